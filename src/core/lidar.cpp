@@ -1,0 +1,28 @@
+#include "core/lidar.hpp"
+
+#include "core/error.hpp"
+
+namespace lidarflow {
+
+DisparityMap SparseLidar::to_map() const {
+    require(width > 0 && height > 0, ErrorCode::InvalidArgument, "SparseLidar has no image size");
+    DisparityMap map(height, width, kInvalidDisparity);
+    for (const LidarPoint &p : points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < width && p.y < height, ErrorCode::InvalidArgument,
+                "LiDAR point outside the image");
+        map(p.y, p.x) = p.disparity;
+    }
+    return map;
+}
+
+SparseLidar SparseLidar::from_map(const DisparityMap &map) {
+    SparseLidar out;
+    out.width = map.cols;
+    out.height = map.rows;
+    for (int y = 0; y < map.rows; ++y)
+        for (int x = 0; x < map.cols; ++x)
+            if (disparity_valid(map(y, x))) out.points.push_back({x, y, map(y, x)});
+    return out;
+}
+
+}  // namespace lidarflow

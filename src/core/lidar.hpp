@@ -1,0 +1,24 @@
+#pragma once
+// Sparse LiDAR measurements aligned to one left image: a list of (pixel, disparity).
+#include <vector>
+
+#include "core/maps.hpp"
+
+namespace lidarflow {
+
+struct LidarPoint {
+    int x = 0, y = 0;      // pixel in the image the scan is aligned to
+    float disparity = 0;   // d = fx * B / z [px]
+};
+
+struct SparseLidar {
+    int width = 0, height = 0;  // size of the image the points live in
+    std::vector<LidarPoint> points;
+
+    // Dense map with the points' disparities and kInvalidDisparity elsewhere.
+    DisparityMap to_map() const;
+    // Every valid pixel of a disparity map becomes a point (row-major order).
+    static SparseLidar from_map(const DisparityMap &map);
+};
+
+}  // namespace lidarflow

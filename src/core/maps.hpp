@@ -1,0 +1,45 @@
+#pragma once
+// Dense per-pixel maps in the left image at t0 (the reference frame), as the stages exchange
+// them. Invalid disparities are negative (kInvalidDisparity), as in the KITTI devkit; a valid
+// disparity is >= 0. Flow carries an explicit validity mask.
+#include <opencv2/core.hpp>
+
+namespace lidarflow {
+
+constexpr float kInvalidDisparity = -1.0f;
+
+inline bool disparity_valid(float d) { return d >= 0.0f; }
+
+// CV_32F disparity map, invalid pixels < 0.
+using DisparityMap = cv::Mat1f;
+
+struct FlowField {
+    cv::Mat1f u, v;   // displacement [px] from I_l^0 to I_l^1
+    cv::Mat1b valid;  // 1 where (u, v) is defined, else 0
+
+    static FlowField zeros(int width, int height) {
+        return {cv::Mat1f::zeros(height, width), cv::Mat1f::zeros(height, width),
+                cv::Mat1b::zeros(height, width)};
+    }
+    int width() const { return u.cols; }
+    int height() const { return u.rows; }
+};
+
+// Scene flow SF(p) = (u, v, d0, d1) per pixel of I_l^0 (paper Eq. 1). d1 is the disparity at
+// t1 of the point seen at p, i.e. already warped into the t0 reference frame (as KITTI's
+// disp_1). One validity mask for the whole 4-vector: stages produce or drop whole matches.
+struct SceneFlowField {
+    cv::Mat1f u, v, d0, d1;
+    cv::Mat1b valid;       // 1 where the 4-vector is defined
+    cv::Mat1f confidence;  // larger is better; 0 where undefined
+
+    static SceneFlowField zeros(int width, int height) {
+        return {cv::Mat1f::zeros(height, width), cv::Mat1f::zeros(height, width),
+                cv::Mat1f::zeros(height, width), cv::Mat1f::zeros(height, width),
+                cv::Mat1b::zeros(height, width), cv::Mat1f::zeros(height, width)};
+    }
+    int width() const { return u.cols; }
+    int height() const { return u.rows; }
+};
+
+}  // namespace lidarflow

@@ -1,0 +1,23 @@
+#include "io/kitti_layout.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/error.hpp"
+
+namespace lidarflow::io {
+
+std::vector<std::string> KittiLayout::frame_ids() const {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::path(root) / "image_2";
+    require(fs::is_directory(dir), ErrorCode::Io, "no image_2/ folder in " + root);
+    std::vector<std::string> ids;
+    for (const auto &e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        if (name.size() == 13 && name.compare(6, 7, "_10.png") == 0) ids.push_back(name.substr(0, 6));
+    }
+    std::sort(ids.begin(), ids.end());
+    return ids;
+}
+
+}  // namespace lidarflow::io

@@ -1,0 +1,46 @@
+#pragma once
+// File names of the official KITTI Scene Flow 2015 layout (training/ or a submission folder).
+// Frame ids are 6-digit strings ("000002"); _10 is t0 and _11 is t1.
+#include <string>
+#include <vector>
+
+namespace lidarflow::io {
+
+struct KittiLayout {
+    std::string root;  // folder holding image_2/, disp_occ_0/, ... (or disp_0/, flow/ for results)
+
+    std::string left(const std::string &id, int t) const { return file("image_2", id, t); }
+    std::string right(const std::string &id, int t) const { return file("image_3", id, t); }
+    // Ground truth; occ = all pixels, noc = non-occluded only.
+    std::string gt_disp0(const std::string &id, bool occ = true) const {
+        return file(occ ? "disp_occ_0" : "disp_noc_0", id, 0);
+    }
+    std::string gt_disp1(const std::string &id, bool occ = true) const {
+        return file(occ ? "disp_occ_1" : "disp_noc_1", id, 0);
+    }
+    std::string gt_flow(const std::string &id, bool occ = true) const {
+        return file(occ ? "flow_occ" : "flow_noc", id, 0);
+    }
+    std::string calib_cam_to_cam(const std::string &id) const { return root + "/calib_cam_to_cam/" + id + ".txt"; }
+    std::string calib_velo_to_cam(const std::string &id) const { return root + "/calib_velo_to_cam/" + id + ".txt"; }
+    std::string velodyne(const std::string &id) const { return root + "/velodyne/" + id + ".bin"; }
+    // Submission (estimate) layout, and the sparse LiDAR inputs written by sample-lidar.
+    std::string est_disp0(const std::string &id) const { return file("disp_0", id, 0); }
+    std::string est_disp1(const std::string &id) const { return file("disp_1", id, 0); }
+    std::string est_flow(const std::string &id) const { return file("flow", id, 0); }
+    std::string lidar(const std::string &id, int t) const { return file(t == 0 ? "lidar_0" : "lidar_1", id, 0); }
+
+    // Every id with a left t0 image, sorted.
+    std::vector<std::string> frame_ids() const;
+
+    static std::string file_in(const std::string &root, const std::string &folder, const std::string &id, int t) {
+        return root + "/" + folder + "/" + id + (t == 0 ? "_10.png" : "_11.png");
+    }
+
+private:
+    std::string file(const std::string &folder, const std::string &id, int t) const {
+        return file_in(root, folder, id, t);
+    }
+};
+
+}  // namespace lidarflow::io

@@ -1,0 +1,45 @@
+#pragma once
+// Shared helpers for the C++ cmocka suites.
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+// cmocka.h needs the headers above first.
+#include <cmocka.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace lidarflow::test {
+
+// Path of the shared KITTI training folder, or "" when LIDARFLOW_KITTI_DIR is unset/missing.
+inline std::string kitti_dir() {
+    const char *d = std::getenv("LIDARFLOW_KITTI_DIR");
+    if (!d || !*d || !std::filesystem::is_directory(std::filesystem::path(d) / "image_2")) return "";
+    return d;
+}
+
+// For suites that only make sense on the real KITTI frames: exits with CTest's skip code.
+inline std::string kitti_dir_or_skip(const char *suite) {
+    std::string d = kitti_dir();
+    if (d.empty()) {
+        std::printf("%s: skipped: LIDARFLOW_KITTI_DIR is not set to a KITTI training folder\n", suite);
+        std::exit(77);
+    }
+    return d;
+}
+
+// A fresh, empty scratch directory for one test (under the build tree when run by CTest).
+inline std::filesystem::path scratch_dir(const std::string &name) {
+    const char *base = std::getenv("LIDARFLOW_TEST_TMP");
+    std::filesystem::path p = base && *base ? std::filesystem::path(base)
+                                            : std::filesystem::temp_directory_path() / "lidarflow-tests";
+    p /= name;
+    std::filesystem::remove_all(p);
+    std::filesystem::create_directories(p);
+    return p;
+}
+
+}  // namespace lidarflow::test

@@ -1,16 +1,19 @@
 #pragma once
-// Shared helpers for the C++ cmocka suites.
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-// cmocka.h needs the headers above first.
-#include <cmocka.h>
-
+// Shared helpers for the C++ cmocka suites. Include this header LAST: cmocka defines macros
+// (fail(), ...) that break standard/OpenCV headers included after it.
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+// cmocka 1.1 has no extern "C" guard of its own.
+extern "C" {
+#include <cmocka.h>
+}
 
 namespace lidarflow::test {
 

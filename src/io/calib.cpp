@@ -1,0 +1,181 @@
+#include "io/calib.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace lidarflow::io {
+namespace {
+
+std::string read_text(const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    require(in.good(), ErrorCode::Io, "cannot open " + path);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    require(!in.bad(), ErrorCode::Io, "cannot read " + path);
+    return ss.str();
+}
+
+std::string trim(const std::string &s) {
+    const auto b = s.find_first_not_of(" \t\r");
+    if (b == std::string::npos) return "";
+    const auto e = s.find_last_not_of(" \t\r");
+    return s.substr(b, e - b + 1);
+}
+
+// Collects the value text of the wanted keys only: other keys (calib_time, corner_dist, ...)
+// carry non-numeric values that must not make a valid file fail.
+std::map<std::string, std::string> collect(const std::string &text, const std::string &source,
+                                           const std::vector<std::string> &wanted) {
+    std::map<std::string, std::string> found;
+    std::istringstream in(text);
+    std::string line;
+    int lineno = 0;
+    while (std::getline(in, line)) {
+        ++lineno;
+        const std::string t = trim(line);
+        if (t.empty()) continue;
+        const auto colon = t.find(':');
+        require(colon != std::string::npos && colon > 0, ErrorCode::Format,
+                source + ":" + std::to_string(lineno) + ": expected 'KEY: values'");
+        const std::string key = trim(t.substr(0, colon));
+        bool is_wanted = false;
+        for (const auto &w : wanted) is_wanted = is_wanted || w == key;
+        if (!is_wanted) continue;
+        require(found.count(key) == 0, ErrorCode::Format,
+                source + ":" + std::to_string(lineno) + ": duplicate key " + key);
+        found[key] = t.substr(colon + 1);
+    }
+    for (const auto &w : wanted)
+        require(found.count(w) == 1, ErrorCode::Format, source + ": missing key " + w);
+    return found;
+}
+
+std::vector<double> numbers(const std::string &values, size_t expected, const std::string &key,
+                            const std::string &source) {
+    std::istringstream in(values);
+    std::vector<double> out;
+    std::string tok;
+    while (in >> tok) {
+        errno = 0;
+        char *end = nullptr;
+        const double v = std::strtod(tok.c_str(), &end);
+        require(*end == '\0' && errno != ERANGE, ErrorCode::Format,
+                source + ": " + key + ": '" + tok + "' is not a number");
+        require(std::isfinite(v), ErrorCode::Format, source + ": " + key + ": non-finite value '" + tok + "'");
+        out.push_back(v);
+    }
+    require(out.size() == expected, ErrorCode::Format,
+            source + ": " + key + ": expected " + std::to_string(expected) + " values, got " +
+                std::to_string(out.size()));
+    return out;
+}
+
+template <int R, int C>
+cv::Matx<double, R, C> matrix(const std::map<std::string, std::string> &found, const std::string &key,
+                              const std::string &source) {
+    const std::vector<double> v = numbers(found.at(key), R * C, key, source);
+    cv::Matx<double, R, C> m;
+    for (int i = 0; i < R * C; ++i) m.val[i] = v[i];
+    return m;
+}
+
+template <int R, int C>
+bool all_finite(const cv::Matx<double, R, C> &m) {
+    for (int i = 0; i < R * C; ++i)
+        if (!std::isfinite(m.val[i])) return false;
+    return true;
+}
+
+template <int R, int C>
+void write_matrix(std::FILE *f, const char *key, const cv::Matx<double, R, C> &m) {
+    std::fprintf(f, "%s:", key);
+    // 17 significant digits make the text round-trip to the same doubles.
+    for (int i = 0; i < R * C; ++i) std::fprintf(f, " %.16e", m.val[i]);
+    std::fprintf(f, "\n");
+}
+
+}  // namespace
+
+CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string &source) {
+    const auto found = collect(text, source, {"P_rect_02", "P_rect_03", "R_rect_00"});
+    CamToCamCalib c;
+    c.P_rect_02 = matrix<3, 4>(found, "P_rect_02", source);
+    c.P_rect_03 = matrix<3, 4>(found, "P_rect_03", source);
+    c.R_rect_00 = matrix<3, 3>(found, "R_rect_00", source);
+    const cv::Matx34d &P2 = c.P_rect_02, &P3 = c.P_rect_03;
+    c.camera.fx = P2(0, 0);
+    c.camera.fy = P2(1, 1);
+    c.camera.cx = P2(0, 2);
+    c.camera.cy = P2(1, 2);
+    require(c.camera.fx > 0 && c.camera.fy > 0, ErrorCode::Format,
+            source + ": P_rect_02 has a non-positive focal length");
+    c.camera.baseline = (P2(0, 3) - P3(0, 3)) / c.camera.fx;
+    require(c.camera.baseline > 0, ErrorCode::Format,
+            source + ": P_rect_02 / P_rect_03 give a non-positive baseline (right camera not right of left)");
+    return c;
+}
+
+CamToCamCalib read_calib_cam_to_cam(const std::string &path) {
+    return parse_calib_cam_to_cam(read_text(path), path);
+}
+
+cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &source) {
+    const auto found = collect(text, source, {"R", "T"});
+    const cv::Matx33d R = matrix<3, 3>(found, "R", source);
+    const cv::Matx31d T = matrix<3, 1>(found, "T", source);
+    const double ortho = cv::norm(R.t() * R - cv::Matx33d::eye(), cv::NORM_INF);
+    require(ortho <= 1e-3 && cv::determinant(R) > 0, ErrorCode::Format, source + ": R is not a rotation matrix");
+    cv::Matx44d M = cv::Matx44d::eye();
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) M(r, k) = R(r, k);
+        M(r, 3) = T(r, 0);
+    }
+    return M;
+}
+
+cv::Matx44d read_calib_velo_to_cam(const std::string &path) {
+    return parse_calib_velo_to_cam(read_text(path), path);
+}
+
+void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib) {
+    require(all_finite(calib.P_rect_02) && all_finite(calib.P_rect_03) && all_finite(calib.R_rect_00),
+            ErrorCode::InvalidArgument, "non-finite calibration entry for " + path);
+    const auto parent = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    require(!ec, ErrorCode::Io, "cannot create folder " + parent.string() + ": " + ec.message());
+    std::FILE *f = std::fopen(path.c_str(), "w");
+    require(f != nullptr, ErrorCode::Io, "cannot write " + path);
+    write_matrix(f, "R_rect_00", calib.R_rect_00);
+    write_matrix(f, "P_rect_02", calib.P_rect_02);
+    write_matrix(f, "P_rect_03", calib.P_rect_03);
+    const bool ok = !std::ferror(f);
+    require(std::fclose(f) == 0 && ok, ErrorCode::Io, "cannot write " + path);
+}
+
+CamToCamCalib calib_from_camera(const StereoCamera &camera) {
+    require(camera.valid() && std::isfinite(camera.fx) && std::isfinite(camera.fy) && std::isfinite(camera.cx) &&
+                std::isfinite(camera.cy) && std::isfinite(camera.baseline),
+            ErrorCode::InvalidArgument, "calib_from_camera: camera needs finite fx, fy, baseline > 0");
+    const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    CamToCamCalib c;
+    c.R_rect_00 = cv::Matx33d::eye();
+    c.P_rect_02 = cv::Matx34d::zeros();
+    c.P_rect_03 = cv::Matx34d::zeros();
+    for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) c.P_rect_02(r, k) = c.P_rect_03(r, k) = K(r, k);
+    c.P_rect_03(0, 3) = -camera.fx * camera.baseline;
+    c.camera = camera;
+    return c;
+}
+
+}  // namespace lidarflow::io

@@ -1,0 +1,81 @@
+#include "lidar/projection.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace lidarflow::lidar {
+namespace {
+
+void check_inputs(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt) {
+    require(image.width > 0 && image.height > 0, ErrorCode::InvalidArgument, "projection: empty image size");
+    require(calib.camera.valid() && std::isfinite(calib.camera.fx) && std::isfinite(calib.camera.baseline),
+            ErrorCode::InvalidArgument, "projection: calibration has no valid stereo camera");
+    bool finite = true;
+    for (double v : calib.P_rect_02.val) finite = finite && std::isfinite(v);
+    for (double v : calib.R_rect_00.val) finite = finite && std::isfinite(v);
+    require(finite, ErrorCode::InvalidArgument, "projection: non-finite calibration matrix");
+    require(opt.min_depth > 0 && std::isfinite(opt.min_depth), ErrorCode::InvalidArgument,
+            "projection: min_depth must be > 0");
+}
+
+// Z-buffer of disparities in the left image; kInvalidDisparity where nothing landed.
+class DepthBuffer {
+public:
+    DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
+        : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
+          map_(image.height, image.width, kInvalidDisparity) {}
+
+    void add(const cv::Vec3d &x_rect) {
+        const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
+        const double w = p[2];
+        if (!(w > min_depth_)) return;
+        // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit.
+        const double u = std::floor(p[0] / w + 0.5), v = std::floor(p[1] / w + 0.5);
+        if (!(u >= 0 && v >= 0 && u < map_.cols && v < map_.rows)) return;
+        const float d = static_cast<float>(fb_ / w);
+        float &cell = map_(static_cast<int>(v), static_cast<int>(u));
+        if (d > cell) cell = d;
+    }
+    SparseLidar result() const { return SparseLidar::from_map(map_); }
+
+private:
+    cv::Matx34d P_;
+    double fb_, min_depth_;
+    DisparityMap map_;
+};
+
+}  // namespace
+
+SparseLidar project_to_left(const std::vector<io::VelodynePoint> &points, const io::CamToCamCalib &calib,
+                            const cv::Matx44d &velo_to_cam, cv::Size image, const ProjectionOptions &opt) {
+    check_inputs(calib, image, opt);
+    for (double v : velo_to_cam.val)
+        require(std::isfinite(v), ErrorCode::InvalidArgument, "projection: non-finite Velodyne-to-camera transform");
+    cv::Matx44d rect = cv::Matx44d::eye();
+    for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) rect(r, k) = calib.R_rect_00(r, k);
+    const cv::Matx44d T = rect * velo_to_cam;
+    DepthBuffer buf(calib, image, opt);
+    for (const io::VelodynePoint &q : points) {
+        require(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z), ErrorCode::InvalidArgument,
+                "projection: non-finite Velodyne point");
+        const cv::Vec4d x = T * cv::Vec4d(q.x, q.y, q.z, 1.0);
+        buf.add(cv::Vec3d(x[0], x[1], x[2]));
+    }
+    return buf.result();
+}
+
+SparseLidar project_to_left(const std::vector<cv::Point3d> &rect_points, const io::CamToCamCalib &calib,
+                            cv::Size image, const ProjectionOptions &opt) {
+    check_inputs(calib, image, opt);
+    DepthBuffer buf(calib, image, opt);
+    for (const cv::Point3d &q : rect_points) {
+        require(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z), ErrorCode::InvalidArgument,
+                "projection: non-finite point");
+        buf.add(cv::Vec3d(q.x, q.y, q.z));
+    }
+    return buf.result();
+}
+
+}  // namespace lidarflow::lidar

@@ -1,0 +1,35 @@
+#pragma once
+// Projection of 3-D LiDAR points into the left rectified image (KITTI camera 2) as a
+// SparseLidar, following the KITTI devkit chain:
+//   X_rect = R_rect_00 * Tr_velo_to_cam * X_velo,   (u, v, w) = P_rect_02 * X_rect,
+//   pixel = (round(u / w), round(v / w)),           d = fx * B / w.
+// w is the point's depth in camera 2's rectified frame (P_rect_02's third row is (0 0 1 t_z)),
+// so d is the disparity of the left/right pair that P_rect_02 / P_rect_03 describe.
+// Only points with w > min_depth that land inside the image are kept; where several land on one
+// pixel the nearest (largest disparity) wins, as a LiDAR beam would be blocked by it.
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/lidar.hpp"
+#include "io/calib.hpp"
+#include "io/velodyne.hpp"
+
+namespace lidarflow::lidar {
+
+struct ProjectionOptions {
+    double min_depth = 0.1;  // [m] in camera 2's rectified frame; also keeps d finite
+};
+
+// Velodyne points (Velodyne frame) -> left image of size `image`. The result owns its points,
+// in row-major pixel order. Throws Error(InvalidArgument) for an empty image size, a calibration
+// without a valid camera, min_depth <= 0, or a non-finite point.
+SparseLidar project_to_left(const std::vector<io::VelodynePoint> &points, const io::CamToCamCalib &calib,
+                            const cv::Matx44d &velo_to_cam, cv::Size image, const ProjectionOptions &opt = {});
+
+// Points already in camera 0's rectified frame (X_rect above; for calib_from_camera() this is
+// the left camera's frame) -> left image. Same ownership and errors as above.
+SparseLidar project_to_left(const std::vector<cv::Point3d> &rect_points, const io::CamToCamCalib &calib,
+                            cv::Size image, const ProjectionOptions &opt = {});
+
+}  // namespace lidarflow::lidar

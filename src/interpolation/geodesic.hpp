@@ -1,0 +1,49 @@
+#pragma once
+// Edge-aware (geodesic) neighbourhoods of the sparse matches, EpicFlow-style: one multi-source
+// Dijkstra on the pixel grid gives every pixel its geodesically nearest seed (a geodesic
+// Voronoi diagram); seeds whose cells touch are linked with the shortest path through the
+// shared border. The k nearest seeds of any pixel are then a small Dijkstra on that seed
+// graph, which is what makes thousands of per-superpixel queries cheap.
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace lidarflow::interp {
+
+struct SeedGraph {
+    cv::Mat1i nearest;   // index of the geodesically nearest seed per pixel
+    cv::Mat1f distance;  // geodesic distance to that seed
+    // Seed adjacency, CSR: neighbours of seed i are nbr[start[i] .. start[i+1]) with weight.
+    std::vector<int> start, nbr;
+    std::vector<float> weight;
+    int num_seeds() const { return static_cast<int>(start.size()) - 1; }
+};
+
+// Step cost between 4-neighbouring pixels p, q is 1 + edge_gain * (E(p) + E(q)) / 2, so a
+// path through flat image regions costs its length in pixels and crossing an edge costs more.
+// `seeds` are distinct pixels inside the map (at least one). Throws Error(InvalidArgument)
+// on an empty map, no seeds, a seed outside the map, or edge_gain < 0 / non-finite.
+SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> &seeds, float edge_gain);
+
+// Reusable scratch for k-nearest-seed queries; one per thread (not thread-safe itself).
+class SeedSearch {
+public:
+    explicit SeedSearch(int num_seeds);
+    // Seeds in order of increasing geodesic distance from pixel `from`, as (seed, distance),
+    // until `k` accepted seeds were collected or the graph is exhausted; seeds for which
+    // accept(seed) is false are skipped (not returned, still traversed). `out` is overwritten.
+    template <class Accept>
+    void nearest(const SeedGraph &g, cv::Point from, int k, Accept accept,
+                 std::vector<std::pair<int, float>> &out);
+
+private:
+    std::vector<float> dist_;
+    std::vector<unsigned> stamp_;
+    unsigned epoch_ = 0;
+    std::vector<std::pair<float, int>> heap_;
+};
+
+}  // namespace lidarflow::interp
+
+#include "interpolation/geodesic_search.inl"

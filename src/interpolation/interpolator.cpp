@@ -1,0 +1,513 @@
+#include "interpolation/interpolator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "core/error.hpp"
+#include "interpolation/geodesic.hpp"
+#include "interpolation/lidar_anchors.hpp"
+#include "interpolation/piecewise_model.hpp"
+
+namespace lidarflow::interp {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+enum Channel { kD0 = 0, kD1 = 1, kFlow = 2, kNumChannels = 3 };
+constexpr int kDims[kNumChannels] = {1, 1, 2};
+
+// The sparse input as a flat list: valid matches (raster order), then, with LiDAR on, the
+// LiDAR pixels whose match did not survive (they still carry the measured d0).
+struct Seeds {
+    std::vector<cv::Point> pos;
+    std::vector<float> x, y, u, v, d0, d1;
+    std::vector<uint8_t> has_motion, is_lidar;
+    int size() const { return static_cast<int>(pos.size()); }
+    void push(int px, int py, float uu, float vv, float dd0, float dd1, bool motion, bool lidar) {
+        pos.emplace_back(px, py);
+        x.push_back(static_cast<float>(px));
+        y.push_back(static_cast<float>(py));
+        u.push_back(uu);
+        v.push_back(vv);
+        d0.push_back(dd0);
+        d1.push_back(dd1);
+        has_motion.push_back(motion);
+        is_lidar.push_back(lidar);
+    }
+};
+
+void validate_options(const InterpolationOptions &o) {
+    auto positive = [](float f) { return std::isfinite(f) && f > 0.0f; };
+    require(std::isfinite(o.edge_gain) && o.edge_gain >= 0.0f, ErrorCode::InvalidArgument,
+            "interpolation: edge_gain must be finite and >= 0");
+    require(o.num_neighbors >= 1 && o.num_neighbors <= 4096, ErrorCode::InvalidArgument,
+            "interpolation: num_neighbors must be in [1, 4096]");
+    require(positive(o.distance_sigma), ErrorCode::InvalidArgument, "interpolation: distance_sigma must be > 0");
+    require(positive(o.disparity_inlier) && positive(o.flow_inlier), ErrorCode::InvalidArgument,
+            "interpolation: inlier thresholds must be > 0");
+    require(o.initial_hypotheses >= 1 && o.initial_hypotheses <= 10000, ErrorCode::InvalidArgument,
+            "interpolation: initial_hypotheses must be in [1, 10000]");
+    require(o.iterations >= 0 && o.iterations <= 1000, ErrorCode::InvalidArgument,
+            "interpolation: iterations must be in [0, 1000]");
+    require(o.random_hypotheses >= 0 && o.random_hypotheses <= 10000, ErrorCode::InvalidArgument,
+            "interpolation: random_hypotheses must be in [0, 10000]");
+    require(std::isfinite(o.lidar_anchor_distance) && o.lidar_anchor_distance >= 0.0f,
+            ErrorCode::InvalidArgument, "interpolation: lidar_anchor_distance must be >= 0");
+    require(positive(o.lidar_disparity_tolerance) && positive(o.lidar_match_tolerance),
+            ErrorCode::InvalidArgument, "interpolation: LiDAR tolerances must be > 0");
+    require(positive(o.lidar_weight), ErrorCode::InvalidArgument, "interpolation: lidar_weight must be > 0");
+    require(o.num_threads >= 1 && o.num_threads <= 1024, ErrorCode::InvalidArgument,
+            "interpolation: num_threads must be in [1, 1024]");
+    // Sub-stage options are checked by their own functions; check them up front too so a bad
+    // configuration fails at construction, not on the first frame.
+    require(o.superpixels.region_size >= 4 && o.superpixels.region_size <= 512, ErrorCode::InvalidArgument,
+            "interpolation: superpixels.region_size must be in [4, 512]");
+    require(std::isfinite(o.superpixels.compactness) && o.superpixels.compactness > 0.0f,
+            ErrorCode::InvalidArgument, "interpolation: superpixels.compactness must be > 0");
+    require(o.superpixels.iterations >= 1 && o.superpixels.iterations <= 100, ErrorCode::InvalidArgument,
+            "interpolation: superpixels.iterations must be in [1, 100]");
+    require(std::isfinite(o.edges.base_sigma) && o.edges.base_sigma > 0.0f && o.edges.base_sigma <= 16.0f,
+            ErrorCode::InvalidArgument, "interpolation: edges.base_sigma must be in (0, 16]");
+    require(positive(o.edges.contrast_gain), ErrorCode::InvalidArgument,
+            "interpolation: edges.contrast_gain must be > 0");
+}
+
+Seeds collect_seeds(const SceneFlowField &m, const SparseLidar &lidar, bool use_lidar, cv::Mat1i &seed_at) {
+    const int w = m.width(), h = m.height();
+    seed_at.create(h, w);
+    seed_at.setTo(-1);
+    Seeds s;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!m.valid(y, x)) continue;
+            const float u = m.u(y, x), v = m.v(y, x), d0 = m.d0(y, x), d1 = m.d1(y, x);
+            require(std::isfinite(u) && std::isfinite(v) && std::isfinite(d0) && std::isfinite(d1),
+                    ErrorCode::InvalidArgument, "interpolation: non-finite value in a valid match");
+            require(d0 >= 0.0f && d1 >= 0.0f, ErrorCode::InvalidArgument,
+                    "interpolation: negative disparity in a valid match");
+            seed_at(y, x) = s.size();
+            s.push(x, y, u, v, d0, d1, true, false);
+        }
+    require(s.size() > 0, ErrorCode::InvalidArgument, "interpolation: no valid match to interpolate");
+    if (!use_lidar) return s;
+    for (const LidarPoint &p : lidar.points) {
+        const int id = seed_at(p.y, p.x);
+        if (id >= 0 && s.is_lidar[id]) continue;  // duplicate pixel: the first point wins
+        if (id >= 0) {
+            s.d0[id] = p.disparity;  // the measurement is exact, the matched d0 is not
+            s.is_lidar[id] = 1;
+        } else {
+            seed_at(p.y, p.x) = s.size();
+            s.push(p.x, p.y, 0.0f, 0.0f, p.disparity, 0.0f, false, true);
+        }
+    }
+    return s;
+}
+
+void validate_inputs(const SceneFlowField &m, const SparseLidar &lidar, const cv::Mat &image) {
+    require(!image.empty(), ErrorCode::InvalidArgument, "interpolation: empty reference image");
+    require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),
+            ErrorCode::InvalidArgument, "interpolation: reference image must be 8-bit gray or BGR");
+    const cv::Size sz = image.size();
+    require(!m.valid.empty() && !m.u.empty(), ErrorCode::InvalidArgument, "interpolation: empty match field");
+    for (const cv::Mat *mat : {&static_cast<const cv::Mat &>(m.u), &static_cast<const cv::Mat &>(m.v),
+                               &static_cast<const cv::Mat &>(m.d0), &static_cast<const cv::Mat &>(m.d1),
+                               &static_cast<const cv::Mat &>(m.valid)})
+        require(mat->size() == sz, ErrorCode::SizeMismatch,
+                "interpolation: match field and reference image differ in size");
+    if (lidar.points.empty()) return;
+    require(lidar.width == sz.width && lidar.height == sz.height, ErrorCode::SizeMismatch,
+            "interpolation: LiDAR and reference image differ in size");
+    for (const LidarPoint &p : lidar.points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < sz.width && p.y < sz.height, ErrorCode::InvalidArgument,
+                "interpolation: LiDAR point outside the image");
+        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
+                "interpolation: LiDAR disparity must be finite and >= 0");
+    }
+}
+
+// splitmix64: tiny, statistically fine, and reproducible across platforms (std::
+// distributions are not).
+struct Rng {
+    uint64_t s;
+    explicit Rng(uint64_t seed) : s(seed) {}
+    uint64_t next() {
+        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    float uniform() { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }  // [0, 1)
+};
+
+uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
+    Rng r(base * 0x100000001B3ull ^ (static_cast<uint64_t>(sp) << 20) ^
+          (static_cast<uint64_t>(iteration) << 8) ^ static_cast<uint64_t>(channel));
+    return r.next();
+}
+
+// One superpixel's neighbourhood for one channel, gathered contiguously.
+struct Problem {
+    int dims = 1;
+    float tau = 1;
+    std::vector<float> x, y, z0, z1, w, cw;  // cw: cumulative weights for sampling
+    int anchor = -1;                          // index into the arrays, or -1
+    float anchor_tol = 0;
+    float sx = 0, sy = 0;                     // superpixel centroid (perturbation pivot)
+    float size = 16;
+    int n() const { return static_cast<int>(x.size()); }
+    float z(int i, int k) const { return k == 0 ? z0[i] : z1[i]; }
+    float residual(const Model &m, int i) const {
+        const float r0 = m.p[0].at(x[i], y[i]) - z0[i];
+        if (dims == 1) return std::fabs(r0);
+        const float r1 = m.p[1].at(x[i], y[i]) - z1[i];
+        return std::sqrt(r0 * r0 + r1 * r1);
+    }
+    bool admissible(const Model &m) const { return anchor < 0 || residual(m, anchor) <= anchor_tol; }
+    float cost(const Model &m) const {
+        float c = 0;
+        for (int i = 0; i < n(); ++i) c += w[i] * std::min(residual(m, i), tau);
+        return c;
+    }
+    int sample(Rng &rng) const {
+        const float t = rng.uniform() * cw.back();
+        const int i = static_cast<int>(std::upper_bound(cw.begin(), cw.end(), t) - cw.begin());
+        return std::min(i, n() - 1);
+    }
+    Model constant(int i) const {
+        Model m;
+        m.p[0].c = z0[i];
+        m.p[1].c = dims == 2 ? z1[i] : 0.0f;
+        return m;
+    }
+    // Affine model through three neighbours (the anchor first when there is one).
+    bool random_affine(Rng &rng, Model &m) const {
+        if (n() < 3) return false;
+        int id[3];
+        id[0] = anchor >= 0 ? anchor : sample(rng);
+        for (int k = 1; k < 3; ++k) {
+            int tries = 0;
+            do {
+                id[k] = sample(rng);
+            } while ((id[k] == id[0] || (k == 2 && id[k] == id[1])) && ++tries < 8);
+            if (tries >= 8) return false;
+        }
+        const float px[3] = {x[id[0]], x[id[1]], x[id[2]]}, py[3] = {y[id[0]], y[id[1]], y[id[2]]};
+        for (int k = 0; k < dims; ++k) {
+            const float pz[3] = {z(id[0], k), z(id[1], k), z(id[2], k)};
+            if (!plane_from_3(px, py, pz, m.p[k])) return false;
+        }
+        return true;
+    }
+    // Weighted least squares on the inliers of m; the anchor, if any, dominates.
+    bool refine(const Model &m, Model &out) const {
+        PlaneLsq lsq(sx, sy);
+        float zz[2];
+        float wsum = 0;
+        for (int i = 0; i < n(); ++i) {
+            if (residual(m, i) >= tau) continue;
+            zz[0] = z0[i];
+            zz[1] = dims == 2 ? z1[i] : 0.0f;
+            lsq.add(x[i], y[i], w[i], zz, dims);
+            wsum += w[i];
+        }
+        if (anchor >= 0) {
+            zz[0] = z0[anchor];
+            zz[1] = dims == 2 ? z1[anchor] : 0.0f;
+            lsq.add(x[anchor], y[anchor], 10.0f * wsum + 1.0f, zz, dims);
+        }
+        return lsq.solve(dims, out);
+    }
+    float inlier_share(const Model &m) const {
+        float in = 0, all = 0;
+        for (int i = 0; i < n(); ++i) {
+            all += w[i];
+            if (residual(m, i) < tau) in += w[i];
+        }
+        return all > 0 ? in / all : 0.0f;
+    }
+};
+
+struct Candidate {
+    Model m;
+    float cost = std::numeric_limits<float>::infinity();
+};
+
+void consider(const Problem &p, const Model &m, Candidate &best) {
+    if (!p.admissible(m)) return;
+    const float c = p.cost(m);
+    if (c < best.cost) {
+        best.cost = c;
+        best.m = m;
+    }
+}
+
+// Random search: the current model tilted and shifted around the superpixel centre, with a
+// radius that halves every round.
+Model perturb(const Problem &p, const Model &m, float radius, Rng &rng) {
+    Model out = m;
+    for (int k = 0; k < p.dims; ++k) {
+        const float base = m.p[k].at(p.sx, p.sy) + radius * (2.0f * rng.uniform() - 1.0f);
+        out.p[k].a += radius / p.size * (2.0f * rng.uniform() - 1.0f);
+        out.p[k].b += radius / p.size * (2.0f * rng.uniform() - 1.0f);
+        out.p[k].c = base - out.p[k].a * p.sx - out.p[k].b * p.sy;
+    }
+    return out;
+}
+
+}  // namespace
+
+RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
+    validate_options(options_);
+    if (options_.edges.method == EdgeMethod::StructuredForest)
+        sed_ = std::make_shared<const SedModel>(options_.edges.sed_model_path);
+}
+
+InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
+                                            const cv::Mat &image) const {
+    const InterpolationOptions &o = options_;
+    const auto t_start = Clock::now();
+    validate_inputs(matches, lidar0, image);
+    const int w = image.cols, h = image.rows;
+    const bool use_lidar = o.use_lidar && !lidar0.points.empty();
+    cv::Mat1i seed_at;
+    const Seeds seeds = collect_seeds(matches, lidar0, use_lidar, seed_at);
+
+    InterpolationResult res;
+    auto t = Clock::now();
+    res.edges = compute_edge_map(image, o.edges, sed_.get());
+    res.timings.edges_s = seconds_since(t);
+
+    t = Clock::now();
+    SuperpixelOptions spo = o.superpixels;
+    spo.num_threads = o.num_threads;
+    const Superpixels sp = compute_superpixels(image, spo);
+    res.superpixels = sp.labels;
+    res.num_superpixels = sp.count;
+    res.timings.superpixels_s = seconds_since(t);
+
+    t = Clock::now();
+    const SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
+    const LidarAnchors anchors =
+        use_lidar ? associate_lidar(sp, seeds.pos, seeds.is_lidar, seeds.has_motion, o.lidar_anchor_distance)
+                  : LidarAnchors::none(sp.count);
+    // Neighbourhoods, flat: geometry (d0) and motion (u, v, d1) lists of up to K seeds each.
+    const int K = o.num_neighbors;
+    std::vector<std::vector<std::pair<int, float>>> geo_nb(sp.count), mot_nb(sp.count);
+#pragma omp parallel num_threads(o.num_threads)
+    {
+        SeedSearch search(seeds.size());
+#pragma omp for schedule(dynamic, 16)
+        for (int s = 0; s < sp.count; ++s) {
+            const int ga = anchors.geometry[s], ma = anchors.motion[s];
+            const cv::Point gp = ga >= 0 ? seeds.pos[ga] : sp.anchor[s];
+            const cv::Point mp = ma >= 0 ? seeds.pos[ma] : sp.anchor[s];
+            search.nearest(graph, gp, K, [](int) { return true; }, geo_nb[s]);
+            bool reuse = gp == mp;
+            for (const auto &e : geo_nb[s]) reuse = reuse && seeds.has_motion[e.first];
+            if (reuse)
+                mot_nb[s] = geo_nb[s];
+            else
+                search.nearest(graph, mp, K, [&](int i) { return seeds.has_motion[i] != 0; }, mot_nb[s]);
+        }
+    }
+    res.timings.geodesic_s = seconds_since(t);
+    for (int s = 0; s < sp.count; ++s) {
+        res.lidar_anchored_geometry += anchors.geometry[s] >= 0;
+        res.lidar_anchored_motion += anchors.motion[s] >= 0;
+    }
+
+    t = Clock::now();
+    const int S = sp.count;
+    std::vector<Model> cur(static_cast<size_t>(S) * kNumChannels), next(cur.size());
+    std::vector<float> share(cur.size(), 0.0f);
+    auto build = [&](int s, int c, Problem &p) {
+        const auto &nb = c == kD0 ? geo_nb[s] : mot_nb[s];
+        const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
+        p.dims = kDims[c];
+        p.tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
+        p.anchor_tol = c == kD0 ? o.lidar_disparity_tolerance : o.lidar_match_tolerance;
+        p.anchor = -1;
+        p.sx = sp.centroid[s].x;
+        p.sy = sp.centroid[s].y;
+        p.size = static_cast<float>(o.superpixels.region_size);
+        p.x.clear(), p.y.clear(), p.z0.clear(), p.z1.clear(), p.w.clear(), p.cw.clear();
+        float acc = 0;
+        for (const auto &[id, dist] : nb) {
+            if (id == anchor_seed) p.anchor = p.n();
+            p.x.push_back(seeds.x[id]);
+            p.y.push_back(seeds.y[id]);
+            if (c == kD0) {
+                p.z0.push_back(seeds.d0[id]);
+            } else if (c == kD1) {
+                p.z0.push_back(seeds.d1[id]);
+            } else {
+                p.z0.push_back(seeds.u[id]);
+                p.z1.push_back(seeds.v[id]);
+            }
+            float wt = std::exp(-dist / o.distance_sigma);
+            if (c == kD0 && use_lidar && seeds.is_lidar[id]) wt *= o.lidar_weight;
+            // Floor keeps far neighbours sampleable when the anchor sits in a sparse region.
+            wt = std::max(wt, 1e-6f);
+            p.w.push_back(wt);
+            acc += wt;
+            p.cw.push_back(acc);
+        }
+    };
+    for (int it = 0; it <= o.iterations; ++it) {
+#pragma omp parallel num_threads(o.num_threads)
+        {
+            Problem p;
+            Model m;
+#pragma omp for schedule(dynamic, 8)
+            for (int s = 0; s < S; ++s) {
+                for (int c = 0; c < kNumChannels; ++c) {
+                    build(s, c, p);
+                    Rng rng(stream_seed(o.random_seed, s, it, c));
+                    Candidate best;
+                    const size_t slot = static_cast<size_t>(s) * kNumChannels + c;
+                    if (it == 0) {
+                        // Constants always exist, so a superpixel with < 3 usable neighbours
+                        // (or only collinear ones) still gets a model.
+                        consider(p, p.constant(p.anchor >= 0 ? p.anchor : 0), best);
+                        consider(p, p.constant(p.sample(rng)), best);
+                        for (int k = 0; k < o.initial_hypotheses; ++k)
+                            if (p.random_affine(rng, m)) consider(p, m, best);
+                    } else {
+                        consider(p, cur[slot], best);
+                        for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1]; ++e)
+                            consider(p, cur[static_cast<size_t>(sp.adj[e]) * kNumChannels + c], best);
+                        for (int k = 0; k < o.random_hypotheses; ++k)
+                            if (p.random_affine(rng, m)) consider(p, m, best);
+                        const float radius = p.tau * std::ldexp(1.0f, 1 - it);
+                        consider(p, perturb(p, best.m, radius, rng), best);
+                    }
+                    for (int r = 0; r < 2; ++r) {
+                        if (!p.refine(best.m, m)) break;
+                        const float before = best.cost;
+                        consider(p, m, best);
+                        if (!(best.cost < before)) break;
+                    }
+                    next[slot] = best.m;
+                    if (it == o.iterations) share[slot] = p.inlier_share(best.m);
+                }
+            }
+        }
+        std::swap(cur, next);
+    }
+    res.timings.models_s = seconds_since(t);
+
+    t = Clock::now();
+    res.dense = SceneFlowField::zeros(w, h);
+    res.dense.valid.setTo(1);
+    // Per-pixel model choice: a pixel keeps its superpixel's model unless the matches around
+    // it (its geodesically nearest seed and that seed's graph neighbours) are better explained
+    // by the model of an adjacent superpixel. Superpixels coarser than thin structures (poles,
+    // sign posts) would otherwise paint them with the background's model.
+    auto seed_value = [&](int id, int c, int k) {
+        if (c == kD0) return seeds.d0[id];
+        if (c == kD1) return seeds.d1[id];
+        return k == 0 ? seeds.u[id] : seeds.v[id];
+    };
+    auto residual = [&](const Model &m, int c, int id) {
+        const float r0 = m.p[0].at(seeds.x[id], seeds.y[id]) - seed_value(id, c, 0);
+        if (kDims[c] == 1) return std::fabs(r0);
+        const float r1 = m.p[1].at(seeds.x[id], seeds.y[id]) - seed_value(id, c, 1);
+        return std::sqrt(r0 * r0 + r1 * r1);
+    };
+    // Decisions depend only on (nearest seed, superpixel): number the pairs that occur (rows
+    // are mostly long runs of one pair), decide each pair once, then fill the pixels.
+    cv::Mat1i pair_of(h, w);
+    std::vector<std::pair<int, int>> pairs;  // (seed, superpixel)
+    {
+        std::vector<std::vector<std::pair<int, int>>> by_seed(seeds.size());  // (superpixel, pair)
+        for (int y = 0; y < h; ++y) {
+            int last_seed = -1, last_sp = -1, last_pair = -1;
+            for (int x = 0; x < w; ++x) {
+                const int s = sp.labels(y, x), seed = graph.nearest(y, x);
+                if (seed != last_seed || s != last_sp) {
+                    last_seed = seed;
+                    last_sp = s;
+                    last_pair = -1;
+                    for (const auto &e : by_seed[seed])
+                        if (e.first == s) last_pair = e.second;
+                    if (last_pair < 0) {
+                        last_pair = static_cast<int>(pairs.size());
+                        pairs.emplace_back(seed, s);
+                        by_seed[seed].emplace_back(s, last_pair);
+                    }
+                }
+                pair_of(y, x) = last_pair;
+            }
+        }
+    }
+    std::vector<int> chosen(pairs.size() * kNumChannels);
+#pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 256)
+    for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
+        const auto [seed, s] = pairs[pi];
+        for (int c = 0; c < kNumChannels; ++c) {
+            int pick = s;
+            // The LiDAR point's own cell keeps the anchored model: there the measurement is
+            // the nearest evidence, whatever the matches around it say.
+            const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
+            if (o.pixel_model_selection && seed != anchor_seed) {
+                const float tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
+                auto support = [&](int cand) {
+                    const Model &m = cur[static_cast<size_t>(cand) * kNumChannels + c];
+                    float sc = 0;
+                    if (c == kD0 || seeds.has_motion[seed]) sc += residual(m, c, seed) < tau ? 1.0f : 0.0f;
+                    for (int e = graph.start[seed]; e < graph.start[seed + 1]; ++e) {
+                        const int j = graph.nbr[e];
+                        if (c != kD0 && !seeds.has_motion[j]) continue;
+                        if (residual(m, c, j) < tau) sc += std::exp(-graph.weight[e] / o.distance_sigma);
+                    }
+                    return sc;
+                };
+                // The own model wins ties: switching needs clearly more local support.
+                float best = support(s) + 0.5f;
+                for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1]; ++e) {
+                    const float sc = support(sp.adj[e]);
+                    if (sc > best) {
+                        best = sc;
+                        pick = sp.adj[e];
+                    }
+                }
+            }
+            chosen[static_cast<size_t>(pi) * kNumChannels + c] = pick;
+        }
+    }
+#pragma omp parallel for num_threads(o.num_threads) schedule(static)
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int *pick = &chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels];
+            const float fx = static_cast<float>(x), fy = static_cast<float>(y);
+            const Model &m0 = cur[static_cast<size_t>(pick[kD0]) * kNumChannels + kD0];
+            const Model &m1 = cur[static_cast<size_t>(pick[kD1]) * kNumChannels + kD1];
+            const Model &mf = cur[static_cast<size_t>(pick[kFlow]) * kNumChannels + kFlow];
+            res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy));
+            res.dense.d1(y, x) = std::max(0.0f, m1.p[0].at(fx, fy));
+            res.dense.u(y, x) = mf.p[0].at(fx, fy);
+            res.dense.v(y, x) = mf.p[1].at(fx, fy);
+            const size_t base = static_cast<size_t>(sp.labels(y, x)) * kNumChannels;
+            res.dense.confidence(y, x) = (share[base] + share[base + 1] + share[base + 2]) / 3.0f;
+        }
+    if (use_lidar && o.keep_lidar_values)
+        for (const LidarPoint &lp : lidar0.points) res.dense.d0(lp.y, lp.x) = seeds.d0[seed_at(lp.y, lp.x)];
+    res.timings.output_s = seconds_since(t);
+    res.timings.total_s = seconds_since(t_start);
+    return res;
+}
+
+SceneFlowField interpolate_scene_flow(const SceneFlowField &matches, const SparseLidar &lidar0,
+                                      const cv::Mat &image, const InterpolationOptions &options) {
+    return RobustInterpolator(options).run(matches, lidar0, image).dense;
+}
+
+}  // namespace lidarflow::interp

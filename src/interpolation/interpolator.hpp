@@ -1,0 +1,99 @@
+#pragma once
+// Stage 4: LiDAR-supported robust interpolation (paper Sec. "LiDAR-Supported Robust
+// Interpolation", Fig. 5), RIC-style (Hu et al., CVPR 2017) extended to all four scene-flow
+// components. Sparse matches in I_l^0 -> dense u, v, d0, d1:
+//  1. soft edge map of I_l^0 (built-in multi-scale gradient, or a user SED model);
+//  2. SLIC superpixels; each one's anchor is its centre, or the closest LiDAR measurement
+//     (geometry d0) / LiDAR match (motion u, v and d1) when that lies inside the superpixel
+//     or within lidar_anchor_distance of its centre;
+//  3. the K geodesically nearest matches of each anchor (edge-aware neighbourhood);
+//  4. per superpixel a plane for d0, a plane for d1 and an affine (u, v) model, from random
+//     minimal subsets scored robustly on the neighbourhood, refined by propagation from
+//     adjacent superpixels, random search and inlier least squares; a hypothesis that
+//     disagrees with the superpixel's LiDAR anchor is rejected outright;
+//  5. every pixel takes its superpixel's models, or an adjacent superpixel's when the matches
+//     around it (geodesic Voronoi cell) clearly support that one better (thin structures);
+//     the LiDAR point's own cell always keeps its anchored model.
+// use_lidar = false is the "Interp-only" ablation: same code, no LiDAR anchors/rejection.
+#include <memory>
+#include <string>
+
+#include "core/lidar.hpp"
+#include "core/maps.hpp"
+#include "interpolation/edge_map.hpp"
+#include "interpolation/superpixels.hpp"
+
+namespace lidarflow::interp {
+
+struct InterpolationOptions {
+    bool use_lidar = true;
+    EdgeMapOptions edges;          // set edges.method = StructuredForest + sed_model_path for SED
+    SuperpixelOptions superpixels; // region_size ~ sqrt(superpixel area)
+    float edge_gain = 3.0f;        // geodesic step cost 1 + edge_gain * edge (>= 0)
+    int num_neighbors = 64;        // K geodesic nearest matches per anchor (>= 1)
+    // Neighbour weight exp(-geodesic / distance_sigma) in scoring and sampling (> 0) [px].
+    float distance_sigma = 24.0f;
+    float disparity_inlier = 2.0f;  // robust-cost truncation for d0, d1 residuals [px] (> 0)
+    float flow_inlier = 3.0f;       // robust-cost truncation for (u, v) end-point errors [px] (> 0)
+    int initial_hypotheses = 24;   // random minimal subsets per superpixel and channel (>= 1)
+    int iterations = 4;            // propagation + random-search rounds (>= 0)
+    int random_hypotheses = 4;     // new random subsets per round and channel (>= 0)
+    // LiDAR: anchor threshold [px] (distance LiDAR pixel - superpixel centre), tolerance of
+    // the rejection test for d0 against the measurement and for (u, v) EPE / d1 against the
+    // LiDAR match, and the weight of LiDAR seeds in the robust cost.
+    float lidar_anchor_distance = 12.0f;
+    float lidar_disparity_tolerance = 1.0f;
+    float lidar_match_tolerance = 2.0f;
+    float lidar_weight = 1.0f;
+    // Pixels may take an adjacent superpixel's model when their nearest matches support it
+    // clearly better (thin structures inside coarse superpixels).
+    bool pixel_model_selection = true;
+    // The output d0 at LiDAR pixels is the measurement itself (LiDAR is never filtered).
+    bool keep_lidar_values = true;
+    unsigned random_seed = 1;      // all random draws derive from it and the superpixel index
+    int num_threads = 1;           // OpenMP threads; results do not depend on it
+};
+
+struct InterpolationTimings {
+    double edges_s = 0, superpixels_s = 0, geodesic_s = 0, models_s = 0, output_s = 0, total_s = 0;
+};
+
+struct InterpolationResult {
+    // Dense field: valid = 1 everywhere, d0/d1 >= 0, confidence in [0, 1] = weighted inlier
+    // share of the pixel's superpixel models over its neighbourhood (averaged over channels).
+    SceneFlowField dense;
+    cv::Mat1f edges;          // the edge map used
+    cv::Mat1i superpixels;    // superpixel label per pixel
+    int num_superpixels = 0;
+    int lidar_anchored_geometry = 0;  // superpixels whose d0 model is LiDAR-anchored
+    int lidar_anchored_motion = 0;    // superpixels whose u, v, d1 models are LiDAR-anchored
+    InterpolationTimings timings;
+};
+
+class RobustInterpolator {
+public:
+    // Validates the options and loads the SED model when edges.method is StructuredForest.
+    // Throws Error(InvalidArgument) on options out of range, Error(Io/Format) when the SED
+    // model cannot be read. Copies the options; holds the model for its lifetime.
+    explicit RobustInterpolator(const InterpolationOptions &options);
+
+    // matches: sparse field in I_l^0 (at least one valid match; finite u, v, d0 >= 0, d1 >= 0
+    // where valid). lidar0: D_l^0 points (may be empty; when not, its width/height equal the
+    // image's, points inside it, finite disparities >= 0). image: I_l^0, 8-bit gray or BGR,
+    // same size. Inputs are only read. Throws Error(SizeMismatch) on differing sizes and
+    // Error(InvalidArgument) on any other invalid input. Safe to call from several threads.
+    InterpolationResult run(const SceneFlowField &matches, const SparseLidar &lidar0,
+                            const cv::Mat &image) const;
+
+    const InterpolationOptions &options() const { return options_; }
+
+private:
+    InterpolationOptions options_;
+    std::shared_ptr<const SedModel> sed_;
+};
+
+// One-shot convenience: RobustInterpolator(options).run(...).dense.
+SceneFlowField interpolate_scene_flow(const SceneFlowField &matches, const SparseLidar &lidar0,
+                                      const cv::Mat &image, const InterpolationOptions &options = {});
+
+}  // namespace lidarflow::interp

@@ -1,0 +1,39 @@
+#pragma once
+// Affine models over image coordinates, the per-superpixel pieces of the interpolation:
+// a plane d = a x + b y + c for a disparity (exact for a planar surface in a rectified
+// camera), and a pair of them for the flow (u, v) (the affine approximation of the
+// homography a moving plane induces). Plain value types; no allocation.
+#include <cmath>
+
+namespace lidarflow::interp {
+
+struct Plane {
+    float a = 0, b = 0, c = 0;
+    float at(float x, float y) const { return a * x + b * y + c; }
+};
+
+// One piecewise model of one channel; dims == 1 (a disparity) or 2 (flow u, v).
+struct Model {
+    Plane p[2];
+};
+
+// Plane through three points (x_i, y_i, z_i). Returns false for a degenerate (near-collinear)
+// triple: doubled triangle area below max(min_area2, sliver * longest side^2).
+bool plane_from_3(const float x[3], const float y[3], const float z[3], Plane &out);
+
+// Accumulates a weighted least-squares plane fit; solve() returns false when the weighted
+// points do not span a plane (fewer than three or near-collinear).
+class PlaneLsq {
+public:
+    // Coordinates relative to (ox, oy) keep the normal equations well conditioned.
+    PlaneLsq(float ox, float oy) : ox_(ox), oy_(oy) {}
+    void add(float x, float y, float w, const float *z, int dims);
+    bool solve(int dims, Model &out) const;
+
+private:
+    float ox_, oy_;
+    double sxx_ = 0, sxy_ = 0, syy_ = 0, sx_ = 0, sy_ = 0, s1_ = 0;
+    double sxz_[2] = {0, 0}, syz_[2] = {0, 0}, sz_[2] = {0, 0};
+};
+
+}  // namespace lidarflow::interp

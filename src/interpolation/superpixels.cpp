@@ -1,0 +1,211 @@
+#include "interpolation/superpixels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+
+namespace lidarflow::interp {
+namespace {
+
+struct Centre {
+    float l, a, b, x, y;
+};
+
+// Lab as three float planes (L in 0..100, a/b centred on 0) for a vectorisable inner loop;
+// the 8-bit conversion is several times faster than the float one and precise enough here.
+void to_lab_planes(const cv::Mat &image, cv::Mat1f planes[3]) {
+    cv::Mat bgr;
+    if (image.channels() == 1)
+        cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+    else
+        bgr = image;
+    cv::Mat lab8;
+    cv::cvtColor(bgr, lab8, cv::COLOR_BGR2Lab);
+    cv::Mat ch[3];
+    cv::split(lab8, ch);
+    ch[0].convertTo(planes[0], CV_32F, 100.0 / 255.0);
+    ch[1].convertTo(planes[1], CV_32F, 1.0, -128.0);
+    ch[2].convertTo(planes[2], CV_32F, 1.0, -128.0);
+}
+
+// Relabels 4-connected components; components smaller than min_size join the component
+// they touch first in raster order (the SLIC paper's post-processing). Returns the count.
+int enforce_connectivity(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
+    const int w = in.cols, h = in.rows;
+    out.create(h, w);
+    out.setTo(-1);
+    std::vector<int> queue;
+    queue.reserve(static_cast<size_t>(w) * h);
+    int next = 0;
+    static const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    for (int y0 = 0; y0 < h; ++y0) {
+        for (int x0 = 0; x0 < w; ++x0) {
+            if (out(y0, x0) >= 0) continue;
+            const int original = in(y0, x0);
+            int adjacent = -1;
+            for (int k = 0; k < 4; ++k) {
+                const int nx = x0 + dx[k], ny = y0 + dy[k];
+                if (nx >= 0 && ny >= 0 && nx < w && ny < h && out(ny, nx) >= 0) adjacent = out(ny, nx);
+            }
+            queue.clear();
+            queue.push_back(y0 * w + x0);
+            out(y0, x0) = next;
+            for (size_t q = 0; q < queue.size(); ++q) {
+                const int px = queue[q] % w, py = queue[q] / w;
+                for (int k = 0; k < 4; ++k) {
+                    const int nx = px + dx[k], ny = py + dy[k];
+                    if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+                    if (out(ny, nx) >= 0 || in(ny, nx) != original) continue;
+                    out(ny, nx) = next;
+                    queue.push_back(ny * w + nx);
+                }
+            }
+            if (static_cast<int>(queue.size()) < min_size && adjacent >= 0) {
+                for (int p : queue) out(p / w, p % w) = adjacent;
+            } else {
+                ++next;
+            }
+        }
+    }
+    return next;
+}
+
+}  // namespace
+
+Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o) {
+    require(!image.empty(), ErrorCode::InvalidArgument, "superpixels: empty image");
+    require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),
+            ErrorCode::InvalidArgument, "superpixels: image must be 8-bit gray or BGR");
+    require(o.region_size >= 4 && o.region_size <= 512, ErrorCode::InvalidArgument,
+            "superpixels: region_size must be in [4, 512]");
+    require(std::isfinite(o.compactness) && o.compactness > 0.0f, ErrorCode::InvalidArgument,
+            "superpixels: compactness must be > 0");
+    require(o.iterations >= 1 && o.iterations <= 100, ErrorCode::InvalidArgument,
+            "superpixels: iterations must be in [1, 100]");
+    require(o.num_threads >= 1, ErrorCode::InvalidArgument, "superpixels: num_threads must be >= 1");
+
+    const int w = image.cols, h = image.rows;
+    cv::Mat1f lab[3];
+    to_lab_planes(image, lab);
+    const int gx = std::max(1, static_cast<int>(std::lround(static_cast<double>(w) / o.region_size)));
+    const int gy = std::max(1, static_cast<int>(std::lround(static_cast<double>(h) / o.region_size)));
+    const float step_x = static_cast<float>(w) / gx, step_y = static_cast<float>(h) / gy;
+    std::vector<Centre> centres(static_cast<size_t>(gx) * gy);
+    for (int j = 0; j < gy; ++j)
+        for (int i = 0; i < gx; ++i) {
+            const float cx = (i + 0.5f) * step_x, cy = (j + 0.5f) * step_y;
+            const int py = std::min(h - 1, static_cast<int>(cy)), px = std::min(w - 1, static_cast<int>(cx));
+            centres[static_cast<size_t>(j) * gx + i] = {lab[0](py, px), lab[1](py, px), lab[2](py, px), cx, cy};
+        }
+
+    // First pixel column of each grid column (pixel x lies in column min(gx-1, x / step_x)).
+    std::vector<int> col_start(gx + 1, w);
+    for (int x = w - 1; x >= 0; --x) col_start[std::min(gx - 1, static_cast<int>(x / step_x))] = x;
+    for (int i = gx - 1; i >= 0; --i) col_start[i] = std::min(col_start[i], col_start[i + 1]);
+    // Colour distances in Lab are ~0..100; SLIC's m / S balances them against pixels.
+    const float spatial = (o.compactness / o.region_size) * (o.compactness / o.region_size);
+    cv::Mat1i assign(h, w, 0);
+    std::vector<double> acc(centres.size() * 6);
+    for (int it = 0; it < o.iterations; ++it) {
+#pragma omp parallel num_threads(o.num_threads)
+        {
+            std::vector<float> best(w);
+#pragma omp for schedule(static)
+            for (int y = 0; y < h; ++y) {
+                const int cy = std::min(gy - 1, static_cast<int>(y / step_y));
+                const float *L = lab[0][y], *A = lab[1][y], *B = lab[2][y];
+                int *arow = assign[y];
+                std::fill(best.begin(), best.end(), std::numeric_limits<float>::max());
+                // Centre (j, i) competes for the pixels of grid columns i-1 .. i+1: one
+                // contiguous x range per centre, so the inner loop vectorises.
+                for (int j = std::max(0, cy - 1); j <= std::min(gy - 1, cy + 1); ++j)
+                    for (int i = 0; i < gx; ++i) {
+                        const int k = j * gx + i;
+                        const Centre c = centres[static_cast<size_t>(k)];
+                        const int x0 = col_start[std::max(0, i - 1)], x1 = col_start[std::min(gx, i + 2)];
+                        const float dy2 = spatial * (y - c.y) * (y - c.y);
+                        for (int x = x0; x < x1; ++x) {
+                            const float dl = L[x] - c.l, da = A[x] - c.a, db = B[x] - c.b, sx = x - c.x;
+                            const float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2;
+                            if (d < best[x]) {
+                                best[x] = d;
+                                arow[x] = k;
+                            }
+                        }
+                    }
+            }
+        }
+        std::fill(acc.begin(), acc.end(), 0.0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                double *a = &acc[static_cast<size_t>(assign(y, x)) * 6];
+                a[0] += lab[0](y, x);
+                a[1] += lab[1](y, x);
+                a[2] += lab[2](y, x);
+                a[3] += x;
+                a[4] += y;
+                a[5] += 1.0;
+            }
+        for (size_t k = 0; k < centres.size(); ++k) {
+            const double *a = &acc[k * 6];
+            if (a[5] <= 0.0) continue;  // an empty cluster keeps its old centre
+            centres[k] = {static_cast<float>(a[0] / a[5]), static_cast<float>(a[1] / a[5]),
+                          static_cast<float>(a[2] / a[5]), static_cast<float>(a[3] / a[5]),
+                          static_cast<float>(a[4] / a[5])};
+        }
+    }
+
+    Superpixels sp;
+    sp.count = enforce_connectivity(assign, std::max(1, o.region_size * o.region_size / 4), sp.labels);
+    const int n = sp.count;
+    std::vector<double> sx(n, 0.0), sy(n, 0.0);
+    sp.pixel_count.assign(n, 0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int l = sp.labels(y, x);
+            sx[l] += x;
+            sy[l] += y;
+            ++sp.pixel_count[l];
+        }
+    sp.centroid.resize(n);
+    for (int l = 0; l < n; ++l)
+        sp.centroid[l] = cv::Point2f(static_cast<float>(sx[l] / sp.pixel_count[l]),
+                                     static_cast<float>(sy[l] / sp.pixel_count[l]));
+    // A non-convex superpixel's centroid may lie outside it; the anchor must be its own pixel.
+    std::vector<float> best(n, std::numeric_limits<float>::max());
+    sp.anchor.assign(n, cv::Point(0, 0));
+    std::vector<std::vector<int>> nb(n);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int l = sp.labels(y, x);
+            const float dx = x - sp.centroid[l].x, dy = y - sp.centroid[l].y;
+            const float d = dx * dx + dy * dy;
+            if (d < best[l]) {
+                best[l] = d;
+                sp.anchor[l] = cv::Point(x, y);
+            }
+            if (x + 1 < w && sp.labels(y, x + 1) != l) {
+                nb[l].push_back(sp.labels(y, x + 1));
+                nb[sp.labels(y, x + 1)].push_back(l);
+            }
+            if (y + 1 < h && sp.labels(y + 1, x) != l) {
+                nb[l].push_back(sp.labels(y + 1, x));
+                nb[sp.labels(y + 1, x)].push_back(l);
+            }
+        }
+    sp.adj_start.assign(n + 1, 0);
+    for (int l = 0; l < n; ++l) {
+        std::sort(nb[l].begin(), nb[l].end());
+        nb[l].erase(std::unique(nb[l].begin(), nb[l].end()), nb[l].end());
+        sp.adj_start[l + 1] = sp.adj_start[l] + static_cast<int>(nb[l].size());
+    }
+    sp.adj.reserve(sp.adj_start[n]);
+    for (int l = 0; l < n; ++l) sp.adj.insert(sp.adj.end(), nb[l].begin(), nb[l].end());
+    return sp;
+}
+
+}  // namespace lidarflow::interp

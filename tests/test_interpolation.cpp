@@ -1,0 +1,384 @@
+// Stage 4 (src/interpolation): the robust interpolator on an exactly piecewise-planar scene,
+// LiDAR anchoring, very few and very many matches, degenerate input, determinism.
+#include "test_support.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+#include "interpolation/interpolator.hpp"
+#include "interpolation_scene.hpp"
+
+using namespace lidarflow;
+using lidarflow::test::outlier_rates;
+
+namespace {
+
+bool all_finite_and_valid(const SceneFlowField &f) {
+    for (int y = 0; y < f.height(); ++y)
+        for (int x = 0; x < f.width(); ++x) {
+            if (!f.valid(y, x)) return false;
+            for (const cv::Mat1f *m : {&f.u, &f.v, &f.d0, &f.d1})
+                if (!std::isfinite((*m)(y, x))) return false;
+            if (f.d0(y, x) < 0 || f.d1(y, x) < 0) return false;
+        }
+    return true;
+}
+
+void print_rates(const char *what, const test::OutlierRates &r) {
+    std::printf("%s: D0 %.2f D1 %.2f Fl %.2f SF %.2f %% (EPE d0 %.3f, fl %.3f px)\n", what, r.d0, r.d1, r.fl,
+                r.sf, r.epe_d0, r.epe_fl);
+}
+
+// 5 % matches, 5 % of them gross outliers, no LiDAR: the four planar regions come back.
+void reproduces_piecewise_planar_scene(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    const SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.05, 11);
+    interp::InterpolationOptions o;
+    o.use_lidar = false;
+    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    assert_true(all_finite_and_valid(r.dense));
+    const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
+    print_rates("planar scene", rate);
+    assert_true(rate.sf < 3.0);
+    assert_true(rate.epe_d0 < 0.5);
+    assert_true(rate.epe_fl < 0.5);
+    // Away from region boundaries, the planes are recovered almost exactly.
+    cv::Mat1b interior(s.region.size(), uint8_t(0));
+    for (int y = 4; y < s.region.rows - 4; ++y)
+        for (int x = 4; x < s.region.cols - 4; ++x) {
+            bool same = true;
+            for (int dy = -4; dy <= 4; dy += 4)
+                for (int dx = -4; dx <= 4; dx += 4) same = same && s.region(y + dy, x + dx) == s.region(y, x);
+            interior(y, x) = same;
+        }
+    const test::OutlierRates in = outlier_rates(r.dense, s.truth, interior);
+    print_rates("interior", in);
+    assert_true(in.sf < 1.0);
+    assert_true(in.epe_d0 < 0.02);
+}
+
+// LiDAR grid of exact d0 measurements (every `step` px), also entered as exact matches.
+SparseLidar lidar_grid(const SceneFlowField &truth, SceneFlowField &matches, int step) {
+    SparseLidar l;
+    l.width = truth.width();
+    l.height = truth.height();
+    for (int y = step / 2; y < truth.height(); y += step)
+        for (int x = step / 2; x < truth.width(); x += step) {
+            l.points.push_back({x, y, truth.d0(y, x)});
+            matches.u(y, x) = truth.u(y, x);
+            matches.v(y, x) = truth.v(y, x);
+            matches.d0(y, x) = truth.d0(y, x);
+            matches.d1(y, x) = truth.d1(y, x);
+            matches.valid(y, x) = 1;
+        }
+    return l;
+}
+
+// Every LiDAR pixel's output d0 is its measurement: exactly with keep_lidar_values, within
+// the rejection tolerance from the models alone - even where the measurement contradicts all
+// matches around it (the matches say truth, one LiDAR point says truth + 5 px).
+void lidar_anchors_are_honoured(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.05, 12);
+    SparseLidar lidar = lidar_grid(s.truth, m, 40);
+    const int odd = 20;  // (180, 100): ground region interior
+    assert_int_equal(lidar.points[odd].x, 180);
+    assert_int_equal(lidar.points[odd].y, 100);
+    lidar.points[odd].disparity += 5.0f;
+
+    interp::InterpolationOptions o;
+    o.keep_lidar_values = true;
+    const interp::InterpolationResult exact = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    for (const LidarPoint &p : lidar.points) assert_float_equal(exact.dense.d0(p.y, p.x), p.disparity, 1e-6);
+    assert_true(exact.lidar_anchored_geometry >= static_cast<int>(lidar.points.size()));
+
+    o.keep_lidar_values = false;
+    const interp::InterpolationResult model = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    for (const LidarPoint &p : lidar.points)
+        assert_true(std::fabs(model.dense.d0(p.y, p.x) - p.disparity) <= o.lidar_disparity_tolerance + 1e-4f);
+
+    o.use_lidar = false;
+    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const LidarPoint &p = lidar.points[odd];
+    std::printf("contradicting LiDAR: on %.3f, off %.3f, truth %.3f, LiDAR %.3f\n", model.dense.d0(p.y, p.x),
+                off.dense.d0(p.y, p.x), s.truth.d0(p.y, p.x), p.disparity);
+    assert_true(std::fabs(off.dense.d0(p.y, p.x) - s.truth.d0(p.y, p.x)) < 0.5f);
+    assert_int_equal(off.lidar_anchored_geometry, 0);
+}
+
+// A patch of the ground where matching failed coherently (every match there wrong the same
+// way, as in a shadow): the superpixel holding a LiDAR point there is fixed with use_lidar
+// (the wrong majority's models are rejected by the anchor) and stays wrong without.
+void lidar_fixes_coherently_wrong_superpixel(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.0, 13);
+    const int cx = 150, cy = 130, r = 14;
+    for (int y = cy - r; y <= cy + r; ++y)
+        for (int x = cx - r; x <= cx + r; ++x) {
+            if (!m.valid(y, x) || (x - cx) * (x - cx) + (y - cy) * (y - cy) > r * r) continue;
+            m.u(y, x) = s.truth.u(y, x) + 7.0f;
+            m.v(y, x) = s.truth.v(y, x) - 4.0f;
+            m.d0(y, x) = s.truth.d0(y, x) + 8.0f;
+            m.d1(y, x) = s.truth.d1(y, x) + 8.0f;
+        }
+    SparseLidar lidar;
+    lidar.width = s.truth.width();
+    lidar.height = s.truth.height();
+    lidar.points.push_back({cx, cy, s.truth.d0(cy, cx)});
+    m.u(cy, cx) = s.truth.u(cy, cx);
+    m.v(cy, cx) = s.truth.v(cy, cx);
+    m.d0(cy, cx) = s.truth.d0(cy, cx);
+    m.d1(cy, cx) = s.truth.d1(cy, cx);
+    m.valid(cy, cx) = 1;
+
+    interp::InterpolationOptions o;
+    o.keep_lidar_values = false;
+    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    o.use_lidar = false;
+    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const cv::Mat1b mask = on.superpixels == on.superpixels(cy, cx);
+    const test::OutlierRates ron = outlier_rates(on.dense, s.truth, mask);
+    const test::OutlierRates roff = outlier_rates(off.dense, s.truth, mask);
+    print_rates("LiDAR superpixel, use_lidar on ", ron);
+    print_rates("LiDAR superpixel, use_lidar off", roff);
+    assert_true(on.lidar_anchored_geometry >= 1 && on.lidar_anchored_motion >= 1);
+    assert_true(ron.epe_d0 < 1.0 && ron.epe_fl < 1.5);
+    assert_true(roff.epe_d0 > 4.0 && roff.epe_fl > 4.0);
+}
+
+// ~50 matches over 51k pixels (no outliers): every pixel gets a finite model and the large
+// planar regions are still mostly right.
+void works_with_very_few_matches(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    const SceneFlowField m = test::sample_matches(s.truth, 0.001, 0.0, 14);
+    const int n = cv::countNonZero(m.valid);
+    assert_true(n >= 30 && n <= 80);
+    interp::InterpolationOptions o;
+    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    assert_true(all_finite_and_valid(r.dense));
+    const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
+    std::printf("%d matches: ", n);
+    print_rates("", rate);
+    assert_true(rate.sf < 15.0);
+
+    // A single match: constant fields equal to it.
+    SceneFlowField one = SceneFlowField::zeros(s.truth.width(), s.truth.height());
+    one.u(50, 50) = 1.5f, one.v(50, 50) = -2.0f, one.d0(50, 50) = 12.0f, one.d1(50, 50) = 11.0f;
+    one.valid(50, 50) = 1;
+    const SceneFlowField d = interp::interpolate_scene_flow(one, SparseLidar{}, s.image, o);
+    assert_true(all_finite_and_valid(d));
+    for (int y = 0; y < d.height(); y += 7)
+        for (int x = 0; x < d.width(); x += 7) {
+            assert_float_equal(d.u(y, x), 1.5f, 1e-4);
+            assert_float_equal(d.d0(y, x), 12.0f, 1e-4);
+        }
+}
+
+// Degenerate input: every match on one image row (all 3-point subsets collinear), and two
+// matches only. No NaN, no crash, values along the row right.
+void handles_collinear_and_tiny_inputs(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField m = SceneFlowField::zeros(s.truth.width(), s.truth.height());
+    for (int x = 0; x < m.width(); x += 3) {
+        m.u(100, x) = s.truth.u(100, x), m.v(100, x) = s.truth.v(100, x);
+        m.d0(100, x) = s.truth.d0(100, x), m.d1(100, x) = s.truth.d1(100, x);
+        m.valid(100, x) = 1;
+    }
+    interp::InterpolationOptions o;
+    o.use_lidar = false;
+    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    assert_true(all_finite_and_valid(r.dense));
+    int good = 0, total = 0;
+    for (int x = 0; x < m.width(); ++x) {
+        ++total;
+        good += std::fabs(r.dense.d0(100, x) - s.truth.d0(100, x)) < 1.0f;
+    }
+    assert_true(good > total * 8 / 10);
+
+    SceneFlowField two = SceneFlowField::zeros(m.width(), m.height());
+    two.valid(10, 10) = two.valid(150, 300) = 1;
+    two.d0(10, 10) = 5, two.d0(150, 300) = 30;
+    const SceneFlowField d = interp::interpolate_scene_flow(two, SparseLidar{}, s.image, o);
+    assert_true(all_finite_and_valid(d));
+}
+
+// Every pixel a match (51k matches, 2 % gross outliers): near-exact result.
+void works_with_dense_matches(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    const SceneFlowField m = test::sample_matches(s.truth, 1.0, 0.02, 15);
+    interp::InterpolationOptions o;
+    o.num_threads = 2;
+    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    assert_true(all_finite_and_valid(r.dense));
+    const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
+    print_rates("dense matches", rate);
+    assert_true(rate.sf < 0.5);
+}
+
+bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
+    for (const auto &[x, y] : {std::pair(&a.u, &b.u), std::pair(&a.v, &b.v), std::pair(&a.d0, &b.d0),
+                               std::pair(&a.d1, &b.d1), std::pair(&a.confidence, &b.confidence)})
+        if (cv::norm(*x, *y, cv::NORM_INF) != 0.0) return false;
+    return true;
+}
+
+// Same input, same output, bit for bit, on 1 and 3 threads; another seed may differ.
+void deterministic_for_any_thread_count(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.1, 16);
+    const SparseLidar lidar = lidar_grid(s.truth, m, 50);
+    interp::InterpolationOptions o;
+    o.num_threads = 1;
+    const interp::RobustInterpolator one(o);
+    o.num_threads = 3;
+    const interp::RobustInterpolator three(o);
+    const SceneFlowField a = one.run(m, lidar, s.image).dense;
+    const SceneFlowField b = three.run(m, lidar, s.image).dense;
+    const SceneFlowField c = one.run(m, lidar, s.image).dense;
+    assert_true(same_field(a, b));
+    assert_true(same_field(a, c));
+}
+
+template <class F>
+void expect_error(F &&f, ErrorCode code) {
+    try {
+        f();
+    } catch (const Error &e) {
+        assert_int_equal(static_cast<int>(e.code()), static_cast<int>(code));
+        return;
+    }
+    fail_msg("expected lidarflow::Error");
+}
+
+void rejects_invalid_input(void **) {
+    const test::PlanarScene s = test::make_planar_scene(64, 32);
+    const SceneFlowField good = test::sample_matches(s.truth, 0.2, 0.0, 17);
+    const interp::RobustInterpolator ri{interp::InterpolationOptions{}};
+    const SparseLidar none;
+    ri.run(good, none, s.image);  // the baseline call succeeds
+
+    cv::Mat small;
+    cv::resize(s.image, small, cv::Size(32, 32));
+    expect_error([&] { ri.run(good, none, small); }, ErrorCode::SizeMismatch);
+    expect_error([&] { ri.run(good, none, cv::Mat()); }, ErrorCode::InvalidArgument);
+    cv::Mat img16;
+    s.image.convertTo(img16, CV_16UC3);
+    expect_error([&] { ri.run(good, none, img16); }, ErrorCode::InvalidArgument);
+
+    SceneFlowField empty = SceneFlowField::zeros(64, 32);
+    expect_error([&] { ri.run(empty, none, s.image); }, ErrorCode::InvalidArgument);
+    auto copy = [&] {
+        return SceneFlowField{good.u.clone(), good.v.clone(), good.d0.clone(), good.d1.clone(),
+                              good.valid.clone(), good.confidence.clone()};
+    };
+    cv::Point at(-1, -1);
+    for (int y = 0; y < 32 && at.x < 0; ++y)
+        for (int x = 0; x < 64 && at.x < 0; ++x)
+            if (good.valid(y, x)) at = cv::Point(x, y);
+    SceneFlowField bad = copy();
+    bad.u(at) = std::nanf("");
+    expect_error([&] { ri.run(bad, none, s.image); }, ErrorCode::InvalidArgument);
+    bad = copy();
+    bad.d1(at) = std::numeric_limits<float>::infinity();
+    expect_error([&] { ri.run(bad, none, s.image); }, ErrorCode::InvalidArgument);
+    bad = copy();
+    bad.d0(at) = -2.0f;
+    expect_error([&] { ri.run(bad, none, s.image); }, ErrorCode::InvalidArgument);
+    bad = copy();
+    bad.v = cv::Mat1f(16, 64, 0.0f);
+    expect_error([&] { ri.run(bad, none, s.image); }, ErrorCode::SizeMismatch);
+    bad = copy();
+    bad.u.release();
+    expect_error([&] { ri.run(bad, none, s.image); }, ErrorCode::InvalidArgument);
+
+    SparseLidar lidar;
+    lidar.width = 64, lidar.height = 32;
+    lidar.points.push_back({64, 5, 10.0f});
+    expect_error([&] { ri.run(good, lidar, s.image); }, ErrorCode::InvalidArgument);
+    lidar.points = {{3, 5, std::nanf("")}};
+    expect_error([&] { ri.run(good, lidar, s.image); }, ErrorCode::InvalidArgument);
+    lidar.points = {{3, 5, -1.0f}};
+    expect_error([&] { ri.run(good, lidar, s.image); }, ErrorCode::InvalidArgument);
+    lidar.points = {{3, 5, 10.0f}};
+    lidar.width = 65;
+    expect_error([&] { ri.run(good, lidar, s.image); }, ErrorCode::SizeMismatch);
+
+    auto with = [](auto edit) {
+        interp::InterpolationOptions o;
+        edit(o);
+        return [o] { interp::RobustInterpolator{o}; };
+    };
+    using O = interp::InterpolationOptions;
+    expect_error(with([](O &o) { o.num_neighbors = 0; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.distance_sigma = std::nanf(""); }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.edge_gain = -1; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.num_threads = 0; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.superpixels.region_size = 2; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_disparity_tolerance = 0; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.edges.contrast_gain = 0; }), ErrorCode::InvalidArgument);
+}
+
+// The optional SED model: a missing file is an I/O error, a file that is not a model a
+// format error; both when the interpolator is built, not on the first frame.
+void sed_model_errors(void **) {
+    const auto dir = test::scratch_dir("interpolation_sed");
+    interp::InterpolationOptions o;
+    o.edges.method = interp::EdgeMethod::StructuredForest;
+    o.edges.sed_model_path = (dir / "missing.yml.gz").string();
+    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Io);
+    o.edges.sed_model_path = "";
+    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::InvalidArgument);
+
+    const auto garbage = dir / "garbage.yml";
+    std::FILE *f = std::fopen(garbage.string().c_str(), "w");
+    assert_non_null(f);
+    std::fputs("this is { not : a model ]\n", f);
+    std::fclose(f);
+    o.edges.sed_model_path = garbage.string();
+    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Format);
+
+    const auto yaml = dir / "other.yml";
+    f = std::fopen(yaml.string().c_str(), "w");
+    assert_non_null(f);
+    std::fputs("%YAML:1.0\n---\nthrs: [ 1, 2 ]\n", f);
+    std::fclose(f);
+    o.edges.sed_model_path = yaml.string();
+    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Format);
+
+    // Built-in edge maps: soft, in [0, 1], high on the scene's region boundaries.
+    const test::PlanarScene s = test::make_planar_scene();
+    for (auto method : {interp::EdgeMethod::Gradient, interp::EdgeMethod::MultiScaleGradient}) {
+        interp::EdgeMapOptions eo;
+        eo.method = method;
+        const cv::Mat1f e = interp::compute_edge_map(s.image, eo);
+        double lo, hi;
+        cv::minMaxLoc(e, &lo, &hi);
+        assert_true(lo >= 0.0 && hi <= 1.0);
+        assert_true(e(60, 20) > 0.5f);   // background / ground boundary
+        assert_true(e(30, 20) < 0.3f);   // inside the background
+    }
+    interp::EdgeMapOptions sed_without_model;
+    sed_without_model.method = interp::EdgeMethod::StructuredForest;
+    expect_error([&] { interp::compute_edge_map(s.image, sed_without_model); }, ErrorCode::InvalidArgument);
+}
+
+}  // namespace
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(reproduces_piecewise_planar_scene),
+        cmocka_unit_test(lidar_anchors_are_honoured),
+        cmocka_unit_test(lidar_fixes_coherently_wrong_superpixel),
+        cmocka_unit_test(works_with_very_few_matches),
+        cmocka_unit_test(handles_collinear_and_tiny_inputs),
+        cmocka_unit_test(works_with_dense_matches),
+        cmocka_unit_test(deterministic_for_any_thread_count),
+        cmocka_unit_test(rejects_invalid_input),
+        cmocka_unit_test(sed_model_errors),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

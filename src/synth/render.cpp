@@ -1,0 +1,227 @@
+// Ray-casting renderer of the synthetic street scene and its exact ground truth.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <omp.h>
+
+#include "core/error.hpp"
+#include "synth/model.hpp"
+#include "synth/noise.hpp"
+#include "synth/scene.hpp"
+#include "synth/texture.hpp"
+
+namespace lidarflow::synth {
+namespace {
+
+// Independent random streams per use, derived from the seed, so that e.g. changing the LiDAR
+// noise leaves the images bit-identical.
+enum StreamId : uint64_t {
+    kNoiseLeft0 = 1,
+    kNoiseRight0,
+    kNoiseLeft1,
+    kNoiseRight1,
+    kLidarGrid0,
+    kLidarGrid1,
+    kLidarNoise0,
+    kLidarNoise1,
+};
+
+struct Rig {
+    SceneModel model;
+    StereoCamera cam;
+    int width = 0, height = 0;
+
+    V3 ray_dir(int t, double px, double py) const {
+        return model.left[t].rot.apply(V3{(px - cam.cx) / cam.fx, (py - cam.cy) / cam.fy, 1.0});
+    }
+};
+
+void validate(const SynthConfig &c) {
+    auto bad = [](const std::string &m) { throw Error(ErrorCode::InvalidArgument, "synth: " + m); };
+    if (c.width < 32 || c.width > 8192 || c.height < 32 || c.height > 8192)
+        bad("image size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " outside [32, 8192]");
+    if (!std::isfinite(c.fx) || c.fx < 0) bad("fx must be finite and >= 0 (0 = automatic)");
+    if (!std::isfinite(c.baseline) || c.baseline <= 0) bad("baseline must be finite and > 0");
+    if (!std::isfinite(c.noise_sigma) || c.noise_sigma < 0) bad("noise_sigma must be finite and >= 0");
+    if (!std::isfinite(c.lidar_noise) || c.lidar_noise < 0) bad("lidar_noise must be finite and >= 0");
+    if (c.lidar_points < 0 || static_cast<int64_t>(c.lidar_points) > static_cast<int64_t>(c.width) * c.height)
+        bad("lidar_points must be in [0, width*height]");
+    if (c.supersampling < 1 || c.supersampling > 8) bad("supersampling must be in [1, 8]");
+    if (c.threads < 0) bad("threads must be >= 0");
+}
+
+uint64_t stream_key(uint64_t seed, StreamId id) { return mix64(mix64(seed) + id * 0x9e3779b97f4a7c15ULL); }
+
+int thread_count(const SynthConfig &c) { return c.threads > 0 ? c.threads : omp_get_max_threads(); }
+
+uint8_t to_u8(double v) { return static_cast<uint8_t>(std::lround(std::min(std::max(v, 0.0), 255.0))); }
+
+// Colour image of one view (area-sampled, plus sensor noise); optionally the depth Z and the
+// disparity fx*B/Z of the pixel-centre rays (0 and kInvalidDisparity where nothing is hit).
+void render_view(const Rig &rig, const SynthConfig &cfg, int t, bool right, uint64_t noise_key, cv::Mat &image,
+                 cv::Mat1f *depth, DisparityMap *disp) {
+    image.create(rig.height, rig.width, CV_8UC3);
+    if (depth) depth->create(rig.height, rig.width);
+    if (disp) disp->create(rig.height, rig.width);
+    const int ss = cfg.supersampling;
+    const V3 origin = rig.model.camera_centre(t, right);
+#pragma omp parallel for num_threads(thread_count(cfg)) schedule(dynamic, 4)
+    for (int y = 0; y < rig.height; ++y) {
+        cv::Vec3b *row = image.ptr<cv::Vec3b>(y);
+        for (int x = 0; x < rig.width; ++x) {
+            Rgb sum{0, 0, 0};
+            for (int j = 0; j < ss; ++j)
+                for (int i = 0; i < ss; ++i) {
+                    const V3 dir = rig.ray_dir(t, x + (i + 0.5) / ss - 0.5, y + (j + 0.5) / ss - 0.5);
+                    const Hit h = cast_ray(rig.model, t, origin, dir);
+                    if (h.label == kLabelNone) continue;
+                    // Surface patch one sample covers: range / fx across the ray, stretched by
+                    // 1/cos along it at grazing angles. The geometric mean of the two keeps
+                    // ground texture crisp; the rest of the aliasing is left to supersampling.
+                    const double len = norm(dir);
+                    const double cosine = std::max(std::fabs(dot(dir, h.normal)) / len, 0.01);
+                    const double footprint = h.t * len / rig.cam.fx / std::sqrt(cosine) / ss;
+                    const Rgb c = surface_colour(rig.model, h, footprint);
+                    for (int k = 0; k < 3; ++k) sum[k] += c[k];
+                }
+            const uint64_t pix = static_cast<uint64_t>(y) * rig.width + x;
+            cv::Vec3b &out = row[x];
+            for (int k = 0; k < 3; ++k) {  // k: R, G, B; OpenCV stores B, G, R
+                double v = 255.0 * sum[k] / (ss * ss);
+                if (cfg.noise_sigma > 0) v += cfg.noise_sigma * gaussian(noise_key, pix * 3 + k);
+                out[2 - k] = to_u8(v);
+            }
+            if (!depth && !disp) continue;
+            const Hit c = cast_ray(rig.model, t, origin, rig.ray_dir(t, x, y));
+            const bool hit = c.label != kLabelNone;
+            if (depth) (*depth)(y, x) = hit ? static_cast<float>(c.t) : 0.0f;
+            if (disp) (*disp)(y, x) = hit ? static_cast<float>(rig.cam.disparity_from_depth(c.t)) : kInvalidDisparity;
+        }
+    }
+}
+
+// Exactly n pixels (fewer only if cells collapse on tiny images) on a jittered regular grid:
+// rows of near-square cells, one uniformly placed point in the central 80 % of each cell.
+std::vector<cv::Point> jittered_grid(int n, int w, int h, uint64_t key) {
+    std::vector<cv::Point> pts;
+    if (n <= 0) return pts;
+    const int rows = std::min(n, std::max(1, static_cast<int>(std::lround(std::sqrt(double(n) * h / w)))));
+    std::vector<uint8_t> taken(static_cast<size_t>(w) * h, 0);
+    uint64_t counter = 0;
+    for (int r = 0; r < rows; ++r) {
+        const int cols = static_cast<int>(int64_t(r + 1) * n / rows - int64_t(r) * n / rows);
+        const double ch = double(h) / rows, cw = double(w) / cols;
+        for (int c = 0; c < cols; ++c) {
+            const double jx = 0.1 + 0.8 * unit(mix64(key ^ mix64(counter++)));
+            const double jy = 0.1 + 0.8 * unit(mix64(key ^ mix64(counter++)));
+            const int x = std::min(w - 1, static_cast<int>((c + jx) * cw));
+            const int y = std::min(h - 1, static_cast<int>((r + jy) * ch));
+            uint8_t &t = taken[static_cast<size_t>(y) * w + x];
+            if (t) continue;
+            t = 1;
+            pts.emplace_back(x, y);
+        }
+    }
+    return pts;
+}
+
+// LiDAR returns are the true disparities of the view (exact, or with lidar_noise).
+SparseLidar sample_lidar(const DisparityMap &disp, const SynthConfig &cfg, uint64_t grid_key, uint64_t noise_key) {
+    SparseLidar out;
+    out.width = disp.cols;
+    out.height = disp.rows;
+    uint64_t i = 0;
+    for (const cv::Point &p : jittered_grid(cfg.lidar_points, disp.cols, disp.rows, grid_key)) {
+        float d = disp(p.y, p.x);
+        if (!disparity_valid(d)) continue;
+        if (cfg.lidar_noise > 0) d = std::max(0.0f, d + static_cast<float>(cfg.lidar_noise * gaussian(noise_key, i++)));
+        out.points.push_back({p.x, p.y, d});
+    }
+    return out;
+}
+
+// Per-pixel ground truth of the left t0 image (see scene.hpp for the definitions).
+void ground_truth(const Rig &rig, const SynthConfig &cfg, SynthScene &s) {
+    const int w = rig.width, h = rig.height;
+    const SceneModel &m = rig.model;
+    const StereoCamera &cam = rig.cam;
+    s.disp0_occ = DisparityMap(h, w, kInvalidDisparity);
+    s.disp0_noc = DisparityMap(h, w, kInvalidDisparity);
+    s.disp1_occ = DisparityMap(h, w, kInvalidDisparity);
+    s.disp1_noc = DisparityMap(h, w, kInvalidDisparity);
+    s.flow_occ = FlowField::zeros(w, h);
+    s.flow_noc = FlowField::zeros(w, h);
+    s.textureless_mask = cv::Mat1b::zeros(h, w);
+    s.shadow_mask = cv::Mat1b::zeros(h, w);
+    s.labels0 = cv::Mat1b::zeros(h, w);
+    const int uniform_box = m.textureless_box();
+    const V3 left0 = m.camera_centre(0, false), right0 = m.camera_centre(0, true);
+    const V3 left1 = m.camera_centre(1, false), right1 = m.camera_centre(1, true);
+    const Yaw &yaw1 = m.left[1].rot;
+#pragma omp parallel for num_threads(thread_count(cfg)) schedule(dynamic, 4)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const Hit hit = cast_ray(m, 0, left0, rig.ray_dir(0, x, y));
+            if (hit.label == kLabelNone) continue;
+            s.labels0(y, x) = hit.label;
+            if (uniform_box >= 0 && hit.label == kLabelFirstBox + uniform_box) s.textureless_mask(y, x) = 255;
+            if (in_shadow(m, hit)) s.shadow_mask(y, x) = 255;
+
+            const double d0 = cam.disparity_from_depth(hit.t);
+            s.disp0_occ(y, x) = static_cast<float>(d0);
+            if (x - d0 >= 0 && visible_from(m, 0, right0, hit.point)) s.disp0_noc(y, x) = static_cast<float>(d0);
+
+            const V3 p1 = m.move_to_t1(hit.label, hit.point);
+            const V3 c1 = yaw1.inverse(p1 - left1);
+            if (c1.z <= 0.1) continue;
+            const double u1 = cam.fx * c1.x / c1.z + cam.cx, v1 = cam.fy * c1.y / c1.z + cam.cy;
+            if (!(u1 >= 0 && u1 <= w - 1 && v1 >= 0 && v1 <= h - 1)) continue;
+            const double d1 = cam.disparity_from_depth(c1.z);
+            const auto fu = static_cast<float>(u1 - x), fv = static_cast<float>(v1 - y);
+            s.flow_occ.u(y, x) = fu;
+            s.flow_occ.v(y, x) = fv;
+            s.flow_occ.valid(y, x) = 1;
+            s.disp1_occ(y, x) = static_cast<float>(d1);
+            if (!visible_from(m, 1, left1, p1)) continue;
+            s.flow_noc.u(y, x) = fu;
+            s.flow_noc.v(y, x) = fv;
+            s.flow_noc.valid(y, x) = 1;
+            if (u1 - d1 >= 0 && visible_from(m, 1, right1, p1)) s.disp1_noc(y, x) = static_cast<float>(d1);
+        }
+    }
+}
+
+}  // namespace
+
+SynthScene render(const SynthConfig &config) {
+    validate(config);
+    Rig rig;
+    rig.width = config.width;
+    rig.height = config.height;
+    rig.cam.fx = rig.cam.fy = config.fx > 0 ? config.fx : 0.58 * config.width;
+    rig.cam.cx = 0.5 * (config.width - 1);
+    rig.cam.cy = 0.46 * (config.height - 1);
+    rig.cam.baseline = config.baseline;
+    rig.model = make_street_scene(config.seed, config.baseline);
+
+    SynthScene s;
+    s.config = config;
+    s.camera = rig.cam;
+    const V3 ego = rig.model.left[1].centre;
+    s.ego_translation = cv::Vec3d(ego.x, ego.y, ego.z);
+    s.ego_yaw = rig.model.left[1].yaw;
+
+    DisparityMap disp_left1;
+    render_view(rig, config, 0, false, stream_key(config.seed, kNoiseLeft0), s.left0, &s.depth_left0, nullptr);
+    render_view(rig, config, 0, true, stream_key(config.seed, kNoiseRight0), s.right0, nullptr, nullptr);
+    render_view(rig, config, 1, false, stream_key(config.seed, kNoiseLeft1), s.left1, &s.depth_left1, &disp_left1);
+    render_view(rig, config, 1, true, stream_key(config.seed, kNoiseRight1), s.right1, nullptr, nullptr);
+    ground_truth(rig, config, s);
+    s.lidar0 = sample_lidar(s.disp0_occ, config, stream_key(config.seed, kLidarGrid0), stream_key(config.seed, kLidarNoise0));
+    s.lidar1 = sample_lidar(disp_left1, config, stream_key(config.seed, kLidarGrid1), stream_key(config.seed, kLidarNoise1));
+    return s;
+}
+
+}  // namespace lidarflow::synth

@@ -1,0 +1,206 @@
+// The synth, viz and demo commands of the lidarflow CLI: files they write, what demo says,
+// and non-zero exits on bad arguments. Runs the built binary ($LIDARFLOW_CLI, set by CTest).
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/maps.hpp"
+#include "io/kitti_layout.hpp"
+#include "io/kitti_png.hpp"
+#include "synth/write_kitti.hpp"
+#include "viz/error_map.hpp"
+// cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+extern "C" {
+#include <cmocka.h>
+}
+#include "test_support.hpp"
+
+using namespace lidarflow;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string g_cli;
+
+struct Result {
+    int code = -1;
+    std::string output;
+};
+
+// Runs `lidarflow ARGS` with stdout+stderr captured in a file of the scratch dir `dir`.
+Result run(const std::string &args, const fs::path &dir) {
+    const fs::path log = dir / "cli.log";
+    const std::string cmd = "'" + g_cli + "' " + args + " > '" + log.string() + "' 2>&1";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.output = ss.str();
+    return r;
+}
+
+std::string q(const fs::path &p) { return "'" + p.string() + "'"; }
+
+void expect_kitti_frame(const fs::path &root, const std::string &id) {
+    const io::KittiLayout k{root.string()};
+    for (const std::string &f :
+         {k.left(id, 0), k.left(id, 1), k.right(id, 0), k.right(id, 1), k.gt_disp0(id, true), k.gt_disp0(id, false),
+          k.gt_disp1(id, true), k.gt_disp1(id, false), k.gt_flow(id, true), k.gt_flow(id, false),
+          k.calib_cam_to_cam(id), k.lidar(id, 0), k.lidar(id, 1), synth::textureless_mask_path(root.string(), id),
+          synth::shadow_mask_path(root.string(), id)}) {
+        if (!fs::is_regular_file(f)) fail_msg("missing %s", f.c_str());
+        assert_true(fs::file_size(f) > 0);
+    }
+}
+
+void test_demo_writes_layout_and_pictures(void **) {
+    const fs::path dir = test::scratch_dir("cli_demo");
+    const Result r = run("demo --out " + q(dir / "out"), dir);
+    if (r.code != 0) fail_msg("demo failed (%d): %s", r.code, r.output.c_str());
+    expect_kitti_frame(dir / "out", "000000");
+    for (const char *name : {"inputs", "flow_gt", "flow_coverage", "disp0_gt", "disp1_gt", "masks"}) {
+        const fs::path p = dir / "out" / "viz" / (std::string("000000_") + name + ".png");
+        const cv::Mat m = io::read_image(p.string());
+        assert_int_equal(m.type(), CV_8UC3);
+        if (std::string(name) == "inputs") {
+            assert_int_equal(m.cols, 2 * 640 + 4);  // 2x2 grid with a 4 px gutter
+            assert_int_equal(m.rows, 2 * 192 + 4);
+        } else {
+            assert_int_equal(m.cols, 640);
+            assert_int_equal(m.rows, 192);
+        }
+        assert_true(r.output.find(p.string()) != std::string::npos);  // it says what it wrote
+    }
+    // It must not pretend to estimate anything.
+    assert_true(r.output.find("GROUND TRUTH") != std::string::npos);
+    assert_true(r.output.find("Nothing is estimated") != std::string::npos);
+    assert_true(r.output.find("88 points at t0") != std::string::npos);
+    // Default output folder is demo-out in the working directory.
+    const Result h = run("demo --help", dir);
+    assert_int_equal(h.code, 0);
+    assert_true(h.output.find("demo-out") != std::string::npos);
+}
+
+void test_synth_frames_ids_and_options(void **) {
+    const fs::path dir = test::scratch_dir("cli_synth");
+    const fs::path out = dir / "kitti";
+    Result r = run("synth --out " + q(out) + " --frames 2 --seed 5 --width 320 --height 96 --points 40", dir);
+    if (r.code != 0) fail_msg("synth failed (%d): %s", r.code, r.output.c_str());
+    expect_kitti_frame(out, "000000");
+    expect_kitti_frame(out, "000001");
+    const io::KittiLayout k{out.string()};
+    const cv::Mat a = io::read_image(k.left("000000", 0)), b = io::read_image(k.left("000001", 0));
+    assert_int_equal(a.cols, 320);
+    assert_int_equal(a.rows, 96);
+    assert_true(cv::norm(a, b, cv::NORM_L1) > 0);  // frame k uses seed + k
+    assert_int_equal(SparseLidar::from_map(io::read_disparity_png(k.lidar("000001", 0))).points.size(), 40);
+    r = run("synth --out " + q(out) + " --id 000010 --seed 5 --width 320 --height 96", dir);
+    assert_int_equal(r.code, 0);
+    expect_kitti_frame(out, "000010");
+    // Same seed and size as frame 000000 above: identical image files.
+    assert_true(cv::norm(a, io::read_image(k.left("000010", 0)), cv::NORM_INF) == 0);
+    assert_int_equal(k.frame_ids().size(), 3);
+}
+
+void test_viz_pictures_and_error_maps(void **) {
+    const fs::path dir = test::scratch_dir("cli_viz");
+    const fs::path out = dir / "kitti";
+    assert_int_equal(run("synth --out " + q(out) + " --width 320 --height 96", dir).code, 0);
+    const io::KittiLayout k{out.string()};
+    Result r = run("viz --disp " + q(k.gt_disp0("000000")) + " --out " + q(dir / "d.png") + " --max 60", dir);
+    if (r.code != 0) fail_msg("viz --disp failed: %s", r.output.c_str());
+    cv::Mat m = io::read_image((dir / "d.png").string());
+    assert_int_equal(m.type(), CV_8UC3);
+    assert_true(m.size() == cv::Size(320, 96));
+
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --out " + q(dir / "f.png") + " --style middlebury", dir);
+    assert_int_equal(r.code, 0);
+    assert_true(io::read_image((dir / "f.png").string()).size() == cv::Size(320, 96));
+
+    // Error map of the GT against itself: every pixel with GT is in the lowest band, the rest
+    // black; against the noc GT (a worse "estimate" at occluded pixels) higher bands appear.
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --gt " + q(k.gt_flow("000000")) + " --out " +
+                q(dir / "e.png"),
+            dir);
+    assert_int_equal(r.code, 0);
+    m = io::read_image((dir / "e.png").string());
+    const cv::Vec3b lowest = viz::log_error_color(0), black(0, 0, 0);
+    const FlowField gt = io::read_flow_png(k.gt_flow("000000"));
+    for (int y = 0; y < m.rows; ++y)
+        for (int x = 0; x < m.cols; ++x) assert_true(m.at<cv::Vec3b>(y, x) == (gt.valid(y, x) ? lowest : black));
+    r = run("viz --disp " + q(k.gt_disp1("000000", false)) + " --gt " + q(k.gt_disp1("000000", true)) +
+                " --gt-noc " + q(k.gt_disp1("000000", false)) + " --out " + q(dir / "e1.png"),
+            dir);
+    assert_int_equal(r.code, 0);
+    m = io::read_image((dir / "e1.png").string());
+    const cv::Vec3b worst_half(38 / 2, 0, 165 / 2);  // invalid estimate at occluded-only pixels
+    int worst = 0;
+    for (int y = 0; y < m.rows; ++y)
+        for (int x = 0; x < m.cols; ++x) worst += m.at<cv::Vec3b>(y, x) == worst_half;
+    assert_true(worst > 100);
+}
+
+void expect_failure(const std::string &args, const fs::path &dir, int code) {
+    const Result r = run(args, dir);
+    if (r.code != code) fail_msg("'%s' exited %d (want %d): %s", args.c_str(), r.code, code, r.output.c_str());
+    assert_true(r.output.find("error") != std::string::npos);
+}
+
+void test_bad_arguments_fail(void **) {
+    const fs::path dir = test::scratch_dir("cli_synth_bad");
+    const std::string o = " --out " + q(dir / "o");
+    expect_failure("synth", dir, 2);                       // --out missing
+    expect_failure("synth" + o + " --width -5", dir, 2);   // render() range check
+    expect_failure("synth" + o + " --height 10", dir, 2);
+    expect_failure("synth" + o + " --points -1", dir, 2);
+    expect_failure("synth" + o + " --noise nan", dir, 2);
+    expect_failure("synth" + o + " --seed -3", dir, 2);
+    expect_failure("synth" + o + " --id 12", dir, 2);
+    expect_failure("synth" + o + " --id 999999 --frames 2", dir, 2);
+    expect_failure("synth" + o + " --frames 0", dir, 2);
+    expect_failure("synth" + o + " --bogus 1", dir, 2);
+    expect_failure("synth" + o + " stray", dir, 2);
+    assert_false(fs::exists(dir / "o"));  // nothing written on bad arguments
+    expect_failure("demo --seed abc" + o, dir, 2);
+    expect_failure("viz --out x.png", dir, 2);  // neither --disp nor --flow
+    expect_failure("viz --disp a.png --flow b.png --out x.png", dir, 2);
+    expect_failure("viz --disp a.png", dir, 2);  // --out missing
+    expect_failure("viz --disp a.png --gt b.png --max 3 --out x.png", dir, 2);
+    expect_failure("viz --disp a.png --style kitti --out x.png", dir, 2);
+    expect_failure("viz --disp " + q(dir / "missing.png") + " --out " + q(dir / "x.png"), dir, 1);  // Io
+    {
+        std::ofstream(dir / "junk.png") << "not a png";
+    }
+    expect_failure("viz --flow " + q(dir / "junk.png") + " --out " + q(dir / "x.png"), dir, 1);  // Format
+    assert_false(fs::exists(dir / "x.png"));
+}
+
+}  // namespace
+
+int main() {
+    const char *cli = std::getenv("LIDARFLOW_CLI");
+    if (!cli || !*cli || !fs::exists(cli)) {
+        std::printf("synth_cli: skipped: LIDARFLOW_CLI is not set to the built lidarflow binary\n");
+        return 77;
+    }
+    g_cli = cli;
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_demo_writes_layout_and_pictures),
+        cmocka_unit_test(test_synth_frames_ids_and_options),
+        cmocka_unit_test(test_viz_pictures_and_error_maps),
+        cmocka_unit_test(test_bad_arguments_fail),
+    };
+    return cmocka_run_group_tests_name("synth_cli", tests, nullptr, nullptr);
+}

@@ -1,0 +1,93 @@
+#include "consistency/consistency.hpp"
+
+#include <chrono>
+
+#include "consistency/validate.hpp"
+#include "core/error.hpp"
+
+namespace lidarflow::consistency {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+long long count_valid(const SceneFlowField &f) { return cv::countNonZero(f.valid); }
+
+}  // namespace
+
+ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlowField &backward,
+                                  const DisparityMap &sgm, const SparseLidar &lidar0,
+                                  const ConsistencyOptions &opt) {
+    const Clock::time_point start = Clock::now();
+    detail::check_options(opt);
+    detail::check_field(forward, "forward");
+    detail::check_field(backward, "backward");
+    const int h = forward.height(), w = forward.width();
+    detail::check_size(backward.u, h, w, "backward field");
+    detail::check_size(sgm, h, w, "SGM disparity");
+    const LidarReference lidar = LidarReference::build(lidar0, w, h, opt.support_window);
+
+    // LiDAR d0 is exact (the matcher may not move it); put it in so that every output carries it.
+    SceneFlowField input = forward;
+    if (!lidar.image_only()) {
+        input.d0 = forward.d0.clone();
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                if (lidar.is_lidar(y, x) && forward.valid(y, x)) input.d0(y, x) = lidar.disparity(y, x);
+    }
+
+    ConsistencyResult r;
+    r.sgm = sgm.clone();
+    r.lidar_pixels = lidar.is_lidar.clone();
+    r.counts.input = count_valid(input);
+    r.counts.lidar_pixels = lidar.count;
+
+    Clock::time_point t = Clock::now();
+    const SceneFlowField checked_sgm = sgm_check(input, sgm, lidar, opt);
+    r.seconds.sgm_check = seconds_since(t);
+    r.counts.after_sgm_check = count_valid(checked_sgm);
+
+    t = Clock::now();
+    r.after_sgm = remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), opt).field;
+    r.seconds.sgm_clusters = seconds_since(t);
+    r.counts.after_sgm_clusters = count_valid(r.after_sgm);
+
+    t = Clock::now();
+    ForwardBackwardResult fb = forward_backward_check(r.after_sgm, backward, lidar, opt);
+    r.seconds.fb_check = seconds_since(t);
+    r.counts.after_fb_check = count_valid(fb.field);
+    r.counts.lidar_motion_unreliable = cv::countNonZero(fb.lidar_motion_unreliable);
+
+    t = Clock::now();
+    r.after_fb = remove_small_clusters(fb.field, lidar, fb.lidar_motion_unreliable, opt).field;
+    r.seconds.fb_clusters = seconds_since(t);
+    r.counts.after_fb_clusters = count_valid(r.after_fb);
+
+    t = Clock::now();
+    r.sparse = sparsify(r.after_fb, fb.error, lidar, opt);
+    r.seconds.sparsify = seconds_since(t);
+    r.counts.sparse = count_valid(r.sparse);
+
+    r.fb_error = fb.error;
+    r.lidar_motion_unreliable = fb.lidar_motion_unreliable;
+    r.seconds.total = seconds_since(start);
+    return r;
+}
+
+ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlowField &backward, const cv::Mat &left0,
+                                  const cv::Mat &right0, const SparseLidar &lidar0, const ConsistencyOptions &opt) {
+    const Clock::time_point start = Clock::now();
+    detail::check_options(opt);
+    detail::check_field(forward, "forward");
+    detail::check_size(left0, forward.height(), forward.width(), "left image");
+    const DisparityMap sgm = compute_sgm_disparity(left0, right0, opt.sgm);
+    const double sgm_seconds = seconds_since(start);
+    ConsistencyResult r = run_consistency(forward, backward, sgm, lidar0, opt);
+    r.seconds.sgm = sgm_seconds;
+    r.seconds.total = seconds_since(start);
+    return r;
+}
+
+}  // namespace lidarflow::consistency

@@ -7,7 +7,10 @@
 #include <limits>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/error.hpp"
+#include "interpolation/ego_motion.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/piecewise_model.hpp"
@@ -28,9 +31,13 @@ constexpr int kDims[kNumChannels] = {1, 1, 2};
 struct Seeds {
     std::vector<cv::Point> pos;
     std::vector<float> x, y, u, v, d0, d1;
-    std::vector<uint8_t> has_motion, is_lidar;
+    // What is interpolated (see InterpolationOptions::d1_from_change / ego_motion): the
+    // matches minus the background prediction from their own d0 (d0_match).
+    std::vector<float> z1, zu, zv, d0_match;
+    std::vector<uint8_t> has_motion, is_lidar, is_hint;
     int size() const { return static_cast<int>(pos.size()); }
-    void push(int px, int py, float uu, float vv, float dd0, float dd1, bool motion, bool lidar) {
+    void push(int px, int py, float uu, float vv, float dd0, float dd1, bool motion, bool lidar,
+              bool hint = false) {
         pos.emplace_back(px, py);
         x.push_back(static_cast<float>(px));
         y.push_back(static_cast<float>(py));
@@ -38,8 +45,13 @@ struct Seeds {
         v.push_back(vv);
         d0.push_back(dd0);
         d1.push_back(dd1);
+        z1.push_back(dd1);
+        zu.push_back(uu);
+        zv.push_back(vv);
+        d0_match.push_back(dd0);
         has_motion.push_back(motion);
         is_lidar.push_back(lidar);
+        is_hint.push_back(hint);
     }
 };
 
@@ -63,6 +75,25 @@ void validate_options(const InterpolationOptions &o) {
     require(positive(o.lidar_disparity_tolerance) && positive(o.lidar_match_tolerance),
             ErrorCode::InvalidArgument, "interpolation: LiDAR tolerances must be > 0");
     require(positive(o.lidar_weight), ErrorCode::InvalidArgument, "interpolation: lidar_weight must be > 0");
+    const EgoMotionOptions &e = o.ego;
+    require(e.hypotheses >= 1 && e.hypotheses <= 100000, ErrorCode::InvalidArgument,
+            "interpolation: ego.hypotheses must be in [1, 100000]");
+    require(positive(e.disparity_inlier) && positive(e.flow_inlier), ErrorCode::InvalidArgument,
+            "interpolation: ego inlier thresholds must be > 0");
+    require(std::isfinite(e.min_inlier_share) && e.min_inlier_share >= 0.0f && e.min_inlier_share <= 1.0f,
+            ErrorCode::InvalidArgument, "interpolation: ego.min_inlier_share must be in [0, 1]");
+    require(e.min_inliers >= 0 && e.min_inliers <= 100000000, ErrorCode::InvalidArgument,
+            "interpolation: ego.min_inliers must be in [0, 10^8]");
+    require(e.joint_rounds >= 0 && e.joint_rounds <= 100, ErrorCode::InvalidArgument,
+            "interpolation: ego.joint_rounds must be in [0, 100]");
+    require(o.hint_grid >= 1 && o.hint_grid <= 4096, ErrorCode::InvalidArgument,
+            "interpolation: hint_grid must be in [1, 4096]");
+    require(std::isfinite(o.hint_min_distance) && o.hint_min_distance >= 0.0f, ErrorCode::InvalidArgument,
+            "interpolation: hint_min_distance must be finite and >= 0");
+    require(positive(o.hint_weight) && positive(o.hint_lidar_tolerance), ErrorCode::InvalidArgument,
+            "interpolation: hint_weight and hint_lidar_tolerance must be > 0");
+    require(positive(o.hint_lidar_radius) && o.hint_lidar_radius <= 4096.0f, ErrorCode::InvalidArgument,
+            "interpolation: hint_lidar_radius must be in (0, 4096]");
     require(o.num_threads >= 1 && o.num_threads <= 1024, ErrorCode::InvalidArgument,
             "interpolation: num_threads must be in [1, 1024]");
     // Sub-stage options are checked by their own functions; check them up front too so a bad
@@ -131,6 +162,58 @@ void validate_inputs(const SceneFlowField &m, const SparseLidar &lidar, const cv
         require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
                 "interpolation: LiDAR disparity must be finite and >= 0");
     }
+}
+
+void validate_hint(const DisparityMap &hint, const cv::Size &sz) {
+    if (hint.empty()) return;
+    require(hint.size() == sz, ErrorCode::SizeMismatch, "interpolation: geometry hint and image differ in size");
+    for (int y = 0; y < hint.rows; ++y)
+        for (int x = 0; x < hint.cols; ++x)
+            require(std::isfinite(hint(y, x)), ErrorCode::InvalidArgument,
+                    "interpolation: non-finite value in the geometry hint");
+}
+
+// Geometry-hint seeds (see InterpolationOptions::use_geometry_hint): grid pixels in the holes
+// of the matches where the LiDAR pixels around them confirm the hint. The hint is compared with
+// LiDAR only at LiDAR pixels (same pixel, no slope assumption); a window vouches for its hint
+// when at least 80 % of its comparable LiDAR pixels agree, so a single bad measurement (e.g.
+// a LiDAR/camera parallax artefact) does not veto a whole region of dense scans.
+int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const SparseLidar &lidar,
+                   const InterpolationOptions &o) {
+    const int w = hint.cols, h = hint.rows;
+    cv::Mat1b not_match(h, w, uint8_t{255});
+    for (int i = 0; i < s.size(); ++i)
+        if (s.has_motion[i]) not_match(s.pos[i]) = 0;
+    cv::Mat1f dist;
+    cv::distanceTransform(not_match, dist, cv::DIST_L2, 3);
+    cv::Mat1b agree(h, w, uint8_t{0}), disagree(h, w, uint8_t{0});
+    for (const LidarPoint &p : lidar.points) {
+        const float d = hint(p.y, p.x);
+        if (d < 0.0f) continue;
+        (std::fabs(d - p.disparity) <= o.hint_lidar_tolerance ? agree : disagree)(p.y, p.x) = 1;
+    }
+    cv::Mat1i ia, id;  // (h + 1) x (w + 1) integral images
+    cv::integral(agree, ia, CV_32S);
+    cv::integral(disagree, id, CV_32S);
+    const int r = static_cast<int>(o.hint_lidar_radius);
+    auto box = [&](const cv::Mat1i &ii, int x, int y) {
+        const int x0 = std::max(0, x - r), y0 = std::max(0, y - r);
+        const int x1 = std::min(w, x + r + 1), y1 = std::min(h, y + r + 1);
+        return ii(y1, x1) - ii(y0, x1) - ii(y1, x0) + ii(y0, x0);
+    };
+    int added = 0;
+    const int g = o.hint_grid;
+    for (int y = g / 2; y < h; y += g)
+        for (int x = g / 2; x < w; x += g) {
+            const float d = hint(y, x);
+            if (d < 0.0f || seed_at(y, x) >= 0 || dist(y, x) < o.hint_min_distance) continue;
+            const int na = box(ia, x, y), nd = box(id, x, y);
+            if (na == 0 || 5 * nd > na + nd) continue;
+            seed_at(y, x) = s.size();
+            s.push(x, y, 0.0f, 0.0f, d, 0.0f, false, false, true);
+            ++added;
+        }
+    return added;
 }
 
 // splitmix64: tiny, statistically fine, and reproducible across platforms (std::
@@ -271,16 +354,43 @@ RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : op
 }
 
 InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
-                                            const cv::Mat &image) const {
+                                            const cv::Mat &image, const DisparityMap &geometry_hint) const {
     const InterpolationOptions &o = options_;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
+    validate_hint(geometry_hint, image.size());
     const int w = image.cols, h = image.rows;
     const bool use_lidar = o.use_lidar && !lidar0.points.empty();
     cv::Mat1i seed_at;
-    const Seeds seeds = collect_seeds(matches, lidar0, use_lidar, seed_at);
-
+    Seeds seeds = collect_seeds(matches, lidar0, use_lidar, seed_at);
     InterpolationResult res;
+    // Background prediction, subtracted from the matches here and added back per pixel from
+    // the dense d0. The match's own d0 is used: its d1 and flow were measured with it, so the
+    // residual stays consistent even where LiDAR replaces d0.
+    if (o.ego_motion) {
+        EgoMotionOptions eo = o.ego;
+        eo.seed = o.random_seed;
+        std::vector<float> mx, my, md0, md1, mu, mv;
+        for (int i = 0; i < seeds.size(); ++i)
+            if (seeds.has_motion[i]) {
+                mx.push_back(seeds.x[i]), my.push_back(seeds.y[i]), md0.push_back(seeds.d0_match[i]);
+                md1.push_back(seeds.d1[i]), mu.push_back(seeds.u[i]), mv.push_back(seeds.v[i]);
+            }
+        res.ego = fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
+    }
+    const bool subtract_d0 = o.d1_from_change || res.ego.valid;
+    for (int i = 0; i < seeds.size(); ++i) {
+        if (!seeds.has_motion[i] || !subtract_d0) continue;
+        float d1e, ue, ve;
+        res.ego.predict(seeds.x[i], seeds.y[i], seeds.d0_match[i], d1e, ue, ve);
+        seeds.z1[i] = seeds.d1[i] - d1e;
+        seeds.zu[i] = seeds.u[i] - ue;
+        seeds.zv[i] = seeds.v[i] - ve;
+    }
+    // After the ego-motion fit: hints carry no motion.
+    if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
+        res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);
+
     auto t = Clock::now();
     res.edges = compute_edge_map(image, o.edges, sed_.get());
     res.timings.edges_s = seconds_since(t);
@@ -347,13 +457,14 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             if (c == kD0) {
                 p.z0.push_back(seeds.d0[id]);
             } else if (c == kD1) {
-                p.z0.push_back(seeds.d1[id]);
+                p.z0.push_back(seeds.z1[id]);
             } else {
-                p.z0.push_back(seeds.u[id]);
-                p.z1.push_back(seeds.v[id]);
+                p.z0.push_back(seeds.zu[id]);
+                p.z1.push_back(seeds.zv[id]);
             }
             float wt = std::exp(-dist / o.distance_sigma);
             if (c == kD0 && use_lidar && seeds.is_lidar[id]) wt *= o.lidar_weight;
+            if (seeds.is_hint[id]) wt *= o.hint_weight;
             // Floor keeps far neighbours sampleable when the anchor sits in a sparse region.
             wt = std::max(wt, 1e-6f);
             p.w.push_back(wt);
@@ -413,8 +524,8 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     // sign posts) would otherwise paint them with the background's model.
     auto seed_value = [&](int id, int c, int k) {
         if (c == kD0) return seeds.d0[id];
-        if (c == kD1) return seeds.d1[id];
-        return k == 0 ? seeds.u[id] : seeds.v[id];
+        if (c == kD1) return seeds.z1[id];
+        return k == 0 ? seeds.zu[id] : seeds.zv[id];
     };
     auto residual = [&](const Model &m, int c, int id) {
         const float r0 = m.p[0].at(seeds.x[id], seeds.y[id]) - seed_value(id, c, 0);
@@ -492,9 +603,11 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             const Model &m1 = cur[static_cast<size_t>(pick[kD1]) * kNumChannels + kD1];
             const Model &mf = cur[static_cast<size_t>(pick[kFlow]) * kNumChannels + kFlow];
             res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy));
-            res.dense.d1(y, x) = std::max(0.0f, m1.p[0].at(fx, fy));
-            res.dense.u(y, x) = mf.p[0].at(fx, fy);
-            res.dense.v(y, x) = mf.p[1].at(fx, fy);
+            float d1e = 0, ue = 0, ve = 0;
+            if (subtract_d0) res.ego.predict(fx, fy, res.dense.d0(y, x), d1e, ue, ve);
+            res.dense.d1(y, x) = std::max(0.0f, d1e + m1.p[0].at(fx, fy));
+            res.dense.u(y, x) = ue + mf.p[0].at(fx, fy);
+            res.dense.v(y, x) = ve + mf.p[1].at(fx, fy);
             const size_t base = static_cast<size_t>(sp.labels(y, x)) * kNumChannels;
             res.dense.confidence(y, x) = (share[base] + share[base + 1] + share[base + 2]) / 3.0f;
         }

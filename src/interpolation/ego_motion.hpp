@@ -1,0 +1,47 @@
+#pragma once
+// The dominant rigid motion of the scene (in driving: the static background seen from the
+// moving camera), fitted robustly to all sparse matches, expressed without calibration.
+// For a static point at pixel (x, y) with disparity d0 and a camera motion (small rotation w,
+// translation t), a rectified stereo camera gives exactly, to first order in w:
+//   d0 / d1        = 1 + a0 + a1 x + a2 y + a3 d0                  (depth change)
+//   x' = x + u     = bx0 (1 - r) + r (bx1 + bx2 y) + bx3 d1 + r x   (r = d1 / d0)
+//   y' = y + v     = by0 (1 - r) + r (by1 + by2 x) + by3 d1 + r y
+// (bx0, by0 play the principal point, a3 / bx3 / by3 the translation, the rest the rotation).
+// All three are linear in their unknowns. The interpolator subtracts this prediction from the
+// matches and interpolates only the remainder: ~0 on the background, so the motion in large
+// match-free holes (the road) follows the dense d0 (which LiDAR supports) instead of being
+// extrapolated from far-away matches.
+#include <cstdint>
+#include <vector>
+
+namespace lidarflow::interp {
+
+struct EgoMotion {
+    bool valid = false;
+    double a[4] = {0, 0, 0, 0};
+    double bx[4] = {0, 0, 0, 0}, by[4] = {0, 0, 0, 0};
+    int inliers = 0;  // matches consistent with the model (d1 and flow)
+
+    // Predicted t1 disparity and flow of a background point at (x, y) with disparity d0 >= 0.
+    // Without a valid model: d1 = d0, (u, v) = 0.
+    void predict(float x, float y, float d0, float &d1, float &u, float &v) const;
+};
+
+struct EgoMotionOptions {
+    int hypotheses = 200;        // RANSAC minimal sets per model (>= 1)
+    float disparity_inlier = 1.0f;  // |d1 residual| [px]
+    float flow_inlier = 2.0f;       // end-point residual [px]
+    float min_inlier_share = 0.3f;  // of the matches, for the model to be used
+    int min_inliers = 50;
+    int joint_rounds = 4;           // depth/flow alternations after the separate fits (>= 0)
+    unsigned seed = 1;
+};
+
+// Fits the model to matches given as parallel arrays (same length; d0, d1 > 0 where usable:
+// others are ignored). Deterministic for a given seed. Returns valid = false when the data do
+// not support a dominant motion (too few matches, or too few inliers). Does not throw.
+EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,
+                         const std::vector<float> &d1, const std::vector<float> &u, const std::vector<float> &v,
+                         const EgoMotionOptions &options);
+
+}  // namespace lidarflow::interp

@@ -10,6 +10,15 @@
 //                       [--blobs N]   (N discs of radius 24 px with coherently wrong matches)
 // DIR defaults to $LIDARFLOW_KITTI_DIR. --set overrides InterpolationOptions fields of every
 // variant (keys: see apply_overrides), for tuning.
+//
+// Real stage-3 inputs instead of GT samples (fast, reproducible tuning on what the pipeline
+// really feeds the interpolator):
+//   bench_interpolation --sparse SDIR [--lidar paper|velodyne|none] [--values real|gt]
+// SDIR is the output of `lidarflow kitti --stage sparse --out SDIR` (disp_0/, disp_1/, flow/
+// with holes); the LiDAR inputs are rebuilt exactly as `lidarflow kitti` builds them.
+// --values gt keeps the pixel set but replaces every value by the ground truth (pixels without
+// full GT are dropped): it separates the error of coverage (holes) from that of the outliers.
+// Scores are the devkit's (hole-filled), plus SF outliers by distance to the nearest match.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -24,8 +33,14 @@
 
 #include "core/error.hpp"
 #include "interpolation/interpolator.hpp"
+#include "consistency/options.hpp"
+#include "consistency/sgm_check.hpp"
 #include "io/kitti_layout.hpp"
+#include "io/kitti_submission.hpp"
+#include <opencv2/imgproc.hpp>
 #include "io/kitti_png.hpp"
+#include "eval/kitti_eval.hpp"
+#include "pipeline/kitti_runner.hpp"
 
 using namespace lidarflow;
 
@@ -41,6 +56,7 @@ struct Frame {
 struct Input {
     SceneFlowField matches;
     SparseLidar lidar;
+    DisparityMap hint;  // --sparse: the stage-2a SGM disparity, as the estimator passes it
     int num_matches = 0, num_outliers = 0;
 };
 
@@ -129,6 +145,84 @@ Input make_input(const Frame &f, double density, double outliers, int blobs, uin
     return in;
 }
 
+// Stage-3 matches read back from a submission folder; a pixel is a match where all three maps
+// are valid. values_gt: replace by the GT (drop pixels without full GT).
+Input sparse_input(const std::string &dir, const Frame &f, const SparseLidar &lidar, bool values_gt) {
+    const DisparityMap d0 = io::read_disparity_png(dir + "/disp_0/" + f.id + "_10.png");
+    const DisparityMap d1 = io::read_disparity_png(dir + "/disp_1/" + f.id + "_10.png");
+    const FlowField fl = io::read_flow_png(dir + "/flow/" + f.id + "_10.png");
+    const int w = f.image.cols, h = f.image.rows;
+    Input in;
+    in.matches = SceneFlowField::zeros(w, h);
+    in.lidar = lidar;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (d0(y, x) < 0 || d1(y, x) < 0 || !fl.valid(y, x)) continue;
+            // KITTI's GT is semi-dense (LiDAR lines): a match between lines takes the GT of
+            // the nearest GT pixel within 2 px.
+            int gx = -1, gy = -1, best = 1 << 30;
+            for (int yy = std::max(0, y - 2); yy <= std::min(h - 1, y + 2); ++yy)
+                for (int xx = std::max(0, x - 2); xx <= std::min(w - 1, x + 2); ++xx) {
+                    const int dd = (xx - x) * (xx - x) + (yy - y) * (yy - y);
+                    if (dd < best && gt_valid(f, yy, xx)) best = dd, gx = xx, gy = yy;
+                }
+            const bool has_gt = gt_valid(f, y, x);
+            if (values_gt && gx < 0) continue;
+            auto &m = in.matches;
+            m.u(y, x) = values_gt ? f.flow.u(gy, gx) : fl.u(y, x);
+            m.v(y, x) = values_gt ? f.flow.v(gy, gx) : fl.v(y, x);
+            m.d0(y, x) = values_gt ? f.d0(gy, gx) : d0(y, x);
+            m.d1(y, x) = values_gt ? f.d1(gy, gx) : d1(y, x);
+            m.valid(y, x) = 1;
+            m.confidence(y, x) = 1;
+            ++in.num_matches;
+            if (!has_gt) continue;
+            const bool b0 = eval::disparity_outlier(f.d0(y, x), m.d0(y, x));
+            const bool b1 = eval::disparity_outlier(f.d1(y, x), m.d1(y, x));
+            const bool bf = eval::flow_outlier(f.flow.u(y, x), f.flow.v(y, x), m.u(y, x), m.v(y, x));
+            in.num_outliers += b0 || b1 || bf;
+        }
+    return in;
+}
+
+// SF outliers (occ GT) in bands of Euclidean distance to the nearest match: how much of the
+// error sits in holes of the sparse input.
+std::string coverage_breakdown(const SceneFlowField &est, const Frame &f, const SceneFlowField &matches) {
+    cv::Mat1b holes(matches.valid.size());
+    for (int y = 0; y < holes.rows; ++y)
+        for (int x = 0; x < holes.cols; ++x) holes(y, x) = matches.valid(y, x) ? 0 : 255;
+    cv::Mat1f dist;
+    cv::distanceTransform(holes, dist, cv::DIST_L2, 3);
+    const float edges[] = {0, 8, 24, 64, 1e9f};
+    long n[4] = {0, 0, 0, 0}, bad_sf[4] = {0, 0, 0, 0}, bad_c[4][3] = {};
+    for (int y = 0; y < holes.rows; ++y)
+        for (int x = 0; x < holes.cols; ++x) {
+            if (!gt_valid(f, y, x)) continue;
+            int b = 0;
+            while (dist(y, x) >= edges[b + 1]) ++b;
+            const bool b0 = eval::disparity_outlier(f.d0(y, x), est.d0(y, x));
+            const bool b1 = eval::disparity_outlier(f.d1(y, x), est.d1(y, x));
+            const bool bf = eval::flow_outlier(f.flow.u(y, x), f.flow.v(y, x), est.u(y, x), est.v(y, x));
+            ++n[b];
+            bad_sf[b] += b0 || b1 || bf;
+            bad_c[b][0] += b0, bad_c[b][1] += b1, bad_c[b][2] += bf;
+        }
+    long total = 0;
+    for (long k : n) total += k;
+    std::string out;
+    const char *names[] = {"<8px", "8-24", "24-64", ">64"};
+    for (int b = 0; b < 4; ++b) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "%s%s: %4.1f%% of px, SF %5.1f (D0 %4.1f D1 %4.1f Fl %4.1f) -> %4.1f pts",
+                      b ? " | " : "", names[b], 100.0 * n[b] / std::max(1L, total),
+                      100.0 * bad_sf[b] / std::max(1L, n[b]), 100.0 * bad_c[b][0] / std::max(1L, n[b]),
+                      100.0 * bad_c[b][1] / std::max(1L, n[b]), 100.0 * bad_c[b][2] / std::max(1L, n[b]),
+                      100.0 * bad_sf[b] / std::max(1L, total));
+        out += buf;
+    }
+    return out;
+}
+
 struct Rates {
     double n = 0, d0 = 0, d1 = 0, fl = 0, sf = 0;
     void add(const Rates &o) { n += o.n, d0 += o.d0, d1 += o.d1, fl += o.fl, sf += o.sf; }
@@ -198,6 +292,15 @@ void apply_overrides(const std::string &list, interp::InterpolationOptions &o) {
         else if (k == "use_lidar") o.use_lidar = v != 0;
         else if (k == "select") o.pixel_model_selection = v != 0;
         else if (k == "bilateral") o.edges.bilateral_prefilter = v != 0;
+        else if (k == "d1_change") o.d1_from_change = v != 0;
+        else if (k == "ego") o.ego_motion = v != 0;
+        else if (k == "ego_rounds") o.ego.joint_rounds = static_cast<int>(v);
+        else if (k == "hint") o.use_geometry_hint = v != 0;
+        else if (k == "hint_grid") o.hint_grid = static_cast<int>(v);
+        else if (k == "hint_dist") o.hint_min_distance = static_cast<float>(v);
+        else if (k == "hint_w") o.hint_weight = static_cast<float>(v);
+        else if (k == "hint_r") o.hint_lidar_radius = static_cast<float>(v);
+        else if (k == "hint_tol") o.hint_lidar_tolerance = static_cast<float>(v);
         else throw Error(ErrorCode::InvalidArgument, "--set: unknown key " + k);
     }
 }
@@ -243,9 +346,21 @@ int main(int argc, char **argv) try {
         f.flow_noc = io::read_flow_png(kitti.gt_flow(id, false));
         frames.push_back(f);
     }
+    const std::string sparse_dir = arg(argc, argv, "--sparse", "");
+    const bool values_gt = arg(argc, argv, "--values", "real") == "gt";
+    pipeline::LidarInputOptions lio;
+    lio.protocol = pipeline::parse_protocol(arg(argc, argv, "--lidar", "paper"));
+    lio.points = std::stoi(arg(argc, argv, "--points", lio.protocol == pipeline::LidarProtocol::Velodyne ? "0" : "88"));
     std::vector<Input> inputs;
     for (size_t i = 0; i < frames.size(); ++i) {
-        inputs.push_back(make_input(frames[i], density, outliers, blobs, 1000 + i));
+        if (sparse_dir.empty())
+            inputs.push_back(make_input(frames[i], density, outliers, blobs, 1000 + i));
+        else {
+            const pipeline::KittiFrame kf = pipeline::load_kitti_frame(root, frames[i].id, lio);
+            inputs.push_back(sparse_input(sparse_dir, frames[i], kf.input.lidar0, values_gt));
+            inputs.back().hint = consistency::compute_sgm_disparity(kf.input.left0, kf.input.right0,
+                                                                    consistency::ConsistencyOptions{}.sgm);
+        }
         std::printf("frame %s: %dx%d, %d matches (%.2f %% of pixels), %d corrupted, %zu LiDAR points\n",
                     frames[i].id.c_str(), frames[i].image.cols, frames[i].image.rows, inputs[i].num_matches,
                     100.0 * inputs[i].num_matches / frames[i].image.total(), inputs[i].num_outliers,
@@ -284,12 +399,13 @@ int main(int argc, char **argv) try {
     for (const Variant &v : variants) {
         const interp::RobustInterpolator ri(v.o);
         Rates all, noc;
+        double mean_sf = 0, mean_sf_noc = 0;
         double secs = 0, cpu = 0;
         std::printf("\n== %s\n", v.name.c_str());
         for (size_t i = 0; i < frames.size(); ++i) {
             const double c0 = cpu_seconds();
             const auto t0 = std::chrono::steady_clock::now();
-            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image);
+            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint);
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             secs += s;
             cpu += cpu_seconds() - c0;
@@ -299,11 +415,25 @@ int main(int argc, char **argv) try {
             noc.add(n);
             const auto &t = r.timings;
             std::printf("  %s: %.3f s (edges %.3f, superpixels %.3f, geodesic %.3f, models %.3f, output %.3f); "
-                        "%d superpixels, LiDAR anchors geo %d / motion %d\n",
+                        "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds\n",
                         frames[i].id.c_str(), s, t.edges_s, t.superpixels_s, t.geodesic_s, t.models_s,
-                        t.output_s, r.num_superpixels, r.lidar_anchored_geometry, r.lidar_anchored_motion);
+                        t.output_s, r.num_superpixels, r.lidar_anchored_geometry, r.lidar_anchored_motion,
+                        r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds);
             std::printf("    all: %s\n    noc: %s\n", a.str().c_str(), n.str().c_str());
+            if (r.ego.valid)
+                std::printf("    ego a %.4f %.4f %.4f %.4f | bx %.2f %.3f %.3f %.3f | by %.2f %.3f %.3f %.3f\n", r.ego.a[0],
+                            r.ego.a[1], r.ego.a[2], r.ego.a[3], r.ego.bx[0], r.ego.bx[1], r.ego.bx[2], r.ego.bx[3],
+                            r.ego.by[0], r.ego.by[1], r.ego.by[2], r.ego.by[3]);
+            mean_sf += 100 * a.sf / a.n / frames.size();
+            mean_sf_noc += 100 * n.sf / n.n / frames.size();
+            if (!sparse_dir.empty())
+                std::printf("    by distance to a match: %s\n",
+                            coverage_breakdown(r.dense, frames[i], inputs[i].matches).c_str());
+            if (std::getenv("BENCH_DUMP")) io::write_submission(std::getenv("BENCH_DUMP") + std::string("/") +
+                                                                    (v.o.use_lidar ? "lidar" : "only"),
+                                                                frames[i].id, r.dense);
         }
+        std::printf("  mean SF over frames: %.2f / noc %.2f\n", mean_sf, mean_sf_noc);
         std::printf("  pooled all: %s | noc: %s | mean %.3f s/frame (CPU %.3f s), peak RSS %.0f MiB\n",
                     all.str().c_str(), noc.str().c_str(), secs / frames.size(), cpu / frames.size(), peak_rss_mib());
     }

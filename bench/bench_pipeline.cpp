@@ -1,0 +1,191 @@
+// The complete pipeline's speed and accuracy, beside OpenCV's off-the-shelf baseline measured
+// in the same run (StereoSGBM for d0 and d1 + DISOpticalFlow for u, v):
+//   per-stage and total seconds (median of --runs), peak RSS, KITTI outliers (devkit, filled),
+//   for the shared KITTI frames (paper LiDAR protocol) and the built-in synthetic scene.
+//
+//   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--no-synth] [--no-kitti]
+// DIR defaults to $LIDARFLOW_KITTI_DIR; without it only the synthetic scene is measured.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <thread>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "bench_util.hpp"
+#include "eval/kitti_eval.hpp"
+#include "eval/metrics.hpp"
+#include "io/kitti_layout.hpp"
+#include "pipeline/estimator.hpp"
+#include "pipeline/kitti_runner.hpp"
+#include "synth/scene.hpp"
+
+using namespace lidarflow;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+struct Case {
+    std::string name;
+    pipeline::FrameInput input;
+    eval::FrameGroundTruth gt;
+};
+
+struct Args {
+    std::string root;
+    std::vector<std::string> ids;
+    int runs = 3, threads = 2;
+    bool synth = true, kitti = true;
+};
+
+[[noreturn]] void usage(const char *msg) {
+    std::fprintf(stderr, "bench_pipeline: %s\nusage: bench_pipeline [--root DIR] [--ids A,B] [--runs N] "
+                         "[--threads N] [--no-synth] [--no-kitti]\n", msg);
+    std::exit(2);
+}
+
+Args parse(int argc, char **argv) {
+    Args a;
+    if (const char *k = std::getenv("LIDARFLOW_KITTI_DIR")) a.root = k;
+    for (int i = 1; i < argc; ++i) {
+        const std::string k = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) usage(("missing value for " + k).c_str());
+            return argv[++i];
+        };
+        if (k == "--root") a.root = value();
+        else if (k == "--ids") {
+            std::stringstream ss(value());
+            for (std::string id; std::getline(ss, id, ',');) a.ids.push_back(id);
+        } else if (k == "--runs") a.runs = std::atoi(value().c_str());
+        else if (k == "--threads") a.threads = std::atoi(value().c_str());
+        else if (k == "--no-synth") a.synth = false;
+        else if (k == "--no-kitti") a.kitti = false;
+        else usage(("unknown option " + k).c_str());
+    }
+    if (a.runs < 1 || a.threads < 1) usage("--runs and --threads must be >= 1");
+    return a;
+}
+
+cv::Mat gray(const cv::Mat &m) {
+    if (m.channels() == 1) return m;
+    cv::Mat g;
+    cv::cvtColor(m, g, cv::COLOR_BGR2GRAY);
+    return g;
+}
+
+DisparityMap sgbm(const cv::Mat &left, const cv::Mat &right) {
+    auto s = cv::StereoSGBM::create(0, 128, 5, 8 * 25, 32 * 25, 1, 0, 10, 100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
+    cv::Mat raw;
+    s->compute(gray(left), gray(right), raw);
+    DisparityMap d(raw.size());
+    for (int y = 0; y < raw.rows; ++y)
+        for (int x = 0; x < raw.cols; ++x) {
+            const int16_t v = raw.at<int16_t>(y, x);
+            d(y, x) = v < 0 ? kInvalidDisparity : v / 16.0f;
+        }
+    return d;
+}
+
+// The baseline: SGBM at t0 and t1, DIS flow, d1 looked up at p + flow (holes stay holes; the
+// evaluator fills them as the devkit does).
+eval::Estimate opencv_baseline(const pipeline::FrameInput &in) {
+    eval::Estimate e;
+    e.d0 = sgbm(in.left0, in.right0);
+    const DisparityMap d1_t1 = sgbm(in.left1, in.right1);
+    cv::Mat2f flow;
+    cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM)->calc(gray(in.left0), gray(in.left1), flow);
+    e.flow = FlowField::zeros(flow.cols, flow.rows);
+    e.d1 = DisparityMap(flow.size(), kInvalidDisparity);
+    for (int y = 0; y < flow.rows; ++y)
+        for (int x = 0; x < flow.cols; ++x) {
+            const cv::Vec2f f = flow(y, x);
+            e.flow.u(y, x) = f[0];
+            e.flow.v(y, x) = f[1];
+            e.flow.valid(y, x) = 1;
+            const int x1 = cvRound(x + f[0]), y1 = cvRound(y + f[1]);
+            if (x1 >= 0 && y1 >= 0 && x1 < flow.cols && y1 < flow.rows) e.d1(y, x) = d1_t1(y1, x1);
+        }
+    return e;
+}
+
+std::vector<Case> load_cases(const Args &a) {
+    std::vector<Case> cases;
+    if (a.kitti && !a.root.empty()) {
+        const std::vector<std::string> ids = a.ids.empty() ? io::KittiLayout{a.root}.frame_ids() : a.ids;
+        for (const std::string &id : ids) {
+            pipeline::KittiFrame f = pipeline::load_kitti_frame(a.root, id, {});
+            cases.push_back({"kitti " + id, std::move(f.input), eval::load_ground_truth(a.root, id)});
+        }
+    }
+    if (a.synth) {
+        const synth::SynthScene s = synth::render(synth::SynthConfig{});
+        Case c;
+        c.name = "synthetic";
+        c.input = {s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+        c.gt.occ = {s.disp0_occ, s.disp1_occ, s.flow_occ};
+        c.gt.has_noc = true;
+        c.gt.noc = {s.disp0_noc, s.disp1_noc, s.flow_noc};
+        cases.push_back(std::move(c));
+    }
+    return cases;
+}
+
+void print_scores(const char *label, const eval::FrameScore &s, double seconds) {
+    const eval::ComponentScores &c = s.dense.occ;
+    std::printf("  %-22s D0 %6.2f  D1 %6.2f  Fl %6.2f  SF %6.2f %%   %7.3f s\n", label, c.d0.outlier_pct(),
+                c.d1.outlier_pct(), c.fl.outlier_pct(), c.sf.outlier_pct(), seconds);
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    const Args a = parse(argc, argv);
+    const std::vector<Case> cases = load_cases(a);
+    if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
+    pipeline::EstimatorOptions opt;
+    opt.threads = a.threads;
+    const pipeline::Estimator estimator(opt);
+    std::printf("bench_pipeline: %d thread(s), median of %d run(s), %u hardware threads\n", a.threads, a.runs,
+                std::thread::hardware_concurrency());
+    for (const Case &c : cases) {
+        std::printf("\n%s (%dx%d, LiDAR %zu + %zu points)\n", c.name.c_str(), c.input.left0.cols, c.input.left0.rows,
+                    c.input.lidar0.points.size(), c.input.lidar1.points.size());
+        std::map<std::string, std::vector<double>> stage;
+        std::vector<std::string> order;
+        std::vector<double> total, base;
+        pipeline::EstimatorResult last;
+        eval::Estimate base_est;
+        bench::reset_peak_rss();
+        const double rss_before = bench::peak_rss_mib();
+        for (int r = 0; r < a.runs; ++r) {
+            last = estimator.run(c.input);
+            for (const pipeline::StageTime &t : last.timings) {
+                if (!stage.count(t.name)) order.push_back(t.name);
+                stage[t.name].push_back(t.seconds);
+            }
+            total.push_back(last.total_seconds);
+        }
+        const double rss_pipeline = bench::peak_rss_mib();
+        for (int r = 0; r < a.runs; ++r) {
+            const auto t0 = Clock::now();
+            base_est = opencv_baseline(c.input);
+            base.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        }
+        for (const std::string &n : order) std::printf("  %-22s %7.3f s\n", n.c_str(), bench::median(stage[n]));
+        std::printf("  %-22s %7.3f s   peak RSS %.0f MiB (%.0f MiB before the first run)\n", "total",
+                    bench::median(total), rss_pipeline, rss_before);
+        const eval::EvalOptions eo;
+        print_scores("lidarflow", eval::evaluate_frame(c.gt, last.dense, eo), bench::median(total));
+        print_scores("OpenCV SGBM+DIS", eval::evaluate_frame(c.gt, base_est, eo), bench::median(base));
+        std::printf("  time ratio lidarflow / baseline: %.1fx\n", bench::median(total) / bench::median(base));
+    }
+    return 0;
+}

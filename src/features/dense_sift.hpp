@@ -1,0 +1,50 @@
+#pragma once
+// Dense SIFT-Flow-style descriptors: one descriptor per pixel, for patch matching.
+//
+// Why this layout: the matcher compares millions of descriptor pairs, so every pixel's
+// descriptor is a contiguous run of `dim` uint8 values (row-major image of descriptors, stride
+// padded to 16 bytes) that SSE2 loads directly. Each descriptor is 4x4 spatial cells x 8
+// orientation bins (128 values) as in SIFT Flow; orientations are soft-binned between the two
+// nearest bins and positions are bilinearly binned (triangular cell filter), so descriptors vary
+// smoothly with position. `dim = 64` merges opposite orientations (gradient sign dropped) for a
+// faster, smaller variant.
+//
+// Low contrast: the L2 normalisation divides by max(norm, norm_floor) so that flat, textureless
+// regions keep near-zero descriptors instead of amplified noise (those are exactly the regions
+// where the matcher should lean on LiDAR, not on noise).
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace lidarflow::features {
+
+struct DenseSiftOptions {
+    int cell_size = 2;         // cell side [px]; the descriptor spans 4 * cell_size px
+    int dim = 128;             // 128 (16 cells x 8 signed bins) or 64 (16 cells x 4 unsigned bins)
+    float clip = 0.2f;         // SIFT clipping of normalised entries before renormalising
+    float norm_floor = 0.03f;  // lower bound of the normalising L2 norm (gray scale in [0, 1])
+};
+
+// Descriptor image. Owns its storage; copies are deep only through clone().
+struct DescriptorImage {
+    int width = 0, height = 0, dim = 0;
+    std::vector<uint8_t> data;  // width * height * dim, row-major, pixel-major
+
+    const uint8_t *at(int x, int y) const {
+        return data.data() + (static_cast<size_t>(y) * width + x) * dim;
+    }
+    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * dim; }
+    bool empty() const { return data.empty(); }
+};
+
+// Descriptors of a single-channel CV_32F image with values in [0, 1]. Throws
+// lidarflow::Error(InvalidArgument) for an empty / wrongly typed image or bad options.
+// threads: OpenMP threads used (>= 1).
+DescriptorImage compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options,
+                                   int threads = 1);
+
+// 8-bit gray or BGR(A) image -> CV_32F gray in [0, 1]. Throws InvalidArgument otherwise.
+cv::Mat1f to_gray_float(const cv::Mat &image);
+
+}  // namespace lidarflow::features

@@ -1,0 +1,90 @@
+#pragma once
+// Knobs of the LiDAR-supported scene-flow matcher (paper Sec. "LiDAR-Supported Matching").
+//
+// The paper's ablation (Table I) is expressed as switches of the one matcher:
+//  - im-only:  use_lidar = false. Pure image cost C_I (Eq. 3) everywhere, random init.
+//  - im+LiDAR: LiDAR pixels of D_l^0 become seeds with d0 fixed to the measurement and the
+//              cost C_{D_l^0} (Eq. 7); a flow target that lands exactly on a D_l^1 pixel ties
+//              d1 to that measurement and switches to C_{D_l^1} (Eq. 10) / C_{D_l^0 D_l^1}
+//              (Eq. 12).
+//  - +win:     support windows (window_size^2 around each LiDAR point): seeds inside a D_l^0
+//              window start, on the coarsest level, from the nearest measurement's d0; a flow
+//              target inside a D_l^1 window counts as a D_l^1 hit (so the sparse D_l^1 is
+//              actually met, which the paper names as the window's second purpose).
+//  - +const1:  constraint 1 = the LiDAR cost cases decide inside windows too: seeds inside a
+//              D_l^0 window are scored with C_{D_l^0} (resp. C_{D_l^0 D_l^1}), i.e. matches
+//              propagated into window pixels must minimise the LiDAR-case cost (Fig. 3/4).
+//  - +const2:  constraint 2 = the disparity space around the LiDAR value: inside a D_l^0
+//              window d0, and for targets inside a D_l^1 window d1, are kept within
+//              value +- max(const2_abs, const2_rel * value); propagated / random candidates
+//              are clamped into that interval.
+//
+// Decisions where the paper is silent (measured on the two shared KITTI frames):
+//  - Case costs are weighted *means* of their terms (see cost_cases.hpp) so they share a scale.
+//  - Whether a seed is in a D_l^1 case is decided once per seed visit from its current match;
+//    all candidates of that visit are scored with the same formula. Deciding per candidate let
+//    flow targets be attracted into D_l^1 windows merely because the C_{D_l^1} mean is lower
+//    than the C_I mean (Fl outliers +1.8 points).
+//  - A match whose image position leaves an image costs out_of_image_penalty per patch sample;
+//    300 (below the median matched cost) made out-of-image matches win everywhere (SF 59 %).
+#include <cstdint>
+
+#include "features/dense_sift.hpp"
+#include "matching/patch_cost.hpp"
+
+namespace lidarflow::matching {
+
+enum class MatchVariant { ImageOnly, ImLidar, ImLidarWin, ImLidarWinConst1, Full };
+
+// Name as in Table I ("im-only", "im+LiDAR", "im+LiDAR+win", ...).
+const char *variant_name(MatchVariant v);
+
+struct MatchingOptions {
+    // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least
+    // min_coarsest_height px high (and up to max_levels levels in total).
+    int min_coarsest_height = 40;
+    int max_levels = 6;
+
+    // Seeds on a regular grid of this step [px] at full resolution; the same seeds, scaled, are
+    // used on every level (CPM).
+    int grid_step = 3;
+    // PatchMatch iterations per level; a level stops early once fewer than stop_ratio of the
+    // seeds improved in one iteration.
+    int iterations = 8;
+    float stop_ratio = 0.05f;
+    // Full-resolution bounds of the search space (KITTI-sized defaults).
+    float max_flow = 400.0f;      // random init radius of (u, v) on the coarsest level [px]
+    float max_disparity = 256.0f; // disparities are searched in [0, max_disparity] [px]
+
+    // Cost (Eq. 2).
+    features::DenseSiftOptions sift;
+    int patch_radius = 3;  // 7x7 patch
+    int patch_step = 3;    // sample every 3rd pixel of it (3x3 samples)
+    DescriptorNorm norm = DescriptorNorm::L2;
+    // Per patch sample, in descriptor-distance units (descriptors have length 512): about the
+    // 99th percentile of matched per-sample costs on KITTI, so a match leaving the image loses
+    // against any plausible in-image match but beats clearly wrong ones.
+    float out_of_image_penalty = 500.0f;
+
+    // LiDAR support (see the variant table above).
+    bool use_lidar = true;
+    bool support_window = true;
+    bool const1 = true;
+    bool const2 = true;
+    bool use_lidar1 = true;  // false: D_l^1 is ignored (only D_l^0 supports the matching)
+    int window_size = 15;  // odd, full-resolution support window side [px]
+    float const2_abs = 2.0f;
+    float const2_rel = 0.05f;  // 5 %: the KITTI outlier tolerance
+
+    // Strips of this many seed rows are the unit of (deterministic) parallel work.
+    int strip_rows = 6;
+    uint64_t random_seed = 1;
+    int threads = 1;  // OpenMP threads (num_threads clauses only); results do not depend on it
+
+    // The options of one Table-I row, everything else at its default.
+    static MatchingOptions for_variant(MatchVariant v);
+    // Throws lidarflow::Error(InvalidArgument) naming the first bad field.
+    void validate() const;
+};
+
+}  // namespace lidarflow::matching

@@ -1,0 +1,656 @@
+#include "matching/scene_flow_matcher.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+#include "matching/cost_cases.hpp"
+#include "matching/lidar_support.hpp"
+
+namespace lidarflow::matching {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+uint64_t splitmix64(uint64_t &state) {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+// Counter-based stream: identical numbers for a (seed, level, iteration, index) whatever the
+// thread that draws them.
+struct Rng {
+    uint64_t state;
+    Rng(uint64_t seed, int level, int iteration, int index) {
+        state = seed ^ 0x5DEECE66Dull;
+        uint64_t s = state;
+        state ^= splitmix64(s) + static_cast<uint64_t>(level) * 0x100000001B3ull;
+        s = state;
+        state ^= splitmix64(s) + static_cast<uint64_t>(iteration + 7) * 0xC2B2AE3D27D4EB4Full;
+        s = state;
+        state ^= splitmix64(s) + static_cast<uint64_t>(index) * 0x165667B19E3779F9ull;
+    }
+    // Uniform integer in [-m, m].
+    int sym(int m) { return static_cast<int>(splitmix64(state) % static_cast<uint64_t>(2 * m + 1)) - m; }
+    // Uniform real in [0, hi].
+    float uniform(float hi) {
+        return hi * static_cast<float>((splitmix64(state) >> 11) * (1.0 / 9007199254740992.0));
+    }
+};
+
+// Round half away from zero without a libm call (hot path).
+inline int iround(float f) { return static_cast<int>(f + (f >= 0.0f ? 0.5f : -0.5f)); }
+
+void validate_lidar(const SparseLidar &l, int w, int h, const char *name) {
+    if (l.points.empty()) return;
+    require(l.width == w && l.height == h, ErrorCode::SizeMismatch,
+            std::string("MatchInput: ") + name + " is " + std::to_string(l.width) + "x" +
+                std::to_string(l.height) + " but the images are " + std::to_string(w) + "x" +
+                std::to_string(h));
+    for (const LidarPoint &p : l.points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
+                std::string("MatchInput: ") + name + " has a point outside the image");
+        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
+                std::string("MatchInput: ") + name + " has a non-finite or negative disparity");
+    }
+}
+
+// One point per pixel; on duplicates the larger disparity (the nearer, visible surface) wins.
+std::vector<LidarPoint> dedupe(const SparseLidar &l) {
+    std::map<std::pair<int, int>, float> by_pixel;
+    for (const LidarPoint &p : l.points) {
+        auto key = std::make_pair(p.y, p.x);
+        auto it = by_pixel.find(key);
+        if (it == by_pixel.end() || p.disparity > it->second) by_pixel[key] = p.disparity;
+    }
+    std::vector<LidarPoint> out;
+    out.reserve(by_pixel.size());
+    for (const auto &kv : by_pixel) out.push_back({kv.first.second, kv.first.first, kv.second});
+    return out;
+}
+
+// Everything one matcher shares between directions: validated LiDAR and the descriptor
+// pyramids of the four images.
+struct MatcherData {
+    MatchingOptions opt;
+    int width = 0, height = 0;
+    std::vector<LidarPoint> lidar[2];  // t0 (aligned to left0), t1 (aligned to left1)
+    // levels[l].desc[i]: image i in (left0, right0, left1, right1) order.
+    struct Level {
+        int w = 0, h = 0;
+        features::DescriptorImage desc[4];
+    };
+    std::vector<Level> levels;
+    double seconds_features = 0;
+};
+
+// The PatchMatch of one direction. All per-seed arrays are allocated once up front.
+class Engine {
+public:
+    struct State {
+        float u = 0, v = 0, d0 = 0, d1 = 0;
+    };
+
+    Engine(const MatcherData &m, Direction dir);
+    MatchResult run();
+
+private:
+    struct SeedInfo {
+        int x = 0, y = 0;   // full resolution
+        int lidar = -1;     // reference LiDAR point at this pixel (d0 fixed)
+        int window = -1;    // nearest reference LiDAR point whose support window holds the seed
+        int strip = -1;     // grid seeds: strip index; extra LiDAR seeds: -1
+        int nb_begin = 0, nb_end = 0;
+    };
+    // A scored candidate: rounded positions in the four images and the term values.
+    struct Scored {
+        State s;
+        int x1 = 0, y1 = 0, xr0 = 0, xr1 = 0;
+        int cas = 0;
+        float term[kNumTerms] = {};
+        uint8_t have = 0;  // bit t: term[t] computed
+        float cost = std::numeric_limits<float>::infinity();
+    };
+
+    void setup_seeds();
+    void setup_level(int l);
+    void init_coarsest();
+    int target_hit(int i, const State &s) const;
+    void prepare(int i, State cand, Scored &out, bool d1case) const;
+    bool evaluate(int i, Scored &out, const Scored *reuse, float bound) const;
+    void score(int i, const State &cand, Scored &out, bool d1case) const;
+    bool try_candidate(int i, const State &cand, Scored &best, bool d1case) const;
+    bool process_seed(int i, int iteration, bool consider_all_in_strip);
+    int run_strip(int strip, bool reverse, int iteration);
+    void update_radii(int l);
+
+    const MatcherData &m_;
+    const MatchingOptions &opt_;
+    int slot_img_[4];  // slot -> physical image index
+    const std::vector<LidarPoint> &ref_lidar_;
+    const std::vector<LidarPoint> &tgt_lidar_;
+
+    int gw_ = 0, gh_ = 0, num_grid_ = 0, num_strips_ = 0;
+    std::vector<SeedInfo> info_;
+    std::vector<int> neighbours_;
+    std::vector<std::vector<int>> strip_seeds_;  // row-major seed order within each strip
+    std::vector<int> extra_seeds_;
+
+    // Per level.
+    int level_ = 0;
+    float scale_ = 1;  // 2^-level
+    int lw_ = 0, lh_ = 0;
+    const features::DescriptorImage *desc_[4] = {nullptr, nullptr, nullptr, nullptr};
+    std::vector<int> px_, py_;     // seed positions on the level
+    cv::Mat1i tgt_labels_;         // D1 hits on the level
+    std::vector<cv::Point> tgt_centre_;
+    PatchShape shape_;
+    float penalty_ = 0, dmax_ = 0, max_r_ = 0;
+
+    std::vector<Scored> best_;
+    std::vector<int> visited_;
+    std::vector<float> radius_, radius_d0_, radius_d1_;
+};
+
+Engine::Engine(const MatcherData &m, Direction dir)
+    : m_(m), opt_(m.opt), ref_lidar_(dir == Direction::Forward ? m.lidar[0] : m.lidar[1]),
+      tgt_lidar_(dir == Direction::Forward ? m.lidar[1] : m.lidar[0]),
+      shape_(m.opt.patch_radius, m.opt.patch_step) {
+    const bool fwd = dir == Direction::Forward;
+    slot_img_[kL0] = fwd ? 0 : 2;
+    slot_img_[kR0] = fwd ? 1 : 3;
+    slot_img_[kL1] = fwd ? 2 : 0;
+    slot_img_[kR1] = fwd ? 3 : 1;
+    setup_seeds();
+}
+
+void Engine::setup_seeds() {
+    const int W = m_.width, H = m_.height, step = opt_.grid_step;
+    gw_ = std::max(1, W / step);
+    gh_ = std::max(1, H / step);
+    const int xoff = std::min(W - 1, (W - (gw_ - 1) * step) / 2);
+    const int yoff = std::min(H - 1, (H - (gh_ - 1) * step) / 2);
+    num_grid_ = gw_ * gh_;
+    info_.assign(num_grid_, SeedInfo{});
+    for (int gy = 0; gy < gh_; ++gy)
+        for (int gx = 0; gx < gw_; ++gx) {
+            SeedInfo &s = info_[gy * gw_ + gx];
+            s.x = std::min(W - 1, gx * step + xoff);
+            s.y = std::min(H - 1, gy * step + yoff);
+            s.strip = gy / opt_.strip_rows;
+        }
+    num_strips_ = (gh_ + opt_.strip_rows - 1) / opt_.strip_rows;
+
+    // LiDAR seeds: a grid seed on a LiDAR pixel becomes that point's seed, others get their own.
+    std::vector<int> lidar_seed(ref_lidar_.size(), -1);
+    if (opt_.use_lidar) {
+        for (int k = 0; k < static_cast<int>(ref_lidar_.size()); ++k) {
+            const LidarPoint &p = ref_lidar_[k];
+            const int gx = (p.x - xoff) / step, gy = (p.y - yoff) / step;
+            if (p.x >= xoff && p.y >= yoff && gx < gw_ && gy < gh_ && (p.x - xoff) % step == 0 &&
+                (p.y - yoff) % step == 0 && info_[gy * gw_ + gx].x == p.x && info_[gy * gw_ + gx].y == p.y) {
+                info_[gy * gw_ + gx].lidar = k;
+                lidar_seed[k] = gy * gw_ + gx;
+            } else {
+                SeedInfo s;
+                s.x = p.x;
+                s.y = p.y;
+                s.lidar = k;
+                lidar_seed[k] = static_cast<int>(info_.size());
+                extra_seeds_.push_back(lidar_seed[k]);
+                info_.push_back(s);
+            }
+        }
+        // Support windows at full resolution: the same set of seeds on every level.
+        if (opt_.support_window && !ref_lidar_.empty()) {
+            std::vector<cv::Point2f> pts;
+            for (const LidarPoint &p : ref_lidar_) pts.emplace_back(float(p.x), float(p.y));
+            const cv::Mat1i lab = nearest_point_labels(pts, W, H, opt_.window_size / 2);
+            for (SeedInfo &s : info_) s.window = s.lidar >= 0 ? s.lidar : lab(s.y, s.x);
+        } else {
+            for (SeedInfo &s : info_) s.window = s.lidar;
+        }
+    }
+
+    // Neighbour graph: 8-connected grid, the window's LiDAR seed for window seeds, and the 3x3
+    // grid neighbourhood of the nearest grid node for extra LiDAR seeds.
+    neighbours_.clear();
+    for (int i = 0; i < static_cast<int>(info_.size()); ++i) {
+        SeedInfo &s = info_[i];
+        s.nb_begin = static_cast<int>(neighbours_.size());
+        int cgx, cgy;
+        if (i < num_grid_) {
+            cgx = i % gw_;
+            cgy = i / gw_;
+        } else {
+            cgx = std::clamp(iround(float(s.x - xoff) / step), 0, gw_ - 1);
+            cgy = std::clamp(iround(float(s.y - yoff) / step), 0, gh_ - 1);
+        }
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int nx = cgx + dx, ny = cgy + dy;
+                if (nx < 0 || ny < 0 || nx >= gw_ || ny >= gh_) continue;
+                const int n = ny * gw_ + nx;
+                if (n != i) neighbours_.push_back(n);
+            }
+        if (i < num_grid_ && s.window >= 0 && lidar_seed[s.window] != i)
+            neighbours_.push_back(lidar_seed[s.window]);
+        s.nb_end = static_cast<int>(neighbours_.size());
+    }
+
+    strip_seeds_.assign(num_strips_, {});
+    for (int i = 0; i < num_grid_; ++i) strip_seeds_[info_[i].strip].push_back(i);
+
+    const size_t n = info_.size();
+    best_.assign(n, Scored{});
+    visited_.assign(n, -1);
+    radius_.assign(n, 0);
+    radius_d0_.assign(n, 0);
+    radius_d1_.assign(n, 0);
+    px_.assign(n, 0);
+    py_.assign(n, 0);
+}
+
+void Engine::setup_level(int l) {
+    level_ = l;
+    scale_ = std::ldexp(1.0f, -l);
+    const auto &lev = m_.levels[l];
+    lw_ = lev.w;
+    lh_ = lev.h;
+    for (int s = 0; s < 4; ++s) desc_[s] = &lev.desc[slot_img_[s]];
+    for (size_t i = 0; i < info_.size(); ++i) {
+        px_[i] = std::min(lw_ - 1, info_[i].x >> l);
+        py_[i] = std::min(lh_ - 1, info_[i].y >> l);
+    }
+    penalty_ = opt_.out_of_image_penalty;
+    dmax_ = opt_.max_disparity * scale_;
+    max_r_ = std::max(1.0f, opt_.max_flow * scale_);
+    tgt_centre_.clear();
+    if (opt_.use_lidar && opt_.use_lidar1 && !tgt_lidar_.empty()) {
+        std::vector<cv::Point2f> pts;
+        for (const LidarPoint &p : tgt_lidar_) {
+            pts.emplace_back(float(p.x) * scale_, float(p.y) * scale_);
+            tgt_centre_.emplace_back(iround(pts.back().x), iround(pts.back().y));
+        }
+        const int r = opt_.support_window ? iround(float(opt_.window_size / 2) * scale_) : 0;
+        tgt_labels_ = nearest_point_labels(pts, lw_, lh_, r);
+    } else {
+        tgt_labels_.release();
+    }
+}
+
+// Index of the target LiDAR point whose (support window around its) pixel holds the flow
+// target of state s, or -1.
+int Engine::target_hit(int i, const State &s) const {
+    if (tgt_labels_.empty()) return -1;
+    const int x1 = px_[i] + iround(s.u), y1 = py_[i] + iround(s.v);
+    if (x1 < 0 || y1 < 0 || x1 >= lw_ || y1 >= lh_) return -1;
+    return tgt_labels_(y1, x1);
+}
+
+// Applies the LiDAR rules to a candidate and computes the cost of the given case, reusing terms
+// of `reuse` whose image positions are unchanged. The D_l^1 case is decided per seed visit
+// (from the seed's current match), not per candidate: candidates of one visit are compared with
+// one formula, so no candidate wins merely because its target enters or leaves a D_l^1 window
+// (the case formulas have different typical magnitudes).
+void Engine::prepare(int i, State c, Scored &out, bool d1case) const {
+    const SeedInfo &si = info_[i];
+    const bool lidar = opt_.use_lidar;
+    c.d0 = std::clamp(c.d0, 0.0f, dmax_);
+    if (lidar && si.lidar >= 0) {
+        c.d0 = ref_lidar_[si.lidar].disparity * scale_;  // never propagated into a LiDAR pixel
+    } else if (lidar && opt_.const2 && si.window >= 0) {
+        c.d0 = disparity_interval(ref_lidar_[si.window].disparity, opt_.const2_abs, opt_.const2_rel)
+                   .clamp(c.d0 / scale_) * scale_;
+    }
+    const int x0 = px_[i];
+    const int x1 = x0 + iround(c.u), y1 = py_[i] + iround(c.v);
+    c.d1 = std::clamp(c.d1, 0.0f, dmax_);
+    {
+        const int k = target_hit(i, c);
+        if (k >= 0) {
+            const float value = tgt_lidar_[k].disparity;
+            if (tgt_centre_[k].x == x1 && tgt_centre_[k].y == y1)
+                c.d1 = value * scale_;  // the target is the measured pixel itself
+            else if (opt_.const2)
+                c.d1 = disparity_interval(value, opt_.const2_abs, opt_.const2_rel).clamp(c.d1 / scale_) *
+                       scale_;
+        }
+    }
+    const bool d0case = lidar && (si.lidar >= 0 || (opt_.const1 && si.window >= 0));
+    out.s = c;
+    out.x1 = x1;
+    out.y1 = y1;
+    out.xr0 = x0 - iround(c.d0);
+    out.xr1 = x1 - iround(c.d1);
+    out.cas = (d0case ? 1 : 0) + (d1case ? 2 : 0);
+    out.have = 0;
+    out.cost = std::numeric_limits<float>::infinity();
+}
+
+bool Engine::evaluate(int i, Scored &out, const Scored *reuse, float bound) const {
+    const int x0 = px_[i], y0 = py_[i];
+    const int sx[4] = {x0, out.xr0, out.x1, out.xr1};
+    const int sy[4] = {y0, y0, out.y1, out.y1};
+    const float *w = kCaseWeights[out.cas];
+    const float budget = bound * kCaseWeightSum[out.cas];
+    float sum = 0;
+    uint8_t todo = 0;
+    // Terms whose two image positions did not move are taken from `reuse` first, so that the
+    // remaining ones can stop as soon as the candidate cannot beat the bound.
+    for (int t = 0; t < kNumTerms; ++t) {
+        if (w[t] == 0) continue;
+        const Slot a = kTermA[t], b = kTermB[t];
+        if (reuse && (reuse->have >> t & 1)) {
+            const int rsx[4] = {x0, reuse->xr0, reuse->x1, reuse->xr1};
+            const int rsy[4] = {y0, y0, reuse->y1, reuse->y1};
+            if (rsx[a] == sx[a] && rsy[a] == sy[a] && rsx[b] == sx[b] && rsy[b] == sy[b]) {
+                out.term[t] = reuse->term[t];
+                out.have |= static_cast<uint8_t>(1u << t);
+                sum += w[t] * reuse->term[t];
+                continue;
+            }
+        }
+        todo |= static_cast<uint8_t>(1u << t);
+    }
+    for (int t = 0; t < kNumTerms; ++t) {
+        if (!(todo >> t & 1)) continue;
+        if (sum > budget) return false;
+        const Slot a = kTermA[t], b = kTermB[t];
+        const float e = patch_cost(*desc_[a], *desc_[b], sx[a], sy[a], sx[b], sy[b], shape_, opt_.norm,
+                                   penalty_, (budget - sum) / w[t]);
+        sum += w[t] * e;
+        if (sum > budget) return false;  // e may be partial: the candidate is rejected anyway
+        out.term[t] = e;
+        out.have |= static_cast<uint8_t>(1u << t);
+    }
+    out.cost = sum / kCaseWeightSum[out.cas];
+    return true;
+}
+
+void Engine::score(int i, const State &c, Scored &out, bool d1case) const {
+    prepare(i, c, out, d1case);
+    evaluate(i, out, nullptr, std::numeric_limits<float>::infinity());
+}
+
+bool Engine::try_candidate(int i, const State &cand, Scored &best, bool d1case) const {
+    Scored s;
+    prepare(i, cand, s, d1case);
+    if (s.x1 == best.x1 && s.y1 == best.y1 && s.xr0 == best.xr0 && s.xr1 == best.xr1 && s.cas == best.cas)
+        return false;  // same positions: same cost
+    if (evaluate(i, s, &best, best.cost) && s.cost < best.cost) {
+        best = s;
+        return true;
+    }
+    return false;
+}
+
+bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
+    const SeedInfo &si = info_[i];
+    Scored &best = best_[i];
+    bool improved = false;
+    const bool d1case = target_hit(i, best.s) >= 0;
+    if (d1case != (best.cas >= 2)) {
+        const State cur = best.s;
+        score(i, cur, best, d1case);
+    }
+    // Propagation (constraint 1 everywhere; LiDAR rules applied inside score()).
+    for (int k = si.nb_begin; k < si.nb_end; ++k) {
+        const int n = neighbours_[k];
+        const SeedInfo &ni = info_[n];
+        const bool fresh = consider_all_in_strip || ni.strip != si.strip || ni.strip < 0 ||
+                           visited_[n] == iteration;
+        if (!fresh) continue;
+        improved |= try_candidate(i, best_[n].s, best, d1case);
+    }
+    // Random search with shrinking radius, separately for (u, v), d0 and d1.
+    Rng rng(opt_.random_seed, level_, iteration, i);
+    for (int mag = iround(radius_[i]); mag >= 1; mag /= 2) {
+        State c = best.s;
+        c.u += static_cast<float>(rng.sym(mag));
+        c.v += static_cast<float>(rng.sym(mag));
+        improved |= try_candidate(i, c, best, d1case);
+    }
+    const bool d0_fixed = opt_.use_lidar && si.lidar >= 0;
+    if (!d0_fixed) {
+        for (int mag = iround(radius_d0_[i]); mag >= 1; mag /= 2) {
+            State c = best.s;
+            c.d0 += static_cast<float>(rng.sym(mag));
+            improved |= try_candidate(i, c, best, d1case);
+        }
+    }
+    for (int mag = iround(radius_d1_[i]); mag >= 1; mag /= 2) {
+        State c = best.s;
+        c.d1 += static_cast<float>(rng.sym(mag));
+        improved |= try_candidate(i, c, best, d1case);
+    }
+    visited_[i] = iteration;
+    return improved;
+}
+
+int Engine::run_strip(int strip, bool reverse, int iteration) {
+    const std::vector<int> &seeds = strip_seeds_[strip];
+    int updates = 0;
+    const int n = static_cast<int>(seeds.size());
+    for (int k = 0; k < n; ++k) {
+        const int i = seeds[reverse ? n - 1 - k : k];
+        updates += process_seed(i, iteration, false) ? 1 : 0;
+    }
+    return updates;
+}
+
+void Engine::init_coarsest() {
+    const int top = level_;
+    const float init_r = max_r_;
+    for (size_t i = 0; i < info_.size(); ++i) {
+        Rng rng(opt_.random_seed, top, -1, static_cast<int>(i));
+        State s;
+        s.u = static_cast<float>(rng.sym(iround(init_r)));
+        s.v = static_cast<float>(rng.sym(iround(init_r)));
+        const SeedInfo &si = info_[i];
+        if (opt_.use_lidar && opt_.support_window && si.window >= 0)
+            s.d0 = ref_lidar_[si.window].disparity * scale_;
+        else
+            s.d0 = std::floor(rng.uniform(dmax_ + 0.999f));
+        s.d1 = s.d0;
+        radius_[i] = init_r;
+        radius_d0_[i] = dmax_;
+        radius_d1_[i] = dmax_;
+        best_[i].s = s;
+    }
+}
+
+// CPM: the next level searches within the spread of the neighbours' matches (x2 for the finer
+// grid), at least 1 px.
+void Engine::update_radii(int l) {
+    const float maxr = std::max(1.0f, opt_.max_flow * std::ldexp(1.0f, -l));
+    const float maxd = std::max(1.0f, opt_.max_disparity * std::ldexp(1.0f, -l));
+    for (size_t i = 0; i < info_.size(); ++i) {
+        const State &s = best_[i].s;
+        float rf = 0, r0 = 0, r1 = 0;
+        for (int k = info_[i].nb_begin; k < info_[i].nb_end; ++k) {
+            const State &n = best_[neighbours_[k]].s;
+            rf = std::max(rf, std::hypot(n.u - s.u, n.v - s.v));
+            r0 = std::max(r0, std::abs(n.d0 - s.d0));
+            r1 = std::max(r1, std::abs(n.d1 - s.d1));
+        }
+        radius_[i] = std::clamp(rf, 1.0f, maxr) * 2.0f;
+        radius_d0_[i] = std::clamp(r0, 1.0f, maxd) * 2.0f;
+        radius_d1_[i] = std::clamp(r1, 1.0f, maxd) * 2.0f;
+    }
+}
+
+MatchResult Engine::run() {
+    const int nlev = static_cast<int>(m_.levels.size());
+    const int n = static_cast<int>(info_.size());
+    const int threads = opt_.threads;
+    int iteration_stamp = 0;
+    for (int l = nlev - 1; l >= 0; --l) {
+        setup_level(l);
+        if (l == nlev - 1) {
+            init_coarsest();
+        } else {
+            for (int i = 0; i < n; ++i) {
+                State &s = best_[i].s;
+                s.u *= 2;
+                s.v *= 2;
+                s.d0 *= 2;
+                s.d1 *= 2;
+            }
+        }
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (int i = 0; i < n; ++i) {
+            const State s = best_[i].s;
+            score(i, s, best_[i], target_hit(i, s) >= 0);
+        }
+        for (int it = 0; it < opt_.iterations; ++it) {
+            const int stamp = iteration_stamp++;
+            const bool reverse = it % 2 == 1;
+            int updates = 0;
+            for (int phase = 0; phase < 2; ++phase) {
+                const int parity = reverse ? 1 - phase : phase;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : updates)
+                for (int k = parity; k < num_strips_; k += 2) updates += run_strip(k, reverse, stamp);
+            }
+            const int ne = static_cast<int>(extra_seeds_.size());
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(+ : updates)
+            for (int k = 0; k < ne; ++k) updates += process_seed(extra_seeds_[k], stamp, true) ? 1 : 0;
+            if (static_cast<float>(updates) < opt_.stop_ratio * static_cast<float>(n)) break;
+        }
+        if (l > 0) update_radii(l);
+    }
+
+    MatchResult r;
+    r.grid_width = gw_;
+    r.grid_height = gh_;
+    r.seeds.resize(n);
+    for (int i = 0; i < n; ++i) {
+        const State &s = best_[i].s;
+        SeedMatch &o = r.seeds[i];
+        o.x = info_[i].x;
+        o.y = info_[i].y;
+        o.u = s.u;
+        o.v = s.v;
+        o.d0 = s.d0;
+        o.d1 = s.d1;
+        o.cost = best_[i].cost;
+        o.cost_case = static_cast<CostCase>(best_[i].cas);
+        o.is_lidar = info_[i].lidar >= 0;
+        o.in_window = info_[i].window >= 0;
+    }
+    const int W = m_.width, H = m_.height, step = opt_.grid_step;
+    r.dense = SceneFlowField::zeros(W, H);
+    const int xoff = info_[0].x, yoff = info_[0].y;
+    auto put = [&](int x, int y, int i) {
+        const SeedMatch &o = r.seeds[i];
+        r.dense.u(y, x) = o.u;
+        r.dense.v(y, x) = o.v;
+        r.dense.d0(y, x) = o.d0;
+        r.dense.d1(y, x) = o.d1;
+        r.dense.valid(y, x) = 1;
+        r.dense.confidence(y, x) = 1.0f / (1.0f + std::max(0.0f, o.cost) / 100.0f);
+    };
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int y = 0; y < H; ++y) {
+        const int gy = std::clamp(static_cast<int>(std::floor(float(y - yoff) / step + 0.5f)), 0, gh_ - 1);
+        for (int x = 0; x < W; ++x) {
+            const int gx = std::clamp(static_cast<int>(std::floor(float(x - xoff) / step + 0.5f)), 0, gw_ - 1);
+            put(x, y, gy * gw_ + gx);
+        }
+    }
+    for (int i : extra_seeds_) put(info_[i].x, info_[i].y, i);
+    return r;
+}
+
+}  // namespace
+
+struct SceneFlowMatcher::Impl : MatcherData {
+    MatchResult run(Direction dir) const;
+};
+
+MatchResult SceneFlowMatcher::Impl::run(Direction dir) const {
+    const auto t0 = Clock::now();
+    Engine engine(*this, dir);
+    MatchResult r = engine.run();
+    r.seconds_features = seconds_features;
+    r.seconds_matching = seconds_since(t0);
+    return r;
+}
+
+SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options)
+    : impl_(std::make_unique<Impl>()) {
+    options.validate();
+    const auto t0 = Clock::now();
+    const cv::Mat *imgs[4] = {&in.left0, &in.right0, &in.left1, &in.right1};
+    const char *names[4] = {"left0", "right0", "left1", "right1"};
+    for (int i = 0; i < 4; ++i) {
+        require(!imgs[i]->empty(), ErrorCode::InvalidArgument, std::string("MatchInput: ") + names[i] + " is empty");
+        require(imgs[i]->depth() == CV_8U && (imgs[i]->channels() == 1 || imgs[i]->channels() == 3 ||
+                                               imgs[i]->channels() == 4),
+                ErrorCode::InvalidArgument,
+                std::string("MatchInput: ") + names[i] + " must be 8-bit gray, BGR or BGRA");
+        require(imgs[i]->size() == in.left0.size(), ErrorCode::SizeMismatch,
+                std::string("MatchInput: ") + names[i] + " differs in size from left0");
+    }
+    Impl &m = *impl_;
+    m.opt = options;
+    m.width = in.left0.cols;
+    m.height = in.left0.rows;
+    require(m.width >= 2 && m.height >= 2, ErrorCode::InvalidArgument, "MatchInput: images must be at least 2x2");
+    validate_lidar(in.lidar0, m.width, m.height, "lidar0");
+    validate_lidar(in.lidar1, m.width, m.height, "lidar1");
+    if (options.use_lidar) {
+        m.lidar[0] = dedupe(in.lidar0);
+        m.lidar[1] = dedupe(in.lidar1);
+    }
+
+    int nlev = 1;
+    while (nlev < options.max_levels && (m.height >> nlev) >= options.min_coarsest_height &&
+           (m.width >> nlev) >= 8)
+        ++nlev;
+    m.levels.resize(nlev);
+    const int threads = options.threads;
+    // Pyramids and descriptors of the four images; the images are independent.
+    std::vector<std::vector<cv::Mat1f>> pyr(4);
+    for (int i = 0; i < 4; ++i) {
+        pyr[i].resize(nlev);
+        pyr[i][0] = features::to_gray_float(*imgs[i]);
+        for (int l = 1; l < nlev; ++l) cv::pyrDown(pyr[i][l - 1], pyr[i][l]);
+    }
+    for (int l = 0; l < nlev; ++l) {
+        m.levels[l].w = pyr[0][l].cols;
+        m.levels[l].h = pyr[0][l].rows;
+    }
+    const int outer = std::min(threads, 4);
+    const int inner = std::max(1, threads / outer);
+#pragma omp parallel for schedule(static) num_threads(outer)
+    for (int i = 0; i < 4; ++i)
+        for (int l = 0; l < nlev; ++l)
+            m.levels[l].desc[i] = features::compute_dense_sift(pyr[i][l], options.sift, inner);
+    m.seconds_features = seconds_since(t0);
+}
+
+SceneFlowMatcher::~SceneFlowMatcher() = default;
+
+MatchResult SceneFlowMatcher::run(Direction direction) const { return impl_->run(direction); }
+
+double SceneFlowMatcher::seconds_features() const { return impl_->seconds_features; }
+
+MatchResult match_scene_flow(const MatchInput &input, const MatchingOptions &options, Direction direction) {
+    SceneFlowMatcher matcher(input, options);
+    return matcher.run(direction);
+}
+
+}  // namespace lidarflow::matching

@@ -1,0 +1,87 @@
+#pragma once
+// Stage 1 of LiDAR-Flow: coarse-to-fine PatchMatch over the 4-D scene flow (u, v, d0, d1)
+// (CPM-style, extended to scene flow as in SceneFlowFields), with the paper's four LiDAR cost
+// cases, support windows and constraints (see matching_options.hpp for the exact rules).
+//
+// Algorithm (per direction):
+//  1. Gray pyramids (factor 0.5) of the four images and dense SIFT descriptors on every level.
+//  2. Seeds: a regular grid (grid_step px) plus, with LiDAR, every D_l^0 pixel (its own seed,
+//     d0 fixed). The same seeds, scaled, live on every level.
+//  3. Coarsest level: random (u, v) within max_flow, random d0 (or the nearest D_l^0 value in
+//     the seed's support window), d1 = d0. Each level runs PatchMatch: in every iteration each
+//     seed tries its neighbours' matches (propagation) and random candidates with shrinking
+//     radius for (u, v), d0 and d1 separately (random search); a candidate is kept if its
+//     cost is lower (constraint 1). A finer level starts from the coarser result (x2) with a
+//     per-seed search radius given by how much its neighbours disagree.
+//  4. Dense output: each pixel takes the match of its grid seed; LiDAR pixels keep their own.
+//
+// Determinism: seed rows are cut into fixed strips; even strips run in parallel, then odd
+// strips, then the LiDAR seeds, each strip scanned sequentially (alternating direction per
+// iteration). Random numbers are a counter-based hash of (random_seed, level, iteration, seed),
+// so results are identical for any thread count.
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/lidar.hpp"
+#include "core/maps.hpp"
+#include "matching/cost_cases.hpp"
+#include "matching/matching_options.hpp"
+
+namespace lidarflow::matching {
+
+// Caller-owned views; the matcher copies what it needs in its constructor.
+struct MatchInput {
+    cv::Mat left0, right0, left1, right1;  // 8-bit gray or BGR(A), all the same size
+    SparseLidar lidar0;  // D_l^0, aligned to left0 (may be empty: no points)
+    SparseLidar lidar1;  // D_l^1, aligned to left1 (may be empty)
+};
+
+// Forward: reference I_l^0, t0 -> t1. Backward: reference I_l^1, t1 -> t0 (images and LiDAR
+// roles swapped; the result lives in I_l^1's pixel grid).
+enum class Direction { Forward, Backward };
+
+struct SeedMatch {
+    int x = 0, y = 0;                 // full-resolution pixel of the reference image
+    float u = 0, v = 0, d0 = 0, d1 = 0;
+    float cost = 0;                   // case_cost(cost_case, ...) of the match (lower is better)
+    CostCase cost_case = CostCase::Image;
+    bool is_lidar = false;            // a pixel of the reference LiDAR scan (d0 = measurement)
+    bool in_window = false;           // inside a reference LiDAR support window
+};
+
+struct MatchResult {
+    // 100% dense: every pixel valid. confidence = 1 / (1 + cost / 100).
+    SceneFlowField dense;
+    std::vector<SeedMatch> seeds;  // grid seeds first (row-major), then extra LiDAR seeds
+    int grid_width = 0, grid_height = 0;
+    double seconds_features = 0, seconds_matching = 0;
+};
+
+class SceneFlowMatcher {
+public:
+    // Validates and copies the input, builds pyramids and descriptors (shared by both
+    // directions). Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),
+    // InvalidArgument (empty or non-8-bit images, LiDAR points outside the image, not finite
+    // or negative disparities, bad options).
+    SceneFlowMatcher(const MatchInput &input, const MatchingOptions &options);
+    ~SceneFlowMatcher();
+    SceneFlowMatcher(const SceneFlowMatcher &) = delete;
+    SceneFlowMatcher &operator=(const SceneFlowMatcher &) = delete;
+
+    // Runs one direction; may be called repeatedly, results depend only on inputs and options.
+    MatchResult run(Direction direction) const;
+
+    double seconds_features() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Convenience: builds a matcher and runs one direction.
+MatchResult match_scene_flow(const MatchInput &input, const MatchingOptions &options,
+                             Direction direction);
+
+}  // namespace lidarflow::matching

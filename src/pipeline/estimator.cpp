@@ -1,0 +1,123 @@
+#include "pipeline/estimator.hpp"
+
+#include <chrono>
+
+#include "consistency/consistency.hpp"
+#include "core/error.hpp"
+#include "matching/scene_flow_matcher.hpp"
+
+namespace lidarflow::pipeline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The stage options as the estimator runs them: one thread count and one LiDAR switch.
+interp::InterpolationOptions interpolation_options(const EstimatorOptions &o) {
+    interp::InterpolationOptions io = o.interpolation;
+    io.num_threads = o.threads;
+    io.use_lidar = io.use_lidar && o.use_lidar;
+    return io;
+}
+
+matching::MatchingOptions matching_options(const EstimatorOptions &o) {
+    matching::MatchingOptions mo = o.matching;
+    mo.threads = o.threads;
+    if (!o.use_lidar || !mo.use_lidar) {  // the im-only row of Table I: no LiDAR rule at all
+        mo.use_lidar = false;
+        mo.support_window = mo.const1 = mo.const2 = false;
+    }
+    return mo;
+}
+
+}  // namespace
+
+const char *stage_name(Stage s) {
+    switch (s) {
+    case Stage::Matching: return "matching";
+    case Stage::Consistency: return "consistency";
+    case Stage::Sparse: return "sparse";
+    case Stage::Interpolation: return "interpolation";
+    }
+    return "unknown";
+}
+
+Stage parse_stage(const std::string &name) {
+    for (Stage s : {Stage::Matching, Stage::Consistency, Stage::Sparse, Stage::Interpolation})
+        if (name == stage_name(s)) return s;
+    throw Error(ErrorCode::InvalidArgument,
+                "unknown stage '" + name + "' (matching, consistency, sparse, interpolation)");
+}
+
+void EstimatorOptions::validate() const {
+    require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "threads must be in [1, 256]");
+    require(last_stage >= Stage::Matching && last_stage <= Stage::Interpolation, ErrorCode::InvalidArgument,
+            "last_stage out of range");
+    matching_options(*this).validate();
+}
+
+const SceneFlowField &EstimatorResult::output() const {
+    switch (last_stage) {
+    case Stage::Matching: return forward;
+    case Stage::Consistency: return after_fb;
+    case Stage::Sparse: return sparse;
+    case Stage::Interpolation: return dense;
+    }
+    return dense;
+}
+
+Estimator::Estimator(const EstimatorOptions &options)
+    : options_((options.validate(), options)), interpolator_(interpolation_options(options)) {}
+
+EstimatorResult Estimator::run(const FrameInput &frame) const {
+    const auto t_total = Clock::now();
+    EstimatorResult r;
+    r.last_stage = options_.last_stage;
+    const SparseLidar no_lidar0{frame.left0.cols, frame.left0.rows, {}};
+    const SparseLidar no_lidar1{frame.left1.cols, frame.left1.rows, {}};
+    const SparseLidar &lidar0 = options_.use_lidar ? frame.lidar0 : no_lidar0;
+    const SparseLidar &lidar1 = options_.use_lidar ? frame.lidar1 : no_lidar1;
+
+    // Stage 1. Descriptors are computed once and shared by both directions.
+    auto t = Clock::now();
+    const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
+    const matching::SceneFlowMatcher matcher(mi, matching_options(options_));
+    r.timings.push_back({"features", seconds_since(t)});
+    t = Clock::now();
+    r.forward = matcher.run(matching::Direction::Forward).dense;
+    r.timings.push_back({"matching_forward", seconds_since(t)});
+    if (options_.last_stage == Stage::Matching) {
+        r.total_seconds = seconds_since(t_total);
+        return r;
+    }
+    t = Clock::now();
+    r.backward = matcher.run(matching::Direction::Backward).dense;
+    r.timings.push_back({"matching_backward", seconds_since(t)});
+
+    // Stages 2-3.
+    t = Clock::now();
+    consistency::ConsistencyResult c = consistency::run_consistency(r.forward, r.backward, frame.left0,
+                                                                     frame.right0, lidar0, options_.consistency);
+    r.after_sgm = std::move(c.after_sgm);
+    r.after_fb = std::move(c.after_fb);
+    r.sparse = std::move(c.sparse);
+    r.timings.push_back({"sgm", c.seconds.sgm});
+    r.timings.push_back({"consistency", seconds_since(t) - c.seconds.sgm - c.seconds.sparsify});
+    r.timings.push_back({"sparsify", c.seconds.sparsify});
+    if (options_.last_stage <= Stage::Sparse) {
+        r.total_seconds = seconds_since(t_total);
+        return r;
+    }
+
+    // Stage 4.
+    t = Clock::now();
+    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm).dense;
+    r.timings.push_back({"interpolation", seconds_since(t)});
+    r.total_seconds = seconds_since(t_total);
+    return r;
+}
+
+}  // namespace lidarflow::pipeline

@@ -1,0 +1,86 @@
+#pragma once
+// The complete LiDAR-Flow estimator: stage 1 matching (both directions) -> stage 2 consistency
+// -> stage 3 sparsification -> stage 4 interpolation. It owns the options of every stage,
+// can stop after any stage (for Table I and ablations), and returns every intermediate field
+// with per-stage timings. This is what the C ABI and the CLI wrap.
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "consistency/options.hpp"
+#include "core/lidar.hpp"
+#include "core/maps.hpp"
+#include "interpolation/interpolator.hpp"
+#include "matching/matching_options.hpp"
+
+namespace lidarflow::pipeline {
+
+enum class Stage { Matching = 1, Consistency = 2, Sparse = 3, Interpolation = 4 };
+
+// "matching", "consistency", "sparse", "interpolation".
+const char *stage_name(Stage s);
+// Inverse of stage_name; throws Error(InvalidArgument) for an unknown name.
+Stage parse_stage(const std::string &name);
+
+struct EstimatorOptions {
+    // Master LiDAR switch. false = the image-only (SceneFlowFields-style) pipeline: the
+    // matcher runs im-only, stages 2-4 get no LiDAR. LiDAR inputs are then ignored.
+    bool use_lidar = true;
+    Stage last_stage = Stage::Interpolation;
+    int threads = 1;  // OpenMP threads for every stage (num_threads clauses; never global)
+
+    matching::MatchingOptions matching;
+    consistency::ConsistencyOptions consistency;
+    interp::InterpolationOptions interpolation;
+
+    // Throws Error(InvalidArgument) naming the first bad field.
+    void validate() const;
+};
+
+// Caller-owned views, only read during run().
+struct FrameInput {
+    cv::Mat left0, right0, left1, right1;  // rectified, 8-bit gray or BGR, all one size
+    SparseLidar lidar0;  // D_l^0 in I_l^0 (may have no points)
+    SparseLidar lidar1;  // D_l^1 in I_l^1 (may have no points, e.g. a real scan only at t0)
+};
+
+struct StageTime {
+    std::string name;
+    double seconds = 0;
+};
+
+struct EstimatorResult {
+    Stage last_stage = Stage::Interpolation;
+    SceneFlowField forward;   // stage 1, reference I_l^0 (dense)
+    SceneFlowField backward;  // stage 1, reference I_l^1 (dense; empty if not needed)
+    SceneFlowField after_sgm; // stage 2a + clustering (Table I "Disp+LiDAR")
+    SceneFlowField after_fb;  // stage 2b + clustering (Table I "disp+LiDAR & backward+LiDAR")
+    SceneFlowField sparse;    // stage 3 (Table I "Spars+LiDAR")
+    SceneFlowField dense;     // stage 4 (the final result)
+    // The output of last_stage: one of the fields above.
+    const SceneFlowField &output() const;
+
+    std::vector<StageTime> timings;  // in execution order
+    double total_seconds = 0;
+};
+
+class Estimator {
+public:
+    // Validates and copies the options. Throws Error(InvalidArgument) (bad options) or
+    // Error(Io/Format) (an SED edge model that cannot be loaded).
+    explicit Estimator(const EstimatorOptions &options);
+
+    // Runs the stages up to options.last_stage. Throws Error(SizeMismatch / InvalidArgument)
+    // for bad inputs; the estimator stays usable. Const and thread-safe: distinct threads may
+    // run distinct frames on one Estimator.
+    EstimatorResult run(const FrameInput &frame) const;
+
+    const EstimatorOptions &options() const { return options_; }
+
+private:
+    EstimatorOptions options_;
+    interp::RobustInterpolator interpolator_;
+};
+
+}  // namespace lidarflow::pipeline

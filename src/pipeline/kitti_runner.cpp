@@ -1,0 +1,311 @@
+#include "pipeline/kitti_runner.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "eval/json_report.hpp"
+#include "io/calib.hpp"
+#include "io/kitti_layout.hpp"
+#include "io/kitti_png.hpp"
+#include "io/kitti_submission.hpp"
+#include "io/velodyne.hpp"
+#include "lidar/paper_protocol.hpp"
+#include "lidar/velodyne_protocol.hpp"
+#include "matching/scene_flow_matcher.hpp"
+#include "viz/disparity_color.hpp"
+#include "viz/error_map.hpp"
+#include "viz/flow_color.hpp"
+
+namespace lidarflow::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool has_ground_truth(const io::KittiLayout &k, const std::string &id) {
+    return fs::exists(k.gt_disp0(id)) && fs::exists(k.gt_disp1(id)) && fs::exists(k.gt_flow(id));
+}
+
+// Collects the per-frame scores of one table row; rows are created in a fixed order on the
+// first frame and filled frame by frame.
+class RowTable {
+public:
+    explicit RowTable(std::vector<ResultRow> &rows) : rows_(rows) {}
+    void add(const std::string &group, const std::string &name, eval::FillMode mode,
+             const eval::FrameGroundTruth &gt, const SceneFlowField &field, const DisparityMap &seeds,
+             const std::string &id) {
+        ResultRow *row = nullptr;
+        for (ResultRow &r : rows_)
+            if (r.group == group && r.name == name) row = &r;
+        if (!row) {
+            rows_.push_back({group, name, {}});
+            row = &rows_.back();
+            row->evaluation.options.mode = mode;
+        }
+        const bool any_seed = cv::countNonZero(seeds >= 0) > 0;
+        row->evaluation.frames.push_back(
+            eval::evaluate_frame(gt, field, row->evaluation.options, any_seed ? &seeds : nullptr, id));
+    }
+
+private:
+    std::vector<ResultRow> &rows_;
+};
+
+eval::FillMode mode_for(Stage s) {
+    return s == Stage::Consistency || s == Stage::Sparse ? eval::FillMode::EstimateOnly : eval::FillMode::Filled;
+}
+
+const char *group_of(Stage s) {
+    return s == Stage::Matching ? "Matching" : s == Stage::Interpolation ? "Interpolation" : "Consist. Check";
+}
+
+void write_viz(const std::string &out, const std::string &id, const SceneFlowField &f,
+               const eval::FrameGroundTruth *gt) {
+    const std::string dir = out + "/viz/" + id;
+    const FlowField flow = io::field_flow(f);
+    const DisparityMap d0 = io::field_disparity0(f), d1 = io::field_disparity1(f);
+    io::write_image(dir + "_flow.png", viz::flow_to_color(flow));
+    io::write_image(dir + "_disp0.png", viz::disparity_to_color(d0));
+    io::write_image(dir + "_disp1.png", viz::disparity_to_color(d1));
+    if (!gt) return;
+    const eval::GroundTruth &occ = gt->occ;
+    const eval::GroundTruth *noc = gt->has_noc ? &gt->noc : nullptr;
+    io::write_image(dir + "_disp0_error.png", viz::disparity_error_image(d0, occ.d0, noc ? noc->d0 : DisparityMap()));
+    io::write_image(dir + "_disp1_error.png", viz::disparity_error_image(d1, occ.d1, noc ? noc->d1 : DisparityMap()));
+    io::write_image(dir + "_flow_error.png", viz::flow_error_image(flow, occ.flow, noc ? noc->flow : FlowField()));
+}
+
+std::string fmt(double v, int prec = 2) {
+    if (!std::isfinite(v)) return "-";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.*f", prec, v);
+    return buf;
+}
+
+std::string pad(std::string s, size_t w) {
+    if (s.size() < w) s.insert(0, w - s.size(), ' ');
+    return s;
+}
+
+std::string pad_right(std::string s, size_t w) {
+    if (s.size() < w) s.append(w - s.size(), ' ');
+    return s;
+}
+
+}  // namespace
+
+const char *protocol_name(LidarProtocol p) {
+    switch (p) {
+    case LidarProtocol::Paper: return "paper";
+    case LidarProtocol::Velodyne: return "velodyne";
+    case LidarProtocol::None: return "none";
+    }
+    return "unknown";
+}
+
+LidarProtocol parse_protocol(const std::string &name) {
+    for (LidarProtocol p : {LidarProtocol::Paper, LidarProtocol::Velodyne, LidarProtocol::None})
+        if (name == protocol_name(p)) return p;
+    throw Error(ErrorCode::InvalidArgument, "unknown LiDAR protocol '" + name + "' (paper, velodyne, none)");
+}
+
+KittiFrame load_kitti_frame(const std::string &root, const std::string &id, const LidarInputOptions &lidar) {
+    const io::KittiLayout k{root};
+    KittiFrame f;
+    f.id = id;
+    f.input.left0 = io::read_image(k.left(id, 0));
+    f.input.right0 = io::read_image(k.right(id, 0));
+    f.input.left1 = io::read_image(k.left(id, 1));
+    f.input.right1 = io::read_image(k.right(id, 1));
+    const cv::Size size = f.input.left0.size();
+    f.input.lidar0 = {size.width, size.height, {}};
+    f.input.lidar1 = {size.width, size.height, {}};
+    if (lidar.protocol == LidarProtocol::Paper) {
+        lidar::PaperProtocolOptions po;
+        po.target_points = lidar.points;
+        lidar::PaperSamples s = lidar::sample_paper_protocol(io::read_disparity_png(k.gt_disp0(id)),
+                                                             io::read_disparity_png(k.gt_disp1(id)),
+                                                             io::read_flow_png(k.gt_flow(id)), po);
+        f.input.lidar0 = std::move(s.d0);
+        f.input.lidar1 = std::move(s.d1);
+    } else if (lidar.protocol == LidarProtocol::Velodyne) {
+        lidar::VelodyneProtocolOptions vo;
+        vo.target_points = lidar.points;
+        vo.beams = lidar.beams;
+        lidar::VelodyneSamples s = lidar::sample_velodyne_protocol(
+            io::read_velodyne_bin(k.velodyne(id)), io::read_calib_cam_to_cam(k.calib_cam_to_cam(id)),
+            io::read_calib_velo_to_cam(k.calib_velo_to_cam(id)), size, vo);
+        f.input.lidar0 = std::move(s.d0);
+        f.input.lidar1 = std::move(s.d1);
+    }
+    return f;
+}
+
+KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
+    const io::KittiLayout k{o.root};
+    const std::vector<std::string> ids = o.ids.empty() ? k.frame_ids() : o.ids;
+    require(!ids.empty(), ErrorCode::InvalidArgument, "kitti: no frames in " + o.root);
+
+    EstimatorOptions main_opt = o.estimator;
+    main_opt.use_lidar = o.lidar.protocol != LidarProtocol::None && o.estimator.use_lidar;
+    const Stage last = main_opt.last_stage;
+    const Estimator estimator(main_opt);
+    // The image-only pipeline (the SceneFlowFields-style comparison rows).
+    EstimatorOptions image_opt = main_opt;
+    image_opt.use_lidar = false;
+    const bool image_rows = o.ablation && main_opt.use_lidar;
+    interp::InterpolationOptions interp_only = main_opt.interpolation;
+    interp_only.use_lidar = false;
+    interp_only.num_threads = main_opt.threads;
+
+    KittiRunReport rep;
+    RowTable table(rep.rows);
+    const std::string main_name = main_opt.use_lidar ? "LiDAR-Flow" : "image-only";
+    for (size_t i = 0; i < ids.size(); ++i) {
+        const std::string &id = ids[i];
+        if (progress) progress(i, ids.size(), id + ": loading");
+        const KittiFrame frame = load_kitti_frame(o.root, id, o.lidar);
+        const DisparityMap seeds = frame.input.lidar0.to_map();
+        const bool scored = has_ground_truth(k, id);
+        eval::FrameGroundTruth gt;
+        if (scored) gt = eval::load_ground_truth(o.root, id);
+
+        if (progress) progress(i, ids.size(), id + ": " + main_name);
+        const EstimatorResult r = estimator.run(frame.input);
+        rep.timings.push_back({id, frame.input.lidar0.points.size(), frame.input.lidar1.points.size(), r.timings,
+                               r.total_seconds});
+        if (!o.out.empty()) {
+            io::write_submission(o.out, id, r.output());
+            if (o.write_viz) write_viz(o.out, id, r.output(), scored ? &gt : nullptr);
+        }
+        if (!scored) continue;
+        if (!o.ablation) {
+            table.add(group_of(last), main_name, mode_for(last), gt, r.output(), seeds, id);
+            continue;
+        }
+
+        // Table I: every stage up to `last`, LiDAR variants and the image-only comparison.
+        EstimatorResult img;
+        if (image_rows) {
+            if (progress) progress(i, ids.size(), id + ": image-only");
+            img = Estimator(image_opt).run(frame.input);
+        }
+        const DisparityMap no_seeds(seeds.size(), kInvalidDisparity);
+        if (main_opt.use_lidar) {
+            using matching::MatchVariant;
+            table.add("Matching", "im-only", eval::FillMode::Filled, gt, img.forward, seeds, id);
+            for (MatchVariant v : {MatchVariant::ImLidar, MatchVariant::ImLidarWin, MatchVariant::ImLidarWinConst1}) {
+                if (progress) progress(i, ids.size(), id + ": matching " + matching::variant_name(v));
+                matching::MatchingOptions mo = matching::MatchingOptions::for_variant(v);
+                mo.threads = main_opt.threads;
+                const matching::MatchInput mi{frame.input.left0, frame.input.right0, frame.input.left1,
+                                              frame.input.right1, frame.input.lidar0, frame.input.lidar1};
+                table.add("Matching", matching::variant_name(v), eval::FillMode::Filled, gt,
+                          matching::match_scene_flow(mi, mo, matching::Direction::Forward).dense, seeds, id);
+            }
+        }
+        table.add("Matching", main_name, eval::FillMode::Filled, gt, r.forward, seeds, id);
+        if (last == Stage::Matching) continue;
+        table.add("Consist. Check", main_opt.use_lidar ? "Disp+LiDAR" : "disp", eval::FillMode::EstimateOnly, gt,
+                  r.after_sgm, seeds, id);
+        table.add("Consist. Check", main_opt.use_lidar ? "disp+LiDAR & backward+LiDAR" : "disp & backward",
+                  eval::FillMode::EstimateOnly, gt, r.after_fb, seeds, id);
+        if (image_rows)
+            table.add("Consist. Check", "image-only", eval::FillMode::EstimateOnly, gt, img.after_fb, no_seeds, id);
+        if (last == Stage::Consistency) continue;
+        table.add("Interpolation", main_opt.use_lidar ? "Spars+LiDAR" : "Spars", eval::FillMode::EstimateOnly, gt,
+                  r.sparse, seeds, id);
+        if (last == Stage::Sparse) continue;
+        if (main_opt.use_lidar) {
+            if (progress) progress(i, ids.size(), id + ": interp-only");
+            const SceneFlowField dense_only =
+                interp::RobustInterpolator(interp_only).run(r.sparse, frame.input.lidar0, frame.input.left0).dense;
+            table.add("Interpolation", "Spars+LiDAR & Interp-only", eval::FillMode::Filled, gt, dense_only, seeds, id);
+        }
+        table.add("Interpolation", main_opt.use_lidar ? "LiDAR-Flow (Spars+LiDAR & Interp+LiDAR)" : "image-only",
+                  eval::FillMode::Filled, gt, r.dense, seeds, id);
+        if (image_rows) table.add("Interpolation", "image-only", eval::FillMode::Filled, gt, img.dense, seeds, id);
+    }
+    for (ResultRow &row : rep.rows) row.evaluation.summary = eval::summarize(row.evaluation.frames);
+    for (size_t i = 0; i < rep.rows.size(); ++i)
+        if (rep.rows[i].name.rfind(main_name, 0) == 0 && rep.rows[i].group == group_of(last)) rep.main_row = i;
+    if (!o.out.empty()) {
+        std::ofstream(o.out + "/report.json") << report_json(o, rep);
+    }
+    return rep;
+}
+
+std::string format_report(const KittiRunReport &rep) {
+    std::ostringstream s;
+    if (rep.rows.empty()) return "no frame had ground truth: nothing scored\n";
+    const size_t frames = rep.rows.front().evaluation.frames.size();
+    s << "Table I (occ ground truth; mean over " << frames
+      << " frame(s); sparse rows scored on their own pixels, dense rows hole-filled as the devkit does)\n";
+    s << pad_right("", 16) << pad_right("", 42) << "   ------ EPE [px] ------   -------- outliers [%] --------   density\n";
+    s << pad_right("stage", 16) << pad_right("variant", 42) << pad("D0", 8) << pad("D1", 8) << pad("Fl", 8) << "   "
+      << pad("D0", 7) << pad("D1", 7) << pad("Fl", 7) << pad("SF", 7) << "   " << pad("[%]", 7) << "\n";
+    std::string group;
+    for (const ResultRow &row : rep.rows) {
+        const eval::ComponentMeans &m = row.evaluation.summary.mean_dense.occ;
+        s << pad_right(row.group == group ? "" : row.group, 16) << pad_right(row.name, 42) << pad(fmt(m.d0.epe), 8)
+          << pad(fmt(m.d1.epe), 8) << pad(fmt(m.fl.epe), 8) << "   " << pad(fmt(m.d0.outlier_pct), 7)
+          << pad(fmt(m.d1.outlier_pct), 7) << pad(fmt(m.fl.outlier_pct), 7) << pad(fmt(m.sf.outlier_pct), 7) << "   "
+          << pad(fmt(m.sf.density_pct), 7) << "\n";
+        group = row.group;
+    }
+    s << "\nSF outliers [%] per frame (occ / noc)\n" << pad_right("variant", 58);
+    for (const eval::FrameScore &f : rep.rows.front().evaluation.frames) s << pad(f.id, 16);
+    s << pad("pooled", 16) << "\n";
+    for (const ResultRow &row : rep.rows) {
+        s << pad_right(row.group + ": " + row.name, 58);
+        auto cell = [](const eval::RegionScores &r) {
+            return fmt(r.occ.sf.outlier_pct()) + " / " + (r.has_noc ? fmt(r.noc.sf.outlier_pct()) : "-");
+        };
+        for (const eval::FrameScore &f : row.evaluation.frames) s << pad(cell(f.dense), 16);
+        s << pad(cell(row.evaluation.summary.pooled.dense), 16) << "\n";
+    }
+    bool header = false;
+    for (const ResultRow &row : rep.rows) {
+        const eval::Summary &sm = row.evaluation.summary;
+        if (row.group != "Interpolation" || !sm.pooled.has_lidar) continue;
+        if (!header) {
+            s << "\nTable II (final SF outliers [%], occ, mean over frames)\n" << pad_right("variant", 42)
+              << pad("seeds", 9) << pad("window", 9) << pad("dense", 9) << pad("#seeds", 9) << pad("#window", 9)
+              << "\n";
+            header = true;
+        }
+        s << pad_right(row.name, 42) << pad(fmt(sm.mean_seeds.occ.sf.outlier_pct), 9)
+          << pad(fmt(sm.mean_window.occ.sf.outlier_pct), 9) << pad(fmt(sm.mean_dense.occ.sf.outlier_pct), 9)
+          << pad(fmt(double(sm.pooled.seeds.occ.sf.n_total) / row.evaluation.frames.size(), 0), 9)
+          << pad(fmt(double(sm.pooled.window.occ.sf.n_total) / row.evaluation.frames.size(), 0), 9) << "\n";
+    }
+    return s.str();
+}
+
+std::string report_json(const KittiRunOptions &o, const KittiRunReport &rep) {
+    std::ostringstream s;
+    s.precision(9);
+    s << "{\n  \"format\": \"lidarflow-kitti/1\",\n  \"lidar\": \"" << protocol_name(o.lidar.protocol)
+      << "\",\n  \"lidar_points\": " << o.lidar.points << ",\n  \"stage\": \"" << stage_name(o.estimator.last_stage)
+      << "\",\n  \"threads\": " << o.estimator.threads << ",\n  \"frames\": [";
+    for (size_t i = 0; i < rep.timings.size(); ++i) {
+        const FrameTimings &t = rep.timings[i];
+        s << (i ? "," : "") << "\n    {\"id\": \"" << t.id << "\", \"lidar0_points\": " << t.lidar0_points
+          << ", \"lidar1_points\": " << t.lidar1_points << ", \"total_seconds\": " << t.total_seconds
+          << ", \"seconds\": {";
+        for (size_t j = 0; j < t.stages.size(); ++j)
+            s << (j ? ", " : "") << "\"" << t.stages[j].name << "\": " << t.stages[j].seconds;
+        s << "}}";
+    }
+    s << "\n  ],\n  \"main_row\": " << rep.main_row << ",\n  \"rows\": [";
+    for (size_t i = 0; i < rep.rows.size(); ++i)
+        s << (i ? "," : "") << "\n    {\"group\": \"" << rep.rows[i].group << "\", \"name\": \"" << rep.rows[i].name
+          << "\", \"evaluation\": " << eval::to_json(rep.rows[i].evaluation) << "}";
+    s << "\n  ]\n}\n";
+    return s.str();
+}
+
+}  // namespace lidarflow::pipeline

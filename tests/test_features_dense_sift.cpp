@@ -1,0 +1,138 @@
+// Dense SIFT descriptors: layout, normalisation, shift equivariance, low-contrast handling and
+// argument validation.
+#include "test_support.hpp"
+
+#include <cmath>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+#include "features/dense_sift.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::features;
+
+namespace {
+
+cv::Mat1f texture(int w, int h, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    cv::Mat1f img(h, w);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) img(y, x) = u(rng);
+    cv::GaussianBlur(img, img, cv::Size(0, 0), 1.2);
+    return img;
+}
+
+double length(const uint8_t *d, int dim) {
+    double s = 0;
+    for (int i = 0; i < dim; ++i) s += double(d[i]) * d[i];
+    return std::sqrt(s);
+}
+
+void layout_and_length(void **) {
+    const cv::Mat1f img = texture(40, 30, 1);
+    for (int dim : {128, 64}) {
+        DenseSiftOptions o;
+        o.dim = dim;
+        const DescriptorImage d = compute_dense_sift(img, o);
+        assert_int_equal(d.width, 40);
+        assert_int_equal(d.height, 30);
+        assert_int_equal(d.dim, dim);
+        assert_int_equal(d.data.size(), 40u * 30u * dim);
+        // Textured pixel: normalised, clipped and renormalised to 512 (rounding tolerance).
+        const double len = length(d.at(20, 15), dim);
+        assert_true(len > 490.0 && len < 530.0);
+    }
+}
+
+void flat_image_gives_zero_descriptors(void **) {
+    const cv::Mat1f flat(20, 24, 0.5f);
+    const DescriptorImage d = compute_dense_sift(flat, DenseSiftOptions{});
+    for (uint8_t v : d.data) assert_int_equal(v, 0);
+}
+
+void low_contrast_is_not_amplified(void **) {
+    // The same texture at 1/100 contrast: far below the norm floor, so much shorter descriptors.
+    const cv::Mat1f img = texture(40, 30, 2);
+    const cv::Mat1f faint = img * 0.01f + 0.5f;
+    const DescriptorImage a = compute_dense_sift(img, DenseSiftOptions{});
+    const DescriptorImage b = compute_dense_sift(faint, DenseSiftOptions{});
+    assert_true(length(b.at(20, 15), 128) < 0.2 * length(a.at(20, 15), 128));
+}
+
+void shift_equivariance(void **) {
+    const cv::Mat1f img = texture(60, 40, 3);
+    cv::Mat1f shifted(40, 60, 0.0f);
+    img(cv::Rect(0, 0, 55, 37)).copyTo(shifted(cv::Rect(5, 3, 55, 37)));
+    const DescriptorImage a = compute_dense_sift(img, DenseSiftOptions{});
+    const DescriptorImage b = compute_dense_sift(shifted, DenseSiftOptions{});
+    for (int y = 12; y < 28; ++y)
+        for (int x = 12; x < 45; ++x)
+            assert_memory_equal(a.at(x, y), b.at(x + 5, y + 3), 128);
+    // ... and a different position does not match (the test can fail).
+    assert_memory_not_equal(a.at(20, 20), b.at(20, 20), 128);
+}
+
+void thread_count_does_not_change_output(void **) {
+    const cv::Mat1f img = texture(50, 33, 4);
+    const DescriptorImage a = compute_dense_sift(img, DenseSiftOptions{}, 1);
+    const DescriptorImage b = compute_dense_sift(img, DenseSiftOptions{}, 3);
+    assert_true(a.data == b.data);
+}
+
+void gray_conversion(void **) {
+    cv::Mat bgr(4, 5, CV_8UC3, cv::Scalar(255, 255, 255));
+    const cv::Mat1f g = to_gray_float(bgr);
+    assert_int_equal(g.cols, 5);
+    assert_true(std::abs(g(2, 2) - 1.0f) < 1e-6f);
+    cv::Mat gray(3, 3, CV_8UC1, cv::Scalar(51));
+    assert_true(std::abs(to_gray_float(gray)(1, 1) - 0.2f) < 1e-6f);
+}
+
+void invalid_arguments(void **) {
+    auto expect_invalid = [](auto fn) {
+        try {
+            fn();
+            fail_msg("expected lidarflow::Error");
+        } catch (const Error &e) {
+            assert_int_equal(static_cast<int>(e.code()), static_cast<int>(ErrorCode::InvalidArgument));
+        }
+    };
+    expect_invalid([] { compute_dense_sift(cv::Mat1f(), DenseSiftOptions{}); });
+    expect_invalid([] {
+        DenseSiftOptions o;
+        o.dim = 96;
+        compute_dense_sift(cv::Mat1f(8, 8, 0.f), o);
+    });
+    expect_invalid([] {
+        DenseSiftOptions o;
+        o.cell_size = 0;
+        compute_dense_sift(cv::Mat1f(8, 8, 0.f), o);
+    });
+    expect_invalid([] {
+        DenseSiftOptions o;
+        o.norm_floor = NAN;
+        compute_dense_sift(cv::Mat1f(8, 8, 0.f), o);
+    });
+    expect_invalid([] { compute_dense_sift(cv::Mat1f(8, 8, 0.f), DenseSiftOptions{}, 0); });
+    expect_invalid([] { to_gray_float(cv::Mat()); });
+    expect_invalid([] { to_gray_float(cv::Mat(4, 4, CV_16UC1, cv::Scalar(0))); });
+    expect_invalid([] { to_gray_float(cv::Mat(4, 4, CV_8UC2, cv::Scalar(0))); });
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(layout_and_length),
+        cmocka_unit_test(flat_image_gives_zero_descriptors),
+        cmocka_unit_test(low_contrast_is_not_amplified),
+        cmocka_unit_test(shift_equivariance),
+        cmocka_unit_test(thread_count_does_not_change_output),
+        cmocka_unit_test(gray_conversion),
+        cmocka_unit_test(invalid_arguments),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -1,0 +1,186 @@
+// The matching cost: patch distance (Eq. 2) and the four LiDAR cases (Eqs. 3, 7, 10, 12),
+// checked against terms computed independently here from the paper's pixel positions, and
+// the matcher's reported seed costs checked against the same case formulas.
+#include "test_support.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "core/error.hpp"
+#include "features/dense_sift.hpp"
+#include "matching/cost_cases.hpp"
+#include "matching/patch_cost.hpp"
+#include "matching/scene_flow_matcher.hpp"
+#include "synth/scene.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::matching;
+using features::DescriptorImage;
+
+namespace {
+
+DescriptorImage random_descriptors(int w, int h, int dim, uint32_t seed) {
+    std::mt19937 rng(seed);
+    DescriptorImage d;
+    d.width = w;
+    d.height = h;
+    d.dim = dim;
+    d.data.resize(size_t(w) * h * dim);
+    for (auto &v : d.data) v = static_cast<uint8_t>(rng() & 0xFF);
+    return d;
+}
+
+// Eq. 2 written out: full 7x7 patch, Euclidean distance, no sampling tricks.
+double reference_E(const DescriptorImage &a, const DescriptorImage &b, int ax, int ay, int bx, int by) {
+    double sum = 0;
+    for (int dy = -3; dy <= 3; ++dy)
+        for (int dx = -3; dx <= 3; ++dx) {
+            const uint8_t *p = a.at(ax + dx, ay + dy), *q = b.at(bx + dx, by + dy);
+            double s = 0;
+            for (int i = 0; i < a.dim; ++i) s += double(int(p[i]) - int(q[i])) * (int(p[i]) - int(q[i]));
+            sum += std::sqrt(s);
+        }
+    return sum;
+}
+
+struct Four {
+    DescriptorImage l0, r0, l1, r1;
+    SlotDescriptors slots() const {
+        SlotDescriptors s;
+        s.image[kL0] = &l0;
+        s.image[kR0] = &r0;
+        s.image[kL1] = &l1;
+        s.image[kR1] = &r1;
+        return s;
+    }
+};
+
+void near(double a, double b) {
+    if (std::abs(a - b) > 1e-4 * std::max(1.0, std::abs(b))) fail_msg("%.6f != %.6f", a, b);
+}
+
+void patch_distance_matches_eq2(void **) {
+    const DescriptorImage a = random_descriptors(20, 16, 32, 1), b = random_descriptors(20, 16, 32, 2);
+    const PatchShape full(3, 1);
+    assert_int_equal(full.samples(), 49);
+    near(patch_cost(a, b, 8, 7, 11, 9, full, DescriptorNorm::L2, 1e9f), reference_E(a, b, 8, 7, 11, 9));
+    // L1 on one descriptor pair.
+    double l1 = 0;
+    for (int i = 0; i < 32; ++i) l1 += std::abs(int(a.at(5, 5)[i]) - int(b.at(6, 4)[i]));
+    near(descriptor_distance(a.at(5, 5), b.at(6, 4), 32, DescriptorNorm::L1), l1);
+    // Sub-sampled 7x7 patch (step 3): the 3x3 samples at offsets -3, 0, 3.
+    const PatchShape sub(3, 3);
+    assert_int_equal(sub.samples(), 9);
+    double s = 0;
+    for (int dy = -3; dy <= 3; dy += 3)
+        for (int dx = -3; dx <= 3; dx += 3)
+            s += descriptor_distance(a.at(8 + dx, 7 + dy), b.at(11 + dx, 9 + dy), 32, DescriptorNorm::L2);
+    near(patch_cost(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f), s);
+}
+
+void out_of_image_costs_the_penalty(void **) {
+    const DescriptorImage a = random_descriptors(20, 16, 16, 3), b = random_descriptors(20, 16, 16, 4);
+    const PatchShape sub(3, 3);
+    near(patch_cost(a, b, 5, 5, -1, 5, sub, DescriptorNorm::L2, 77.0f), 9 * 77.0);
+    near(patch_cost(a, b, 5, 5, 5, 16, sub, DescriptorNorm::L2, 77.0f), 9 * 77.0);
+    // Centre inside but patch crossing the border: samples are clamped, not penalised.
+    double s = 0;
+    for (int dy = -3; dy <= 3; dy += 3)
+        for (int dx = -3; dx <= 3; dx += 3)
+            s += descriptor_distance(a.at(std::max(0, 1 + dx), 5 + dy), b.at(std::max(0, 0 + dx), 5 + dy), 16,
+                                     DescriptorNorm::L2);
+    near(patch_cost(a, b, 1, 5, 0, 5, sub, DescriptorNorm::L2, 1e9f), s);
+    // Early exit returns a partial sum above the bound.
+    const float full = patch_cost(a, b, 9, 8, 10, 8, sub, DescriptorNorm::L2, 1e9f);
+    const float part = patch_cost(a, b, 9, 8, 10, 8, sub, DescriptorNorm::L2, 1e9f, full / 4);
+    assert_true(part > full / 4 && part <= full);
+}
+
+void four_cases_follow_the_paper(void **) {
+    Four f{random_descriptors(40, 24, 32, 10), random_descriptors(40, 24, 32, 11), random_descriptors(40, 24, 32, 12),
+           random_descriptors(40, 24, 32, 13)};
+    const PatchShape full(3, 1);
+    const int x = 20, y = 11, u = 3, v = -2, d0 = 6, d1 = 9;
+    // Positions of Eqs. 4-6, 8-9, 11.
+    const double E_l0l1 = reference_E(f.l0, f.l1, x, y, x + u, y + v);
+    const double E_l0r0 = reference_E(f.l0, f.r0, x, y, x - d0, y);
+    const double E_l0r1 = reference_E(f.l0, f.r1, x, y, x + u - d1, y + v);
+    const double E_r0r1 = reference_E(f.r0, f.r1, x - d0, y, x + u - d1, y + v);
+    const double E_r0l1 = reference_E(f.r0, f.l1, x - d0, y, x + u, y + v);
+    const double E_l1r1 = reference_E(f.l1, f.r1, x + u, y + v, x + u - d1, y + v);
+    const SlotDescriptors s = f.slots();
+    auto C = [&](CostCase c) { return case_cost(s, c, x, y, u, v, d0, d1, full, DescriptorNorm::L2, 1e9f); };
+    near(C(CostCase::Image), (E_l0l1 + E_l0r0 + E_l0r1) / 3);                       // Eq. 3
+    near(C(CostCase::LidarD0), (E_l0l1 + E_l0r1 + E_r0r1 + E_r0l1) / 4);            // Eq. 7
+    near(C(CostCase::LidarD1), (E_l0l1 + E_l0r0 + E_r0r1 + E_l1r1) / 4);            // Eq. 10
+    near(C(CostCase::LidarD0D1), (E_l0l1 + E_r0l1 + 2 * E_r0r1 + E_l1r1) / 5);      // Eq. 12
+    // The cases differ (the test would notice a swapped term).
+    assert_true(std::abs(C(CostCase::LidarD0) - C(CostCase::LidarD1)) > 1.0);
+}
+
+void case_cost_validates(void **) {
+    Four f{random_descriptors(10, 10, 16, 1), random_descriptors(10, 10, 16, 2), random_descriptors(10, 10, 16, 3),
+           random_descriptors(12, 10, 16, 4)};
+    SlotDescriptors s = f.slots();
+    try {
+        case_cost(s, CostCase::Image, 5, 5, 0, 0, 0, 0, PatchShape(3, 3), DescriptorNorm::L2, 1);
+        fail_msg("size mismatch accepted");
+    } catch (const Error &e) {
+        assert_int_equal(int(e.code()), int(ErrorCode::InvalidArgument));
+    }
+    s.image[kR1] = nullptr;
+    try {
+        case_cost(s, CostCase::Image, 5, 5, 0, 0, 0, 0, PatchShape(3, 3), DescriptorNorm::L2, 1);
+        fail_msg("missing slot accepted");
+    } catch (const Error &e) {
+        assert_int_equal(int(e.code()), int(ErrorCode::InvalidArgument));
+    }
+}
+
+// Every seed's reported cost is the case formula of its reported case at its match, and the
+// case follows the LiDAR rules: D0 part for LiDAR pixels (and, with const1, window seeds).
+void matcher_costs_are_the_case_formulas(void **) {
+    synth::SynthConfig sc;
+    sc.width = 160;
+    sc.height = 96;
+    sc.seed = 5;
+    sc.threads = 1;
+    const synth::SynthScene scene = synth::render(sc);
+    MatchInput in{scene.left0, scene.right0, scene.left1, scene.right1, scene.lidar0, scene.lidar1};
+    MatchingOptions o = MatchingOptions::for_variant(MatchVariant::Full);
+    o.min_coarsest_height = 24;
+    const MatchResult r = match_scene_flow(in, o, Direction::Forward);
+
+    Four f;
+    f.l0 = features::compute_dense_sift(features::to_gray_float(scene.left0), o.sift);
+    f.r0 = features::compute_dense_sift(features::to_gray_float(scene.right0), o.sift);
+    f.l1 = features::compute_dense_sift(features::to_gray_float(scene.left1), o.sift);
+    f.r1 = features::compute_dense_sift(features::to_gray_float(scene.right1), o.sift);
+    const SlotDescriptors s = f.slots();
+    const PatchShape shape(o.patch_radius, o.patch_step);
+    auto rnd = [](float a) { return int(a + (a >= 0 ? 0.5f : -0.5f)); };
+    int counts[4] = {0, 0, 0, 0};
+    for (const SeedMatch &m : r.seeds) {
+        const int u = rnd(m.u), v = rnd(m.v), d0 = rnd(m.d0), d1 = rnd(m.d1);
+        const double expect = case_cost(s, m.cost_case, m.x, m.y, u, v, d0, d1, shape, o.norm, o.out_of_image_penalty);
+        near(m.cost, expect);
+        const bool d0case = m.cost_case == CostCase::LidarD0 || m.cost_case == CostCase::LidarD0D1;
+        assert_int_equal(d0case, m.is_lidar || m.in_window);
+        counts[int(m.cost_case)]++;
+    }
+    // The scene exercises all four cases.
+    for (int c = 0; c < 4; ++c) assert_true(counts[c] > 0);
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(patch_distance_matches_eq2),
+        cmocka_unit_test(out_of_image_costs_the_penalty),
+        cmocka_unit_test(four_cases_follow_the_paper),
+        cmocka_unit_test(case_cost_validates),
+        cmocka_unit_test(matcher_costs_are_the_case_formulas),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

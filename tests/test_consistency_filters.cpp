@@ -140,7 +140,8 @@ void forward_backward_removes_each_kind_of_mismatch(void **) {
     b.d0(11, 23) = 6.0f;   // d1 vs d0_b off by 3            -> p (20, 10)
     b.valid(11, 28) = 0;   // nothing to come back to        -> p (25, 10)
     b.v(11, 33) = -2.5f;   // off by 1.5: within 2 px        -> p (30, 10) stays
-    ConsistencyOptions opt;
+    ConsistencyOptions opt;  // thresholds fixed here so the test does not follow retuned defaults
+    opt.fb_max_flow = opt.fb_max_d0 = opt.fb_max_d1 = 2.0f;
     opt.fb_search_radius = 0;  // B at q only: its consistent neighbours must not rescue p
     const ForwardBackwardResult r = forward_backward_check(f, b, no_lidar(), opt);
     assert_int_equal(r.field.valid(10, 10), 0);
@@ -154,7 +155,9 @@ void forward_backward_removes_each_kind_of_mismatch(void **) {
     assert_int_equal(cv::countNonZero(r.lidar_motion_unreliable), 0);
 
     // With the default radius 1 a consistent B pixel next to q rescues p (grid-copied B).
-    const ForwardBackwardResult r1 = forward_backward_check(f, b, no_lidar(), ConsistencyOptions{});
+    ConsistencyOptions opt1 = opt;
+    opt1.fb_search_radius = 1;
+    const ForwardBackwardResult r1 = forward_backward_check(f, b, no_lidar(), opt1);
     assert_int_equal(r1.field.valid(10, 10) + r1.field.valid(10, 15) + r1.field.valid(10, 20), 3);
     assert_int_equal(r1.field.valid(10, 25), 1);
     // ... whose round trip accounts for the offset: B = (-4, -1) one pixel right of q returns

@@ -38,9 +38,9 @@ struct ConsistencyOptions {
     SgmOptions sgm;
 
     // --- stage 2b: forward-backward round trip, q = p + (u, v) looked up in B ---
-    float fb_max_flow = 2.0f;  // |(u, v) + (u_b, v_b)(q)| [px]
-    float fb_max_d0 = 2.0f;    // |d0 - d1_b(q)| [px]
-    float fb_max_d1 = 2.0f;    // |d1 - d0_b(q)| [px]
+    float fb_max_flow = 1.5f;  // |(u, v) + (u_b, v_b)(q)| [px]
+    float fb_max_d0 = 1.5f;    // |d0 - d1_b(q)| [px]
+    float fb_max_d1 = 1.5f;    // |d1 - d0_b(q)| [px]
     BackwardLookup fb_lookup = BackwardLookup::Nearest;
     // B is searched in the (2r+1)^2 pixels around q for the best round trip (see
     // forward_backward_check.hpp); 1 matches the matcher's 3 px seed grid, 0 = q only.

@@ -6,17 +6,33 @@
  *
  * Conventions
  *  - Every function is prefixed lf_, every type lf_*_t, every macro LF_.
- *  - Only fixed-width integer types, float/double and pointers appear in signatures.
+ *  - Only fixed-width integer types, float/double and pointers appear in signatures and
+ *    structs; enumerations name the values that int32_t fields and returns carry.
  *  - Status codes are explicitly numbered and are never renumbered; new codes are appended.
- *  - Strings returned by the library are static, NUL-terminated, and owned by the library.
+ *  - Fallible functions return an lf_status_t value as int32_t. On failure they change
+ *    nothing (a handle keeps its state and stays usable) and record a message that
+ *    lf_last_error() returns.
+ *  - Structs that may grow begin with `uint32_t struct_size`: set it to sizeof(the struct)
+ *    (the lf_*_init helpers below do). Fields are only ever appended, so a program built
+ *    against an older header keeps working with a newer library.
+ *  - Strings returned by the library are NUL-terminated and owned by the library; each
+ *    function says how long they stay valid.
+ *  - Thread safety: functions on distinct handles may run concurrently; one handle must not be
+ *    used by two threads at the same time. Functions without a handle are thread-safe.
  *
- * This header grows as stages of the estimator land: a stage that is not built yet is not
- * declared here. Today it holds the status codes and the version queries.
+ * Typical use (see examples/capi_example.c):
+ *    lf_options_t *opt; lf_options_create(&opt); lf_options_set_int(opt, "threads", 4);
+ *    lf_calibration_t cal; lf_calibration_init(&cal); cal.fx = ...;
+ *    lf_estimator_t *est; lf_create(opt, &cal, &est); lf_options_destroy(opt);
+ *    for each stereo frame: lf_push_frame(est, t_us, &left, &right, &lidar);
+ *                           if (lf_has_result(est)) lf_get_result(est, &buffers);
+ *    lf_destroy(est);
  */
 #ifndef LIDARFLOW_H
 #define LIDARFLOW_H
 
 #include <stdint.h>
+#include <string.h>
 
 #include "lidarflow/lidarflow_version.h"
 
@@ -31,6 +47,10 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* ===================================================================================== */
+/* Status codes and version                                                              */
+/* ===================================================================================== */
 
 /* Result of every fallible call. Values are part of the ABI and never change. */
 typedef enum lf_status_t {
@@ -59,6 +79,356 @@ LF_API const char *lf_version_string(void);
 
 /* ABI major version of the loaded library (the SONAME suffix). Thread-safe. */
 LF_API uint32_t lf_abi_major(void);
+
+/* ===================================================================================== */
+/* Options                                                                               */
+/* ===================================================================================== */
+
+/* Opaque set of estimator settings, read by lf_create() (which copies them). */
+typedef struct lf_options lf_options_t;
+
+/*
+ * Keys. Integer keys take lf_options_set_int; float keys take lf_options_set_float or
+ * lf_options_set_int; switches are integer keys taking 0 or 1; string keys take
+ * lf_options_set_string. Distances are pixels of the full-resolution left image.
+ *
+ * general
+ *   "threads"          int    [1, 256]   OpenMP threads of this handle (default 1); results do
+ *                                        not depend on it
+ *   "preset"           string "default"  resets every option except "threads" to the preset
+ *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
+ *                                        pipeline, LiDAR inputs are then checked but unused
+ *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
+ *                                        "interpolation" (default: the dense result)
+ *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and
+ *                                        consistency check (default 15)
+ * The stage keys below default to the values the core is tuned with (the paper's settings,
+ * measured on KITTI); read them with lf_options_get_int / lf_options_get_float.
+ * stage 1: LiDAR-supported matching
+ *   "matching.support_windows"  0/1  "matching.const1" 0/1  "matching.const2" 0/1
+ *                                    windows and the two constraints (need use_lidar; const1
+ *                                    and const2 need support_windows)
+ *   "matching.use_lidar1"       0/1  use the LiDAR of the second frame
+ *   "matching.grid_step"        int   [1, 32]     seed grid step
+ *   "matching.iterations"       int   [1, 100]    PatchMatch iterations per level
+ *   "matching.max_levels"       int   [1, 10]     pyramid levels at most
+ *   "matching.min_coarsest_height" int [8, 4096]
+ *   "matching.patch_radius"     int   [0, 16]
+ *   "matching.stop_ratio"       float [0, 1]
+ *   "matching.max_flow"         float [1, 10000]
+ *   "matching.max_disparity"    float [1, 10000]
+ *   "matching.const2_abs"       float [0, 10000]
+ *   "matching.const2_rel"       float [0, 10]
+ *   "matching.random_seed"      int   [0, 2^53]
+ * stage 2-3: LiDAR-supported consistency check and sparsification
+ *   "consistency.sgm_max_diff"  float (0, 10000]  |d0 - SGM disparity| limit
+ *   "consistency.sgm_keep_unverified" 0/1         keep matches SGM cannot verify
+ *   "consistency.sgm_num_disparities" int [16, 1024], multiple of 16
+ *   "consistency.sgm_block_size" int odd [1, 31]
+ *   "consistency.fb_max_flow"   float (0, 10000]  forward-backward limits
+ *   "consistency.fb_max_d0"     float (0, 10000]
+ *   "consistency.fb_max_d1"     float (0, 10000]
+ *   "consistency.fb_search_radius" int [0, 8]
+ *   "consistency.keep_unreliable_lidar" 0/1
+ *   "consistency.cluster_max_flow_step" float (0, 10000]
+ *   "consistency.cluster_max_disp_step" float (0, 10000]
+ *   "consistency.cluster_min_size" int [1, 100000000]
+ *   "consistency.keep_lidar_clusters" 0/1
+ *   "consistency.sparsify_block" int [1, 64]       1 = no sparsification
+ *   "consistency.sparsify_support" int odd [1, 63]
+ * stage 4: LiDAR-supported robust interpolation
+ *   "interpolation.use_lidar"   0/1               LiDAR anchors
+ *   "interpolation.superpixel_size" int [4, 512]
+ *   "interpolation.num_neighbors" int [1, 4096]
+ *   "interpolation.iterations"  int   [0, 1000]
+ *   "interpolation.initial_hypotheses" int [1, 10000]
+ *   "interpolation.random_hypotheses"  int [0, 10000]
+ *   "interpolation.edge_gain"   float [0, 10000]
+ *   "interpolation.distance_sigma" float (0, 10000]
+ *   "interpolation.disparity_inlier" float (0, 10000]
+ *   "interpolation.flow_inlier" float (0, 10000]
+ *   "interpolation.lidar_anchor_distance" float [0, 10000]
+ *   "interpolation.pixel_model_selection" 0/1
+ *   "interpolation.keep_lidar_values" 0/1
+ *   "interpolation.random_seed" int   [0, 2^32 - 1]
+ *   "interpolation.sed_model"   string            path of an OpenCV structured-edge model;
+ *                                                 "" = built-in edges (default); loaded
+ *                                                 by lf_create (LF_ERR_IO / LF_ERR_FORMAT)
+ *
+ * Errors of every options function: LF_ERR_INVALID_ARGUMENT for a NULL argument, an unknown
+ * key, a value of the wrong type, NaN/inf, or a value out of bounds; the options object is
+ * then unchanged and lf_options_last_error() says why.
+ */
+
+/* Creates an options object holding the defaults. *out receives it (NULL on failure); the
+ * caller owns it and frees it with lf_options_destroy(). Errors: LF_ERR_INVALID_ARGUMENT
+ * (out is NULL), LF_ERR_OUT_OF_MEMORY; the message is in lf_last_error(NULL). Thread-safe. */
+LF_API int32_t lf_options_create(lf_options_t **out);
+
+/* Frees an options object; NULL is a no-op. Estimators created from it are unaffected.
+ * Not concurrently with another call on the same object. */
+LF_API void lf_options_destroy(lf_options_t *options);
+
+/* Sets an integer, float or switch key (see the table above). set_int also sets float keys.
+ * Setters and getters: one thread at a time per options object; the object keeps no pointer
+ * to the caller's strings. */
+LF_API int32_t lf_options_set_int(lf_options_t *options, const char *key, int64_t value);
+LF_API int32_t lf_options_set_float(lf_options_t *options, const char *key, double value);
+/* Sets a string key; value is copied. */
+LF_API int32_t lf_options_set_string(lf_options_t *options, const char *key, const char *value);
+
+/* Reads an integer or switch key into *out. */
+LF_API int32_t lf_options_get_int(lf_options_t *options, const char *key, int64_t *out);
+/* Reads any numeric key (integer, switch or float) into *out. */
+LF_API int32_t lf_options_get_float(lf_options_t *options, const char *key, double *out);
+/* Reads a string key. *out points into the options object and stays valid until the next
+ * call that sets an option on it, or its destruction. */
+LF_API int32_t lf_options_get_string(lf_options_t *options, const char *key, const char **out);
+
+/* Message of the most recent failed call on `options` ("" after a successful one). Owned by
+ * the options object, valid until the next call on it. NULL gives lf_last_error(NULL).
+ * One thread at a time per options object. */
+LF_API const char *lf_options_last_error(const lf_options_t *options);
+
+/* ===================================================================================== */
+/* Calibration and inputs                                                                */
+/* ===================================================================================== */
+
+/* The rectified stereo camera. All lengths in metres, pixel quantities in pixels of the
+ * (full-resolution) images pushed later. */
+typedef struct lf_calibration_t {
+    uint32_t struct_size;          /* sizeof(lf_calibration_t) */
+    uint32_t has_lidar_to_camera;  /* 1: lidar_to_camera is set (needed by LF_LIDAR_POINTS_LIDAR) */
+    double fx, fy;                 /* focal lengths [px], > 0 */
+    double cx, cy;                 /* principal point [px] */
+    double baseline;               /* distance of the rectified left and right centres [m], > 0 */
+    /* Row-major 4x4 rigid transform from the LiDAR frame to the left rectified camera frame
+     * (x right, y down, z forward); last row 0 0 0 1. */
+    double lidar_to_camera[16];
+} lf_calibration_t;
+
+/* Zeroes *c and sets its struct_size (call before filling the fields). */
+static inline void lf_calibration_init(lf_calibration_t *c) {
+    memset(c, 0, sizeof *c);
+    c->struct_size = (uint32_t)sizeof *c;
+}
+
+/* Pixel formats of lf_image_t. */
+typedef enum lf_pixel_format_t {
+    LF_PIXEL_GRAY8 = 1, /* one byte per pixel */
+    LF_PIXEL_RGB8 = 2,  /* three bytes per pixel, red first */
+    LF_PIXEL_BGR8 = 3   /* three bytes per pixel, blue first (OpenCV order) */
+} lf_pixel_format_t;
+
+/* A caller-owned, read-only image, only read during the call it is passed to. Rows are
+ * stride_bytes apart (>= width * bytes per pixel); any alignment. */
+typedef struct lf_image_t {
+    const void *data;
+    uint32_t width, height;
+    uint64_t stride_bytes;
+    int32_t format;  /* lf_pixel_format_t */
+} lf_image_t;
+
+/* Kinds of LiDAR input. */
+typedef enum lf_lidar_kind_t {
+    LF_LIDAR_NONE = 0,
+    /* float32 (x, y, z) [m] in the left rectified camera frame. Points behind the camera
+     * (z <= 0.1 m) or outside the image are dropped, as the camera does not see them; where
+     * several points land on one pixel the nearest wins. */
+    LF_LIDAR_POINTS_CAMERA = 1,
+    /* float32 (x, y, z) [m] in the LiDAR frame, moved by the calibration's lidar_to_camera,
+     * then as LF_LIDAR_POINTS_CAMERA. */
+    LF_LIDAR_POINTS_LIDAR = 2,
+    /* float32 (x, y, d): pixel column, row (rounded to the nearest pixel, which must lie in
+     * the image) and disparity d = fx * baseline / z >= 0 [px]. Where two entries share a
+     * pixel the larger disparity wins. */
+    LF_LIDAR_DISPARITY = 3
+} lf_lidar_kind_t;
+
+/* A caller-owned list of `count` LiDAR entries, each three float32 at the start of an
+ * element of stride_bytes (0 = packed, 12 bytes; e.g. 16 for KITTI x, y, z, reflectance).
+ * Only read during the call. Entries must be finite. */
+typedef struct lf_lidar_t {
+    int32_t kind;  /* lf_lidar_kind_t */
+    uint32_t count;
+    const void *data;
+    uint64_t stride_bytes;
+} lf_lidar_t;
+
+/* ===================================================================================== */
+/* Estimator                                                                             */
+/* ===================================================================================== */
+
+/* Opaque estimator handle: settings, the previous frame and the latest result. */
+typedef struct lf_estimator lf_estimator_t;
+
+/* Creates an estimator. options may be NULL (defaults); it is copied and may be destroyed
+ * afterwards; calibration is copied. *out receives the handle (NULL on failure), owned by the
+ * caller until lf_destroy(). Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
+ * struct_size too small, non-finite or non-positive fx / fy / baseline, a lidar_to_camera that
+ * is not finite with last row 0 0 0 1, inconsistent options such as const1 without support
+ * windows), LF_ERR_IO / LF_ERR_FORMAT (the "interpolation.sed_model" file), LF_ERR_OUT_OF_MEMORY;
+ * the message is in lf_last_error(NULL). Thread-safe. */
+LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *calibration,
+                         lf_estimator_t **out);
+
+/* Frees the estimator and everything it owns (views from it become invalid). NULL is a no-op.
+ * Not concurrently with another call on the same estimator. */
+LF_API void lf_destroy(lf_estimator_t *estimator);
+
+/* Adds the next stereo frame. left and right must have the same size and format; size and
+ * format stay fixed from the first frame until lf_reset(). lidar may be NULL (no LiDAR for
+ * this frame). Everything is copied before the call returns.
+ * From the second frame on, the call computes (synchronously) the scene flow between the
+ * previous frame (t0, the reference) and this one (t1): the previous frame's LiDAR is D_l^0,
+ * this frame's is D_l^1. The new result replaces the previous one.
+ * timestamp_us must be larger than the previous frame's (any value for the first frame).
+ * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
+ * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
+ * timestamp not increasing, NULL LiDAR data with count > 0, non-finite LiDAR values,
+ * disparity entries outside the image or negative,
+ * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
+ * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes
+ * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes),
+ * LF_ERR_OUT_OF_MEMORY. On any error the estimator is unchanged: the previous frame and the
+ * previous result stay. One thread at a time per estimator (this and every function below
+ * that takes one); distinct estimators may push concurrently. */
+LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
+                             const lf_image_t *right, const lf_lidar_t *lidar);
+
+/* Forgets the previous frame and the result (the next push starts a new sequence, any
+ * size); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL).
+ * One thread at a time per estimator. */
+LF_API int32_t lf_reset(lf_estimator_t *estimator);
+
+/* 1 when a result is available (two frames pushed since creation or lf_reset), else 0
+ * (also for NULL). Changes nothing, not even the last error. One thread at a time per
+ * estimator. */
+LF_API int32_t lf_has_result(const lf_estimator_t *estimator);
+
+/* Stages, as reported by lf_result_info_t.last_stage (same order as the "last_stage" names). */
+typedef enum lf_stage_t {
+    LF_STAGE_MATCHING = 1,
+    LF_STAGE_CONSISTENCY = 2,
+    LF_STAGE_SPARSE = 3,
+    LF_STAGE_INTERPOLATION = 4
+} lf_stage_t;
+
+/* Facts about the latest result. */
+typedef struct lf_result_info_t {
+    uint32_t struct_size;      /* set by the caller: sizeof(lf_result_info_t) */
+    uint32_t width, height;    /* size of the result planes (= the images') */
+    int32_t last_stage;        /* lf_stage_t the result comes from */
+    int64_t t0_us, t1_us;      /* timestamps of the reference (t0) and the second (t1) frame */
+    uint32_t timing_count;     /* number of entries lf_get_timing() knows */
+    double total_seconds;      /* wall time of the computation */
+} lf_result_info_t;
+
+static inline void lf_result_info_init(lf_result_info_t *i) {
+    memset(i, 0, sizeof *i);
+    i->struct_size = (uint32_t)sizeof *i;
+}
+
+/* Fills *info (caller-owned). Errors: LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small),
+ * LF_ERR_NOT_READY (no result yet). One thread at a time per estimator. */
+LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *info);
+
+/* Per-stage timing `index` (0 .. timing_count - 1, in execution order) of the latest result:
+ * *name (e.g. "matching_forward", "interpolation"; owned by the estimator, valid until the
+ * next push, reset or destroy) and *seconds. Either output may be NULL. Errors:
+ * LF_ERR_INVALID_ARGUMENT (NULL estimator, index out of range), LF_ERR_NOT_READY. One thread
+ * at a time per estimator. */
+LF_API int32_t lf_get_timing(lf_estimator_t *estimator, uint32_t index, const char **name, double *seconds);
+
+/* A caller-owned output plane: rows stride_bytes apart (>= width * element size); any
+ * alignment. data = NULL skips the plane. */
+typedef struct lf_plane_t {
+    void *data;
+    uint64_t stride_bytes;
+} lf_plane_t;
+
+/* Caller buffers for lf_get_result(). The result lives in the left image at t0; per pixel:
+ * u, v  float32 optical flow to the left image at t1 [px];
+ * d0    float32 disparity at t0 [px];  d1 float32 disparity at t1 of the same point [px];
+ * valid uint8 1 where (u, v, d0, d1) is defined, 0 elsewhere (the dense result of the
+ *       interpolation stage is valid everywhere; earlier stages are sparse); u, v, d0, d1 are
+ *       0 where valid is 0;
+ * confidence float32 >= 0, larger is better, 0 where not valid. */
+typedef struct lf_result_buffers_t {
+    uint32_t struct_size;    /* sizeof(lf_result_buffers_t) */
+    uint32_t width, height;  /* must equal the result's */
+    lf_plane_t u, v, d0, d1; /* float32 */
+    lf_plane_t valid;        /* uint8 */
+    lf_plane_t confidence;   /* float32 */
+} lf_result_buffers_t;
+
+static inline void lf_result_buffers_init(lf_result_buffers_t *b) {
+    memset(b, 0, sizeof *b);
+    b->struct_size = (uint32_t)sizeof *b;
+}
+
+/* Copies the latest result into the non-NULL planes of *buffers. Errors:
+ * LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small), LF_ERR_NOT_READY,
+ * LF_ERR_SIZE_MISMATCH (width/height differ from the result, a stride smaller than a row).
+ * Nothing is written on error. The planes stay the caller's; only written during the call.
+ * One thread at a time per estimator. */
+LF_API int32_t lf_get_result(lf_estimator_t *estimator, const lf_result_buffers_t *buffers);
+
+/* A read-only plane owned by the estimator. */
+typedef struct lf_view_t {
+    const void *data;
+    uint64_t stride_bytes;
+} lf_view_t;
+
+/* Borrowed views of the latest result, same meaning as lf_result_buffers_t. */
+typedef struct lf_result_views_t {
+    uint32_t struct_size;    /* set by the caller: sizeof(lf_result_views_t) */
+    uint32_t width, height;
+    lf_view_t u, v, d0, d1, valid, confidence;
+} lf_result_views_t;
+
+static inline void lf_result_views_init(lf_result_views_t *v) {
+    memset(v, 0, sizeof *v);
+    v->struct_size = (uint32_t)sizeof *v;
+}
+
+/* Fills *views with pointers into the estimator; they stay valid until the next
+ * lf_push_frame, lf_reset or lf_destroy on it (a failed push keeps them valid). Errors:
+ * LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small), LF_ERR_NOT_READY. Read them only
+ * while no other thread calls into the estimator. */
+LF_API int32_t lf_get_result_views(lf_estimator_t *estimator, lf_result_views_t *views);
+
+/* Caller buffers for lf_get_points3d(). */
+typedef struct lf_points3d_buffers_t {
+    uint32_t struct_size;    /* sizeof(lf_points3d_buffers_t) */
+    uint32_t width, height;  /* must equal the result's */
+    /* float32 (x, y, z) per pixel [m]: the point seen at the pixel at t0, in the left
+     * camera frame at t0. */
+    lf_plane_t points;
+    /* float32 (dx, dy, dz) per pixel [m]: its position at t1, in the left camera frame at
+     * t1, minus its position at t0 (scene flow relative to the camera: includes ego-motion). */
+    lf_plane_t motion;
+    /* uint8: 1 where the result is valid with d0 > 0 and d1 > 0; elsewhere points and motion
+     * are NaN. */
+    lf_plane_t valid;
+} lf_points3d_buffers_t;
+
+static inline void lf_points3d_buffers_init(lf_points3d_buffers_t *b) {
+    memset(b, 0, sizeof *b);
+    b->struct_size = (uint32_t)sizeof *b;
+}
+
+/* Converts the latest result with the calibration (Z = fx * baseline / d, X = (x - cx) Z / fx,
+ * Y = (y - cy) Z / fy) into the non-NULL planes of *buffers (points and motion rows hold
+ * 12 bytes per pixel). Errors, ownership and threads as lf_get_result(). */
+LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buffers_t *buffers);
+
+/* Message of the most recent failed call on `estimator` ("" after a successful one). Owned by
+ * the estimator, valid until the next call on it.
+ * lf_last_error(NULL) is the message of the calling thread's most recent failed call (of any
+ * lf_ function, including those without a handle such as lf_create); valid until that thread's
+ * next failed call. Never NULL. One thread at a time per estimator; NULL is thread-safe. */
+LF_API const char *lf_last_error(const lf_estimator_t *estimator);
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -1,0 +1,22 @@
+"""lidarflow: dense scene flow from a rectified stereo camera and a sparse LiDAR.
+
+A pure ctypes + numpy binding of the lidarflow C ABI. Importing it loads liblidarflow (see
+lidarflow._lib for where it is looked for) and checks its ABI version.
+
+    import lidarflow
+    with lidarflow.Estimator(fx, fy, cx, cy, baseline, options={"threads": 4}) as est:
+        est.push(left0, right0, lidar0)
+        if est.push(left1, right1, lidar1):
+            flow = est.result()          # dict of numpy arrays u, v, d0, d1, valid, confidence
+"""
+from ._lib import ABI_MAJOR, lib as _lib_handle
+from .estimator import Estimator, LidarflowError
+
+__version__ = _lib_handle.lf_version_string().decode()
+
+# lf_status_t codes, for LidarflowError.status.
+from ._lib import (ERR_BAD_STATE, ERR_FORMAT, ERR_INTERNAL, ERR_INVALID_ARGUMENT, ERR_IO,  # noqa: E402
+                   ERR_NOT_READY, ERR_OUT_OF_MEMORY, ERR_SIZE_MISMATCH, OK)
+
+__all__ = ["Estimator", "LidarflowError", "ABI_MAJOR", "OK", "ERR_INVALID_ARGUMENT", "ERR_SIZE_MISMATCH",
+           "ERR_IO", "ERR_FORMAT", "ERR_BAD_STATE", "ERR_NOT_READY", "ERR_OUT_OF_MEMORY", "ERR_INTERNAL"]

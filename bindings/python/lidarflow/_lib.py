@@ -1,0 +1,143 @@
+"""ctypes declarations of the lidarflow C ABI (include/lidarflow/lidarflow.h) and the loader.
+
+The shared library is found, in this order, at:
+  1. the path in the environment variable LIDARFLOW_LIBRARY;
+  2. next to this package (liblidarflow.so.N copied into lidarflow/);
+  3. the build tree of the checkout this package sits in (build*/capi/);
+  4. the system's library search path (LD_LIBRARY_PATH, ld.so.cache).
+Its ABI major must equal ABI_MAJOR, else importing lidarflow raises ImportError.
+"""
+import ctypes
+import glob
+import os
+
+ABI_MAJOR = 0  # the lidarflow.h this module mirrors (LF_ABI_MAJOR)
+_SONAME = "liblidarflow.so.%d" % ABI_MAJOR
+
+# lf_status_t
+OK = 0
+ERR_INVALID_ARGUMENT = 1
+ERR_SIZE_MISMATCH = 2
+ERR_IO = 3
+ERR_FORMAT = 4
+ERR_BAD_STATE = 5
+ERR_NOT_READY = 6
+ERR_OUT_OF_MEMORY = 7
+ERR_INTERNAL = 8
+
+# lf_pixel_format_t, lf_lidar_kind_t, lf_stage_t
+PIXEL_GRAY8, PIXEL_RGB8, PIXEL_BGR8 = 1, 2, 3
+LIDAR_NONE, LIDAR_POINTS_CAMERA, LIDAR_POINTS_LIDAR, LIDAR_DISPARITY = 0, 1, 2, 3
+STAGE_NAMES = {1: "matching", 2: "consistency", 3: "sparse", 4: "interpolation"}
+
+
+class Calibration(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("has_lidar_to_camera", ctypes.c_uint32),
+                ("fx", ctypes.c_double), ("fy", ctypes.c_double), ("cx", ctypes.c_double),
+                ("cy", ctypes.c_double), ("baseline", ctypes.c_double),
+                ("lidar_to_camera", ctypes.c_double * 16)]
+
+
+class Image(ctypes.Structure):
+    _fields_ = [("data", ctypes.c_void_p), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
+                ("stride_bytes", ctypes.c_uint64), ("format", ctypes.c_int32)]
+
+
+class Lidar(ctypes.Structure):
+    _fields_ = [("kind", ctypes.c_int32), ("count", ctypes.c_uint32), ("data", ctypes.c_void_p),
+                ("stride_bytes", ctypes.c_uint64)]
+
+
+class ResultInfo(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
+                ("last_stage", ctypes.c_int32), ("t0_us", ctypes.c_int64), ("t1_us", ctypes.c_int64),
+                ("timing_count", ctypes.c_uint32), ("total_seconds", ctypes.c_double)]
+
+
+class Plane(ctypes.Structure):
+    _fields_ = [("data", ctypes.c_void_p), ("stride_bytes", ctypes.c_uint64)]
+
+
+class ResultBuffers(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
+                ("u", Plane), ("v", Plane), ("d0", Plane), ("d1", Plane), ("valid", Plane),
+                ("confidence", Plane)]
+
+
+class Points3dBuffers(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
+                ("points", Plane), ("motion", Plane), ("valid", Plane)]
+
+
+def _candidates():
+    env = os.environ.get("LIDARFLOW_LIBRARY")
+    if env:
+        # An explicit choice is the only candidate: silently falling back would hide mistakes.
+        return [env]
+    here = os.path.dirname(os.path.abspath(__file__))
+    found = [os.path.join(here, _SONAME)]
+    repo = os.path.dirname(os.path.dirname(os.path.dirname(here)))  # bindings/python/lidarflow
+    found += sorted(glob.glob(os.path.join(repo, "build*", "capi", _SONAME)))
+    found.append(_SONAME)  # the system search path
+    return found
+
+
+def _load():
+    errors = []
+    for path in _candidates():
+        if os.sep in path and not os.path.exists(path):
+            errors.append("%s: no such file" % path)
+            continue
+        try:
+            return ctypes.CDLL(path)
+        except OSError as e:
+            errors.append("%s: %s" % (path, e))
+    raise ImportError("lidarflow: cannot load %s (set LIDARFLOW_LIBRARY to its path):\n  %s"
+                      % (_SONAME, "\n  ".join(errors)))
+
+
+def _declare(lib):
+    c = ctypes
+    P = c.POINTER
+    i32, u32, i64 = c.c_int32, c.c_uint32, c.c_int64
+    protos = {
+        "lf_status_string": (c.c_char_p, [i32]),
+        "lf_version_number": (u32, []),
+        "lf_version_string": (c.c_char_p, []),
+        "lf_abi_major": (u32, []),
+        "lf_options_create": (i32, [P(c.c_void_p)]),
+        "lf_options_destroy": (None, [c.c_void_p]),
+        "lf_options_set_int": (i32, [c.c_void_p, c.c_char_p, i64]),
+        "lf_options_set_float": (i32, [c.c_void_p, c.c_char_p, c.c_double]),
+        "lf_options_set_string": (i32, [c.c_void_p, c.c_char_p, c.c_char_p]),
+        "lf_options_get_int": (i32, [c.c_void_p, c.c_char_p, P(i64)]),
+        "lf_options_get_float": (i32, [c.c_void_p, c.c_char_p, P(c.c_double)]),
+        "lf_options_get_string": (i32, [c.c_void_p, c.c_char_p, P(c.c_char_p)]),
+        "lf_options_last_error": (c.c_char_p, [c.c_void_p]),
+        "lf_create": (i32, [c.c_void_p, P(Calibration), P(c.c_void_p)]),
+        "lf_destroy": (None, [c.c_void_p]),
+        "lf_push_frame": (i32, [c.c_void_p, i64, P(Image), P(Image), P(Lidar)]),
+        "lf_reset": (i32, [c.c_void_p]),
+        "lf_has_result": (i32, [c.c_void_p]),
+        "lf_get_result_info": (i32, [c.c_void_p, P(ResultInfo)]),
+        "lf_get_timing": (i32, [c.c_void_p, u32, P(c.c_char_p), P(c.c_double)]),
+        "lf_get_result": (i32, [c.c_void_p, P(ResultBuffers)]),
+        "lf_get_points3d": (i32, [c.c_void_p, P(Points3dBuffers)]),
+        "lf_last_error": (c.c_char_p, [c.c_void_p]),
+    }
+    for name, (restype, argtypes) in protos.items():
+        f = getattr(lib, name)
+        f.restype = restype
+        f.argtypes = argtypes
+    return lib
+
+
+def check_abi(library, expected=ABI_MAJOR):
+    """Raises ImportError unless the loaded library's ABI major is `expected`."""
+    if library.lf_abi_major() != expected:
+        raise ImportError("lidarflow: the loaded library %s has ABI %d, this binding needs ABI %d"
+                          % (library.lf_version_string().decode(), library.lf_abi_major(), expected))
+
+
+lib = _declare(_load())
+check_abi(lib)

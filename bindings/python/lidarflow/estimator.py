@@ -1,0 +1,279 @@
+"""The Estimator class: one lidarflow handle (see include/lidarflow/lidarflow.h)."""
+import ctypes
+import threading
+import weakref
+
+import numpy as np
+
+from . import _lib
+from ._lib import lib
+
+
+class LidarflowError(RuntimeError):
+    """A failed call of the C library: .status is the lf_status_t code, .message its text."""
+
+    def __init__(self, status, message):
+        self.status = status
+        self.message = message
+        super().__init__("%s (%s)" % (message, lib.lf_status_string(status).decode()))
+
+
+_LIDAR_KINDS = {"disparity": _lib.LIDAR_DISPARITY, "camera": _lib.LIDAR_POINTS_CAMERA,
+                "lidar": _lib.LIDAR_POINTS_LIDAR}
+_COLOUR_FORMATS = {"rgb": _lib.PIXEL_RGB8, "bgr": _lib.PIXEL_BGR8}
+_RESULT_PLANES = (("u", np.float32), ("v", np.float32), ("d0", np.float32), ("d1", np.float32),
+                  ("valid", np.uint8), ("confidence", np.float32))
+
+
+def _image_view(name, a, colour_order):
+    """lf_image_t over a numpy image without copying; ValueError when it cannot be one."""
+    if not isinstance(a, np.ndarray):
+        raise ValueError("%s must be a numpy array, got %s" % (name, type(a).__name__))
+    if a.dtype != np.uint8:
+        raise ValueError("%s must have dtype uint8, got %s" % (name, a.dtype))
+    if a.ndim == 2:
+        channels, fmt = 1, _lib.PIXEL_GRAY8
+    elif a.ndim == 3 and a.shape[2] == 3:
+        channels, fmt = 3, _COLOUR_FORMATS[colour_order]
+    else:
+        raise ValueError("%s must have shape (H, W) or (H, W, 3), got %s" % (name, a.shape))
+    if a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError("%s is empty (shape %s)" % (name, a.shape))
+    # Rows may be padded (any positive row stride); the pixels of a row must be packed.
+    packed = a.strides[1] == channels and (a.ndim == 2 or a.strides[2] == 1)
+    if not packed or a.strides[0] < a.shape[1] * channels:
+        raise ValueError("%s must have packed rows (strides (S, %d%s) with S >= %d), got strides %s; "
+                         "use np.ascontiguousarray" % (name, channels, ", 1" if channels == 3 else "",
+                                                       a.shape[1] * channels, a.strides))
+    return _lib.Image(a.ctypes.data, a.shape[1], a.shape[0], a.strides[0], fmt)
+
+
+def _lidar_view(lidar, kind):
+    if kind not in _LIDAR_KINDS:
+        raise ValueError("lidar_kind must be one of %s, got %r" % (sorted(_LIDAR_KINDS), kind))
+    if not isinstance(lidar, np.ndarray):
+        raise ValueError("lidar must be a numpy array, got %s" % type(lidar).__name__)
+    if lidar.dtype != np.float32:
+        raise ValueError("lidar must have dtype float32, got %s" % lidar.dtype)
+    if lidar.ndim != 2 or lidar.shape[1] < 3:
+        raise ValueError("lidar must have shape (N, 3) or (N, K >= 3), got %s" % (lidar.shape,))
+    if lidar.shape[0] > 0 and (lidar.strides[1] != 4 or lidar.strides[0] < 12):
+        raise ValueError("lidar entries must hold 3 packed float32 (strides (S >= 12, 4)), got strides %s"
+                         % (lidar.strides,))
+    stride = lidar.strides[0] if lidar.shape[0] > 0 else 12
+    return _lib.Lidar(_LIDAR_KINDS[kind], lidar.shape[0], lidar.ctypes.data if lidar.shape[0] else None, stride)
+
+
+def _plane(name, a, shape, dtype, channels=1):
+    """Plane over a caller array that the library writes into; ValueError when it cannot."""
+    want = shape if channels == 1 else shape + (channels,)
+    if not isinstance(a, np.ndarray) or a.dtype != dtype or a.shape != want:
+        raise ValueError("out[%r] must be a %s array of shape %s, got %s" % (
+            name, np.dtype(dtype).name, want,
+            "%s %s" % (a.dtype, a.shape) if isinstance(a, np.ndarray) else type(a).__name__))
+    if not a.flags.writeable:
+        raise ValueError("out[%r] is read-only" % name)
+    item = np.dtype(dtype).itemsize
+    packed = a.strides[1] == item * channels and (channels == 1 or a.strides[2] == item)
+    if not packed or a.strides[0] < shape[1] * item * channels:
+        raise ValueError("out[%r] must have packed rows, got strides %s" % (name, a.strides))
+    return _lib.Plane(a.ctypes.data, a.strides[0])
+
+
+class Estimator:
+    """Dense scene flow from a stream of rectified stereo frames plus optional sparse LiDAR.
+
+    Estimator(fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None)
+      fx, fy, cx, cy [px] and baseline [m] describe the rectified stereo camera;
+      lidar_to_camera is an optional 4x4 transform LiDAR frame -> left camera frame (needed for
+      lidar_kind="lidar"); options maps option keys (see lidarflow.h) to values, set in order.
+
+    Each push() after the first computes the scene flow between the previous frame and the new
+    one. Use as a context manager or call close(); a forgotten handle is freed by the garbage
+    collector. Calls on one Estimator from several threads are serialised; distinct Estimators
+    run in parallel (ctypes releases the GIL while the library computes).
+    """
+
+    def __init__(self, fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None):
+        cal = _lib.Calibration()
+        cal.struct_size = ctypes.sizeof(_lib.Calibration)
+        cal.fx, cal.fy, cal.cx, cal.cy, cal.baseline = float(fx), float(fy), float(cx), float(cy), float(baseline)
+        if lidar_to_camera is not None:
+            t = np.asarray(lidar_to_camera, dtype=np.float64)
+            if t.shape != (4, 4):
+                raise ValueError("lidar_to_camera must be 4x4, got shape %s" % (t.shape,))
+            cal.has_lidar_to_camera = 1
+            cal.lidar_to_camera[:] = [float(v) for v in t.ravel()]
+        opt = ctypes.c_void_p()
+        _check(lib.lf_options_create(ctypes.byref(opt)), None)
+        try:
+            for key, value in (options or {}).items():
+                _set_option(opt, key, value)
+            handle = ctypes.c_void_p()
+            _check(lib.lf_create(opt, ctypes.byref(cal), ctypes.byref(handle)), None)
+        finally:
+            lib.lf_options_destroy(opt)
+        self._handle = handle
+        self._last_timestamp = None
+        self._busy = threading.RLock()
+        # Frees the handle exactly once: at close(), or when the object is collected.
+        self._finalizer = weakref.finalize(self, lib.lf_destroy, handle)
+
+    # --- lifetime ---
+    def close(self):
+        """Frees the library handle. Idempotent; the Estimator is unusable afterwards."""
+        with self._busy:
+            self._finalizer()
+            self._handle = None
+
+    @property
+    def closed(self):
+        return self._handle is None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def _h(self):
+        if self._handle is None:
+            raise ValueError("the Estimator is closed")
+        return self._handle
+
+    # --- frames ---
+    def push(self, left, right, lidar=None, timestamp=None, lidar_kind="disparity", colour_order="rgb"):
+        """Adds a stereo frame; returns True when a result (previous frame -> this one) is ready.
+
+        left, right: uint8 arrays (H, W) gray or (H, W, 3) colour in colour_order ("rgb" or
+        "bgr"), packed pixels, any row stride; both the same shape. They are copied.
+        lidar: None, or a float32 (N, K >= 3) array whose first three columns are (x, y, d)
+        pixel + disparity (lidar_kind="disparity"), (x, y, z) metres in the left camera frame
+        ("camera") or in the LiDAR frame ("lidar"). timestamp: int microseconds, increasing;
+        None = the previous frame's + 1. Raises ValueError for malformed arrays and
+        LidarflowError when the library rejects the frame (the Estimator is then unchanged).
+        """
+        if colour_order not in _COLOUR_FORMATS:
+            raise ValueError("colour_order must be 'rgb' or 'bgr', got %r" % (colour_order,))
+        li = _image_view("left", left, colour_order)
+        ri = _image_view("right", right, colour_order)
+        if left.shape != right.shape:
+            raise ValueError("left and right differ in shape: %s and %s" % (left.shape, right.shape))
+        lv = None if lidar is None else _lidar_view(lidar, lidar_kind)
+        if timestamp is None:
+            timestamp = 0 if self._last_timestamp is None else self._last_timestamp + 1
+        timestamp = int(timestamp)
+        with self._busy:
+            h = self._h()
+            _check(lib.lf_push_frame(h, timestamp, ctypes.byref(li), ctypes.byref(ri),
+                                     ctypes.byref(lv) if lv is not None else None), h)
+            self._last_timestamp = timestamp
+            return bool(lib.lf_has_result(h))
+
+    def reset(self):
+        """Forgets the previous frame and the result (a new sequence, any size, may follow)."""
+        with self._busy:
+            h = self._h()
+            _check(lib.lf_reset(h), h)
+            self._last_timestamp = None
+
+    @property
+    def has_result(self):
+        with self._busy:
+            return bool(lib.lf_has_result(self._h()))
+
+    # --- results ---
+    def info(self):
+        """dict: width, height, last_stage, t0_us, t1_us, total_seconds, timings [(name, s)]."""
+        with self._busy:
+            h = self._h()
+            i = _result_info(h)
+            timings = []
+            for k in range(i.timing_count):
+                name, sec = ctypes.c_char_p(), ctypes.c_double()
+                _check(lib.lf_get_timing(h, k, ctypes.byref(name), ctypes.byref(sec)), h)
+                timings.append((name.value.decode(), sec.value))
+        return {"width": i.width, "height": i.height, "last_stage": _lib.STAGE_NAMES.get(i.last_stage),
+                "t0_us": i.t0_us, "t1_us": i.t1_us, "total_seconds": i.total_seconds, "timings": timings}
+
+    def result(self, out=None):
+        """The latest result as a dict of (H, W) arrays u, v, d0, d1, confidence (float32) and
+        valid (uint8), written by the library straight into numpy memory (no further copy).
+
+        out: None (new arrays), or a dict holding preallocated arrays for any subset of those
+        keys (packed rows, any row stride, writeable); only those planes are written, in place,
+        and out is returned. Raises LidarflowError (status ERR_NOT_READY) before two frames.
+        """
+        with self._busy:
+            h = self._h()
+            i = _result_info(h)
+            shape = (i.height, i.width)
+            out = _out_dict(out, {name: (shape, dtype) for name, dtype in _RESULT_PLANES})
+            b = _lib.ResultBuffers()
+            b.struct_size = ctypes.sizeof(_lib.ResultBuffers)
+            b.width, b.height = i.width, i.height
+            for name, dtype in _RESULT_PLANES:
+                if name in out:
+                    setattr(b, name, _plane(name, out[name], shape, dtype))
+            _check(lib.lf_get_result(h, ctypes.byref(b)), h)
+        return out
+
+    def points3d(self, out=None):
+        """The latest result in metres: dict with points and motion (H, W, 3) float32 (the point
+        at t0 in the left camera frame at t0, and its position at t1 in the camera frame at t1
+        minus that) and valid (H, W) uint8; NaN where not valid. out: as in result()."""
+        with self._busy:
+            h = self._h()
+            i = _result_info(h)
+            shape = (i.height, i.width)
+            out = _out_dict(out, {"points": (shape + (3,), np.float32), "motion": (shape + (3,), np.float32),
+                                  "valid": (shape, np.uint8)})
+            b = _lib.Points3dBuffers()
+            b.struct_size = ctypes.sizeof(_lib.Points3dBuffers)
+            b.width, b.height = i.width, i.height
+            for name in ("points", "motion"):
+                if name in out:
+                    setattr(b, name, _plane(name, out[name], shape, np.float32, 3))
+            if "valid" in out:
+                b.valid = _plane("valid", out["valid"], shape, np.uint8)
+            _check(lib.lf_get_points3d(h, ctypes.byref(b)), h)
+        return out
+
+
+def _result_info(h):
+    i = _lib.ResultInfo()
+    i.struct_size = ctypes.sizeof(_lib.ResultInfo)
+    _check(lib.lf_get_result_info(h, ctypes.byref(i)), h)
+    return i
+
+
+def _out_dict(out, planes):
+    """out, checked against the known planes {name: (shape, dtype)}; new arrays when None."""
+    if out is None:
+        return {name: np.empty(shape, dtype) for name, (shape, dtype) in planes.items()}
+    if not isinstance(out, dict):
+        raise ValueError("out must be a dict of numpy arrays, got %s" % type(out).__name__)
+    unknown = set(out) - set(planes)
+    if unknown:
+        raise ValueError("out has unknown keys %s (known: %s)" % (sorted(unknown), sorted(planes)))
+    return out
+
+
+def _set_option(opt, key, value):
+    k = key.encode()
+    if isinstance(value, str):
+        st = lib.lf_options_set_string(opt, k, value.encode())
+    elif isinstance(value, (bool, int, np.integer)):
+        st = lib.lf_options_set_int(opt, k, int(value))
+    elif isinstance(value, (float, np.floating)):
+        st = lib.lf_options_set_float(opt, k, float(value))
+    else:
+        raise ValueError("option %r: unsupported value type %s" % (key, type(value).__name__))
+    if st != _lib.OK:
+        raise LidarflowError(st, lib.lf_options_last_error(opt).decode())
+
+
+def _check(status, handle):
+    if status != _lib.OK:
+        raise LidarflowError(status, lib.lf_last_error(handle).decode())

@@ -1,0 +1,270 @@
+"""Tests of the lidarflow Python binding (python3 -m unittest, run by CTest as python_binding).
+
+Synthetic scene with exact truth: a textured fronto-parallel plane at disparity D moves by
+(TU, TV) px, so every pixel's scene flow is (TU, TV, D, D)."""
+import ctypes
+import gc
+import os
+import subprocess
+import sys
+import threading
+import unittest
+
+import numpy as np
+
+import lidarflow
+from lidarflow import _lib
+
+W, H = 160, 64
+FAST = {"matching.min_coarsest_height": 16}  # a second pyramid level on 64 px high images
+CAL = dict(fx=100.0, fy=100.0, cx=80.0, cy=32.0, baseline=0.5)
+
+
+def make_scene(seed=7, d=10, tu=3, tv=1, width=W, height=H):
+    """(left0, right0, left1, right1) uint8 gray images of the moving plane."""
+    rng = np.random.RandomState(seed)
+    m = 32
+    cells = rng.randint(0, 256, size=((height + 2 * m) // 2 + 1, (width + 2 * m) // 2 + 1))
+    world = np.kron(cells, np.ones((2, 2)))
+    blurred = sum(np.roll(np.roll(world, dy, 0), dx, 1) for dy in (-1, 0, 1) for dx in (-1, 0, 1)) / 9.0
+    world = blurred.astype(np.uint8)
+
+    def view(dx, dy):  # image(x, y) = world(x + dx, y + dy)
+        return np.ascontiguousarray(world[m + dy:m + dy + height, m + dx:m + dx + width])
+
+    return view(0, 0), view(d, 0), view(-tu, -tv), view(d - tu, -tv)
+
+
+def grid_lidar(d, step=16, width=W, height=H):
+    ys, xs = np.mgrid[step // 2:height:step, step // 2:width:step]
+    return np.stack([xs.ravel(), ys.ravel(), np.full(xs.size, d)], axis=1).astype(np.float32)
+
+
+def run_pair(scene, lidar=None, options=None, **push_kw):
+    with lidarflow.Estimator(options=dict(FAST, **(options or {})), **CAL) as est:
+        assert not est.push(scene[0], scene[1], lidar, timestamp=0, **push_kw)
+        assert est.push(scene[2], scene[3], lidar, timestamp=100000, **push_kw)
+        return est.result()
+
+
+def accuracy(r, tu=3, tv=1, d=10):
+    ok = ((np.abs(r["u"] - tu) < 1) & (np.abs(r["v"] - tv) < 1) & (np.abs(r["d0"] - d) < 1) &
+          (np.abs(r["d1"] - d) < 1) & (r["valid"] == 1))
+    return ok.mean()
+
+
+def same(a, b):
+    return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+class RoundTrip(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.scene = make_scene()
+        cls.lidar = grid_lidar(10)
+        cls.est = lidarflow.Estimator(options=FAST, **CAL)
+        cls.est.push(cls.scene[0], cls.scene[1], cls.lidar, timestamp=5)
+        cls.est.push(cls.scene[2], cls.scene[3], cls.lidar, timestamp=7)
+        cls.ref = cls.est.result()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.est.close()
+
+    def test_result_is_accurate(self):
+        self.assertGreater(accuracy(self.ref), 0.95)
+        self.assertEqual(self.ref["u"].shape, (H, W))
+        self.assertEqual(self.ref["u"].dtype, np.float32)
+        self.assertEqual(self.ref["valid"].dtype, np.uint8)
+
+    def test_info(self):
+        info = self.est.info()
+        self.assertEqual((info["width"], info["height"]), (W, H))
+        self.assertEqual((info["t0_us"], info["t1_us"]), (5, 7))
+        self.assertEqual(info["last_stage"], "interpolation")
+        self.assertIn("interpolation", [name for name, _ in info["timings"]])
+        self.assertGreater(info["total_seconds"], 0)
+
+    def test_result_into_preallocated_padded_arrays(self):
+        big_u = np.full((H, W + 8), -7.0, np.float32)
+        big_valid = np.full((H, W + 5), 9, np.uint8)
+        out = {"u": big_u[:, :W], "valid": big_valid[:, :W]}
+        ret = self.est.result(out=out)
+        self.assertIs(ret, out)
+        self.assertTrue(np.shares_memory(out["u"], big_u))  # written in place, not replaced
+        np.testing.assert_array_equal(big_u[:, :W], self.ref["u"])
+        np.testing.assert_array_equal(big_valid[:, :W], self.ref["valid"])
+        self.assertTrue((big_u[:, W:] == -7.0).all())  # the padding is untouched
+        self.assertTrue((big_valid[:, W:] == 9).all())
+        self.assertEqual(set(ret), {"u", "valid"})  # only the planes asked for
+
+    def test_points3d(self):
+        p = self.est.points3d()
+        self.assertEqual(p["points"].shape, (H, W, 3))
+        ok = p["valid"] == 1
+        self.assertGreater(ok.mean(), 0.95)
+        z = p["points"][..., 2][ok]
+        self.assertLess(np.abs(np.median(z) - 5.0), 0.05)  # fx * B / d = 50 / 10
+        # the plane moves 3 px right, 1 px down at 5 m: 0.15 m, 0.05 m, 0 m
+        np.testing.assert_allclose(np.median(p["motion"][ok], axis=0), [0.15, 0.05, 0.0], atol=0.01)
+        self.assertTrue(np.isnan(p["points"][~ok]).all())
+
+    def test_padded_input_rows_and_colour_orders(self):
+        padded = [np.zeros((H, W + 24), np.uint8) for _ in range(4)]
+        for p, img in zip(padded, self.scene):
+            p[:, :W] = img
+        views = [p[:, :W] for p in padded]
+        self.assertGreater(views[0].strides[0], W)
+        self.assertTrue(same(run_pair(views, self.lidar), self.ref))
+        # The same colours as RGB and as BGR give the same result.
+        noise = np.random.RandomState(3).randint(0, 256, (4, H, W)).astype(np.uint8)
+        rgb = [np.ascontiguousarray(np.stack([g, 255 - g, n], axis=2)) for g, n in zip(self.scene, noise)]
+        bgr = [np.ascontiguousarray(c[..., ::-1]) for c in rgb]
+        self.assertTrue(same(run_pair(rgb, colour_order="rgb"), run_pair(bgr, colour_order="bgr")))
+
+
+class BadInput(unittest.TestCase):
+    def setUp(self):
+        self.scene = make_scene()
+        self.est = lidarflow.Estimator(options=FAST, **CAL)
+
+    def tearDown(self):
+        self.est.close()
+
+    def assertValueError(self, fragment, fn, *args, **kw):
+        with self.assertRaises(ValueError) as cm:
+            fn(*args, **kw)
+        self.assertIn(fragment, str(cm.exception))
+
+    def assertLidarflowError(self, status, fragment, fn, *args, **kw):
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            fn(*args, **kw)
+        self.assertEqual(cm.exception.status, status)
+        self.assertIn(fragment, cm.exception.message)
+
+    def test_bad_arrays(self):
+        l, r = self.scene[0], self.scene[1]
+        push = self.est.push
+        self.assertValueError("dtype uint8", push, l.astype(np.float32), r)
+        self.assertValueError("numpy array", push, l.tolist(), r)
+        self.assertValueError("shape (H, W) or (H, W, 3)", push, l[..., None].repeat(4, 2), r)
+        self.assertValueError("shape (H, W) or (H, W, 3)", push, l.ravel(), r)
+        self.assertValueError("empty", push, l[:0], r[:0])
+        self.assertValueError("packed rows", push, l[:, ::2], r[:, ::2])
+        self.assertValueError("packed rows", push, l[:, ::-1], r)
+        self.assertValueError("differ in shape", push, l, r[:, :W - 2])
+        self.assertValueError("colour_order", push, l, r, colour_order="rgba")
+        lid = grid_lidar(10)
+        self.assertValueError("float32", push, l, r, lid.astype(np.float64))
+        self.assertValueError("(N, 3)", push, l, r, lid[:, :2])
+        self.assertValueError("packed float32", push, l, r, np.asfortranarray(lid))
+        self.assertValueError("lidar_kind", push, l, r, lid, lidar_kind="points")
+        self.assertFalse(self.est.has_result)
+
+    def test_library_errors_leave_the_estimator_usable(self):
+        l, r = self.scene[0], self.scene[1]
+        lid = grid_lidar(10)
+        lid[3, 2] = np.nan
+        self.assertLidarflowError(lidarflow.ERR_INVALID_ARGUMENT, "not finite", self.est.push, l, r, lid)
+        lid = grid_lidar(10)
+        lid[0, 0] = W + 3
+        self.assertLidarflowError(lidarflow.ERR_INVALID_ARGUMENT, "outside", self.est.push, l, r, lid)
+        self.assertLidarflowError(lidarflow.ERR_INVALID_ARGUMENT, "lidar_to_camera", self.est.push, l, r,
+                                  grid_lidar(10), lidar_kind="lidar")
+        self.assertLidarflowError(lidarflow.ERR_NOT_READY, "no result yet", self.est.result)
+        self.assertFalse(self.est.push(l, r, timestamp=10))
+        self.assertLidarflowError(lidarflow.ERR_INVALID_ARGUMENT, "not after", self.est.push, l, r, timestamp=10)
+        self.assertLidarflowError(lidarflow.ERR_SIZE_MISMATCH, "previous frame", self.est.push, l[:, :100],
+                                  r[:, :100], timestamp=11)
+        self.assertTrue(self.est.push(self.scene[2], self.scene[3], timestamp=11))
+        self.assertGreater(accuracy(self.est.result()), 0.95)
+
+    def test_bad_out_arrays(self):
+        self.est.push(self.scene[0], self.scene[1])
+        self.est.push(self.scene[2], self.scene[3])
+        self.assertValueError("float32", self.est.result, out={"u": np.zeros((H, W), np.float64)})
+        self.assertValueError("shape", self.est.result, out={"u": np.zeros((H, W + 1), np.float32)})
+        ro = np.zeros((H, W), np.float32)
+        ro.flags.writeable = False
+        self.assertValueError("read-only", self.est.result, out={"u": ro})
+        self.assertValueError("packed rows", self.est.result, out={"u": np.zeros((H, 2 * W), np.float32)[:, ::2]})
+        self.assertValueError("unknown keys", self.est.result, out={"flow": np.zeros((H, W), np.float32)})
+        self.assertValueError("dict", self.est.result, out=[np.zeros((H, W), np.float32)])
+        self.assertValueError("(64, 160, 3)", self.est.points3d, out={"points": np.zeros((H, W), np.float32)})
+
+    def test_bad_options(self):
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            lidarflow.Estimator(options={"thread": 2}, **CAL)
+        self.assertIn("unknown option key 'thread'", cm.exception.message)
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            lidarflow.Estimator(options={"threads": 0}, **CAL)
+        self.assertIn("[1, 256]", cm.exception.message)
+        self.assertValueError("unsupported value type", lidarflow.Estimator, options={"threads": [2]}, **CAL)
+        self.assertValueError("4x4", lidarflow.Estimator, lidar_to_camera=np.eye(3), **CAL)
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            lidarflow.Estimator(100, 100, 80, 32, 0.0)
+        self.assertEqual(cm.exception.status, lidarflow.ERR_INVALID_ARGUMENT)
+
+
+class Lifetime(unittest.TestCase):
+    def test_double_close_and_context_manager(self):
+        est = lidarflow.Estimator(**CAL)
+        est.close()
+        est.close()
+        self.assertTrue(est.closed)
+        self.assertRaises(ValueError, est.push, *make_scene()[:2])
+        self.assertRaises(ValueError, est.result)
+        self.assertRaises(ValueError, est.reset)
+        with lidarflow.Estimator(**CAL) as est2:
+            self.assertFalse(est2.closed)
+        self.assertTrue(est2.closed)
+        est2.close()
+
+    def test_finalizer_frees_a_forgotten_handle(self):
+        est = lidarflow.Estimator(**CAL)
+        fin = est._finalizer
+        self.assertTrue(fin.alive)
+        del est
+        gc.collect()
+        self.assertFalse(fin.alive)
+
+    def test_abi_check(self):
+        _lib.check_abi(_lib.lib)
+        with self.assertRaises(ImportError) as cm:
+            _lib.check_abi(_lib.lib, expected=_lib.ABI_MAJOR + 1)
+        self.assertIn("needs ABI", str(cm.exception))
+
+    def test_explicit_library_path_must_exist(self):
+        env = dict(os.environ, LIDARFLOW_LIBRARY="/nonexistent/liblidarflow.so.0")
+        p = subprocess.run([sys.executable, "-c", "import lidarflow"], env=env, capture_output=True, text=True)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn("ImportError", p.stderr)
+        self.assertIn("/nonexistent/liblidarflow.so.0", p.stderr)
+
+
+class Threads(unittest.TestCase):
+    def test_n_handles_in_n_threads_match_serial_runs(self):
+        cases = [(make_scene(seed=s, tu=tu, tv=tv), grid_lidar(10)) for s, tu, tv in ((1, 3, 1), (2, -2, 0), (3, 1, 2))]
+        serial = [run_pair(scene, lidar) for scene, lidar in cases]
+        parallel = [None] * len(cases)
+        errors = []
+
+        def work(k):
+            try:
+                parallel[k] = run_pair(*cases[k])
+            except Exception as e:  # surfaced below: a thread's exception would be lost
+                errors.append(e)
+
+        threads = [threading.Thread(target=work, args=(k,)) for k in range(len(cases))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        self.assertEqual(errors, [])
+        for k in range(len(cases)):
+            self.assertTrue(same(parallel[k], serial[k]), "case %d differs" % k)
+        self.assertFalse(same(serial[0], serial[1]))  # the cases are distinct
+
+
+if __name__ == "__main__":
+    unittest.main()

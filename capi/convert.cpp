@@ -1,0 +1,140 @@
+#include "convert.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+#include "io/calib.hpp"
+#include "lidar/projection.hpp"
+
+namespace lidarflow::capi {
+namespace {
+
+constexpr size_t kLidarEntryBytes = 3 * sizeof(float);
+
+int channels_of(int32_t format) {
+    switch (format) {
+    case LF_PIXEL_GRAY8: return 1;
+    case LF_PIXEL_RGB8:
+    case LF_PIXEL_BGR8: return 3;
+    default: return 0;
+    }
+}
+
+bool finite_all(const double *v, int n) {
+    for (int i = 0; i < n; ++i)
+        if (!std::isfinite(v[i])) return false;
+    return true;
+}
+
+// Reads entry i as three floats; memcpy because the caller's stride need not keep alignment.
+void read_entry(const lf_lidar_t &l, size_t stride, uint32_t i, float out[3]) {
+    std::memcpy(out, static_cast<const unsigned char *>(l.data) + static_cast<size_t>(i) * stride, kLidarEntryBytes);
+}
+
+std::string entry_text(uint32_t i, const float e[3]) {
+    return "lidar entry " + std::to_string(i) + " (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) + ", " +
+           std::to_string(e[2]) + ")";
+}
+
+SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) {
+    // Larger disparity wins on a shared pixel (nearer surface), as in the projection.
+    DisparityMap map(size, kInvalidDisparity);
+    for (uint32_t i = 0; i < l.count; ++i) {
+        float e[3];
+        read_entry(l, stride, i, e);
+        require(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2]), ErrorCode::InvalidArgument,
+                entry_text(i, e) + " is not finite");
+        const double x = std::floor(static_cast<double>(e[0]) + 0.5), y = std::floor(static_cast<double>(e[1]) + 0.5);
+        require(x >= 0 && y >= 0 && x < size.width && y < size.height, ErrorCode::InvalidArgument,
+                entry_text(i, e) + " lies outside the " + std::to_string(size.width) + "x" +
+                    std::to_string(size.height) + " image");
+        require(e[2] >= 0.0f, ErrorCode::InvalidArgument, entry_text(i, e) + " has a negative disparity");
+        float &cell = map(static_cast<int>(y), static_cast<int>(x));
+        if (e[2] > cell) cell = e[2];
+    }
+    return SparseLidar::from_map(map);
+}
+
+SparseLidar from_points(const lf_lidar_t &l, size_t stride, cv::Size size, const Calibration &cal) {
+    const bool move = l.kind == LF_LIDAR_POINTS_LIDAR;
+    require(!move || cal.has_lidar_to_camera, ErrorCode::InvalidArgument,
+            "LF_LIDAR_POINTS_LIDAR needs the calibration's lidar_to_camera (has_lidar_to_camera = 0)");
+    std::vector<cv::Point3d> points(l.count);
+    for (uint32_t i = 0; i < l.count; ++i) {
+        float e[3];
+        read_entry(l, stride, i, e);
+        require(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2]), ErrorCode::InvalidArgument,
+                entry_text(i, e) + " is not finite");
+        cv::Vec4d p(e[0], e[1], e[2], 1.0);
+        if (move) p = cal.lidar_to_camera * p;
+        points[i] = {p[0], p[1], p[2]};
+    }
+    // The ideal rectified pair of the camera: the left rectified frame is the camera frame.
+    return lidar::project_to_left(points, io::calib_from_camera(cal.camera), size);
+}
+
+}  // namespace
+
+Calibration convert_calibration(const lf_calibration_t &c) {
+    const double cam[5] = {c.fx, c.fy, c.cx, c.cy, c.baseline};
+    require(finite_all(cam, 5), ErrorCode::InvalidArgument, "calibration: fx, fy, cx, cy and baseline must be finite");
+    require(c.fx > 0 && c.fy > 0 && c.baseline > 0, ErrorCode::InvalidArgument,
+            "calibration: fx, fy and baseline must be > 0");
+    require(c.has_lidar_to_camera <= 1, ErrorCode::InvalidArgument, "calibration: has_lidar_to_camera must be 0 or 1");
+    Calibration out;
+    out.camera = {c.fx, c.fy, c.cx, c.cy, c.baseline};
+    out.has_lidar_to_camera = c.has_lidar_to_camera == 1;
+    if (out.has_lidar_to_camera) {
+        require(finite_all(c.lidar_to_camera, 16), ErrorCode::InvalidArgument,
+                "calibration: lidar_to_camera must be finite");
+        const double *r = c.lidar_to_camera + 12;
+        require(r[0] == 0 && r[1] == 0 && r[2] == 0 && r[3] == 1, ErrorCode::InvalidArgument,
+                "calibration: the last row of lidar_to_camera must be 0 0 0 1");
+        for (int i = 0; i < 16; ++i) out.lidar_to_camera.val[i] = c.lidar_to_camera[i];
+    }
+    return out;
+}
+
+cv::Mat convert_image(const lf_image_t &image, const char *what) {
+    const std::string name(what);
+    require(image.data != nullptr, ErrorCode::InvalidArgument, name + ".data is NULL");
+    require(image.width > 0 && image.height > 0, ErrorCode::InvalidArgument,
+            name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ": empty");
+    require(image.width <= kMaxImageSide && image.height <= kMaxImageSide, ErrorCode::InvalidArgument,
+            name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", larger than " +
+                std::to_string(kMaxImageSide) + " px per side");
+    const int channels = channels_of(image.format);
+    require(channels > 0, ErrorCode::InvalidArgument,
+            name + ".format " + std::to_string(image.format) + " is not LF_PIXEL_GRAY8, RGB8 or BGR8");
+    const uint64_t row_bytes = static_cast<uint64_t>(image.width) * channels;
+    require(image.stride_bytes >= row_bytes, ErrorCode::SizeMismatch,
+            name + ".stride_bytes " + std::to_string(image.stride_bytes) + " is smaller than a row (" +
+                std::to_string(row_bytes) + " bytes)");
+    const int w = static_cast<int>(image.width), h = static_cast<int>(image.height);
+    cv::Mat out(h, w, channels == 1 ? CV_8UC1 : CV_8UC3);
+    const unsigned char *src = static_cast<const unsigned char *>(image.data);
+    for (int y = 0; y < h; ++y) std::memcpy(out.ptr(y), src + static_cast<uint64_t>(y) * image.stride_bytes, row_bytes);
+    if (image.format == LF_PIXEL_RGB8) cv::cvtColor(out, out, cv::COLOR_RGB2BGR);
+    return out;
+}
+
+SparseLidar convert_lidar(const lf_lidar_t *lidar, cv::Size size, const Calibration &calibration) {
+    if (!lidar || lidar->kind == LF_LIDAR_NONE) return SparseLidar{size.width, size.height, {}};
+    const lf_lidar_t &l = *lidar;
+    require(l.kind == LF_LIDAR_POINTS_CAMERA || l.kind == LF_LIDAR_POINTS_LIDAR || l.kind == LF_LIDAR_DISPARITY,
+            ErrorCode::InvalidArgument, "lidar.kind " + std::to_string(l.kind) + " is not an lf_lidar_kind_t");
+    require(l.count == 0 || l.data != nullptr, ErrorCode::InvalidArgument,
+            "lidar.data is NULL with count " + std::to_string(l.count));
+    const size_t stride = l.stride_bytes == 0 ? kLidarEntryBytes : static_cast<size_t>(l.stride_bytes);
+    require(stride >= kLidarEntryBytes, ErrorCode::SizeMismatch,
+            "lidar.stride_bytes " + std::to_string(l.stride_bytes) + " is smaller than an entry (12 bytes)");
+    if (l.kind == LF_LIDAR_DISPARITY) return from_disparities(l, stride, size);
+    return from_points(l, stride, size, calibration);
+}
+
+}  // namespace lidarflow::capi

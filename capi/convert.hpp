@@ -1,0 +1,30 @@
+#pragma once
+// Checked conversions of the C ABI's caller-owned input views into core types. Each function
+// copies what it keeps, throws lidarflow::Error with a message naming the offending field,
+// and never reads outside the sizes the caller declared.
+#include <opencv2/core.hpp>
+
+#include "core/lidar.hpp"
+#include "handles.hpp"
+#include "lidarflow/lidarflow.h"
+
+namespace lidarflow::capi {
+
+// Largest accepted image side: keeps every byte count far from overflow.
+constexpr uint32_t kMaxImageSide = 16384;
+
+// lf_calibration_t -> Calibration. Throws InvalidArgument (see lf_create).
+Calibration convert_calibration(const lf_calibration_t &c);
+
+// Deep copy of an image as 8-bit gray (GRAY8) or BGR (RGB8, BGR8). `what` names it in messages.
+// Throws InvalidArgument (NULL data, zero or too large size, unknown format) or SizeMismatch
+// (stride smaller than a row).
+cv::Mat convert_image(const lf_image_t &image, const char *what);
+
+// LiDAR entries -> SparseLidar in an image of `size`. lidar may be NULL (no points). Throws
+// InvalidArgument (unknown kind, NULL data with count > 0, non-finite values, disparity entries
+// outside the image or negative, LF_LIDAR_POINTS_LIDAR without a transform) or SizeMismatch
+// (stride below 12 bytes).
+SparseLidar convert_lidar(const lf_lidar_t *lidar, cv::Size size, const Calibration &calibration);
+
+}  // namespace lidarflow::capi

@@ -1,0 +1,132 @@
+// lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
+// builds the new frame and result aside and commits them only when everything succeeded, so a
+// failed call leaves the handle exactly as it was.
+#include <memory>
+#include <string>
+
+#include "convert.hpp"
+#include "guard.hpp"
+#include "handles.hpp"
+
+using lidarflow::ErrorCode;
+using lidarflow::require;
+using namespace lidarflow::capi;
+
+namespace {
+
+ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
+
+std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
+
+const char *format_text(int type) { return type == CV_8UC1 ? "gray" : "colour"; }
+
+// The result the C ABI serves: the last stage's field, continuous, with a confidence plane and
+// zeros wherever the field is not valid (the documented contract of lf_get_result).
+std::unique_ptr<Result> make_result(const lidarflow::pipeline::EstimatorResult &r, int64_t t0, int64_t t1) {
+    auto out = std::make_unique<Result>();
+    const lidarflow::SceneFlowField &f = r.output();
+    const cv::Mat1b invalid = f.valid == 0;
+    auto plane = [&](const cv::Mat1f &m) {
+        cv::Mat1f c = m.empty() ? cv::Mat1f::zeros(f.valid.size()) : m.clone();
+        c.setTo(0.0f, invalid);
+        return c;
+    };
+    out->field.u = plane(f.u);
+    out->field.v = plane(f.v);
+    out->field.d0 = plane(f.d0);
+    out->field.d1 = plane(f.d1);
+    out->field.confidence = plane(f.confidence);
+    out->field.valid = (f.valid != 0) / 255;
+    out->stage = r.last_stage;
+    out->t0_us = t0;
+    out->t1_us = t1;
+    out->timings = r.timings;
+    out->total_seconds = r.total_seconds;
+    return out;
+}
+
+}  // namespace
+
+extern "C" {
+
+LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *calibration, lf_estimator_t **out) {
+    return guarded(ErrorSink(nullptr), "lf_create", [&] {
+        require_non_null(out, "out");
+        *out = nullptr;
+        require_non_null(calibration, "calibration");
+        check_struct_size(calibration, calibration->struct_size, sizeof(lf_calibration_t), "calibration");
+        const Calibration cal = convert_calibration(*calibration);
+        const OptionValues defaults;
+        const OptionValues &values = options ? options->values : defaults;
+        *out = new lf_estimator(values.estimator, cal);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API void lf_destroy(lf_estimator_t *estimator) { delete estimator; }
+
+LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
+                             const lf_image_t *right, const lf_lidar_t *lidar) {
+    return guarded(sink_of(estimator), "lf_push_frame", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(left, "left");
+        require_non_null(right, "right");
+        const Frame *prev = estimator->previous.get();
+        require(!prev || timestamp_us > prev->timestamp_us, ErrorCode::InvalidArgument,
+                "timestamp " + std::to_string(timestamp_us) + " us is not after the previous frame's (" +
+                    (prev ? std::to_string(prev->timestamp_us) : std::string()) + " us)");
+        require(left->format == right->format, ErrorCode::InvalidArgument,
+                "left and right have different formats (" + std::to_string(left->format) + " and " +
+                    std::to_string(right->format) + ")");
+
+        auto frame = std::make_unique<Frame>();
+        frame->timestamp_us = timestamp_us;
+        frame->left = convert_image(*left, "left");
+        frame->right = convert_image(*right, "right");
+        const cv::Size size = frame->left.size();
+        require(frame->right.size() == size, ErrorCode::SizeMismatch,
+                "left is " + size_text(size) + " but right is " + size_text(frame->right.size()));
+        if (prev) {
+            require(prev->left.size() == size, ErrorCode::SizeMismatch,
+                    "frame is " + size_text(size) + " but the previous frame was " + size_text(prev->left.size()) +
+                        " (call lf_reset to start a sequence of another size)");
+            require(prev->left.type() == frame->left.type(), ErrorCode::SizeMismatch,
+                    std::string("frame is ") + format_text(frame->left.type()) + " but the previous frame was " +
+                        format_text(prev->left.type()) + " (call lf_reset to change the format)");
+        }
+        frame->lidar = convert_lidar(lidar, size, estimator->calibration);
+
+        std::unique_ptr<Result> result;
+        if (prev) {
+            lidarflow::pipeline::FrameInput in;
+            in.left0 = prev->left;
+            in.right0 = prev->right;
+            in.left1 = frame->left;
+            in.right1 = frame->right;
+            in.lidar0 = prev->lidar;
+            in.lidar1 = frame->lidar;
+            result = make_result(estimator->estimator.run(in), prev->timestamp_us, timestamp_us);
+        }
+        // Commit: nothing below can throw.
+        if (result) estimator->result = std::move(result);
+        estimator->previous = std::move(frame);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_reset(lf_estimator_t *estimator) {
+    return guarded(sink_of(estimator), "lf_reset", [&] {
+        require_non_null(estimator, "estimator");
+        estimator->previous.reset();
+        estimator->result.reset();
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_has_result(const lf_estimator_t *estimator) { return estimator && estimator->result ? 1 : 0; }
+
+LF_API const char *lf_last_error(const lf_estimator_t *estimator) {
+    return estimator ? estimator->error.c_str() : thread_last_error().c_str();
+}
+
+}  // extern "C"

@@ -1,0 +1,69 @@
+#pragma once
+// The exception firewall of the C ABI: every lf_ function body runs inside guarded(), which
+// turns whatever the C++ core throws into a status code plus a message, so no exception ever
+// crosses the extern "C" boundary.
+#include <cstdint>
+#include <exception>
+#include <new>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "core/error.hpp"
+#include "lidarflow/lidarflow.h"
+
+namespace lidarflow::capi {
+
+// Where a failed call's message goes besides the calling thread's lf_last_error(NULL): the
+// handle's own message string, or nullptr for calls without a handle.
+class ErrorSink {
+public:
+    explicit ErrorSink(std::string *handle_message) : handle_(handle_message) {}
+    // Clears the handle's message at the start of a call (a successful call leaves "").
+    void begin() const {
+        if (handle_) handle_->clear();
+    }
+    // Records `message` for the handle and the thread; returns status.
+    int32_t fail(int32_t status, const std::string &message) const;
+
+private:
+    std::string *handle_;
+};
+
+// The calling thread's last error message ("" when none); lives until the thread ends.
+const std::string &thread_last_error();
+
+// Runs body() (which returns an lf_status_t value) and maps exceptions:
+// lidarflow::Error -> its code, std::bad_alloc -> LF_ERR_OUT_OF_MEMORY, anything else ->
+// LF_ERR_INTERNAL. Never throws.
+template <class Body>
+int32_t guarded(const ErrorSink &sink, const char *function, Body &&body) noexcept {
+    try {
+        sink.begin();
+        return body();
+    } catch (const Error &e) {
+        return sink.fail(static_cast<int32_t>(e.code()), std::string(function) + ": " + e.what());
+    } catch (const std::bad_alloc &) {
+        return sink.fail(LF_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory");
+    } catch (const cv::Exception &e) {
+        // OpenCV asserting on our data is a lidarflow bug: inputs are validated before.
+        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": OpenCV: " + e.what());
+    } catch (const std::exception &e) {
+        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": " + e.what());
+    } catch (...) {
+        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": unknown exception");
+    }
+}
+
+// Throws Error(InvalidArgument, "<what> is NULL") when p is null.
+inline void require_non_null(const void *p, const char *what) {
+    require(p != nullptr, ErrorCode::InvalidArgument, std::string(what) + " is NULL");
+}
+
+// Checks the struct_size of a caller struct whose current layout has `known` bytes: smaller is
+// an error (an older layout than the first one does not exist); larger is accepted only when
+// the bytes this library does not know are all zero (a newer caller that does not use the new
+// fields). Throws Error(InvalidArgument).
+void check_struct_size(const void *s, uint32_t struct_size, size_t known, const char *what);
+
+}  // namespace lidarflow::capi

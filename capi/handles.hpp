@@ -1,0 +1,56 @@
+#pragma once
+// What the opaque C handles are. Private to capi/.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "core/camera.hpp"
+#include "core/lidar.hpp"
+#include "core/maps.hpp"
+#include "option_keys.hpp"
+#include "pipeline/estimator.hpp"
+
+struct lf_options {
+    lidarflow::capi::OptionValues values;
+    std::string error;  // lf_options_last_error
+};
+
+namespace lidarflow::capi {
+
+// The calibration as the estimator keeps it.
+struct Calibration {
+    StereoCamera camera;
+    bool has_lidar_to_camera = false;
+    cv::Matx44d lidar_to_camera = cv::Matx44d::eye();
+};
+
+// One pushed frame, owned by the estimator.
+struct Frame {
+    int64_t timestamp_us = 0;
+    cv::Mat left, right;  // 8-bit gray or BGR
+    SparseLidar lidar;    // in `left`
+};
+
+// The latest result: the output field of the last stage plus what describes it.
+struct Result {
+    SceneFlowField field;  // continuous planes; confidence always present
+    pipeline::Stage stage = pipeline::Stage::Interpolation;
+    int64_t t0_us = 0, t1_us = 0;
+    std::vector<pipeline::StageTime> timings;
+    double total_seconds = 0;
+};
+
+}  // namespace lidarflow::capi
+
+struct lf_estimator {
+    lf_estimator(const lidarflow::pipeline::EstimatorOptions &options, const lidarflow::capi::Calibration &c)
+        : estimator(options), calibration(c) {}
+
+    lidarflow::pipeline::Estimator estimator;
+    lidarflow::capi::Calibration calibration;
+    std::unique_ptr<lidarflow::capi::Frame> previous;  // null before the first frame / after reset
+    std::unique_ptr<lidarflow::capi::Result> result;   // null until two frames were pushed
+    mutable std::string error;                          // lf_last_error
+};

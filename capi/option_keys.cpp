@@ -1,0 +1,229 @@
+#include "option_keys.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.hpp"
+
+namespace lidarflow::capi {
+
+using O = pipeline::EstimatorOptions;
+
+enum class Extra { None, Odd, MultipleOf16 };
+
+struct OptionKey {
+    const char *name;
+    KeyType type;
+    double lo, hi;
+    bool lo_open;  // (lo, hi] instead of [lo, hi]
+    Extra extra;
+    int64_t (*get_int)(const O &);
+    void (*set_int)(O &, int64_t);
+    double (*get_float)(const O &);
+    void (*set_float)(O &, double);
+};
+
+namespace {
+
+// Accessors of one EstimatorOptions field, as captureless lambdas (function pointers).
+#define LF_INT_FIELD(field)                                                                        \
+    [](const O &o) -> int64_t { return static_cast<int64_t>(o.field); },                           \
+        [](O &o, int64_t v) { o.field = static_cast<decltype(o.field)>(v); }, nullptr, nullptr
+#define LF_FLOAT_FIELD(field)                                                                      \
+    nullptr, nullptr, [](const O &o) -> double { return o.field; },                                \
+        [](O &o, double v) { o.field = static_cast<decltype(o.field)>(v); }
+
+constexpr double kBig = 10000.0;
+constexpr double kMaxSeed53 = 9007199254740992.0;  // 2^53: exact as a double
+
+const OptionKey kKeys[] = {
+    // general
+    {"threads", KeyType::Int, 1, 256, false, Extra::None, LF_INT_FIELD(threads)},
+    {"preset", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    {"use_lidar", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
+    {"last_stage", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    // The paper has one support window: the matcher's and the consistency check's are the same.
+    {"support_window", KeyType::Int, 1, 101, false, Extra::Odd,
+     [](const O &o) -> int64_t { return o.matching.window_size; },
+     [](O &o, int64_t v) { o.matching.window_size = o.consistency.support_window = static_cast<int>(v); },
+     nullptr, nullptr},
+    // stage 1
+    {"matching.support_windows", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.support_window)},
+    {"matching.const1", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const1)},
+    {"matching.const2", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const2)},
+    {"matching.use_lidar1", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.use_lidar1)},
+    {"matching.grid_step", KeyType::Int, 1, 32, false, Extra::None, LF_INT_FIELD(matching.grid_step)},
+    {"matching.iterations", KeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.iterations)},
+    {"matching.max_levels", KeyType::Int, 1, 10, false, Extra::None, LF_INT_FIELD(matching.max_levels)},
+    {"matching.min_coarsest_height", KeyType::Int, 8, 4096, false, Extra::None,
+     LF_INT_FIELD(matching.min_coarsest_height)},
+    {"matching.patch_radius", KeyType::Int, 0, 16, false, Extra::None, LF_INT_FIELD(matching.patch_radius)},
+    {"matching.stop_ratio", KeyType::Float, 0, 1, false, Extra::None, LF_FLOAT_FIELD(matching.stop_ratio)},
+    {"matching.max_flow", KeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_flow)},
+    {"matching.max_disparity", KeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_disparity)},
+    {"matching.const2_abs", KeyType::Float, 0, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.const2_abs)},
+    {"matching.const2_rel", KeyType::Float, 0, 10, false, Extra::None, LF_FLOAT_FIELD(matching.const2_rel)},
+    {"matching.random_seed", KeyType::Int, 0, kMaxSeed53, false, Extra::None, LF_INT_FIELD(matching.random_seed)},
+    // stages 2-3
+    {"consistency.sgm_max_diff", KeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.sgm_max_diff)},
+    {"consistency.sgm_keep_unverified", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.sgm_keep_unverified)},
+    {"consistency.sgm_num_disparities", KeyType::Int, 16, 1024, false, Extra::MultipleOf16,
+     LF_INT_FIELD(consistency.sgm.num_disparities)},
+    {"consistency.sgm_block_size", KeyType::Int, 1, 31, false, Extra::Odd, LF_INT_FIELD(consistency.sgm.block_size)},
+    {"consistency.fb_max_flow", KeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_flow)},
+    {"consistency.fb_max_d0", KeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_d0)},
+    {"consistency.fb_max_d1", KeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_d1)},
+    {"consistency.fb_search_radius", KeyType::Int, 0, 8, false, Extra::None,
+     LF_INT_FIELD(consistency.fb_search_radius)},
+    {"consistency.keep_unreliable_lidar", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.keep_unreliable_lidar)},
+    {"consistency.cluster_max_flow_step", KeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(consistency.cluster_max_flow_step)},
+    {"consistency.cluster_max_disp_step", KeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(consistency.cluster_max_disp_step)},
+    {"consistency.cluster_min_size", KeyType::Int, 1, 100000000, false, Extra::None,
+     LF_INT_FIELD(consistency.cluster_min_size)},
+    {"consistency.keep_lidar_clusters", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.keep_lidar_clusters)},
+    {"consistency.sparsify_block", KeyType::Int, 1, 64, false, Extra::None, LF_INT_FIELD(consistency.sparsify_block)},
+    {"consistency.sparsify_support", KeyType::Int, 1, 63, false, Extra::Odd,
+     LF_INT_FIELD(consistency.sparsify_support)},
+    // stage 4
+    {"interpolation.use_lidar", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(interpolation.use_lidar)},
+    {"interpolation.superpixel_size", KeyType::Int, 4, 512, false, Extra::None,
+     LF_INT_FIELD(interpolation.superpixels.region_size)},
+    {"interpolation.num_neighbors", KeyType::Int, 1, 4096, false, Extra::None,
+     LF_INT_FIELD(interpolation.num_neighbors)},
+    {"interpolation.iterations", KeyType::Int, 0, 1000, false, Extra::None, LF_INT_FIELD(interpolation.iterations)},
+    {"interpolation.initial_hypotheses", KeyType::Int, 1, 10000, false, Extra::None,
+     LF_INT_FIELD(interpolation.initial_hypotheses)},
+    {"interpolation.random_hypotheses", KeyType::Int, 0, 10000, false, Extra::None,
+     LF_INT_FIELD(interpolation.random_hypotheses)},
+    {"interpolation.edge_gain", KeyType::Float, 0, kBig, false, Extra::None, LF_FLOAT_FIELD(interpolation.edge_gain)},
+    {"interpolation.distance_sigma", KeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(interpolation.distance_sigma)},
+    {"interpolation.disparity_inlier", KeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(interpolation.disparity_inlier)},
+    {"interpolation.flow_inlier", KeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(interpolation.flow_inlier)},
+    {"interpolation.lidar_anchor_distance", KeyType::Float, 0, kBig, false, Extra::None,
+     LF_FLOAT_FIELD(interpolation.lidar_anchor_distance)},
+    {"interpolation.pixel_model_selection", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.pixel_model_selection)},
+    {"interpolation.keep_lidar_values", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.keep_lidar_values)},
+    {"interpolation.random_seed", KeyType::Int, 0, 4294967295.0, false, Extra::None,
+     LF_INT_FIELD(interpolation.random_seed)},
+    {"interpolation.sed_model", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+};
+
+#undef LF_INT_FIELD
+#undef LF_FLOAT_FIELD
+
+const char *type_name(KeyType t) {
+    switch (t) {
+    case KeyType::Int: return "an integer";
+    case KeyType::Bool: return "a 0/1 switch";
+    case KeyType::Float: return "a float";
+    case KeyType::String: return "a string";
+    }
+    return "?";
+}
+
+std::string number(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+std::string bounds_text(const OptionKey &k) {
+    if (k.type == KeyType::Bool) return "0 or 1";
+    std::string s = (k.lo_open ? "(" : "[") + number(k.lo) + ", " + number(k.hi) + "]";
+    if (k.extra == Extra::Odd) s += " and odd";
+    if (k.extra == Extra::MultipleOf16) s += " and a multiple of 16";
+    return s;
+}
+
+void check_bounds(const OptionKey &k, double v, const std::string &shown) {
+    bool ok = std::isfinite(v) && (k.lo_open ? v > k.lo : v >= k.lo) && v <= k.hi;
+    if (ok && k.extra == Extra::Odd) ok = std::fmod(v, 2.0) != 0.0;
+    if (ok && k.extra == Extra::MultipleOf16) ok = std::fmod(v, 16.0) == 0.0;
+    require(ok, ErrorCode::InvalidArgument,
+            std::string("option '") + k.name + "' must be " + bounds_text(k) + ", got " + shown);
+}
+
+[[noreturn]] void wrong_type(const OptionKey &k, const char *used) {
+    throw Error(ErrorCode::InvalidArgument,
+                std::string("option '") + k.name + "' is " + type_name(k.type) + " option; " + used + " does not apply");
+}
+
+bool is_key(const OptionKey &k, const char *name) { return std::string(k.name) == name; }
+
+}  // namespace
+
+const OptionKey *find_option_key(const std::string &key) {
+    for (const OptionKey &k : kKeys)
+        if (key == k.name) return &k;
+    return nullptr;
+}
+
+KeyType option_key_type(const OptionKey &k) { return k.type; }
+
+void set_option_int(OptionValues &values, const OptionKey &k, int64_t v) {
+    if (k.type == KeyType::Float) return set_option_float(values, k, static_cast<double>(v));
+    if (k.type == KeyType::String) wrong_type(k, "lf_options_set_int");
+    // Compare as integers: large int64 values do not survive a trip through double (bounds
+    // are integers of at most 2^53, exact in both types).
+    const bool in_range = v >= static_cast<int64_t>(k.lo) && v <= static_cast<int64_t>(k.hi);
+    check_bounds(k, in_range ? static_cast<double>(v) : std::nan(""), std::to_string(v));
+    k.set_int(values.estimator, v);
+}
+
+void set_option_float(OptionValues &values, const OptionKey &k, double v) {
+    if (k.type != KeyType::Float) wrong_type(k, "lf_options_set_float");
+    check_bounds(k, v, number(v));
+    k.set_float(values.estimator, v);
+}
+
+void set_option_string(OptionValues &values, const OptionKey &k, const std::string &v) {
+    if (k.type != KeyType::String) wrong_type(k, "lf_options_set_string");
+    if (is_key(k, "preset")) {
+        values = preset_values(v, values);
+    } else if (is_key(k, "last_stage")) {
+        values.estimator.last_stage = pipeline::parse_stage(v);
+    } else {  // interpolation.sed_model
+        interp::EdgeMapOptions &e = values.estimator.interpolation.edges;
+        e.sed_model_path = v;
+        e.method = v.empty() ? interp::EdgeMapOptions{}.method : interp::EdgeMethod::StructuredForest;
+    }
+}
+
+int64_t get_option_int(const OptionValues &values, const OptionKey &k) {
+    if (k.type != KeyType::Int && k.type != KeyType::Bool) wrong_type(k, "lf_options_get_int");
+    return k.get_int(values.estimator);
+}
+
+double get_option_float(const OptionValues &values, const OptionKey &k) {
+    if (k.type == KeyType::Float) return k.get_float(values.estimator);
+    if (k.type == KeyType::String) wrong_type(k, "lf_options_get_float");
+    return static_cast<double>(k.get_int(values.estimator));
+}
+
+const char *get_option_string(const OptionValues &values, const OptionKey &k) {
+    if (k.type != KeyType::String) wrong_type(k, "lf_options_get_string");
+    if (is_key(k, "preset")) return values.preset.c_str();
+    if (is_key(k, "last_stage")) return pipeline::stage_name(values.estimator.last_stage);
+    return values.estimator.interpolation.edges.sed_model_path.c_str();
+}
+
+OptionValues preset_values(const std::string &name, const OptionValues &current) {
+    // The core has one tuned configuration; it is the only preset.
+    require(name == "default", ErrorCode::InvalidArgument,
+            "unknown preset '" + name + "' (known presets: default)");
+    OptionValues v;
+    v.preset = name;
+    v.estimator.threads = current.estimator.threads;
+    return v;
+}
+
+}  // namespace lidarflow::capi

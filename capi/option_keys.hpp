@@ -1,0 +1,42 @@
+#pragma once
+// The key table of lf_options_t: every key, its type, bounds and the EstimatorOptions field
+// it writes. The header's key table documents the same bounds; tests/test_capi_options.c
+// checks both ends of each.
+#include <cstdint>
+#include <string>
+
+#include "pipeline/estimator.hpp"
+
+namespace lidarflow::capi {
+
+// What the options object holds: the estimator settings plus the names of the string keys.
+struct OptionValues {
+    pipeline::EstimatorOptions estimator;
+    std::string preset = "default";
+};
+
+enum class KeyType { Int, Bool, Float, String };
+
+struct OptionKey;
+
+// Looks a key up; nullptr when unknown.
+const OptionKey *find_option_key(const std::string &key);
+KeyType option_key_type(const OptionKey &k);
+
+// Setters: check type and bounds, then write. Throw Error(InvalidArgument) naming the key,
+// the bounds and the rejected value; `values` is untouched then.
+void set_option_int(OptionValues &values, const OptionKey &k, int64_t v);
+void set_option_float(OptionValues &values, const OptionKey &k, double v);
+void set_option_string(OptionValues &values, const OptionKey &k, const std::string &v);
+
+// Getters (Int/Bool keys as integers; any numeric key as double; String keys as a string
+// that points into `values`). Throw Error(InvalidArgument) on a type mismatch.
+int64_t get_option_int(const OptionValues &values, const OptionKey &k);
+double get_option_float(const OptionValues &values, const OptionKey &k);
+const char *get_option_string(const OptionValues &values, const OptionKey &k);
+
+// The option values of a named preset (threads kept from `current`). Throws
+// Error(InvalidArgument) for an unknown name.
+OptionValues preset_values(const std::string &name, const OptionValues &current);
+
+}  // namespace lidarflow::capi

@@ -1,0 +1,193 @@
+// Result queries of the C ABI: info, timings, copies into caller planes, borrowed views and
+// the 3-D (metric) form. Every argument is checked before the first byte is written.
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "guard.hpp"
+#include "handles.hpp"
+
+using lidarflow::ErrorCode;
+using lidarflow::require;
+using namespace lidarflow::capi;
+
+namespace {
+
+ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
+
+const Result &ready_result(const lf_estimator_t *h) {
+    require_non_null(h, "estimator");
+    require(h->result != nullptr, ErrorCode::NotReady,
+            h->previous ? "no result yet: one frame pushed, the result comes with the second"
+                        : "no result yet: push two frames first");
+    return *h->result;
+}
+
+void check_buffer_size(uint32_t width, uint32_t height, const Result &r) {
+    require(static_cast<int>(width) == r.field.u.cols && static_cast<int>(height) == r.field.u.rows,
+            ErrorCode::SizeMismatch,
+            "buffers are " + std::to_string(width) + "x" + std::to_string(height) + ", the result is " +
+                std::to_string(r.field.u.cols) + "x" + std::to_string(r.field.u.rows));
+}
+
+void check_plane(const lf_plane_t &p, uint32_t width, size_t element_bytes, const char *name) {
+    if (!p.data) return;
+    const uint64_t row = static_cast<uint64_t>(width) * element_bytes;
+    require(p.stride_bytes >= row, ErrorCode::SizeMismatch,
+            std::string(name) + ".stride_bytes " + std::to_string(p.stride_bytes) + " is smaller than a row (" +
+                std::to_string(row) + " bytes)");
+}
+
+// Row-wise copy of a continuous matrix into a caller plane (any alignment).
+void copy_plane(const cv::Mat &m, const lf_plane_t &p) {
+    if (!p.data) return;
+    const size_t row = m.cols * m.elemSize();
+    for (int y = 0; y < m.rows; ++y)
+        std::memcpy(static_cast<unsigned char *>(p.data) + static_cast<uint64_t>(y) * p.stride_bytes, m.ptr(y), row);
+}
+
+lf_view_t view_of(const cv::Mat &m) { return {m.data, static_cast<uint64_t>(m.step[0])}; }
+
+// Writes the library's fields of *dst (a caller struct already size-checked) from `src`,
+// keeping the caller's struct_size and any newer fields it has.
+template <class T>
+void write_struct(T *dst, const T &src) {
+    T tmp = src;
+    tmp.struct_size = dst->struct_size;
+    std::memcpy(dst, &tmp, sizeof(T));
+}
+
+}  // namespace
+
+extern "C" {
+
+LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *info) {
+    return guarded(sink_of(estimator), "lf_get_result_info", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(info, "info");
+        check_struct_size(info, info->struct_size, sizeof(lf_result_info_t), "info");
+        const Result &r = ready_result(estimator);
+        lf_result_info_t out;
+        std::memset(&out, 0, sizeof out);
+        out.width = static_cast<uint32_t>(r.field.u.cols);
+        out.height = static_cast<uint32_t>(r.field.u.rows);
+        out.last_stage = static_cast<int32_t>(r.stage);
+        out.t0_us = r.t0_us;
+        out.t1_us = r.t1_us;
+        out.timing_count = static_cast<uint32_t>(r.timings.size());
+        out.total_seconds = r.total_seconds;
+        write_struct(info, out);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_timing(lf_estimator_t *estimator, uint32_t index, const char **name, double *seconds) {
+    return guarded(sink_of(estimator), "lf_get_timing", [&] {
+        const Result &r = ready_result(estimator);
+        require(index < r.timings.size(), ErrorCode::InvalidArgument,
+                "timing index " + std::to_string(index) + " out of range (" + std::to_string(r.timings.size()) +
+                    " timings)");
+        if (name) *name = r.timings[index].name.c_str();
+        if (seconds) *seconds = r.timings[index].seconds;
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_result(lf_estimator_t *estimator, const lf_result_buffers_t *buffers) {
+    return guarded(sink_of(estimator), "lf_get_result", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(buffers, "buffers");
+        check_struct_size(buffers, buffers->struct_size, sizeof(lf_result_buffers_t), "buffers");
+        const Result &r = ready_result(estimator);
+        const lf_result_buffers_t &b = *buffers;
+        check_buffer_size(b.width, b.height, r);
+        check_plane(b.u, b.width, sizeof(float), "u");
+        check_plane(b.v, b.width, sizeof(float), "v");
+        check_plane(b.d0, b.width, sizeof(float), "d0");
+        check_plane(b.d1, b.width, sizeof(float), "d1");
+        check_plane(b.valid, b.width, 1, "valid");
+        check_plane(b.confidence, b.width, sizeof(float), "confidence");
+        copy_plane(r.field.u, b.u);
+        copy_plane(r.field.v, b.v);
+        copy_plane(r.field.d0, b.d0);
+        copy_plane(r.field.d1, b.d1);
+        copy_plane(r.field.valid, b.valid);
+        copy_plane(r.field.confidence, b.confidence);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_result_views(lf_estimator_t *estimator, lf_result_views_t *views) {
+    return guarded(sink_of(estimator), "lf_get_result_views", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(views, "views");
+        check_struct_size(views, views->struct_size, sizeof(lf_result_views_t), "views");
+        const Result &r = ready_result(estimator);
+        lf_result_views_t out;
+        std::memset(&out, 0, sizeof out);
+        out.width = static_cast<uint32_t>(r.field.u.cols);
+        out.height = static_cast<uint32_t>(r.field.u.rows);
+        out.u = view_of(r.field.u);
+        out.v = view_of(r.field.v);
+        out.d0 = view_of(r.field.d0);
+        out.d1 = view_of(r.field.d1);
+        out.valid = view_of(r.field.valid);
+        out.confidence = view_of(r.field.confidence);
+        write_struct(views, out);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buffers_t *buffers) {
+    return guarded(sink_of(estimator), "lf_get_points3d", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(buffers, "buffers");
+        check_struct_size(buffers, buffers->struct_size, sizeof(lf_points3d_buffers_t), "buffers");
+        const Result &r = ready_result(estimator);
+        const lf_points3d_buffers_t &b = *buffers;
+        check_buffer_size(b.width, b.height, r);
+        check_plane(b.points, b.width, 3 * sizeof(float), "points");
+        check_plane(b.motion, b.width, 3 * sizeof(float), "motion");
+        check_plane(b.valid, b.width, 1, "valid");
+
+        const lidarflow::StereoCamera &cam = estimator->calibration.camera;
+        const double fb = cam.fx * cam.baseline;
+        const int w = r.field.u.cols, h = r.field.u.rows;
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        std::vector<float> points(3 * static_cast<size_t>(w)), motion(points.size());
+        std::vector<unsigned char> valid(static_cast<size_t>(w));
+        for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+                const float d0 = r.field.d0(y, x), d1 = r.field.d1(y, x);
+                const bool ok = r.field.valid(y, x) && d0 > 0.0f && d1 > 0.0f;
+                valid[x] = ok ? 1 : 0;
+                float *p = &points[3 * x], *m = &motion[3 * x];
+                if (!ok) {
+                    p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
+                    continue;
+                }
+                const double z0 = fb / d0, z1 = fb / d1;
+                const double x0 = (x - cam.cx) * z0 / cam.fx, y0 = (y - cam.cy) * z0 / cam.fy;
+                const double x1 = (x + r.field.u(y, x) - cam.cx) * z1 / cam.fx;
+                const double y1 = (y + r.field.v(y, x) - cam.cy) * z1 / cam.fy;
+                p[0] = static_cast<float>(x0);
+                p[1] = static_cast<float>(y0);
+                p[2] = static_cast<float>(z0);
+                m[0] = static_cast<float>(x1 - x0);
+                m[1] = static_cast<float>(y1 - y0);
+                m[2] = static_cast<float>(z1 - z0);
+            }
+            auto row = [&](const lf_plane_t &pl) {
+                return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;
+            };
+            if (b.points.data) std::memcpy(row(b.points), points.data(), points.size() * sizeof(float));
+            if (b.motion.data) std::memcpy(row(b.motion), motion.data(), motion.size() * sizeof(float));
+            if (b.valid.data) std::memcpy(row(b.valid), valid.data(), valid.size());
+        }
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+}  // extern "C"

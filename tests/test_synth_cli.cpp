@@ -83,9 +83,21 @@ void test_demo_writes_layout_and_pictures(void **) {
         }
         assert_true(r.output.find(p.string()) != std::string::npos);  // it says what it wrote
     }
-    // It must not pretend to estimate anything.
-    assert_true(r.output.find("GROUND TRUTH") != std::string::npos);
-    assert_true(r.output.find("Nothing is estimated") != std::string::npos);
+    // The estimator ran with and without LiDAR: both results and their pictures are written,
+    // and the score table names both rows.
+    for (const char *run_name : {"lidarflow", "image-only"}) {
+        const fs::path est = dir / "out" / run_name;
+        const DisparityMap d0 = io::read_disparity_png((est / "disp_0" / "000000_10.png").string());
+        assert_int_equal(d0.cols, 640);
+        assert_int_equal(d0.rows, 192);
+        assert_int_equal(cv::countNonZero(d0 >= 0), 640 * 192);  // the final stage is dense
+        for (const char *pic : {"flow", "disp0", "disp0_error", "flow_error"}) {
+            const fs::path p = dir / "out" / "viz" / (std::string("000000_") + run_name + "_" + pic + ".png");
+            assert_int_equal(io::read_image(p.string()).cols, 640);
+        }
+        assert_true(r.output.find(std::string("  ") + run_name + " ") != std::string::npos);
+    }
+    assert_true(r.output.find("hard regions") != std::string::npos);
     assert_true(r.output.find("88 points at t0") != std::string::npos);
     // Default output folder is demo-out in the working directory.
     const Result h = run("demo --help", dir);

@@ -70,11 +70,12 @@ void test_bad_arguments(void **) {
 }
 
 void test_paper_protocol_files(void **) {
-    const std::string cli = cli_or_skip(), root = test::kitti_dir();
-    if (cli.empty() || root.empty()) {
-        if (root.empty()) std::printf("KITTI frames not available (LIDARFLOW_KITTI_DIR): skipped\n");
+    // cmocka's skip() longjmps past destructors: decide before any string holds heap memory.
+    if (test::kitti_dir().empty() || cli_or_skip().empty()) {
+        if (test::kitti_dir().empty()) std::printf("KITTI frames not available (LIDARFLOW_KITTI_DIR): skipped\n");
         skip();
     }
+    const std::string cli = cli_or_skip(), root = test::kitti_dir();
     const fs::path dir = test::scratch_dir("cli_sample_lidar_paper");
     const io::KittiLayout in{root}, out{(dir / "out").string()};
     std::string text;
@@ -110,11 +111,12 @@ void test_paper_protocol_files(void **) {
 }
 
 void test_velodyne_protocol_files(void **) {
-    const std::string cli = cli_or_skip(), root = test::kitti_dir();
-    if (cli.empty() || root.empty()) {
-        if (root.empty()) std::printf("KITTI frames not available (LIDARFLOW_KITTI_DIR): skipped\n");
+    // cmocka's skip() longjmps past destructors: decide before any string holds heap memory.
+    if (test::kitti_dir().empty() || cli_or_skip().empty()) {
+        if (test::kitti_dir().empty()) std::printf("KITTI frames not available (LIDARFLOW_KITTI_DIR): skipped\n");
         skip();
     }
+    const std::string cli = cli_or_skip(), root = test::kitti_dir();
     const fs::path dir = test::scratch_dir("cli_sample_lidar_velodyne");
     const io::KittiLayout in{root}, out{(dir / "out").string()};
     std::string text;

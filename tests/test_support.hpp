@@ -1,6 +1,8 @@
 #pragma once
 // Shared helpers for the C++ cmocka suites. Include this header LAST: cmocka defines macros
 // (fail(), ...) that break standard/OpenCV headers included after it.
+// cmocka's skip() and assertion failures longjmp past C++ destructors: call skip() before any
+// object that owns heap memory is alive in the test function (else LeakSanitizer reports it).
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>

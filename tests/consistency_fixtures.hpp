@@ -60,16 +60,4 @@ inline SparseLidar lidar_at(int w, int h, std::initializer_list<LidarPoint> pts)
     return l;
 }
 
-// The ErrorCode thrown by f(), or fails the test when f does not throw lidarflow::Error.
-template <class F>
-ErrorCode error_code_of(F &&f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        return e.code();
-    }
-    fail_msg("expected a lidarflow::Error");
-    return ErrorCode::Internal;
-}
-
 }  // namespace lidarflow::test

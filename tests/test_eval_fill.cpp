@@ -30,16 +30,6 @@ void expect_row(const DisparityMap &d, int y, const std::vector<float> &want) {
         if (d(y, x) != want[x]) fail_msg("row %d col %d: got %g, want %g", y, x, d(y, x), want[x]);
 }
 
-template <class F>
-ErrorCode code_of(F &&f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        return e.code();
-    }
-    fail_msg("expected a lidarflow::Error");
-    return ErrorCode::Internal;
-}
 
 void interior_hole_takes_background(void **) {
     // Holes between 5 and 8 take 5 (the smaller, farther one); between 8 and 3 take 3.
@@ -130,11 +120,11 @@ void flow_unfilled_rows_are_zero_and_invalid(void **) {
 }
 
 void bad_input_throws(void **) {
-    assert_true(code_of([] { eval::fill_background(DisparityMap()); }) == ErrorCode::InvalidArgument);
-    assert_true(code_of([] { eval::fill_background(FlowField{}); }) == ErrorCode::InvalidArgument);
+    assert_true(test::error_code_of([] { eval::fill_background(DisparityMap()); }) == ErrorCode::InvalidArgument);
+    assert_true(test::error_code_of([] { eval::fill_background(FlowField{}); }) == ErrorCode::InvalidArgument);
     FlowField fl = FlowField::zeros(4, 3);
     fl.valid = cv::Mat1b::zeros(3, 5);
-    assert_true(code_of([&] { eval::fill_background(fl); }) == ErrorCode::SizeMismatch);
+    assert_true(test::error_code_of([&] { eval::fill_background(fl); }) == ErrorCode::SizeMismatch);
 }
 
 }  // namespace

@@ -25,16 +25,6 @@ namespace {
 
 constexpr int W = 10, H = 10;
 
-template <class F>
-ErrorCode code_of(F &&f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        return e.code();
-    }
-    fail_msg("expected a lidarflow::Error");
-    return ErrorCode::Internal;
-}
 
 void expect_near(double got, double want, double tol, const char *what) {
     if (!(std::fabs(got - want) <= tol)) fail_msg("%s: got %.10g, want %.10g", what, got, want);
@@ -222,7 +212,7 @@ void scene_flow_field_overload(void **) {
     expect_counts(s.dense.occ.fl, 100, 99, 99, 0, "fl");
     expect_counts(s.dense.occ.sf, 100, 99, 98, 1, "sf");
     sf.d1(3, 3) = std::numeric_limits<float>::quiet_NaN();
-    assert_true(code_of([&] { eval::evaluate_frame(gt, sf, {}); }) == ErrorCode::InvalidArgument);
+    assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, sf, {}); }) == ErrorCode::InvalidArgument);
 }
 
 void table_two_regions(void **) {
@@ -252,12 +242,12 @@ void table_two_regions(void **) {
     // A bigger window covers more pixels; an even window is rejected.
     const eval::FrameScore s5 = eval::evaluate_frame(gt, e, {FillMode::Filled, 5}, &seeds);
     expect_counts(s5.window.occ.sf, 25 + 9, 25 + 9, 25 + 9, 3, "window 5");
-    assert_true(code_of([&] { eval::evaluate_frame(gt, e, {FillMode::Filled, 4}, &seeds); }) ==
+    assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {FillMode::Filled, 4}, &seeds); }) ==
                 ErrorCode::InvalidArgument);
-    assert_true(code_of([&] { eval::evaluate_frame(gt, e, {FillMode::Filled, 0}, &seeds); }) ==
+    assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {FillMode::Filled, 0}, &seeds); }) ==
                 ErrorCode::InvalidArgument);
     const DisparityMap small(19, 20, 1.0f);
-    assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}, &small); }) == ErrorCode::SizeMismatch);
+    assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}, &small); }) == ErrorCode::SizeMismatch);
 }
 
 void pooled_versus_mean_over_frames(void **) {
@@ -283,7 +273,7 @@ void pooled_versus_mean_over_frames(void **) {
     assert_string_equal(s.pooled.id.c_str(), "pooled");
     assert_false(s.pooled.dense.has_noc);
     assert_false(s.pooled.has_lidar);
-    assert_true(code_of([] { eval::summarize({}); }) == ErrorCode::InvalidArgument);
+    assert_true(test::error_code_of([] { eval::summarize({}); }) == ErrorCode::InvalidArgument);
 }
 
 void undefined_rates_are_nan(void **) {
@@ -304,39 +294,39 @@ void bad_inputs_throw(void **) {
     {
         eval::Estimate e = copy_of(gt.occ);
         e.d0(2, 3) = nan;
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
         e.d0(2, 3) = -inf;  // even a "negative" infinity is rejected, not taken as a hole
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
     }
     {
         eval::Estimate e = copy_of(gt.occ);
         e.flow.v(1, 1) = inf;
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
     }
     {
         eval::Estimate e = copy_of(gt.occ);
         e.d1 = DisparityMap(H, W + 1, 1.0f);
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::SizeMismatch);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::SizeMismatch);
     }
     {
         eval::Estimate e = copy_of(gt.occ);
         e.flow.valid = cv::Mat1b::ones(H - 1, W);
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::SizeMismatch);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::SizeMismatch);
         e = copy_of(gt.occ);
         e.d0 = DisparityMap();
-        assert_true(code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, e, {}); }) == ErrorCode::InvalidArgument);
     }
     {
         eval::FrameGroundTruth g = uniform_gt();
         g.has_noc = true;  // noc announced but missing
-        assert_true(code_of([&] { eval::evaluate_frame(g, copy_of(gt.occ), {}); }) == ErrorCode::InvalidArgument);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(g, copy_of(gt.occ), {}); }) == ErrorCode::InvalidArgument);
         g.noc = {DisparityMap(H + 1, W, 1.0f), g.occ.d1, g.occ.flow};
-        assert_true(code_of([&] { eval::evaluate_frame(g, copy_of(gt.occ), {}); }) == ErrorCode::SizeMismatch);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(g, copy_of(gt.occ), {}); }) == ErrorCode::SizeMismatch);
     }
     {
         SceneFlowField sf = SceneFlowField::zeros(W, H);
         sf.valid = cv::Mat1b::ones(H, W + 2);
-        assert_true(code_of([&] { eval::evaluate_frame(gt, sf, {}); }) == ErrorCode::SizeMismatch);
+        assert_true(test::error_code_of([&] { eval::evaluate_frame(gt, sf, {}); }) == ErrorCode::SizeMismatch);
     }
 }
 

@@ -22,19 +22,11 @@ extern "C" {
 #include "test_support.hpp"
 
 using namespace lidarflow;
+using test::throws_code;
 namespace fs = std::filesystem;
 
 namespace {
 
-bool throws_code(ErrorCode code, const std::function<void()> &f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        if (e.code() != code) std::printf("unexpected error code %d: %s\n", static_cast<int>(e.code()), e.what());
-        return e.code() == code;
-    }
-    return false;
-}
 
 bool same_raw(const cv::Mat &a, const cv::Mat &b) {
     if (a.empty() || b.empty() || a.size() != b.size() || a.type() != b.type()) return false;

@@ -30,18 +30,10 @@ extern "C" {
 #include "test_support.hpp"
 
 using namespace lidarflow;
+using test::throws_code;
 
 namespace {
 
-bool throws_code(ErrorCode code, const std::function<void()> &f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        if (e.code() != code) std::printf("unexpected error code %d: %s\n", static_cast<int>(e.code()), e.what());
-        return e.code() == code;
-    }
-    return false;
-}
 
 StereoCamera test_camera() {
     StereoCamera c;

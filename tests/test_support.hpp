@@ -6,7 +6,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
+
+#include "core/error.hpp"
 
 #include <setjmp.h>
 #include <stdarg.h>
@@ -18,6 +21,29 @@ extern "C" {
 }
 
 namespace lidarflow::test {
+
+// True when f throws lidarflow::Error with exactly `code`; prints any other code it sees.
+inline bool throws_code(ErrorCode code, const std::function<void()> &f) {
+    try {
+        f();
+    } catch (const Error &e) {
+        if (e.code() != code) std::printf("unexpected error code %d: %s\n", static_cast<int>(e.code()), e.what());
+        return e.code() == code;
+    }
+    return false;
+}
+
+// The ErrorCode thrown by f(); fails the test when f does not throw lidarflow::Error.
+template <class F>
+ErrorCode error_code_of(F &&f) {
+    try {
+        f();
+    } catch (const Error &e) {
+        return e.code();
+    }
+    fail_msg("expected a lidarflow::Error");
+    return ErrorCode::Internal;
+}
 
 // Path of the shared KITTI training folder, or "" when LIDARFLOW_KITTI_DIR is unset/missing.
 inline std::string kitti_dir() {

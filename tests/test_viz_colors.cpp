@@ -20,6 +20,7 @@ extern "C" {
 #include "test_support.hpp"
 
 using namespace lidarflow;
+using test::throws_code;
 
 namespace {
 
@@ -37,15 +38,6 @@ FlowField one_row(std::initializer_list<std::pair<float, float>> uv) {
 
 bool near(const cv::Vec3b &a, int b, int g, int r, int tol = 1) {
     return std::abs(a[0] - b) <= tol && std::abs(a[1] - g) <= tol && std::abs(a[2] - r) <= tol;
-}
-
-bool throws_code(ErrorCode code, const std::function<void()> &f) {
-    try {
-        f();
-    } catch (const Error &e) {
-        return e.code() == code;
-    }
-    return false;
 }
 
 // KITTI style: hue from direction, full saturation from max/8 on, white at rest, black invalid.

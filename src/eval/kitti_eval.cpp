@@ -50,15 +50,7 @@ DisparityMap load_lidar_seeds(const std::string &lidar_root, const std::string &
 }
 
 std::vector<std::string> submission_ids(const std::string &est_root) {
-    const fs::path dir = fs::path(est_root) / "disp_0";
-    require(fs::is_directory(dir), ErrorCode::Io, "no disp_0/ folder in " + est_root);
-    std::vector<std::string> ids;
-    for (const auto &e : fs::directory_iterator(dir)) {
-        const std::string name = e.path().filename().string();
-        if (name.size() == 13 && name.compare(6, 7, "_10.png") == 0) ids.push_back(name.substr(0, 6));
-    }
-    std::sort(ids.begin(), ids.end());
-    return ids;
+    return io::KittiLayout{est_root}.ids_in("disp_0");
 }
 
 KittiEvaluation evaluate_kitti(const std::string &kitti_root, const std::string &est_root,

@@ -7,10 +7,10 @@
 
 namespace lidarflow::io {
 
-std::vector<std::string> KittiLayout::frame_ids() const {
+std::vector<std::string> KittiLayout::ids_in(const std::string &folder) const {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::path(root) / "image_2";
-    require(fs::is_directory(dir), ErrorCode::Io, "no image_2/ folder in " + root);
+    const fs::path dir = fs::path(root) / folder;
+    require(fs::is_directory(dir), ErrorCode::Io, "no " + folder + "/ folder in " + root);
     std::vector<std::string> ids;
     for (const auto &e : fs::directory_iterator(dir)) {
         const std::string name = e.path().filename().string();

@@ -31,7 +31,9 @@ struct KittiLayout {
     std::string lidar(const std::string &id, int t) const { return file(t == 0 ? "lidar_0" : "lidar_1", id, 0); }
 
     // Every id with a left t0 image, sorted.
-    std::vector<std::string> frame_ids() const;
+    std::vector<std::string> frame_ids() const { return ids_in("image_2"); }
+    // Every id with an NNNNNN_10.png in root/folder, sorted; Io when the folder is missing.
+    std::vector<std::string> ids_in(const std::string &folder) const;
 
     static std::string file_in(const std::string &root, const std::string &folder, const std::string &id, int t) {
         return root + "/" + folder + "/" + id + (t == 0 ? "_10.png" : "_11.png");

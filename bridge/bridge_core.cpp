@@ -1,0 +1,527 @@
+#include "bridge_core.hpp"
+
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cinttypes>
+#include <cstdarg>
+#include <cstdlib>
+#include <cstring>
+
+#include "lidarflow_status_t.h"
+
+namespace lidarflow::bridge {
+namespace {
+
+bool same_calibration(const lf_calibration_t &a, const lf_calibration_t &b) {
+    return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.baseline == b.baseline;
+}
+
+bool parse_int(const std::string &s, int64_t *out) {
+    if (s.empty()) return false;
+    char *end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(s.c_str(), &end, 10);
+    if (errno != 0 || *end != '\0') return false;
+    *out = v;
+    return true;
+}
+
+bool parse_double(const std::string &s, double *out) {
+    if (s.empty()) return false;
+    char *end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (*end != '\0') return false;
+    *out = v;
+    return true;
+}
+
+int64_t wall_utime() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+}  // namespace
+
+double monotonic_seconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct Bridge::Frame {
+    StereoMessage stereo;
+    lf_calibration_t calibration{};
+    double received_seconds = 0;
+};
+
+Bridge::Bridge(const BridgeConfig &config, lcm_t *lcm) : config_(config), lcm_(lcm) {}
+
+std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, std::string *error) {
+    if (!lcm) {
+        *error = "no LCM instance";
+        return nullptr;
+    }
+    if (config.queue_capacity < 1 || config.lidar_buffer < 1 || config.lidar_wait_ms < 0 ||
+        config.lidar_tolerance_us < 0 || config.step < 1 || config.step > 16) {
+        *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16";
+        return nullptr;
+    }
+    std::unique_ptr<Bridge> b(new Bridge(config, lcm));
+    if (lf_options_create(&b->options_) != LF_OK) {
+        *error = std::string("estimator options: ") + lf_last_error(nullptr);
+        return nullptr;
+    }
+    for (const auto &[key, value] : config.options) {
+        int64_t i = 0;
+        double d = 0;
+        int32_t st = LF_ERR_INVALID_ARGUMENT;
+        if (parse_int(value, &i)) st = lf_options_set_int(b->options_, key.c_str(), i);
+        if (st != LF_OK && parse_double(value, &d)) st = lf_options_set_float(b->options_, key.c_str(), d);
+        if (st != LF_OK) st = lf_options_set_string(b->options_, key.c_str(), value.c_str());
+        if (st != LF_OK) {
+            *error = "estimator option " + key + "=" + value + ": " + lf_options_last_error(b->options_);
+            return nullptr;
+        }
+    }
+    if (config.fixed_calibration) {
+        // Fail at start-up, not at the first frame, when the C ABI rejects the options or camera.
+        lf_estimator_t *probe = nullptr;
+        if (lf_create(b->options_, &config.calibration, &probe) != LF_OK) {
+            *error = std::string("estimator: ") + lf_last_error(nullptr);
+            return nullptr;
+        }
+        lf_destroy(probe);
+    }
+    b->wake_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (b->wake_fd_ < 0) {
+        *error = std::string("eventfd: ") + std::strerror(errno);
+        return nullptr;
+    }
+    const std::pair<const std::string *, lcm_msg_handler_t> subs[] = {
+        {&config.stereo_channel, &Bridge::on_stereo},
+        {&config.lidar_channel, &Bridge::on_lidar},
+        {&config.calibration_channel, &Bridge::on_calibration}};
+    for (const auto &[channel, handler] : subs) {
+        lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
+        if (!s) {
+            *error = "cannot subscribe to " + *channel;
+            return nullptr;
+        }
+        b->subscriptions_.push_back(s);
+    }
+    b->counters_.queue_capacity = config.queue_capacity;
+    b->start_seconds_ = monotonic_seconds();
+    b->next_status_ = b->start_seconds_ + config.status_period_s;
+    b->worker_ = std::thread(&Bridge::worker_loop, b.get());
+    return b;
+}
+
+Bridge::~Bridge() {
+    stop();
+    for (lcm_subscription_t *s : subscriptions_) lcm_unsubscribe(lcm_, s);
+    if (wake_fd_ >= 0) close(wake_fd_);
+    lf_destroy(estimator_);
+    lf_options_destroy(options_);
+}
+
+void Bridge::log(const char *format, ...) {
+    if (!config_.log) return;
+    char line[1024];
+    va_list ap;
+    va_start(ap, format);
+    std::vsnprintf(line, sizeof line, format, ap);
+    va_end(ap);
+    std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+    std::fflush(config_.log);
+}
+
+void Bridge::wake() {
+    const uint64_t one = 1;
+    // A full counter (never in practice) still leaves the fd readable, which is all we need.
+    if (write(wake_fd_, &one, sizeof one) < 0 && errno != EAGAIN) log("eventfd write failed: %s", std::strerror(errno));
+}
+
+void Bridge::on_stereo(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_stereo(rbuf);
+}
+void Bridge::on_lidar(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_lidar(rbuf);
+}
+void Bridge::on_calibration(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_calibration(rbuf);
+}
+
+void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
+    auto frame = std::make_unique<Frame>();
+    const std::string err = decode_stereo(rbuf->data, rbuf->data_size, frame->stereo);
+    frame->received_seconds = monotonic_seconds();
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.stereo_received;
+    if (!err.empty()) {
+        ++counters_.dropped_malformed;
+        counters_.last_error = "stereo: " + err;
+        log("malformed message on %s (%u bytes), dropped: %s", config_.stereo_channel.c_str(), rbuf->data_size,
+            err.c_str());
+        return;
+    }
+    const lidarflow_stereo_t &m = frame->stereo.msg();
+    if (config_.fixed_calibration) {
+        frame->calibration = config_.calibration;
+    } else if (!have_calibration_) {
+        ++counters_.dropped_no_calibration;
+        if (!warned_no_calibration_)
+            log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
+                config_.calibration_channel.c_str());
+        warned_no_calibration_ = true;
+        return;
+    } else {
+        if ((calibration_width_ && calibration_width_ != m.width) ||
+            (calibration_height_ && calibration_height_ != m.height)) {
+            ++counters_.dropped_calibration_mismatch;
+            log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
+                m.height, calibration_width_, calibration_height_);
+            return;
+        }
+        frame->calibration = channel_calibration_;
+    }
+    if (have_last_ && m.sequence == last_sequence_ && m.utime <= last_utime_) {
+        ++counters_.dropped_out_of_order;
+        log("stereo frame %" PRId64 " is not after the previous one (%" PRId64 "): dropped as out of order", m.utime,
+            last_utime_);
+        return;
+    }
+    have_last_ = true;
+    last_sequence_ = m.sequence;
+    last_utime_ = m.utime;
+    if (static_cast<int>(queue_.size()) >= config_.queue_capacity) {
+        queue_.pop_front();
+        ++counters_.dropped_stale;
+    }
+    queue_.push_back(std::move(frame));
+    counters_.queue_depth = static_cast<int32_t>(queue_.size());
+    counters_.max_queue_depth = std::max(counters_.max_queue_depth, counters_.queue_depth);
+    cv_.notify_all();
+}
+
+void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
+    auto sweep = std::make_shared<LidarSweep>();
+    const std::string err = decode_lidar(rbuf->data, rbuf->data_size, *sweep);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.lidar_received;
+    if (!err.empty()) {
+        ++counters_.lidar_malformed;
+        counters_.last_error = "lidar: " + err;
+        log("malformed message on %s (%u bytes), ignored: %s", config_.lidar_channel.c_str(), rbuf->data_size,
+            err.c_str());
+        return;
+    }
+    lidar_.push_back(std::move(sweep));
+    while (static_cast<int>(lidar_.size()) > config_.lidar_buffer) lidar_.pop_front();
+    counters_.lidar_buffered = static_cast<int32_t>(lidar_.size());
+    cv_.notify_all();
+}
+
+void Bridge::handle_calibration(const lcm_recv_buf_t *rbuf) {
+    lf_calibration_t cal;
+    int32_t w = 0, h = 0;
+    const std::string err = decode_calibration(rbuf->data, rbuf->data_size, &cal, &w, &h);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.calibration_received;
+    if (!err.empty()) {
+        ++counters_.calibration_malformed;
+        counters_.last_error = "calibration: " + err;
+        log("malformed message on %s (%u bytes), ignored: %s", config_.calibration_channel.c_str(),
+            rbuf->data_size, err.c_str());
+        return;
+    }
+    if (config_.fixed_calibration) return;  // --calib wins
+    if (!have_calibration_ || !same_calibration(cal, channel_calibration_) || w != calibration_width_ ||
+        h != calibration_height_)
+        log("calibration: fx %.3f fy %.3f cx %.3f cy %.3f baseline %.5f m, images %dx%d%s", cal.fx, cal.fy, cal.cx,
+            cal.cy, cal.baseline, w, h, w ? "" : " (any size)");
+    have_calibration_ = true;
+    channel_calibration_ = cal;
+    calibration_width_ = w;
+    calibration_height_ = h;
+}
+
+std::shared_ptr<const LidarSweep> Bridge::find_lidar_locked(int64_t utime) const {
+    std::shared_ptr<const LidarSweep> best;
+    int64_t best_dt = 0;
+    for (const auto &s : lidar_) {
+        const int64_t dt = s->utime > utime ? s->utime - utime : utime - s->utime;
+        if (dt <= config_.lidar_tolerance_us && (!best || dt < best_dt)) {
+            best = s;
+            best_dt = dt;
+        }
+    }
+    return best;
+}
+
+void Bridge::worker_loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+        cv_.wait(lock, [this] { return stop_worker_ || !queue_.empty(); });
+        if (stop_worker_) return;
+        std::unique_ptr<Frame> frame = std::move(queue_.front());
+        queue_.pop_front();
+        counters_.queue_depth = static_cast<int32_t>(queue_.size());
+        counters_.busy = true;
+        // A sweep may arrive after its frame; wait a little for it, but only when a LiDAR
+        // stream exists at all (image-only setups would pay the wait on every frame).
+        const int64_t utime = frame->stereo.msg().utime;
+        std::shared_ptr<const LidarSweep> sweep = find_lidar_locked(utime);
+        const auto deadline = std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double>(frame->received_seconds + config_.lidar_wait_ms / 1000.0)));
+        while (!sweep && !stop_worker_ && counters_.lidar_received > 0 &&
+               cv_.wait_until(lock, deadline) != std::cv_status::timeout)
+            sweep = find_lidar_locked(utime);
+        if (!sweep) sweep = find_lidar_locked(utime);
+        if (stop_worker_) {
+            ++counters_.dropped_shutdown;
+            counters_.busy = false;
+            return;
+        }
+        lock.unlock();
+        process(*frame, sweep);
+        frame.reset();
+        lock.lock();
+        counters_.busy = false;
+        wake();
+    }
+}
+
+void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
+    const lidarflow_stereo_t &m = frame.stereo.msg();
+    auto drop = [&](const std::string &why) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.dropped_estimator_error;
+        counters_.last_error = why;
+        log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
+    };
+    if (!estimator_ || !same_calibration(estimator_calibration_, frame.calibration)) {
+        lf_destroy(estimator_);
+        estimator_ = nullptr;
+        estimator_has_frame_ = false;
+        if (lf_create(options_, &frame.calibration, &estimator_) != LF_OK) {
+            drop(std::string("estimator creation failed: ") + lf_last_error(nullptr));
+            return;
+        }
+        estimator_calibration_ = frame.calibration;
+    }
+    const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
+    // A new sequence or another image size / format starts over: never pair across a cut.
+    if (estimator_has_frame_ && (m.sequence != prev_sequence_ || left.width != prev_width_ ||
+                                 left.height != prev_height_ || left.format != prev_format_)) {
+        lf_reset(estimator_);
+        estimator_has_frame_ = false;
+    }
+    lf_lidar_t lidar{};
+    if (sweep) lidar = sweep->view();
+    bool with_lidar = static_cast<bool>(sweep);
+    int32_t st = lf_push_frame(estimator_, m.utime, &left, &right, with_lidar ? &lidar : nullptr);
+    if (st != LF_OK && with_lidar) {
+        const std::string why = lf_last_error(estimator_);
+        if (lf_push_frame(estimator_, m.utime, &left, &right, nullptr) == LF_OK) {
+            st = LF_OK;
+            with_lidar = false;
+            std::lock_guard<std::mutex> lock(mutex_);
+            ++counters_.lidar_rejected;
+            counters_.last_error = "lidar: " + why;
+            log("LiDAR sweep %" PRId64 " rejected by the estimator (%s): frame %" PRId64 " processed without LiDAR",
+                sweep->utime, why.c_str(), m.utime);
+        }
+    }
+    if (st != LF_OK) {
+        drop(lf_last_error(estimator_));
+        return;
+    }
+    const bool had_previous = estimator_has_frame_;
+    const bool previous_lidar = prev_had_lidar_;
+    const int64_t previous_lidar_utime = prev_lidar_utime_;
+    estimator_has_frame_ = true;
+    prev_sequence_ = m.sequence;
+    prev_utime_ = m.utime;
+    prev_width_ = left.width;
+    prev_height_ = left.height;
+    prev_format_ = left.format;
+    prev_had_lidar_ = with_lidar;
+    prev_lidar_utime_ = with_lidar ? sweep->utime : 0;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.stereo_processed;
+        counters_.frames_with_lidar += with_lidar ? 1 : 0;
+    }
+    if (!had_previous || !lf_has_result(estimator_)) return;
+
+    lf_result_info_t info;
+    lf_result_info_init(&info);
+    lf_result_views_t views;
+    lf_result_views_init(&views);
+    FlowMessage flow;
+    std::string err;
+    if (lf_get_result_info(estimator_, &info) != LF_OK || lf_get_result_views(estimator_, &views) != LF_OK) {
+        err = lf_last_error(estimator_);
+    } else if (encode_flow(views, config_.encoding, config_.step, flow, &err)) {
+        lidarflow_scene_flow_t &h = flow.header;
+        h.utime = info.t1_us;
+        h.utime0 = info.t0_us;
+        h.sequence = m.sequence;
+        h.lidar_flags = static_cast<int8_t>((previous_lidar ? LIDARFLOW_SCENE_FLOW_T_LIDAR_T0 : 0) |
+                                            (with_lidar ? LIDARFLOW_SCENE_FLOW_T_LIDAR_T1 : 0));
+        h.lidar_utime0 = previous_lidar ? previous_lidar_utime : 0;
+        h.lidar_utime1 = with_lidar ? sweep->utime : 0;
+        h.last_stage = static_cast<int8_t>(info.last_stage);
+        h.compute_seconds = static_cast<float>(info.total_seconds);
+        lidarflow_scene_flow_t msg = flow.message();
+        std::vector<uint8_t> bytes = encode_scene_flow(msg);
+        if (bytes.empty()) {
+            err = "encoding the scene flow failed";
+        } else {
+            std::lock_guard<std::mutex> lock(mutex_);
+            outbox_.push_back({std::move(bytes), frame.received_seconds, info.total_seconds});
+            return;
+        }
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    counters_.last_error = "result: " + err;
+    log("result of frame %" PRId64 " not published: %s", m.utime, err.c_str());
+}
+
+void Bridge::flush_outbox() {
+    std::vector<Outgoing> out;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        out.swap(outbox_);
+    }
+    for (const Outgoing &o : out) {
+        const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
+                                   static_cast<unsigned>(o.bytes.size()));
+        const double latency_ms = 1000.0 * (monotonic_seconds() - o.received_seconds);
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (rc != 0) {
+            counters_.last_error = "publishing on " + config_.flow_channel + " failed";
+            log("publishing %zu bytes on %s failed", o.bytes.size(), config_.flow_channel.c_str());
+            continue;
+        }
+        ++counters_.results_published;
+        const double n = static_cast<double>(counters_.results_published);
+        latency_sum_ms_ += latency_ms;
+        compute_sum_ms_ += 1000.0 * o.compute_seconds;
+        counters_.latency_last_ms = latency_ms;
+        counters_.latency_mean_ms = latency_sum_ms_ / n;
+        counters_.latency_max_ms = std::max(counters_.latency_max_ms, latency_ms);
+        counters_.compute_last_ms = 1000.0 * o.compute_seconds;
+        counters_.compute_mean_ms = compute_sum_ms_ / n;
+        if (config_.verbose)
+            log("published scene flow (%zu bytes), latency %.1f ms, estimator %.1f ms", o.bytes.size(), latency_ms,
+                1000.0 * o.compute_seconds);
+    }
+}
+
+void Bridge::publish_status() {
+    const Counters c = counters();
+    lidarflow_status_t s;
+    std::memset(&s, 0, sizeof s);
+    s.utime = wall_utime();
+    s.uptime_seconds = monotonic_seconds() - start_seconds_;
+    s.stereo_received = c.stereo_received;
+    s.stereo_processed = c.stereo_processed;
+    s.results_published = c.results_published;
+    s.frames_with_lidar = c.frames_with_lidar;
+    s.dropped_stale = c.dropped_stale;
+    s.dropped_out_of_order = c.dropped_out_of_order;
+    s.dropped_no_calibration = c.dropped_no_calibration;
+    s.dropped_calibration_mismatch = c.dropped_calibration_mismatch;
+    s.dropped_malformed = c.dropped_malformed;
+    s.dropped_estimator_error = c.dropped_estimator_error;
+    s.dropped_shutdown = c.dropped_shutdown;
+    s.lidar_received = c.lidar_received;
+    s.lidar_malformed = c.lidar_malformed;
+    s.lidar_rejected = c.lidar_rejected;
+    s.calibration_received = c.calibration_received;
+    s.calibration_malformed = c.calibration_malformed;
+    s.queue_depth = c.queue_depth;
+    s.queue_capacity = c.queue_capacity;
+    s.busy = c.busy ? 1 : 0;
+    s.latency_last_ms = static_cast<float>(c.latency_last_ms);
+    s.latency_mean_ms = static_cast<float>(c.latency_mean_ms);
+    s.latency_max_ms = static_cast<float>(c.latency_max_ms);
+    s.compute_last_ms = static_cast<float>(c.compute_last_ms);
+    s.compute_mean_ms = static_cast<float>(c.compute_mean_ms);
+    std::string last_error = c.last_error;
+    s.last_error = &last_error[0];
+    if (lidarflow_status_t_publish(lcm_, config_.status_channel.c_str(), &s) != 0) {
+        log("publishing the status on %s failed", config_.status_channel.c_str());
+        return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.status_published;
+}
+
+int Bridge::run_once(int timeout_ms) {
+    if (stopped_) return 0;
+    const double now = monotonic_seconds();
+    int wait = std::max(timeout_ms, 0);
+    if (config_.status_period_s > 0)
+        wait = std::min(wait, std::max(0, static_cast<int>(1000.0 * (next_status_ - now)) + 1));
+    pollfd fds[2] = {{lcm_get_fileno(lcm_), POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    int ret = 0;
+    if (poll(fds, 2, wait) > 0) {
+        if (fds[1].revents & POLLIN) {
+            uint64_t v;
+            if (read(wake_fd_, &v, sizeof v) < 0 && errno != EAGAIN) log("eventfd read failed: %s", std::strerror(errno));
+        }
+        // Drain what is there (bounded, so results and status still go out under a flood).
+        for (int n = 0; n < 256 && (fds[0].revents & POLLIN); ++n) {
+            if (lcm_handle(lcm_) != 0) {
+                ret = -1;
+                break;
+            }
+            pollfd more = {lcm_get_fileno(lcm_), POLLIN, 0};
+            if (poll(&more, 1, 0) <= 0) break;
+        }
+    }
+    flush_outbox();
+    if (config_.status_period_s > 0 && monotonic_seconds() >= next_status_) {
+        publish_status();
+        while (next_status_ <= monotonic_seconds()) next_status_ += config_.status_period_s;
+    }
+    return ret;
+}
+
+void Bridge::stop() {
+    if (stopped_) return;
+    stopped_ = true;
+    if (!worker_.joinable()) return;  // create() failed before starting: nothing ran, nothing to report
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_worker_ = true;
+    }
+    cv_.notify_all();
+    if (worker_.joinable()) worker_.join();
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
+        queue_.clear();
+        counters_.queue_depth = 0;
+        counters_.busy = false;
+    }
+    flush_outbox();
+    publish_status();
+}
+
+Counters Bridge::counters() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return counters_;
+}
+
+bool Bridge::idle() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return queue_.empty() && !counters_.busy && outbox_.empty();
+}
+
+}  // namespace lidarflow::bridge

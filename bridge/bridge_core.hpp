@@ -1,0 +1,163 @@
+#pragma once
+// The bridge between LCM and the lidarflow estimator, as a library so that tests drive it
+// in-process (memq://) exactly as lidarflow-lcm-bridge does over the network.
+//
+// Threads. The thread that calls run_once() owns the lcm_t: it receives (LCM handlers run
+// there) and publishes. Each stereo frame is queued for one worker thread that owns the
+// estimator; the queue is a bounded latest-wins queue, so receiving never waits for the
+// estimator: when it is full the oldest waiting frame is dropped ("stale"). The worker hands
+// encoded results back through an outbox and wakes run_once() with an eventfd, so lcm_t is
+// only ever used from one thread.
+//
+// Accounting. Every message on the stereo channel is counted once as received and ends as
+// processed (given to the estimator) or dropped for one reason (Counters); in between it is
+// queued or being worked on.
+#include <lcm/lcm.h>
+
+#include <condition_variable>
+#include <cstdint>
+#include <cstdio>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "lidarflow/lidarflow.h"
+#include "wire.hpp"
+
+namespace lidarflow::bridge {
+
+struct BridgeConfig {
+    std::string stereo_channel = "LIDARFLOW_STEREO";
+    std::string lidar_channel = "LIDARFLOW_LIDAR";
+    std::string calibration_channel = "LIDARFLOW_CALIB";
+    std::string flow_channel = "LIDARFLOW_FLOW";
+    std::string status_channel = "LIDARFLOW_STATUS";
+    // A fixed calibration (--calib); when set, calibration messages are counted but not used.
+    bool fixed_calibration = false;
+    lf_calibration_t calibration{};
+    int64_t lidar_tolerance_us = 20000;  // |t_lidar - t_stereo| for pairing
+    int lidar_wait_ms = 30;              // how long a frame waits for a late LiDAR sweep
+    int lidar_buffer = 8;                // LiDAR sweeps kept for pairing (oldest dropped)
+    int queue_capacity = 1;              // frames waiting for the worker (latest wins)
+    FlowEncoding encoding = FlowEncoding::Int16;
+    int step = 1;                        // flow subsampling
+    double status_period_s = 1.0;        // <= 0: status only at shutdown
+    // Estimator options "key" -> "value", applied in order with lf_options_set_int (if the value
+    // is an integer), then lf_options_set_float (a number), then lf_options_set_string.
+    std::vector<std::pair<std::string, std::string>> options;
+    FILE *log = stderr;                  // one line per event worth telling; NULL = quiet
+    bool verbose = false;                // also a line per published result
+};
+
+// Snapshot of the counters (status_t has the same meaning).
+struct Counters {
+    int64_t stereo_received = 0, stereo_processed = 0, results_published = 0, frames_with_lidar = 0;
+    int64_t dropped_stale = 0, dropped_out_of_order = 0, dropped_no_calibration = 0,
+            dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
+            dropped_shutdown = 0;
+    int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
+    int64_t calibration_received = 0, calibration_malformed = 0;
+    int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
+    int32_t lidar_buffered = 0;
+    bool busy = false;
+    double latency_last_ms = 0, latency_mean_ms = 0, latency_max_ms = 0;
+    double compute_last_ms = 0, compute_mean_ms = 0;
+    int64_t status_published = 0;
+    std::string last_error;
+
+    int64_t dropped() const {
+        return dropped_stale + dropped_out_of_order + dropped_no_calibration + dropped_calibration_mismatch +
+               dropped_malformed + dropped_estimator_error + dropped_shutdown;
+    }
+};
+
+class Bridge {
+public:
+    // Subscribes to the input channels of `lcm` (borrowed; must outlive the bridge) and starts
+    // the worker. Returns nullptr and sets *error when the estimator options are invalid, the
+    // fixed calibration is rejected by the C ABI, or a subscription or the eventfd fails.
+    static std::unique_ptr<Bridge> create(const BridgeConfig &config, lcm_t *lcm, std::string *error);
+    ~Bridge();  // stop(), then unsubscribes
+    Bridge(const Bridge &) = delete;
+    Bridge &operator=(const Bridge &) = delete;
+
+    // Waits up to timeout_ms for LCM input or worker results, handles what arrived, publishes
+    // finished results and, when due, the status. Returns -1 when lcm_handle failed, else 0.
+    // Call from one thread only (the one that owns the lcm_t).
+    int run_once(int timeout_ms);
+
+    // Stops the worker (it finishes the frame in progress), counts still-queued frames as
+    // dropped_shutdown, publishes the remaining results and a final status. Idempotent; the
+    // run_once() thread only.
+    void stop();
+
+    Counters counters() const;
+    // True when no frame is queued or being worked on and no result awaits publication.
+    bool idle() const;
+
+private:
+    struct Frame;
+    Bridge(const BridgeConfig &config, lcm_t *lcm);
+    static void on_stereo(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_lidar(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_calibration(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void handle_stereo(const lcm_recv_buf_t *rbuf);
+    void handle_lidar(const lcm_recv_buf_t *rbuf);
+    void handle_calibration(const lcm_recv_buf_t *rbuf);
+    void worker_loop();
+    void process(Frame &frame, std::shared_ptr<const LidarSweep> sweep);
+    std::shared_ptr<const LidarSweep> find_lidar_locked(int64_t utime) const;
+    void flush_outbox();
+    void publish_status();
+    void log(const char *format, ...) __attribute__((format(printf, 2, 3)));
+    void wake();
+
+    BridgeConfig config_;
+    lcm_t *lcm_;
+    lf_options_t *options_ = nullptr;
+    std::vector<lcm_subscription_t *> subscriptions_;
+    int wake_fd_ = -1;
+    double start_seconds_ = 0, next_status_ = 0;
+    bool stopped_ = false;
+
+    mutable std::mutex mutex_;        // everything below
+    std::condition_variable cv_;      // queue, LiDAR arrivals, stop
+    std::deque<std::unique_ptr<Frame>> queue_;
+    std::deque<std::shared_ptr<const LidarSweep>> lidar_;
+    bool have_calibration_ = false;   // from the channel
+    lf_calibration_t channel_calibration_{};
+    int32_t calibration_width_ = 0, calibration_height_ = 0;
+    bool warned_no_calibration_ = false;
+    bool have_last_ = false;          // the last accepted frame, for the order check
+    int32_t last_sequence_ = 0;
+    int64_t last_utime_ = 0;
+    bool stop_worker_ = false;
+    struct Outgoing {
+        std::vector<uint8_t> bytes;
+        double received_seconds;
+        double compute_seconds;
+    };
+    std::vector<Outgoing> outbox_;
+    Counters counters_;
+    double latency_sum_ms_ = 0, compute_sum_ms_ = 0;
+    std::thread worker_;
+
+    // Worker-only state.
+    lf_estimator_t *estimator_ = nullptr;
+    lf_calibration_t estimator_calibration_{};
+    bool estimator_has_frame_ = false;
+    int32_t prev_sequence_ = 0;
+    int64_t prev_utime_ = 0, prev_lidar_utime_ = 0;
+    uint32_t prev_width_ = 0, prev_height_ = 0;
+    int32_t prev_format_ = 0;
+    bool prev_had_lidar_ = false;
+};
+
+// Monotonic clock [s].
+double monotonic_seconds();
+
+}  // namespace lidarflow::bridge

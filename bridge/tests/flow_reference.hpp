@@ -1,0 +1,27 @@
+#pragma once
+// Test helper: recomputes a published scene flow with the C ABI from the very input messages
+// the bridge used, and compares the planes exactly. Shared by the in-process suite and the
+// log checker.
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bridge_core.hpp"
+#include "wire.hpp"
+
+namespace lidarflow::bridge::testing {
+
+// Raw input messages, keyed by utime; calibration is the one in force for the frames.
+struct Inputs {
+    std::map<int64_t, std::vector<uint8_t>> stereo;  // raw stereo_t
+    std::map<int64_t, std::vector<uint8_t>> lidar;   // raw lidar_t
+};
+
+// Runs a fresh estimator (options, calibration) on the two frames and LiDAR sweeps `flow`
+// names, encodes the result as `flow` is encoded, and compares every plane value and the valid
+// plane. Returns "" when equal, else what differs.
+std::string check_flow(const std::vector<std::pair<std::string, std::string>> &options, const lf_calibration_t &cal,
+                       const Inputs &inputs, const std::vector<uint8_t> &flow_bytes);
+
+}  // namespace lidarflow::bridge::testing

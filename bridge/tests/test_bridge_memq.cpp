@@ -1,0 +1,540 @@
+// lidarflow-lcm-bridge's logic in-process over memq://: wire checks of every input type, results
+// equal to the C ABI's for the same frames (float32, int16, subsampled; LiDAR as disparities,
+// camera-frame and LiDAR-frame points; no LiDAR), malformed and truncated messages, frames
+// before the calibration, out-of-order timestamps, a burst faster than the estimator, shutdown
+// with frames queued, and the status heartbeat. Every case checks that each received stereo
+// message ends processed or dropped with a reason.
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "bridge_core.hpp"
+#include "calib_file.hpp"
+#include "capi_scene.h"
+#include "flow_reference.hpp"
+#include "lidarflow_status_t.h"
+
+// cmocka 1.1 has no extern "C" guard of its own; included last because of its macros.
+// Assertion failures longjmp past destructors: a failing case may leak, a passing one does not.
+extern "C" {
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+}
+
+using namespace lidarflow::bridge;
+
+namespace {
+
+constexpr int W = 160, H = 64;
+const std::vector<std::pair<std::string, std::string>> kOptions = {{"matching.min_coarsest_height", "16"},
+                                                                  {"threads", "2"}};
+
+scene_t g_scene;
+
+std::vector<uint8_t> stereo_bytes(const uint8_t *left, const uint8_t *right, int64_t utime, int32_t sequence = 0) {
+    lidarflow_stereo_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.sequence = sequence;
+    m.width = W;
+    m.height = H;
+    m.row_stride = W;
+    m.pixel_format = LIDARFLOW_STEREO_T_PIXEL_GRAY8;
+    m.size = W * H;
+    m.left = const_cast<uint8_t *>(left);
+    m.right = const_cast<uint8_t *>(right);
+    std::vector<uint8_t> b(lidarflow_stereo_t_encoded_size(&m));
+    assert_int_equal(lidarflow_stereo_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+    return b;
+}
+
+// A sweep of `xyz` triples in `frame`, with transform T (row-major 4x4) or the identity.
+std::vector<uint8_t> lidar_bytes(const std::vector<float> &xyz, int8_t frame, int64_t utime, const double *T = nullptr) {
+    const size_t n = xyz.size() / 3;
+    std::vector<float> x(n), y(n), z(n);
+    for (size_t i = 0; i < n; ++i) {
+        x[i] = xyz[3 * i];
+        y[i] = xyz[3 * i + 1];
+        z[i] = xyz[3 * i + 2];
+    }
+    lidarflow_lidar_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.frame = frame;
+    for (int i = 0; i < 16; ++i) m.lidar_to_camera[i] = T ? T[i] : (i % 5 == 0 ? 1.0 : 0.0);
+    m.num_points = (int32_t)n;
+    m.x = x.data();
+    m.y = y.data();
+    m.z = z.data();
+    std::vector<uint8_t> b(lidarflow_lidar_t_encoded_size(&m));
+    assert_int_equal(lidarflow_lidar_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+    return b;
+}
+
+std::vector<uint8_t> calibration_bytes(int32_t width = W, int32_t height = H) {
+    const lf_calibration_t cal = scene_calibration(&g_scene);
+    lidarflow_calibration_t m = calibration_message(cal, 1, width, height);
+    std::vector<uint8_t> b(lidarflow_calibration_t_encoded_size(&m));
+    assert_int_equal(lidarflow_calibration_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+    return b;
+}
+
+std::vector<float> scene_disparities() {
+    std::vector<float> xyz(3 * (W / 16 + 1) * (H / 16 + 1));
+    xyz.resize(3 * scene_lidar(&g_scene, 16, xyz.data()));
+    return xyz;
+}
+
+// An in-process bridge on its own memq:// LCM, recording what it publishes.
+struct Rig {
+    lcm_t *lcm = nullptr;
+    std::unique_ptr<Bridge> bridge;
+    std::vector<std::vector<uint8_t>> flows, statuses;
+    lcm_subscription_t *subs[2] = {nullptr, nullptr};
+    FILE *log = nullptr;
+
+    explicit Rig(BridgeConfig config) {
+        lcm = lcm_create("memq://");
+        assert_non_null(lcm);
+        log = std::tmpfile();
+        assert_non_null(log);
+        config.log = log;
+        if (config.options.empty()) config.options = kOptions;
+        std::string err;
+        bridge = Bridge::create(config, lcm, &err);
+        if (!bridge) fail_msg("Bridge::create: %s", err.c_str());
+        subs[0] = lcm_subscribe(lcm, config.flow_channel.c_str(), &Rig::record, &flows);
+        subs[1] = lcm_subscribe(lcm, config.status_channel.c_str(), &Rig::record, &statuses);
+    }
+    ~Rig() {
+        bridge.reset();
+        lcm_unsubscribe(lcm, subs[0]);
+        lcm_unsubscribe(lcm, subs[1]);
+        lcm_destroy(lcm);
+        std::fclose(log);
+    }
+    static void record(const lcm_recv_buf_t *rbuf, const char *, void *user) {
+        const auto *d = static_cast<const uint8_t *>(rbuf->data);
+        static_cast<std::vector<std::vector<uint8_t>> *>(user)->emplace_back(d, d + rbuf->data_size);
+    }
+    int64_t handled() const {
+        const Counters c = bridge->counters();
+        return c.stereo_received + c.lidar_received + c.calibration_received;
+    }
+    // Publishes and waits until the bridge has handled the message and is idle again.
+    void send(const char *channel, const std::vector<uint8_t> &bytes) {
+        const int64_t target = handled() + 1;
+        assert_int_equal(lcm_publish(lcm, channel, bytes.data(), (unsigned)bytes.size()), 0);
+        for (int i = 0; i < 3000 && (handled() < target || !bridge->idle()); ++i) bridge->run_once(10);
+        assert_true(handled() >= target && bridge->idle());
+        for (int i = 0; i < 3; ++i) bridge->run_once(0);  // deliver what the bridge published
+    }
+    // Publishes without waiting for the estimator (only the LCM handler runs).
+    void send_nowait(const char *channel, const std::vector<uint8_t> &bytes) {
+        const int64_t target = handled() + 1;
+        assert_int_equal(lcm_publish(lcm, channel, bytes.data(), (unsigned)bytes.size()), 0);
+        for (int i = 0; i < 100 && handled() < target; ++i) bridge->run_once(10);
+        assert_true(handled() >= target);
+    }
+    std::string log_text() const {
+        std::fflush(log);
+        std::rewind(log);
+        std::string s;
+        char buf[4096];
+        size_t n;
+        while ((n = std::fread(buf, 1, sizeof buf, log)) > 0) s.append(buf, n);
+        return s;
+    }
+};
+
+void assert_accounted(const Counters &c) {
+    assert_int_equal(c.queue_depth, 0);
+    assert_false(c.busy);
+    assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped());
+}
+
+int count_lines(const std::string &text, const char *needle) {
+    int n = 0;
+    for (size_t p = text.find(needle); p != std::string::npos; p = text.find(needle, p + 1)) ++n;
+    return n;
+}
+
+testing::Inputs inputs_of(const std::vector<std::vector<uint8_t>> &stereo, const std::vector<std::vector<uint8_t>> &lidar) {
+    testing::Inputs in;
+    for (const auto &b : stereo) {
+        StereoMessage m;
+        assert_string_equal(decode_stereo(b.data(), b.size(), m).c_str(), "");
+        in.stereo[m.msg().utime] = b;
+    }
+    for (const auto &b : lidar) {
+        LidarSweep s;
+        assert_string_equal(decode_lidar(b.data(), b.size(), s).c_str(), "");
+        in.lidar[s.utime] = b;
+    }
+    return in;
+}
+
+int group_setup(void **) { return scene_make(&g_scene, W, H, 10, 3, 1, 7) ? 0 : -1; }
+int group_teardown(void **) {
+    scene_free(&g_scene);
+    return 0;
+}
+
+void test_wire_checks(void **) {
+    const std::vector<uint8_t> good = stereo_bytes(g_scene.left0, g_scene.right0, 5);
+    StereoMessage ok;
+    assert_string_equal(decode_stereo(good.data(), good.size(), ok).c_str(), "");
+    assert_int_equal(ok.msg().utime, 5);
+    assert_int_equal(ok.left().width, W);
+    auto stereo_err = [](std::vector<uint8_t> b) {
+        StereoMessage m;
+        return decode_stereo(b.data(), b.size(), m);
+    };
+    std::vector<uint8_t> b = good;
+    b.pop_back();
+    assert_non_null(strstr(stereo_err(b).c_str(), "truncated"));
+    b = good;
+    b.push_back(0);
+    assert_non_null(strstr(stereo_err(b).c_str(), "wrong size"));
+    b = good;
+    b[3] ^= 0x40;
+    assert_non_null(strstr(stereo_err(b).c_str(), "bad fingerprint"));
+    assert_non_null(strstr(stereo_err(std::vector<uint8_t>(good.begin(), good.begin() + 5)).c_str(), "truncated"));
+    b = good;  // the size field (8 + 25) made negative, then huge: checked before any allocation
+    b[33] = 0xff;
+    assert_non_null(strstr(stereo_err(b).c_str(), "bad length field size"));
+    b[33] = 0x7f;
+    assert_non_null(strstr(stereo_err(b).c_str(), "truncated"));
+    b = good;  // width (8 + 12, big-endian) + 256: arrays consistent, dimensions not
+    b[22] = 1;
+    assert_non_null(strstr(stereo_err(b).c_str(), "inconsistent dimensions"));
+    b = good;  // pixel format (8 + 24)
+    b[32] = 9;
+    assert_non_null(strstr(stereo_err(b).c_str(), "unknown pixel_format 9"));
+
+    LidarSweep s;
+    std::vector<float> xyz = scene_disparities();
+    std::vector<uint8_t> l = lidar_bytes(xyz, LIDARFLOW_LIDAR_T_FRAME_DISPARITY, 9);
+    assert_string_equal(decode_lidar(l.data(), l.size(), s).c_str(), "");
+    assert_int_equal(s.kind, LF_LIDAR_DISPARITY);
+    assert_memory_equal(s.xyz.data(), xyz.data(), xyz.size() * sizeof(float));
+    l.resize(l.size() - 4);
+    assert_non_null(strstr(decode_lidar(l.data(), l.size(), s).c_str(), "truncated"));
+    xyz[4] = NAN;
+    l = lidar_bytes(xyz, LIDARFLOW_LIDAR_T_FRAME_CAMERA, 9);
+    assert_non_null(strstr(decode_lidar(l.data(), l.size(), s).c_str(), "point 1 is not finite"));
+    double T[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 2};
+    xyz[4] = 1;
+    l = lidar_bytes(xyz, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 9, T);
+    assert_non_null(strstr(decode_lidar(l.data(), l.size(), s).c_str(), "last row"));
+    l = lidar_bytes(xyz, 7, 9);
+    assert_non_null(strstr(decode_lidar(l.data(), l.size(), s).c_str(), "unknown frame 7"));
+
+    lf_calibration_t cal;
+    int32_t cw = 0, ch = 0;
+    std::vector<uint8_t> c = calibration_bytes();
+    assert_string_equal(decode_calibration(c.data(), c.size(), &cal, &cw, &ch).c_str(), "");
+    assert_true(cal.fx == 100.0 && cal.baseline == 0.5 && cw == W && ch == H);
+    assert_non_null(strstr(decode_calibration(good.data(), good.size(), &cal, &cw, &ch).c_str(), "bad fingerprint"));
+    lidarflow_calibration_t bad = calibration_message(cal, 1, W, H);
+    bad.baseline = -1;
+    std::vector<uint8_t> bb(lidarflow_calibration_t_encoded_size(&bad));
+    lidarflow_calibration_t_encode(bb.data(), 0, (int)bb.size(), &bad);
+    assert_non_null(strstr(decode_calibration(bb.data(), bb.size(), &cal, &cw, &ch).c_str(), "baseline > 0"));
+}
+
+// Two frames with LiDAR: the published flow equals the C ABI's, in each encoding.
+void check_encoding(FlowEncoding encoding, int step) {
+    BridgeConfig config;
+    config.encoding = encoding;
+    config.step = step;
+    config.status_period_s = 0;
+    config.lidar_wait_ms = 5000;  // long enough for any machine: the sweep comes right after
+    Rig rig(config);
+    const std::vector<float> xyz = scene_disparities();
+    const auto s0 = stereo_bytes(g_scene.left0, g_scene.right0, 1000000), s1 = stereo_bytes(g_scene.left1, g_scene.right1, 1100000);
+    const auto l0 = lidar_bytes(xyz, LIDARFLOW_LIDAR_T_FRAME_DISPARITY, 1000100),
+               l1 = lidar_bytes(xyz, LIDARFLOW_LIDAR_T_FRAME_DISPARITY, 1099900);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_LIDAR", l0);
+    rig.send("LIDARFLOW_STEREO", s0);
+    rig.send_nowait("LIDARFLOW_STEREO", s1);  // the sweep of t1 comes late: the frame waits for it
+    assert_int_equal(rig.flows.size(), 0);
+    rig.send("LIDARFLOW_LIDAR", l1);
+    for (int i = 0; i < 300 && rig.flows.size() < 1; ++i) rig.bridge->run_once(10);
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow f;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
+    assert_int_equal(f.header.lidar_flags, LIDARFLOW_SCENE_FLOW_T_LIDAR_T0 | LIDARFLOW_SCENE_FLOW_T_LIDAR_T1);
+    assert_true(f.header.lidar_utime0 == 1000100 && f.header.lidar_utime1 == 1099900);
+    assert_true(f.header.utime0 == 1000000 && f.header.utime == 1100000);
+    assert_int_equal(f.header.width, (W + step - 1) / step);
+    assert_int_equal(f.header.image_width, W);
+    const std::string err = testing::check_flow(kOptions, scene_calibration(&g_scene), inputs_of({s0, s1}, {l0, l1}), rig.flows[0]);
+    assert_string_equal(err.c_str(), "");
+    // And the result is the scene's motion (a sanity check of the decoding, not of the estimator).
+    size_t good = 0;
+    for (size_t i = 0; i < f.u.size(); ++i)
+        good += f.valid[i] && std::fabs(f.u[i] - 3) < 1 && std::fabs(f.v[i] - 1) < 1 && std::fabs(f.d0[i] - 10) < 1;
+    assert_true(good > f.u.size() * 8 / 10);
+    const Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.stereo_processed, 2);
+    assert_int_equal(c.frames_with_lidar, 2);
+    assert_int_equal(c.results_published, 1);
+}
+
+void test_float32_equals_capi(void **) { check_encoding(FlowEncoding::Float32, 1); }
+void test_int16_subsampled_equals_capi(void **) { check_encoding(FlowEncoding::Int16, 3); }
+
+// LiDAR as 3-D points in the LiDAR frame (x forward, y left, z up) with the transform to the
+// camera: the same flow as the C ABI given the camera-frame points.
+void test_points_in_lidar_frame(void **) {
+    const lf_calibration_t cal = scene_calibration(&g_scene);
+    const std::vector<float> xyd = scene_disparities();
+    std::vector<float> cam, lid;
+    for (size_t i = 0; i < xyd.size(); i += 3) {
+        const float z = (float)(cal.fx * cal.baseline / xyd[i + 2]);
+        const float x = (float)((xyd[i] - cal.cx) * z / cal.fx), y = (float)((xyd[i + 1] - cal.cy) * z / cal.fy);
+        cam.insert(cam.end(), {x, y, z});
+        lid.insert(lid.end(), {z, -x, -y});
+    }
+    const double T[16] = {0, -1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 0, 0, 0, 0, 1};  // exact in float
+    BridgeConfig config;
+    config.encoding = FlowEncoding::Float32;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 0, T));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(cam, LIDARFLOW_LIDAR_T_FRAME_CAMERA, 100000));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow f;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
+    assert_int_equal(f.header.lidar_flags, 3);
+
+    lf_options_t *o = scene_options(2);
+    lf_estimator_t *e = nullptr;
+    assert_int_equal(lf_create(o, &cal, &e), LF_OK);
+    lf_options_destroy(o);
+    const lf_lidar_t lc = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam.size() / 3), cam.data(), 0};
+    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
+    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
+    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, &lc), LF_OK);
+    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, &lc), LF_OK);
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
+    assert_memory_equal(f.v.data(), r.v, W * H * sizeof(float));
+    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
+    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
+    assert_memory_equal(f.valid.data(), r.valid, W * H);
+    scene_result_free(&r);
+    lf_destroy(e);
+    assert_accounted(rig.bridge->counters());
+}
+
+// No LiDAR stream at all: image-only results, flagged, equal to the C ABI without LiDAR.
+void test_missing_lidar_stream(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    Rig rig(config);
+    const auto s0 = stereo_bytes(g_scene.left0, g_scene.right0, 0), s1 = stereo_bytes(g_scene.left1, g_scene.right1, 100000);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_STEREO", s0);
+    rig.send("LIDARFLOW_STEREO", s1);
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow f;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
+    assert_int_equal(f.header.lidar_flags, 0);
+    assert_string_equal(testing::check_flow(kOptions, scene_calibration(&g_scene), inputs_of({s0, s1}, {}), rig.flows[0]).c_str(), "");
+    const Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.frames_with_lidar, 0);
+}
+
+// Garbage, wrong types, truncated and inconsistent messages on every channel: one log line
+// each, counted, and the bridge goes on to publish the next good pair.
+void test_malformed_messages(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    Rig rig(config);
+    const auto good0 = stereo_bytes(g_scene.left0, g_scene.right0, 0);
+    std::vector<uint8_t> truncated(good0.begin(), good0.begin() + good0.size() / 2), inconsistent = good0, trailing = good0;
+    inconsistent[22] = 1;  // width + 256 > row_stride
+    trailing.push_back(1);
+    const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+    const auto lidar = lidar_bytes(scene_disparities(), LIDARFLOW_LIDAR_T_FRAME_DISPARITY, 0);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_STEREO", garbage);
+    rig.send("LIDARFLOW_STEREO", truncated);
+    rig.send("LIDARFLOW_STEREO", inconsistent);
+    rig.send("LIDARFLOW_STEREO", trailing);
+    rig.send("LIDARFLOW_STEREO", lidar);  // a LiDAR message on the stereo channel
+    rig.send("LIDARFLOW_STEREO", {});
+    rig.send("LIDARFLOW_LIDAR", garbage);
+    rig.send("LIDARFLOW_LIDAR", std::vector<uint8_t>(lidar.begin(), lidar.end() - 1));
+    rig.send("LIDARFLOW_CALIB", good0);
+    rig.send("LIDARFLOW_CALIB", garbage);
+    rig.send("LIDARFLOW_STEREO", good0);
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    const Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.dropped_malformed, 6);
+    assert_int_equal(c.lidar_malformed, 2);
+    assert_int_equal(c.calibration_malformed, 2);
+    assert_int_equal(c.stereo_processed, 2);
+    const std::string log = rig.log_text();
+    assert_int_equal(count_lines(log, "malformed message on"), 10);
+    assert_int_equal(count_lines(log, "\n"), count_lines(log, "lidarflow-lcm-bridge: "));
+    assert_non_null(strstr(log.c_str(), "truncated"));
+    assert_non_null(strstr(log.c_str(), "bad fingerprint"));
+    assert_non_null(strstr(log.c_str(), "wrong size"));
+    assert_non_null(strstr(log.c_str(), "inconsistent dimensions"));
+}
+
+// Frames before any calibration, of another size than the calibration's, and out of order.
+void test_calibration_and_order(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_CALIB", calibration_bytes(W + 1, H));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 50000));
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 100000));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));  // same time
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 90000));   // earlier
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 200000));
+    // A new sequence may go back in time (e.g. a replayed log) and is never paired across.
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 10, 1));
+    const Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.stereo_received, 7);
+    assert_int_equal(c.dropped_no_calibration, 1);
+    assert_int_equal(c.dropped_calibration_mismatch, 1);
+    assert_int_equal(c.dropped_out_of_order, 2);
+    assert_int_equal(c.stereo_processed, 3);
+    assert_int_equal(c.results_published, 1);
+    assert_int_equal(rig.flows.size(), 1);
+}
+
+// Frames far faster than the estimator: the queue never grows past its capacity, stale frames
+// are dropped and counted, the bridge keeps publishing; stopping with frames queued counts them.
+void test_burst_and_shutdown(void **) {
+    BridgeConfig config;
+    config.queue_capacity = 2;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    const int n = 24;
+    std::vector<std::vector<uint8_t>> frames;
+    for (int i = 0; i < n; ++i)
+        frames.push_back(i % 2 ? stereo_bytes(g_scene.left1, g_scene.right1, 100000 * (i + 1))
+                               : stereo_bytes(g_scene.left0, g_scene.right0, 100000 * (i + 1)));
+    for (const auto &f : frames) {
+        rig.send_nowait("LIDARFLOW_STEREO", f);
+        assert_true(rig.bridge->counters().queue_depth <= 2);
+    }
+    for (int i = 0; i < 3000 && !rig.bridge->idle(); ++i) rig.bridge->run_once(10);
+    for (int i = 0; i < 3; ++i) rig.bridge->run_once(0);
+    Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.stereo_received, n);
+    assert_true(c.dropped_stale > 0);
+    assert_true(c.max_queue_depth <= 2);
+    assert_int_equal(c.dropped(), c.dropped_stale);
+    assert_true(c.results_published >= 1);
+    assert_int_equal((int64_t)rig.flows.size(), c.results_published);
+
+    // A second burst, then stop at once: queued frames become "shutdown" drops.
+    for (int i = 0; i < 6; ++i) rig.send_nowait("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 10000000 + i));
+    rig.bridge->stop();
+    c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.stereo_received, n + 6);
+    assert_true(c.dropped_shutdown >= 1);
+}
+
+// The heartbeat: periodic status messages whose counters add up.
+void test_status_heartbeat(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0.05;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_STEREO", {9, 9, 9});
+    for (int i = 0; i < 20; ++i) rig.bridge->run_once(10);
+    assert_true(rig.statuses.size() >= 2);
+    lidarflow_status_t s;
+    std::memset(&s, 0, sizeof s);
+    const auto &last = rig.statuses.back();
+    assert_int_equal(lidarflow_status_t_decode(last.data(), 0, (int)last.size(), &s), (int)last.size());
+    assert_int_equal(s.stereo_received, 2);
+    assert_int_equal(s.stereo_processed, 1);
+    assert_int_equal(s.dropped_malformed, 1);
+    assert_int_equal(s.queue_capacity, 1);
+    assert_non_null(strstr(s.last_error, "truncated"));
+    lidarflow_status_t_decode_cleanup(&s);
+}
+
+// --calib FILE: a KITTI calib_cam_to_cam file gives the calibration; frames need no channel.
+void test_calibration_file(void **) {
+    const std::string dir = std::string(getenv("LIDARFLOW_TEST_TMP") ? getenv("LIDARFLOW_TEST_TMP") : ".");
+    mkdir(dir.c_str(), 0755);  // may exist
+    const std::string path = dir + "/bridge_memq_calib.txt", bad = dir + "/bridge_memq_calib_bad.txt";
+    FILE *f = std::fopen(path.c_str(), "w");
+    assert_non_null(f);
+    std::fprintf(f, "calib_time: 09-Jan-2012\nP_rect_02: 100 0 80 4 0 100 32 0 0 0 1 0\n"
+                    "P_rect_03: 100 0 80 -46 0 100 32 0 0 0 1 0\n");
+    std::fclose(f);
+    f = std::fopen(bad.c_str(), "w");
+    assert_non_null(f);
+    std::fprintf(f, "P_rect_02: 100 0 80 4 0 100 32 0 0 0 1\nP_rect_03: 1 2 3\n");
+    std::fclose(f);
+    lf_calibration_t cal;
+    assert_string_equal(read_kitti_calibration(path, &cal).c_str(), "");
+    assert_true(cal.fx == 100 && cal.fy == 100 && cal.cx == 80 && cal.cy == 32 && cal.baseline == 0.5);
+    assert_non_null(strstr(read_kitti_calibration(bad, &cal).c_str(), "P_rect_02 has 11 values"));
+    assert_non_null(strstr(read_kitti_calibration(dir + "/missing.txt", &cal).c_str(), "cannot open"));
+
+    BridgeConfig config;
+    config.status_period_s = 0;
+    assert_string_equal(read_kitti_calibration(path, &config.calibration).c_str(), "");
+    config.fixed_calibration = true;
+    Rig rig(config);
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    assert_accounted(rig.bridge->counters());
+    std::remove(path.c_str());
+    std::remove(bad.c_str());
+}
+
+}  // namespace
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_wire_checks),
+        cmocka_unit_test(test_float32_equals_capi),
+        cmocka_unit_test(test_int16_subsampled_equals_capi),
+        cmocka_unit_test(test_points_in_lidar_frame),
+        cmocka_unit_test(test_missing_lidar_stream),
+        cmocka_unit_test(test_malformed_messages),
+        cmocka_unit_test(test_calibration_and_order),
+        cmocka_unit_test(test_burst_and_shutdown),
+        cmocka_unit_test(test_status_heartbeat),
+        cmocka_unit_test(test_calibration_file),
+    };
+    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+}

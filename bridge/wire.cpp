@@ -1,0 +1,355 @@
+#include "wire.hpp"
+
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+namespace lidarflow::bridge {
+namespace {
+
+// LCM encodes integers big-endian.
+int64_t read_be(const uint8_t *p, int bytes) {
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+    if (bytes < 8 && (v >> (8 * bytes - 1)) & 1u) v |= ~uint64_t(0) << (8 * bytes);  // sign-extend
+    return static_cast<int64_t>(v);
+}
+
+std::string fmt(const char *format, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char *format, ...) {
+    char buf[512];
+    va_list ap;
+    va_start(ap, format);
+    std::vsnprintf(buf, sizeof buf, format, ap);
+    va_end(ap);
+    return buf;
+}
+
+// One length field of a message: its byte offset after the fingerprint and the bytes one unit
+// of it adds to the message.
+struct LengthField {
+    const char *name;
+    int offset;
+    int64_t unit_bytes;
+};
+
+// Checks fingerprint, length fields and exact size of a message whose fixed part (everything
+// but the arrays) is `fixed` bytes after the fingerprint. Returns "" or the problem.
+std::string check_wire(const void *data, size_t size, const char *type, int64_t hash, int64_t fixed,
+                       const std::vector<LengthField> &lengths) {
+    const auto *p = static_cast<const uint8_t *>(data);
+    if (size < 8) return fmt("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
+    const int64_t got = read_be(p, 8);
+    if (got != hash)
+        return fmt("bad fingerprint 0x%016llx (a %s has 0x%016llx): wrong message type on this channel",
+                   (unsigned long long)got, type, (unsigned long long)hash);
+    if (static_cast<int64_t>(size) < 8 + fixed)
+        return fmt("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
+    int64_t expected = 8 + fixed;
+    std::string fields;
+    for (const LengthField &f : lengths) {
+        const int64_t n = read_be(p + 8 + f.offset, 4);
+        if (n < 0) return fmt("bad length field %s = %lld in a %s", f.name, (long long)n, type);
+        expected += n * f.unit_bytes;
+        fields += fmt("%s%s=%lld", fields.empty() ? "" : ", ", f.name, (long long)n);
+    }
+    if (static_cast<int64_t>(size) < expected)
+        return fmt("truncated: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
+    if (static_cast<int64_t>(size) > expected)
+        return fmt("wrong size: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
+    return "";
+}
+
+// Wire layouts (bytes after the 8-byte fingerprint; see the .lcm files).
+// stereo_t: utime 8, sequence 4, width 4, height 4, row_stride 4, pixel_format 1, size 4 = 29.
+constexpr int kStereoFixed = 29;
+// lidar_t: utime 8, frame 1, lidar_to_camera 128, num_points 4 = 141.
+constexpr int kLidarFixed = 141;
+// calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
+constexpr int kCalibrationFixed = 56;
+// scene_flow_t: utime 8, utime0 8, sequence 4, lidar_flags 1, lidar_utime0 8, lidar_utime1 8,
+// last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
+// compute_seconds 4, plane_size 4, valid_size 4 = 72.
+constexpr int kFlowFixed = 72;
+
+int bytes_per_pixel(int8_t format) {
+    switch (format) {
+    case LIDARFLOW_STEREO_T_PIXEL_GRAY8: return 1;
+    case LIDARFLOW_STEREO_T_PIXEL_RGB8:
+    case LIDARFLOW_STEREO_T_PIXEL_BGR8: return 3;
+    default: return 0;
+    }
+}
+
+void put_le16(uint8_t *p, int16_t v) {
+    const auto u = static_cast<uint16_t>(v);
+    p[0] = static_cast<uint8_t>(u);
+    p[1] = static_cast<uint8_t>(u >> 8);
+}
+
+void put_le32f(uint8_t *p, float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(u >> (8 * i));
+}
+
+float get_le32f(const uint8_t *p) {
+    uint32_t u = 0;
+    for (int i = 0; i < 4; ++i) u |= static_cast<uint32_t>(p[i]) << (8 * i);
+    float f;
+    std::memcpy(&f, &u, 4);
+    return f;
+}
+
+int16_t get_le16(const uint8_t *p) { return static_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))); }
+
+int16_t to_fixed(float value) {
+    if (!std::isfinite(value)) return 0;
+    const double q = std::nearbyint(static_cast<double>(value) / kInt16Scale);
+    return static_cast<int16_t>(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+}
+
+}  // namespace
+
+StereoMessage::~StereoMessage() {
+    if (decoded_) lidarflow_stereo_t_decode_cleanup(&msg_);
+}
+
+lf_image_t StereoMessage::left() const {
+    lf_image_t im{msg_.left, static_cast<uint32_t>(msg_.width), static_cast<uint32_t>(msg_.height),
+                  static_cast<uint64_t>(msg_.row_stride), msg_.pixel_format};
+    return im;
+}
+
+lf_image_t StereoMessage::right() const {
+    lf_image_t im = left();
+    im.data = msg_.right;
+    return im;
+}
+
+std::string decode_stereo(const void *data, size_t size, StereoMessage &out) {
+    std::string err = check_wire(data, size, "lidarflow.stereo_t", __lidarflow_stereo_t_get_hash(), kStereoFixed,
+                                 {{"size", 25, 2}});
+    if (!err.empty()) return err;
+    lidarflow_stereo_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_stereo_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
+        lidarflow_stereo_t_decode_cleanup(&m);
+        return "decoding failed";
+    }
+    const int bpp = bytes_per_pixel(m.pixel_format);
+    if (bpp == 0)
+        err = fmt("unknown pixel_format %d (1 gray8, 2 rgb8, 3 bgr8)", m.pixel_format);
+    else if (m.width < 1 || m.height < 1 || m.width > 16384 || m.height > 16384)
+        err = fmt("inconsistent dimensions: %dx%d (each side 1..16384)", m.width, m.height);
+    else if (static_cast<int64_t>(m.row_stride) < static_cast<int64_t>(m.width) * bpp)
+        err = fmt("inconsistent dimensions: row_stride %d < width %d x %d bytes", m.row_stride, m.width, bpp);
+    else if (static_cast<int64_t>(m.size) != static_cast<int64_t>(m.row_stride) * m.height)
+        err = fmt("inconsistent dimensions: size %d != row_stride %d x height %d", m.size, m.row_stride, m.height);
+    if (!err.empty()) {
+        lidarflow_stereo_t_decode_cleanup(&m);
+        return err;
+    }
+    out.msg_ = m;
+    out.decoded_ = true;
+    return "";
+}
+
+lf_lidar_t LidarSweep::view() const {
+    lf_lidar_t l{kind, static_cast<uint32_t>(xyz.size() / 3), xyz.empty() ? nullptr : xyz.data(), 12};
+    return l;
+}
+
+std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
+    std::string err = check_wire(data, size, "lidarflow.lidar_t", __lidarflow_lidar_t_get_hash(), kLidarFixed,
+                                 {{"num_points", 137, 12}});
+    if (!err.empty()) return err;
+    lidarflow_lidar_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_lidar_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
+        lidarflow_lidar_t_decode_cleanup(&m);
+        return "decoding failed";
+    }
+    const double *T = m.lidar_to_camera;
+    if (m.frame != LIDARFLOW_LIDAR_T_FRAME_CAMERA && m.frame != LIDARFLOW_LIDAR_T_FRAME_LIDAR &&
+        m.frame != LIDARFLOW_LIDAR_T_FRAME_DISPARITY) {
+        err = fmt("unknown frame %d (1 camera, 2 lidar, 3 disparity)", m.frame);
+    } else if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
+        for (int i = 0; i < 16 && err.empty(); ++i)
+            if (!std::isfinite(T[i])) err = fmt("lidar_to_camera[%d] is not finite", i);
+        if (err.empty() && (T[12] != 0 || T[13] != 0 || T[14] != 0 || T[15] != 1))
+            err = fmt("lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
+    }
+    for (int32_t i = 0; i < m.num_points && err.empty(); ++i)
+        if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]) || !std::isfinite(m.z[i]))
+            err = fmt("point %d is not finite", i);
+    if (err.empty()) {
+        out.utime = m.utime;
+        out.kind = m.frame == LIDARFLOW_LIDAR_T_FRAME_DISPARITY ? LF_LIDAR_DISPARITY : LF_LIDAR_POINTS_CAMERA;
+        out.xyz.resize(3 * static_cast<size_t>(m.num_points));
+        for (int32_t i = 0; i < m.num_points; ++i) {
+            float *o = &out.xyz[3 * static_cast<size_t>(i)];
+            if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
+                // In double: the bridge's transform must not add more rounding than one float cast.
+                const double x = m.x[i], y = m.y[i], z = m.z[i];
+                for (int r = 0; r < 3; ++r)
+                    o[r] = static_cast<float>(T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3]);
+            } else {
+                o[0] = m.x[i];
+                o[1] = m.y[i];
+                o[2] = m.z[i];
+            }
+        }
+    }
+    lidarflow_lidar_t_decode_cleanup(&m);
+    return err;
+}
+
+std::string decode_calibration(const void *data, size_t size, lf_calibration_t *out, int32_t *width,
+                               int32_t *height) {
+    std::string err =
+        check_wire(data, size, "lidarflow.calibration_t", __lidarflow_calibration_t_get_hash(), kCalibrationFixed, {});
+    if (!err.empty()) return err;
+    lidarflow_calibration_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_calibration_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size))
+        return "decoding failed";
+    const double v[5] = {m.fx, m.fy, m.cx, m.cy, m.baseline};
+    for (double x : v)
+        if (!std::isfinite(x)) return "calibration has a non-finite value";
+    if (!(m.fx > 0 && m.fy > 0 && m.baseline > 0))
+        return fmt("calibration needs fx, fy, baseline > 0 (got %g, %g, %g)", m.fx, m.fy, m.baseline);
+    if (m.width < 0 || m.height < 0 || m.width > 16384 || m.height > 16384)
+        return fmt("calibration image size %dx%d out of range", m.width, m.height);
+    lf_calibration_init(out);
+    out->fx = m.fx;
+    out->fy = m.fy;
+    out->cx = m.cx;
+    out->cy = m.cy;
+    out->baseline = m.baseline;
+    *width = m.width;
+    *height = m.height;
+    return "";
+}
+
+lidarflow_calibration_t calibration_message(const lf_calibration_t &cal, int64_t utime, int32_t width,
+                                            int32_t height) {
+    lidarflow_calibration_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.width = width;
+    m.height = height;
+    m.fx = cal.fx;
+    m.fy = cal.fy;
+    m.cx = cal.cx;
+    m.cy = cal.cy;
+    m.baseline = cal.baseline;
+    return m;
+}
+
+bool parse_flow_encoding(const std::string &name, FlowEncoding *out) {
+    if (name == "float32") *out = FlowEncoding::Float32;
+    else if (name == "int16") *out = FlowEncoding::Int16;
+    else return false;
+    return true;
+}
+
+lidarflow_scene_flow_t FlowMessage::message() {
+    lidarflow_scene_flow_t m = header;
+    m.u = u.data();
+    m.v = v.data();
+    m.d0 = d0.data();
+    m.d1 = d1.data();
+    m.valid = valid.data();
+    return m;
+}
+
+bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step, FlowMessage &out,
+                 std::string *error) {
+    if (step < 1 || step > 16) {
+        *error = fmt("step %d out of range 1..16", step);
+        return false;
+    }
+    if (!views.u.data || !views.v.data || !views.d0.data || !views.d1.data || !views.valid.data) {
+        *error = "result views without data";
+        return false;
+    }
+    const uint32_t w = (views.width + step - 1) / step, h = (views.height + step - 1) / step;
+    const int value_bytes = encoding == FlowEncoding::Float32 ? 4 : 2;
+    const size_t n = static_cast<size_t>(w) * h;
+    const lf_view_t *src[4] = {&views.u, &views.v, &views.d0, &views.d1};
+    std::vector<uint8_t> *dst[4] = {&out.u, &out.v, &out.d0, &out.d1};
+    for (int k = 0; k < 4; ++k) dst[k]->assign(n * value_bytes, 0);
+    out.valid.assign(n, 0);
+    for (uint32_t y = 0; y < h; ++y) {
+        const uint32_t sy = y * static_cast<uint32_t>(step);
+        for (int k = 0; k < 4; ++k) {
+            const auto *row = reinterpret_cast<const uint8_t *>(src[k]->data) + sy * src[k]->stride_bytes;
+            uint8_t *o = dst[k]->data() + static_cast<size_t>(y) * w * value_bytes;
+            for (uint32_t x = 0; x < w; ++x) {
+                float f;
+                std::memcpy(&f, row + 4 * static_cast<size_t>(x) * step, 4);  // views have any alignment
+                if (encoding == FlowEncoding::Float32) put_le32f(o + 4 * x, f);
+                else put_le16(o + 2 * x, to_fixed(f));
+            }
+        }
+        const auto *vrow = static_cast<const uint8_t *>(views.valid.data) + sy * views.valid.stride_bytes;
+        for (uint32_t x = 0; x < w; ++x) out.valid[static_cast<size_t>(y) * w + x] = vrow[x * step] ? 1 : 0;
+    }
+    out.header.image_width = static_cast<int32_t>(views.width);
+    out.header.image_height = static_cast<int32_t>(views.height);
+    out.header.step = static_cast<int8_t>(step);
+    out.header.width = static_cast<int32_t>(w);
+    out.header.height = static_cast<int32_t>(h);
+    out.header.encoding = static_cast<int8_t>(encoding);
+    out.header.scale = encoding == FlowEncoding::Float32 ? 1.0f : kInt16Scale;
+    out.header.plane_size = static_cast<int32_t>(n * value_bytes);
+    out.header.valid_size = static_cast<int32_t>(n);
+    return true;
+}
+
+std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg) {
+    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_scene_flow_t_encoded_size(&msg)));
+    const int n = lidarflow_scene_flow_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
+    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
+    return buf;
+}
+
+std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
+    std::string err = check_wire(data, size, "lidarflow.scene_flow_t", __lidarflow_scene_flow_t_get_hash(),
+                                 kFlowFixed, {{"plane_size", 64, 4}, {"valid_size", 68, 1}});
+    if (!err.empty()) return err;
+    lidarflow_scene_flow_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_scene_flow_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
+        lidarflow_scene_flow_t_decode_cleanup(&m);
+        return "decoding failed";
+    }
+    const int64_t n = static_cast<int64_t>(m.width) * m.height;
+    const int value_bytes = m.encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_FLOAT32 ? 4
+                            : m.encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 ? 2
+                                                                                  : 0;
+    if (value_bytes == 0) err = fmt("unknown encoding %d", m.encoding);
+    else if (m.width < 0 || m.height < 0 || m.plane_size != n * value_bytes || m.valid_size != n)
+        err = fmt("inconsistent dimensions: %dx%d with plane_size %d, valid_size %d", m.width, m.height, m.plane_size,
+                  m.valid_size);
+    if (err.empty()) {
+        const uint8_t *src[4] = {m.u, m.v, m.d0, m.d1};
+        std::vector<float> *dst[4] = {&out.u, &out.v, &out.d0, &out.d1};
+        for (int k = 0; k < 4; ++k) {
+            dst[k]->resize(static_cast<size_t>(n));
+            for (int64_t i = 0; i < n; ++i)
+                (*dst[k])[i] = value_bytes == 4 ? get_le32f(src[k] + 4 * i)
+                                                : static_cast<float>(get_le16(src[k] + 2 * i)) * m.scale;
+        }
+        out.valid.assign(m.valid, m.valid + n);
+    }
+    lidarflow_scene_flow_t_decode_cleanup(&m);
+    out.header = m;
+    out.header.u = out.header.v = out.header.d0 = out.header.d1 = out.header.valid = nullptr;
+    return err;
+}
+
+}  // namespace lidarflow::bridge

@@ -1,0 +1,106 @@
+#pragma once
+// Checking, decoding and encoding of the lidarflow LCM messages on the bridge's side.
+//
+// The C decoders lcm-gen 1.3.1 emits trust the array lengths in a message (a negative length
+// makes them memcpy "forever", a huge one allocates before noticing the message is short) and
+// leak on failure. So every input message is first checked here against its wire layout —
+// fingerprint, the length fields (which lidarflow types place before the first array), and the
+// exact total size — and only then decoded. Messages that decode are checked for consistency.
+// Nothing here touches LCM itself or the estimator; only the public C ABI header is used.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lidarflow/lidarflow.h"
+#include "lidarflow_calibration_t.h"
+#include "lidarflow_lidar_t.h"
+#include "lidarflow_scene_flow_t.h"
+#include "lidarflow_stereo_t.h"
+
+namespace lidarflow::bridge {
+
+// A decoded stereo_t that owns its arrays (released with the generated cleanup).
+class StereoMessage {
+public:
+    StereoMessage() = default;
+    ~StereoMessage();
+    StereoMessage(const StereoMessage &) = delete;
+    StereoMessage &operator=(const StereoMessage &) = delete;
+    const lidarflow_stereo_t &msg() const { return msg_; }
+    // The images as the C ABI takes them; valid while this object lives.
+    lf_image_t left() const;
+    lf_image_t right() const;
+
+private:
+    friend std::string decode_stereo(const void *, size_t, StereoMessage &);
+    lidarflow_stereo_t msg_{};
+    bool decoded_ = false;
+};
+
+// Decodes and checks a raw stereo_t into `out` (which must be fresh). Returns "" on success,
+// else one line saying what is wrong (truncated, wrong size, bad fingerprint, inconsistent
+// dimensions, unknown pixel format); `out` then holds nothing.
+std::string decode_stereo(const void *data, size_t size, StereoMessage &out);
+
+// A LiDAR sweep converted for the C ABI: packed float32 triples of kind LF_LIDAR_POINTS_CAMERA
+// (FRAME_CAMERA, and FRAME_LIDAR moved by the message's transform) or LF_LIDAR_DISPARITY.
+struct LidarSweep {
+    int64_t utime = 0;
+    int32_t kind = LF_LIDAR_NONE;
+    std::vector<float> xyz;
+    lf_lidar_t view() const;  // borrows xyz
+};
+
+// Decodes, checks (frame, finite values, rigid transform with last row 0 0 0 1) and converts a
+// raw lidar_t. Returns "" on success, else one line saying what is wrong.
+std::string decode_lidar(const void *data, size_t size, LidarSweep &out);
+
+// Decodes and checks a raw calibration_t into *out (finite values, fx, fy, baseline > 0,
+// width and height >= 0). Returns "" or the problem. *width/*height get the image size (0 = any).
+std::string decode_calibration(const void *data, size_t size, lf_calibration_t *out, int32_t *width,
+                               int32_t *height);
+
+// The calibration message of `cal` for images width x height (0 = any).
+lidarflow_calibration_t calibration_message(const lf_calibration_t &cal, int64_t utime, int32_t width,
+                                            int32_t height);
+
+// Encoding of the published scene flow.
+enum class FlowEncoding { Float32 = LIDARFLOW_SCENE_FLOW_T_ENCODING_FLOAT32, Int16 = LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 };
+
+// "float32" / "int16" -> encoding; returns false for anything else.
+bool parse_flow_encoding(const std::string &name, FlowEncoding *out);
+
+// Fixed-point scale of ENCODING_INT16 [px per unit].
+constexpr float kInt16Scale = 1.0f / 64.0f;
+
+// The planes of one scene_flow_t, owned; message() points into them.
+struct FlowMessage {
+    lidarflow_scene_flow_t header{};  // every scalar field; arrays are set by message()
+    std::vector<uint8_t> u, v, d0, d1, valid;
+    // The message to encode/publish; valid while this object lives and is not modified.
+    lidarflow_scene_flow_t message();
+};
+
+// Fills the planes and the size fields of `out` from a result of the C ABI (views of
+// lf_get_result_views), subsampled by `step` (1..16) and encoded as asked. Scalars other than
+// sizes, step, encoding and scale are left to the caller. Throws nothing; returns false (and
+// sets *error) for a step out of range or views without data.
+bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step, FlowMessage &out,
+                 std::string *error);
+
+// Encoded bytes of a message (lcm-gen's encoder).
+std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg);
+
+// A decoded scene_flow_t as float planes (the receiver's view): values in px, valid 0/1.
+struct DecodedFlow {
+    lidarflow_scene_flow_t header{};  // scalars only (array pointers cleared)
+    std::vector<float> u, v, d0, d1;
+    std::vector<uint8_t> valid;
+};
+
+// Decodes a raw scene_flow_t (checked like the inputs) into float planes. Returns "" or the
+// problem.
+std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out);
+
+}  // namespace lidarflow::bridge

@@ -35,6 +35,7 @@
 #include "interpolation/interpolator.hpp"
 #include "consistency/options.hpp"
 #include "consistency/sgm_check.hpp"
+#include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_submission.hpp"
 #include <opencv2/imgproc.hpp>
@@ -57,6 +58,7 @@ struct Input {
     SceneFlowField matches;
     SparseLidar lidar;
     DisparityMap hint;  // --sparse: the stage-2a SGM disparity, as the estimator passes it
+    StereoCamera camera;  // from calib_cam_to_cam, as load_kitti_frame reads it
     int num_matches = 0, num_outliers = 0;
 };
 
@@ -295,6 +297,13 @@ void apply_overrides(const std::string &list, interp::InterpolationOptions &o) {
         else if (k == "d1_change") o.d1_from_change = v != 0;
         else if (k == "ego") o.ego_motion = v != 0;
         else if (k == "ego_rounds") o.ego.joint_rounds = static_cast<int>(v);
+        else if (k == "rigid") o.rigid_ego_motion = v != 0;
+        else if (k == "bg") o.background_hypothesis = v != 0;
+        else if (k == "motion_anchors") o.lidar_motion_anchors = v != 0;
+        else if (k == "occ") o.occlusion_reasoning = v != 0;
+        else if (k == "occ_margin") o.occlusion_margin = static_cast<float>(v);
+        else if (k == "bg_pref") o.background_preference = static_cast<float>(v);
+        else if (k == "ego_lidar") o.ego_lidar_depth = v != 0;
         else if (k == "hint") o.use_geometry_hint = v != 0;
         else if (k == "hint_grid") o.hint_grid = static_cast<int>(v);
         else if (k == "hint_dist") o.hint_min_distance = static_cast<float>(v);
@@ -354,10 +363,14 @@ int main(int argc, char **argv) try {
     std::vector<Input> inputs;
     for (size_t i = 0; i < frames.size(); ++i) {
         if (sparse_dir.empty())
+        {
             inputs.push_back(make_input(frames[i], density, outliers, blobs, 1000 + i));
+            inputs.back().camera = io::read_calib_cam_to_cam(kitti.calib_cam_to_cam(frames[i].id)).camera;
+        }
         else {
             const pipeline::KittiFrame kf = pipeline::load_kitti_frame(root, frames[i].id, lio);
             inputs.push_back(sparse_input(sparse_dir, frames[i], kf.input.lidar0, values_gt));
+            inputs.back().camera = kf.input.camera;
             inputs.back().hint = consistency::compute_sgm_disparity(kf.input.left0, kf.input.right0,
                                                                     consistency::ConsistencyOptions{}.sgm);
         }
@@ -405,7 +418,8 @@ int main(int argc, char **argv) try {
         for (size_t i = 0; i < frames.size(); ++i) {
             const double c0 = cpu_seconds();
             const auto t0 = std::chrono::steady_clock::now();
-            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint);
+            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
+                                                      inputs[i].camera);
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             secs += s;
             cpu += cpu_seconds() - c0;
@@ -415,12 +429,15 @@ int main(int argc, char **argv) try {
             noc.add(n);
             const auto &t = r.timings;
             std::printf("  %s: %.3f s (edges %.3f, superpixels %.3f, geodesic %.3f, models %.3f, output %.3f); "
-                        "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds\n",
+                        "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds, %d occluded\n",
                         frames[i].id.c_str(), s, t.edges_s, t.superpixels_s, t.geodesic_s, t.models_s,
                         t.output_s, r.num_superpixels, r.lidar_anchored_geometry, r.lidar_anchored_motion,
-                        r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds);
+                        r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds, r.occluded_seeds);
             std::printf("    all: %s\n    noc: %s\n", a.str().c_str(), n.str().c_str());
-            if (r.ego.valid)
+            if (r.ego.valid && r.ego.calibrated)
+                std::printf("    ego R %.5f %.5f %.5f | t %.3f %.3f %.3f m\n", r.ego.R[5], r.ego.R[2], r.ego.R[1],
+                            r.ego.t[0], r.ego.t[1], r.ego.t[2]);
+            else if (r.ego.valid)
                 std::printf("    ego a %.4f %.4f %.4f %.4f | bx %.2f %.3f %.3f %.3f | by %.2f %.3f %.3f %.3f\n", r.ego.a[0],
                             r.ego.a[1], r.ego.a[2], r.ego.a[3], r.ego.bx[0], r.ego.bx[1], r.ego.bx[2], r.ego.bx[3],
                             r.ego.by[0], r.ego.by[1], r.ego.by[2], r.ego.by[3]);
@@ -429,6 +446,31 @@ int main(int argc, char **argv) try {
             if (!sparse_dir.empty())
                 std::printf("    by distance to a match: %s\n",
                             coverage_breakdown(r.dense, frames[i], inputs[i].matches).c_str());
+            if (std::getenv("BENCH_OUTLIERS")) {
+                // Grey image, blue dots = matches, green dots = LiDAR; SF outliers coloured by cause.
+                cv::Mat gray, pic;
+                if (frames[i].image.channels() == 3) cv::cvtColor(frames[i].image, gray, cv::COLOR_BGR2GRAY);
+                else gray = frames[i].image;
+                cv::cvtColor(gray / 2, pic, cv::COLOR_GRAY2BGR);
+                const Frame &f = frames[i];
+                for (int y = 0; y < pic.rows; ++y)
+                    for (int x = 0; x < pic.cols; ++x) {
+                        cv::Vec3b &px = pic.at<cv::Vec3b>(y, x);
+                        if (inputs[i].matches.valid(y, x)) px = {255, 128, 0};
+                        if (!gt_valid(f, y, x)) continue;
+                        const bool b0 = bad(std::fabs(r.dense.d0(y, x) - f.d0(y, x)), f.d0(y, x));
+                        const bool b1 = bad(std::fabs(r.dense.d1(y, x) - f.d1(y, x)), f.d1(y, x));
+                        const bool bf = bad(std::hypot(r.dense.u(y, x) - f.flow.u(y, x), r.dense.v(y, x) - f.flow.v(y, x)),
+                                            std::hypot(f.flow.u(y, x), f.flow.v(y, x)));
+                        // red: d0 wrong; magenta: d0 right, flow wrong; yellow: only d1 wrong
+                        if (b0) px = {0, 0, 255};
+                        else if (bf) px = {255, 0, 255};
+                        else if (b1) px = {0, 255, 255};
+                    }
+                for (const LidarPoint &lp : inputs[i].lidar.points) pic.at<cv::Vec3b>(lp.y, lp.x) = {0, 160, 0};
+                io::write_image(std::getenv("BENCH_OUTLIERS") + std::string("/") + (v.o.use_lidar ? "lidar_" : "only_") +
+                                    frames[i].id + ".png", pic);
+            }
             if (std::getenv("BENCH_DUMP")) io::write_submission(std::getenv("BENCH_DUMP") + std::string("/") +
                                                                     (v.o.use_lidar ? "lidar" : "only"),
                                                                 frames[i].id, r.dense);

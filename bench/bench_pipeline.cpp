@@ -3,7 +3,10 @@
 //   per-stage and total seconds (median of --runs), peak RSS, KITTI outliers (devkit, filled),
 //   for the shared KITTI frames (paper LiDAR protocol) and the built-in synthetic scene.
 //
-//   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--no-synth] [--no-kitti]
+//   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--preset NAME] [--no-synth]
+//                  [--no-kitti]
+// Also measured: a stream (Estimator::run with a StreamCache) alternating each frame pair with its
+// time-reversed pair, so every run after the first starts from the previous run's t1 images.
 // DIR defaults to $LIDARFLOW_KITTI_DIR; without it only the synthetic scene is measured.
 #include <chrono>
 #include <cstdio>
@@ -42,12 +45,13 @@ struct Args {
     std::string root;
     std::vector<std::string> ids;
     int runs = 3, threads = 2;
+    std::string preset = "default";
     bool synth = true, kitti = true;
 };
 
 [[noreturn]] void usage(const char *msg) {
     std::fprintf(stderr, "bench_pipeline: %s\nusage: bench_pipeline [--root DIR] [--ids A,B] [--runs N] "
-                         "[--threads N] [--no-synth] [--no-kitti]\n", msg);
+                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti]\n", msg);
     std::exit(2);
 }
 
@@ -66,6 +70,7 @@ Args parse(int argc, char **argv) {
             for (std::string id; std::getline(ss, id, ',');) a.ids.push_back(id);
         } else if (k == "--runs") a.runs = std::atoi(value().c_str());
         else if (k == "--threads") a.threads = std::atoi(value().c_str());
+        else if (k == "--preset") a.preset = value();
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
         else usage(("unknown option " + k).c_str());
@@ -129,7 +134,7 @@ std::vector<Case> load_cases(const Args &a) {
         const synth::SynthScene s = synth::render(synth::SynthConfig{});
         Case c;
         c.name = "synthetic";
-        c.input = {s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+        c.input = {s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}};
         c.gt.occ = {s.disp0_occ, s.disp1_occ, s.flow_occ};
         c.gt.has_noc = true;
         c.gt.noc = {s.disp0_noc, s.disp1_noc, s.flow_noc};
@@ -150,11 +155,11 @@ int main(int argc, char **argv) {
     const Args a = parse(argc, argv);
     const std::vector<Case> cases = load_cases(a);
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
-    pipeline::EstimatorOptions opt;
+    pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(a.preset);
     opt.threads = a.threads;
     const pipeline::Estimator estimator(opt);
-    std::printf("bench_pipeline: %d thread(s), median of %d run(s), %u hardware threads\n", a.threads, a.runs,
-                std::thread::hardware_concurrency());
+    std::printf("bench_pipeline: preset %s, %d thread(s), median of %d run(s), %u hardware threads\n",
+                a.preset.c_str(), a.threads, a.runs, std::thread::hardware_concurrency());
     for (const Case &c : cases) {
         std::printf("\n%s (%dx%d, LiDAR %zu + %zu points)\n", c.name.c_str(), c.input.left0.cols, c.input.left0.rows,
                     c.input.lidar0.points.size(), c.input.lidar1.points.size());
@@ -174,6 +179,22 @@ int main(int argc, char **argv) {
             total.push_back(last.total_seconds);
         }
         const double rss_pipeline = bench::peak_rss_mib();
+        // Streaming: pair, reversed pair, pair, ... through one cache (t0 of each = t1 before).
+        pipeline::FrameInput rev = c.input;
+        std::swap(rev.left0, rev.left1);
+        std::swap(rev.right0, rev.right1);
+        std::swap(rev.lidar0, rev.lidar1);
+        pipeline::StreamCache cache;
+        std::vector<double> stream_total, stream_features;
+        int reused = 0;
+        for (int r = 0; r <= a.runs; ++r) {
+            const pipeline::EstimatorResult sr = estimator.run(r % 2 ? rev : c.input, &cache);
+            if (r == 0) continue;  // the first frame of a stream has nothing to reuse
+            reused += cache.last_reused() ? 1 : 0;
+            stream_total.push_back(sr.total_seconds);
+            for (const pipeline::StageTime &t : sr.timings)
+                if (t.name == "features") stream_features.push_back(t.seconds);
+        }
         for (int r = 0; r < a.runs; ++r) {
             const auto t0 = Clock::now();
             base_est = opencv_baseline(c.input);
@@ -182,6 +203,9 @@ int main(int argc, char **argv) {
         for (const std::string &n : order) std::printf("  %-22s %7.3f s\n", n.c_str(), bench::median(stage[n]));
         std::printf("  %-22s %7.3f s   peak RSS %.0f MiB (%.0f MiB before the first run)\n", "total",
                     bench::median(total), rss_pipeline, rss_before);
+        std::printf("  %-22s %7.3f s   (features %.3f s; %d of %d frames reused the previous t1)\n",
+                    "streaming, per frame", bench::median(stream_total), bench::median(stream_features), reused,
+                    a.runs);
         const eval::EvalOptions eo;
         print_scores("lidarflow", eval::evaluate_frame(c.gt, last.dense, eo), bench::median(total));
         print_scores("OpenCV SGBM+DIS", eval::evaluate_frame(c.gt, base_est, eo), bench::median(base));

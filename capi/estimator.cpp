@@ -105,7 +105,8 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.right1 = frame->right;
             in.lidar0 = prev->lidar;
             in.lidar1 = frame->lidar;
-            result = make_result(estimator->estimator.run(in), prev->timestamp_us, timestamp_us);
+            in.camera = estimator->calibration.camera;
+            result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
         }
         // Commit: nothing below can throw.
         if (result) estimator->result = std::move(result);
@@ -119,6 +120,7 @@ LF_API int32_t lf_reset(lf_estimator_t *estimator) {
         require_non_null(estimator, "estimator");
         estimator->previous.reset();
         estimator->result.reset();
+        estimator->stream.clear();
         return static_cast<int32_t>(LF_OK);
     });
 }

@@ -52,5 +52,7 @@ struct lf_estimator {
     lidarflow::capi::Calibration calibration;
     std::unique_ptr<lidarflow::capi::Frame> previous;  // null before the first frame / after reset
     std::unique_ptr<lidarflow::capi::Result> result;   // null until two frames were pushed
+    // The newer pair's descriptors, reused by the next push (frame k's t1 is frame k+1's t0).
+    lidarflow::pipeline::StreamCache stream;
     mutable std::string error;                          // lf_last_error
 };

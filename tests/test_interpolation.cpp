@@ -137,6 +137,9 @@ void lidar_fixes_coherently_wrong_superpixel(void **) {
 
     interp::InterpolationOptions o;
     o.keep_lidar_values = false;
+    // Default: only geometry is anchored; the LiDAR point still fixes d0 of its superpixel.
+    const interp::InterpolationResult geo_only = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    o.lidar_motion_anchors = true;  // the paper's rule: the LiDAR match anchors motion as well
     const interp::InterpolationResult on = interp::RobustInterpolator(o).run(m, lidar, s.image);
     o.use_lidar = false;
     const interp::InterpolationResult off = interp::RobustInterpolator(o).run(m, lidar, s.image);
@@ -148,6 +151,10 @@ void lidar_fixes_coherently_wrong_superpixel(void **) {
     assert_true(on.lidar_anchored_geometry >= 1 && on.lidar_anchored_motion >= 1);
     assert_true(ron.epe_d0 < 1.0 && ron.epe_fl < 1.5);
     assert_true(roff.epe_d0 > 4.0 && roff.epe_fl > 4.0);
+    const test::OutlierRates rgeo = outlier_rates(geo_only.dense, s.truth, mask);
+    print_rates("LiDAR superpixel, geometry only", rgeo);
+    assert_true(geo_only.lidar_anchored_geometry >= 1 && geo_only.lidar_anchored_motion == 0);
+    assert_true(rgeo.epe_d0 < 1.0);
 }
 
 // ~50 matches over 51k pixels (no outliers): every pixel gets a finite model and the large

@@ -17,6 +17,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "features/huge_page_allocator.hpp"
+
 namespace lidarflow::features {
 
 struct DenseSiftOptions {
@@ -29,7 +31,7 @@ struct DenseSiftOptions {
 // Descriptor image. Owns its storage; copies are deep only through clone().
 struct DescriptorImage {
     int width = 0, height = 0, dim = 0;
-    std::vector<uint8_t> data;  // width * height * dim, row-major, pixel-major
+    std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * dim, row-major, pixel-major
 
     const uint8_t *at(int x, int y) const {
         return data.data() + (static_cast<size_t>(y) * width + x) * dim;

@@ -63,6 +63,10 @@ void EgoMotion::predict(float x, float y, float d0, float &d1_out, float &u_out,
         d1_out = d0, u_out = 0, v_out = 0;
         return;
     }
+    if (calibrated) {
+        detail::predict_rigid(*this, x, y, d0, d1_out, u_out, v_out);
+        return;
+    }
     const double r = 1.0 / depth_ratio(a, x, y, d0);
     const double d1 = r * d0;
     double rx[4], ry[4];

@@ -11,15 +11,27 @@
 // matches and interpolates only the remainder: ~0 on the background, so the motion in large
 // match-free holes (the road) follows the dense d0 (which LiDAR supports) instead of being
 // extrapolated from far-away matches.
+// With the camera known (StereoCamera) the model is the rigid motion itself, P' = R P + t on
+// the triangulated points: 6 unknowns instead of 12, and no first-order approximation. The
+// calibration-free model separates forward translation from rotation poorly where the matches
+// lie on distant surfaces (its principal point bx0 / by0 then drifts by hundreds of pixels).
 #include <cstdint>
 #include <vector>
+
+#include "core/camera.hpp"
 
 namespace lidarflow::interp {
 
 struct EgoMotion {
     bool valid = false;
+    // Calibration-free first-order model (calibrated = false).
     double a[4] = {0, 0, 0, 0};
     double bx[4] = {0, 0, 0, 0}, by[4] = {0, 0, 0, 0};
+    // Rigid model (calibrated = true): P' = R P + t in the left rectified camera [m], R
+    // row-major, for the camera below.
+    bool calibrated = false;
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
+    StereoCamera camera;
     int inliers = 0;  // matches consistent with the model (d1 and flow)
 
     // Predicted t1 disparity and flow of a background point at (x, y) with disparity d0 >= 0.
@@ -43,5 +55,20 @@ struct EgoMotionOptions {
 EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,
                          const std::vector<float> &d1, const std::vector<float> &u, const std::vector<float> &v,
                          const EgoMotionOptions &options);
+
+namespace detail {
+// EgoMotion::predict for calibrated models (ego_motion_rigid.cpp).
+void predict_rigid(const EgoMotion &m, float x, float y, float d0, float &d1, float &u, float &v);
+}  // namespace detail
+
+// The rigid model for a known camera (camera.valid() with finite values required, else
+// returns valid = false, as for arrays of differing lengths): RANSAC over 3-point sets, each
+// solved by Gauss-Newton on the d1 and flow residuals [px], then refitted on the inliers of
+// all matches. Same inputs, inlier rule and determinism as fit_ego_motion; the result has
+// calibrated = true. Does not throw.
+EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,
+                               const std::vector<float> &d1, const std::vector<float> &u,
+                               const std::vector<float> &v, const EgoMotionOptions &options,
+                               const StereoCamera &camera);
 
 }  // namespace lidarflow::interp

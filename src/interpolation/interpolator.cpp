@@ -75,6 +75,9 @@ void validate_options(const InterpolationOptions &o) {
     require(positive(o.lidar_disparity_tolerance) && positive(o.lidar_match_tolerance),
             ErrorCode::InvalidArgument, "interpolation: LiDAR tolerances must be > 0");
     require(positive(o.lidar_weight), ErrorCode::InvalidArgument, "interpolation: lidar_weight must be > 0");
+    require(positive(o.occlusion_margin), ErrorCode::InvalidArgument, "interpolation: occlusion_margin must be > 0");
+    require(positive(o.background_preference) && o.background_preference <= 1.0f, ErrorCode::InvalidArgument,
+            "interpolation: background_preference must be in (0, 1]");
     const EgoMotionOptions &e = o.ego;
     require(e.hypotheses >= 1 && e.hypotheses <= 100000, ErrorCode::InvalidArgument,
             "interpolation: ego.hypotheses must be in [1, 100000]");
@@ -173,6 +176,53 @@ void validate_hint(const DisparityMap &hint, const cv::Size &sz) {
                     "interpolation: non-finite value in the geometry hint");
 }
 
+// Matches of points hidden at t1 (InterpolationOptions::occlusion_reasoning). Every match is
+// splatted into two t1 depth buffers, the left image at its measured landing pixel
+// (x + u, y + v) and the right image at (x + u - d1, y + v), with min(d0, d1): a hidden
+// point's own wrong d1 (the occluder's) then cannot hide its neighbours, its d0 is still its
+// own. A match is hidden in a view when the buffer at the pixel the background model predicts
+// for it is nearer than its predicted d1 by max(occlusion_margin, 10 %). Hidden in the left
+// view: its flow and d1 were matched on the occluder and nothing measured says how it moves;
+// with a rigid (calibrated) background model it is taken as static, remainder 0. (Without a
+// camera the model may describe one non-rigid region only; there it is left alone.) Hidden in
+// the right view (d1 matched on the occluder, e.g. beside a near object): d1 follows the
+// background model if the measured flow says the point is static.
+int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const InterpolationOptions &o) {
+    cv::Mat1f zl(h, w, -1.0f), zr(h, w, -1.0f);
+    constexpr int r = 2;  // matches are ~3 px apart after sparsification; cover the gaps
+    auto splat = [&](cv::Mat1f &z, float fx, float fy, float val) {
+        const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
+        for (int y = std::max(0, ty - r); y <= std::min(h - 1, ty + r); ++y)
+            for (int x = std::max(0, tx - r); x <= std::min(w - 1, tx + r); ++x) z(y, x) = std::max(z(y, x), val);
+    };
+    auto hidden = [&](const cv::Mat1f &z, float fx, float fy, float d) {
+        const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
+        if (tx < 0 || ty < 0 || tx >= w || ty >= h) return false;
+        return z(ty, tx) >= d + std::max(o.occlusion_margin, 0.1f * d);
+    };
+    for (int i = 0; i < s.size(); ++i) {
+        if (!s.has_motion[i]) continue;
+        const float val = std::min(s.d0[i], s.d1[i]);
+        splat(zl, s.x[i] + s.u[i], s.y[i] + s.v[i], val);
+        splat(zr, s.x[i] + s.u[i] - s.d1[i], s.y[i] + s.v[i], val);
+    }
+    int released = 0;
+    for (int i = 0; i < s.size(); ++i) {
+        if (!s.has_motion[i]) continue;
+        float d1e, ue, ve;
+        ego.predict(s.x[i], s.y[i], s.d0[i], d1e, ue, ve);
+        const float tx = s.x[i] + ue, ty = s.y[i] + ve;
+        if (ego.calibrated && hidden(zl, tx, ty, d1e)) {
+            s.z1[i] = s.zu[i] = s.zv[i] = 0.0f;
+            ++released;
+        } else if (hidden(zr, tx - d1e, ty, d1e) && std::hypot(s.zu[i], s.zv[i]) < o.flow_inlier) {
+            s.z1[i] = 0.0f;
+            ++released;
+        }
+    }
+    return released;
+}
+
 // Geometry-hint seeds (see InterpolationOptions::use_geometry_hint): grid pixels in the holes
 // of the matches where the LiDAR pixels around them confirm the hint. The hint is compared with
 // LiDAR only at LiDAR pixels (same pixel, no slope assumption); a window vouches for its hint
@@ -245,7 +295,15 @@ struct Problem {
     float anchor_tol = 0;
     float sx = 0, sy = 0;                     // superpixel centroid (perturbation pivot)
     float size = 16;
+    // Cost factor of the all-zero model (the background model alone explains the seeds); 1 =
+    // no preference. See InterpolationOptions::background_preference.
+    float zero_factor = 1;
     int n() const { return static_cast<int>(x.size()); }
+    static bool is_zero(const Model &m) {
+        for (const Plane &q : m.p)
+            if (q.a != 0.0f || q.b != 0.0f || q.c != 0.0f) return false;
+        return true;
+    }
     float z(int i, int k) const { return k == 0 ? z0[i] : z1[i]; }
     float residual(const Model &m, int i) const {
         const float r0 = m.p[0].at(x[i], y[i]) - z0[i];
@@ -325,7 +383,7 @@ struct Candidate {
 
 void consider(const Problem &p, const Model &m, Candidate &best) {
     if (!p.admissible(m)) return;
-    const float c = p.cost(m);
+    const float c = p.cost(m) * (Problem::is_zero(m) ? p.zero_factor : 1.0f);
     if (c < best.cost) {
         best.cost = c;
         best.m = m;
@@ -354,7 +412,8 @@ RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : op
 }
 
 InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
-                                            const cv::Mat &image, const DisparityMap &geometry_hint) const {
+                                            const cv::Mat &image, const DisparityMap &geometry_hint,
+                                            const StereoCamera &camera) const {
     const InterpolationOptions &o = options_;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
@@ -367,18 +426,24 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     // Background prediction, subtracted from the matches here and added back per pixel from
     // the dense d0. The match's own d0 is used: its d1 and flow were measured with it, so the
     // residual stays consistent even where LiDAR replaces d0.
+    const bool rigid = o.rigid_ego_motion && camera.valid();
     if (o.ego_motion) {
         EgoMotionOptions eo = o.ego;
         eo.seed = o.random_seed;
         std::vector<float> mx, my, md0, md1, mu, mv;
         for (int i = 0; i < seeds.size(); ++i)
             if (seeds.has_motion[i]) {
-                mx.push_back(seeds.x[i]), my.push_back(seeds.y[i]), md0.push_back(seeds.d0_match[i]);
+                mx.push_back(seeds.x[i]), my.push_back(seeds.y[i]);
+                md0.push_back(rigid && o.ego_lidar_depth ? seeds.d0[i] : seeds.d0_match[i]);
                 md1.push_back(seeds.d1[i]), mu.push_back(seeds.u[i]), mv.push_back(seeds.v[i]);
             }
-        res.ego = fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
+        res.ego = rigid ? fit_rigid_ego_motion(mx, my, md0, md1, mu, mv, eo, camera)
+                        : fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
     }
     const bool subtract_d0 = o.d1_from_change || res.ego.valid;
+    // The zero remainder (pure background) is a hypothesis of its own only with a background
+    // model to fall back on.
+    const bool background = res.ego.valid && o.background_hypothesis;
     for (int i = 0; i < seeds.size(); ++i) {
         if (!seeds.has_motion[i] || !subtract_d0) continue;
         float d1e, ue, ve;
@@ -387,6 +452,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         seeds.zu[i] = seeds.u[i] - ue;
         seeds.zv[i] = seeds.v[i] - ve;
     }
+    if (res.ego.valid && o.occlusion_reasoning) res.occluded_seeds = release_occluded(seeds, res.ego, w, h, o);
     // After the ego-motion fit: hints carry no motion.
     if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
         res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);
@@ -405,9 +471,10 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
 
     t = Clock::now();
     const SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
-    const LidarAnchors anchors =
+    LidarAnchors anchors =
         use_lidar ? associate_lidar(sp, seeds.pos, seeds.is_lidar, seeds.has_motion, o.lidar_anchor_distance)
                   : LidarAnchors::none(sp.count);
+    if (!o.lidar_motion_anchors) std::fill(anchors.motion.begin(), anchors.motion.end(), -1);
     // Neighbourhoods, flat: geometry (d0) and motion (u, v, d1) lists of up to K seeds each.
     const int K = o.num_neighbors;
     std::vector<std::vector<std::pair<int, float>>> geo_nb(sp.count), mot_nb(sp.count);
@@ -445,6 +512,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         p.tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
         p.anchor_tol = c == kD0 ? o.lidar_disparity_tolerance : o.lidar_match_tolerance;
         p.anchor = -1;
+        p.zero_factor = background && c != kD0 ? o.background_preference : 1.0f;
         p.sx = sp.centroid[s].x;
         p.sy = sp.centroid[s].y;
         p.size = static_cast<float>(o.superpixels.region_size);
@@ -488,6 +556,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
                         // Constants always exist, so a superpixel with < 3 usable neighbours
                         // (or only collinear ones) still gets a model.
                         consider(p, p.constant(p.anchor >= 0 ? p.anchor : 0), best);
+                        if (background && c != kD0) consider(p, Model{}, best);
                         consider(p, p.constant(p.sample(rng)), best);
                         for (int k = 0; k < o.initial_hypotheses; ++k)
                             if (p.random_affine(rng, m)) consider(p, m, best);

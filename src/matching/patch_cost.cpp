@@ -30,7 +30,7 @@ inline uint32_t hsum_epi32(__m128i v) {
     return static_cast<uint32_t>(_mm_cvtsi128_si32(v));
 }
 
-inline uint32_t l2sq(const uint8_t *a, const uint8_t *b, int dim) {
+__attribute__((always_inline)) inline uint32_t l2sq(const uint8_t *a, const uint8_t *b, int dim) {
     const __m128i zero = _mm_setzero_si128();
     __m128i acc = zero;
     for (int i = 0; i < dim; i += 16) {
@@ -45,7 +45,7 @@ inline uint32_t l2sq(const uint8_t *a, const uint8_t *b, int dim) {
     return hsum_epi32(acc);
 }
 
-inline uint32_t l1(const uint8_t *a, const uint8_t *b, int dim) {
+__attribute__((always_inline)) inline uint32_t l1(const uint8_t *a, const uint8_t *b, int dim) {
     __m128i acc = _mm_setzero_si128();
     for (int i = 0; i < dim; i += 16) {
         const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i *>(a + i));
@@ -82,6 +82,16 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
         // Fast path: the whole patch is inside both images, no clamping.
         const uint8_t *ca = a.at(ax, ay), *cb = b.at(bx, by);
         const ptrdiff_t rowa = static_cast<ptrdiff_t>(a.width) * dim, rowb = static_cast<ptrdiff_t>(b.width) * dim;
+        // The samples lie in rows far apart (cache and TLB misses): request all their lines
+        // first so that the misses overlap instead of being paid one after another.
+        for (int k = 0; k < n; ++k) {
+            const uint8_t *da = ca + shape.dy[k] * rowa + shape.dx[k] * dim;
+            const uint8_t *db = cb + shape.dy[k] * rowb + shape.dx[k] * dim;
+            for (int off = 0; off < dim; off += 64) {
+                _mm_prefetch(reinterpret_cast<const char *>(da + off), _MM_HINT_T0);
+                _mm_prefetch(reinterpret_cast<const char *>(db + off), _MM_HINT_T0);
+            }
+        }
         for (int k = 0; k < n; ++k) {
             const uint8_t *da = ca + shape.dy[k] * rowa + shape.dx[k] * dim;
             const uint8_t *db = cb + shape.dy[k] * rowb + shape.dx[k] * dim;
@@ -146,7 +156,8 @@ __attribute__((target("avx2"))) inline uint32_t l1_avx2(const uint8_t *a, const 
     return total;
 }
 
-__attribute__((target("avx2"))) float patch_cost_avx2(const features::DescriptorImage &a,
+// flatten: the generic patch loop and the AVX2 kernels are inlined into one AVX2 function.
+__attribute__((target("avx2"), flatten)) float patch_cost_avx2(const features::DescriptorImage &a,
                                                       const features::DescriptorImage &b, int ax, int ay,
                                                       int bx, int by, const PatchShape &shape,
                                                       DescriptorNorm norm, float penalty, float bound) {

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <atomic>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <string>
@@ -90,11 +94,21 @@ struct MatcherData {
     // levels[l].desc[i]: image i in (left0, right0, left1, right1) order.
     struct Level {
         int w = 0, h = 0;
-        features::DescriptorImage desc[4];
+        const features::DescriptorImage *desc[4] = {nullptr, nullptr, nullptr, nullptr};
     };
     std::vector<Level> levels;
+    // Owners of the descriptors: the (left0, right0) and (left1, right1) pairs.
+    std::shared_ptr<const StereoFeatures> pair[2];
     double seconds_features = 0;
+    bool reused_t0 = false;
 };
+
+// Pyramid levels: factor 0.5 while the coarser image stays min_coarsest_height high.
+int pyramid_levels(const MatchingOptions &o, int width, int height) {
+    int nlev = 1;
+    while (nlev < o.max_levels && (height >> nlev) >= o.min_coarsest_height && (width >> nlev) >= 8) ++nlev;
+    return nlev;
+}
 
 // The PatchMatch of one direction. All per-seed arrays are allocated once up front.
 class Engine {
@@ -161,6 +175,11 @@ private:
 
     std::vector<Scored> best_;
     std::vector<int> visited_;
+    // Active set (exact): version_[n] counts the changes of seed n's match; seen_[k] is the
+    // version of neighbour neighbours_[k] that its seed last tried. A neighbour whose match has
+    // not changed since lost against a best that has only improved since (same cost formula),
+    // so trying it again cannot win.
+    std::vector<uint32_t> version_, seen_;
     std::vector<float> radius_, radius_d0_, radius_d1_;
 };
 
@@ -256,6 +275,8 @@ void Engine::setup_seeds() {
     const size_t n = info_.size();
     best_.assign(n, Scored{});
     visited_.assign(n, -1);
+    version_.assign(n, 0);
+    seen_.assign(neighbours_.size(), 0);
     radius_.assign(n, 0);
     radius_d0_.assign(n, 0);
     radius_d1_.assign(n, 0);
@@ -269,7 +290,7 @@ void Engine::setup_level(int l) {
     const auto &lev = m_.levels[l];
     lw_ = lev.w;
     lh_ = lev.h;
-    for (int s = 0; s < 4; ++s) desc_[s] = &lev.desc[slot_img_[s]];
+    for (int s = 0; s < 4; ++s) desc_[s] = lev.desc[slot_img_[s]];
     for (size_t i = 0; i < info_.size(); ++i) {
         px_[i] = std::min(lw_ - 1, info_[i].x >> l);
         py_[i] = std::min(lh_ - 1, info_[i].y >> l);
@@ -403,8 +424,10 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
     bool improved = false;
     const bool d1case = target_hit(i, best.s) >= 0;
     if (d1case != (best.cas >= 2)) {
+        // Another cost formula: earlier comparisons say nothing about the new one.
         const State cur = best.s;
         score(i, cur, best, d1case);
+        for (int k = si.nb_begin; k < si.nb_end; ++k) seen_[k] = version_[neighbours_[k]] - 1;
     }
     // Propagation (constraint 1 everywhere; LiDAR rules applied inside score()).
     for (int k = si.nb_begin; k < si.nb_end; ++k) {
@@ -412,7 +435,8 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         const SeedInfo &ni = info_[n];
         const bool fresh = consider_all_in_strip || ni.strip != si.strip || ni.strip < 0 ||
                            visited_[n] == iteration;
-        if (!fresh) continue;
+        if (!fresh || seen_[k] == version_[n]) continue;
+        seen_[k] = version_[n];
         improved |= try_candidate(i, best_[n].s, best, d1case);
     }
     // Random search with shrinking radius, separately for (u, v), d0 and d1.
@@ -437,6 +461,7 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         improved |= try_candidate(i, c, best, d1case);
     }
     visited_[i] = iteration;
+    if (improved) ++version_[i];
     return improved;
 }
 
@@ -515,6 +540,9 @@ MatchResult Engine::run() {
             const State s = best_[i].s;
             score(i, s, best_[i], target_hit(i, s) >= 0);
         }
+        // New level, new costs: every neighbour is worth one try.
+        for (int i = 0; i < n; ++i)
+            for (int k = info_[i].nb_begin; k < info_[i].nb_end; ++k) seen_[k] = version_[neighbours_[k]] - 1;
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp++;
             const bool reverse = it % 2 == 1;
@@ -589,7 +617,21 @@ MatchResult SceneFlowMatcher::Impl::run(Direction dir) const {
     return r;
 }
 
-SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options)
+bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o, int levels) const {
+    auto same = [](const cv::Mat &a, const cv::Mat &b) {
+        if (a.size() != b.size() || a.type() != b.type()) return false;
+        const size_t row = a.cols * a.elemSize();
+        for (int y = 0; y < a.rows; ++y)
+            if (std::memcmp(a.ptr(y), b.ptr(y), row) != 0) return false;
+        return true;
+    };
+    return static_cast<int>(desc[0].size()) == levels && sift.cell_size == o.sift.cell_size &&
+           sift.dim == o.sift.dim && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
+           same(left, l) && same(right, r);
+}
+
+SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
+                                   std::shared_ptr<const StereoFeatures> reuse_t0)
     : impl_(std::make_unique<Impl>()) {
     options.validate();
     const auto t0 = Clock::now();
@@ -616,29 +658,52 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
         m.lidar[1] = dedupe(in.lidar1);
     }
 
-    int nlev = 1;
-    while (nlev < options.max_levels && (m.height >> nlev) >= options.min_coarsest_height &&
-           (m.width >> nlev) >= 8)
-        ++nlev;
-    m.levels.resize(nlev);
     const int threads = options.threads;
-    // Pyramids and descriptors of the four images; the images are independent.
-    std::vector<std::vector<cv::Mat1f>> pyr(4);
-    for (int i = 0; i < 4; ++i) {
-        pyr[i].resize(nlev);
-        pyr[i][0] = features::to_gray_float(*imgs[i]);
-        for (int l = 1; l < nlev; ++l) cv::pyrDown(pyr[i][l - 1], pyr[i][l]);
-    }
-    for (int l = 0; l < nlev; ++l) {
-        m.levels[l].w = pyr[0][l].cols;
-        m.levels[l].h = pyr[0][l].rows;
-    }
-    const int outer = std::min(threads, 4);
+    const int nlev = pyramid_levels(options, m.width, m.height);
+    m.levels.resize(nlev);
+    // The t0 pair's descriptors come from the previous frame when it is the same stereo pair
+    // (streaming: that frame's t1); everything else is computed here.
+    const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options, nlev);
+    auto fresh0 = std::make_shared<StereoFeatures>(), fresh1 = std::make_shared<StereoFeatures>();
+    StereoFeatures *todo[2] = {reuse0 ? nullptr : fresh0.get(), fresh1.get()};
+    const cv::Mat *src[2][2] = {{&in.left0, &in.right0}, {&in.left1, &in.right1}};
+    for (int t = 0; t < 2; ++t)
+        if (todo[t]) {
+            todo[t]->left = src[t][0]->clone();
+            todo[t]->right = src[t][1]->clone();
+            todo[t]->sift = options.sift;
+            todo[t]->desc[0].resize(nlev);
+            todo[t]->desc[1].resize(nlev);
+        }
+    // Pyramids of the images still to describe; the images are independent.
+    std::vector<std::pair<features::DescriptorImage *, cv::Mat1f>> jobs;
+    for (int t = 0; t < 2; ++t)
+        for (int k = 0; k < 2 && todo[t]; ++k) {
+            cv::Mat1f g = features::to_gray_float(*src[t][k]);
+            for (int l = 0; l < nlev; ++l) {
+                cv::Mat1f next;
+                if (l + 1 < nlev) cv::pyrDown(g, next);
+                jobs.emplace_back(&todo[t]->desc[k][l], g);
+                g = next;
+            }
+        }
+    const int nimg = static_cast<int>(jobs.size()) / nlev;
+    const int outer = std::max(1, std::min(threads, nimg));
     const int inner = std::max(1, threads / outer);
 #pragma omp parallel for schedule(static) num_threads(outer)
-    for (int i = 0; i < 4; ++i)
-        for (int l = 0; l < nlev; ++l)
-            m.levels[l].desc[i] = features::compute_dense_sift(pyr[i][l], options.sift, inner);
+    for (int i = 0; i < nimg; ++i)
+        for (int l = 0; l < nlev; ++l) {
+            auto &job = jobs[static_cast<size_t>(i) * nlev + l];
+            *job.first = features::compute_dense_sift(job.second, options.sift, inner);
+        }
+    m.pair[0] = reuse0 ? reuse_t0 : std::shared_ptr<const StereoFeatures>(fresh0);
+    m.pair[1] = fresh1;
+    for (int l = 0; l < nlev; ++l) {
+        m.levels[l].w = m.pair[1]->desc[0][l].width;
+        m.levels[l].h = m.pair[1]->desc[0][l].height;
+        for (int i = 0; i < 4; ++i) m.levels[l].desc[i] = &m.pair[i / 2]->desc[i % 2][l];
+    }
+    m.reused_t0 = reuse0;
     m.seconds_features = seconds_since(t0);
 }
 
@@ -647,6 +712,10 @@ SceneFlowMatcher::~SceneFlowMatcher() = default;
 MatchResult SceneFlowMatcher::run(Direction direction) const { return impl_->run(direction); }
 
 double SceneFlowMatcher::seconds_features() const { return impl_->seconds_features; }
+
+std::shared_ptr<const StereoFeatures> SceneFlowMatcher::features_t1() const { return impl_->pair[1]; }
+
+bool SceneFlowMatcher::reused_t0() const { return impl_->reused_t0; }
 
 MatchResult match_scene_flow(const MatchInput &input, const MatchingOptions &options, Direction direction) {
     SceneFlowMatcher matcher(input, options);

@@ -59,13 +59,29 @@ struct MatchResult {
     double seconds_features = 0, seconds_matching = 0;
 };
 
+// Descriptor pyramids of one stereo pair (left, right) at one time step, with deep copies of
+// the 8-bit images they describe. Immutable once built; shared (shared_ptr) so that a stream can
+// hand the newer pair of one frame to the next frame's matcher.
+struct StereoFeatures {
+    cv::Mat left, right;
+    features::DenseSiftOptions sift;
+    std::vector<features::DescriptorImage> desc[2];  // [0] left, [1] right; index = level
+
+    // True when these are the descriptors of exactly (l, r) (pixel-identical) under the
+    // options' descriptor settings and level count. Never throws.
+    bool matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o, int levels) const;
+};
+
 class SceneFlowMatcher {
 public:
     // Validates and copies the input, builds pyramids and descriptors (shared by both
-    // directions). Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),
+    // directions). reuse_t0 (may be null): the previous frame's features_t1(); used for
+    // (left0, right0) when it matches them (StereoFeatures::matches), ignored otherwise.
+    // Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),
     // InvalidArgument (empty or non-8-bit images, LiDAR points outside the image, not finite
     // or negative disparities, bad options).
-    SceneFlowMatcher(const MatchInput &input, const MatchingOptions &options);
+    SceneFlowMatcher(const MatchInput &input, const MatchingOptions &options,
+                     std::shared_ptr<const StereoFeatures> reuse_t0 = nullptr);
     ~SceneFlowMatcher();
     SceneFlowMatcher(const SceneFlowMatcher &) = delete;
     SceneFlowMatcher &operator=(const SceneFlowMatcher &) = delete;
@@ -74,6 +90,10 @@ public:
     MatchResult run(Direction direction) const;
 
     double seconds_features() const;
+    // The (left1, right1) descriptors, to pass as reuse_t0 of the next frame of a sequence.
+    std::shared_ptr<const StereoFeatures> features_t1() const;
+    // Whether the constructor took (left0, right0)'s descriptors from reuse_t0.
+    bool reused_t0() const;
 
 private:
     struct Impl;

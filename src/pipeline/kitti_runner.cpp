@@ -123,6 +123,10 @@ KittiFrame load_kitti_frame(const std::string &root, const std::string &id, cons
     const cv::Size size = f.input.left0.size();
     f.input.lidar0 = {size.width, size.height, {}};
     f.input.lidar1 = {size.width, size.height, {}};
+    // The rig is optional for the estimator (calibration-free fallback), so a folder without
+    // calib_cam_to_cam still runs; a file that is there but broken is an error.
+    if (std::filesystem::exists(k.calib_cam_to_cam(id)))
+        f.input.camera = io::read_calib_cam_to_cam(k.calib_cam_to_cam(id)).camera;
     if (lidar.protocol == LidarProtocol::Paper) {
         lidar::PaperProtocolOptions po;
         po.target_points = lidar.points;
@@ -222,7 +226,9 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         if (main_opt.use_lidar) {
             if (progress) progress(i, ids.size(), id + ": interp-only");
             const SceneFlowField dense_only =
-                interp::RobustInterpolator(interp_only).run(r.sparse, frame.input.lidar0, frame.input.left0).dense;
+                interp::RobustInterpolator(interp_only)
+                    .run(r.sparse, frame.input.lidar0, frame.input.left0, DisparityMap(), frame.input.camera)
+                    .dense;
             table.add("Interpolation", "Spars+LiDAR & Interp-only", eval::FillMode::Filled, gt, dense_only, seeds, id);
         }
         table.add("Interpolation", main_opt.use_lidar ? "LiDAR-Flow (Spars+LiDAR & Interp+LiDAR)" : "image-only",

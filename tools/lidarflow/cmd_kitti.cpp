@@ -23,6 +23,7 @@ int run_kitti_command(int argc, char **argv) {
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
                {"out", true, "DIR  write disp_0/, disp_1/, flow/, viz/ and report.json here"},
                {"no-viz", false, "do not write pictures"}});
     if (args.help_requested()) {
@@ -40,6 +41,7 @@ int run_kitti_command(int argc, char **argv) {
             "kitti: --points and --beams must be >= 0");
     require(o.lidar.protocol == pipeline::LidarProtocol::Paper ? o.lidar.points > 0 : true,
             ErrorCode::InvalidArgument, "kitti: --points must be > 0 for the paper protocol");
+    o.estimator = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     o.estimator.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
     o.estimator.threads = args.integer("threads", 2);
     o.ablation = args.flag("ablation");

@@ -31,12 +31,13 @@ int run(int argc, char **argv) {
                {"right0", true, "PNG  rectified right image at t0"},
                {"left1", true, "PNG  rectified left image at t1"},
                {"right1", true, "PNG  rectified right image at t1"},
-               {"calib", true, "FILE KITTI calib_cam_to_cam.txt (checked; printed with the result)"},
+               {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; printed with the result)"},
                {"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 as a KITTI disparity PNG"},
                {"lidar1", true, "PNG  sparse LiDAR D_l^1 in left1 as a KITTI disparity PNG"},
                {"no-lidar", false, "image-only pipeline (ignore --lidar0/--lidar1)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
                {"id", true, "ID   frame id of the output files (default 000000)"}});
     if (args.help_requested()) {
@@ -59,9 +60,10 @@ int run(int argc, char **argv) {
     if (args.has("calib")) {
         const io::CamToCamCalib calib = io::read_calib_cam_to_cam(args.str("calib", ""));
         std::printf("camera    fx %.2f px, baseline %.4f m\n", calib.camera.fx, calib.camera.baseline);
+        in.camera = calib.camera;  // enables the rigid background model of stage 4
     }
 
-    pipeline::EstimatorOptions opt;
+    pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     opt.use_lidar = !args.flag("no-lidar");
     opt.threads = args.integer("threads", 2);
     opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));

@@ -1,0 +1,239 @@
+// The calibrated background model of ego_motion.hpp: the rigid camera motion P' = R P + t,
+// fitted to the matches' d1 and flow residuals in pixels.
+//
+// A match (x, y, d0) is the point P = ray / w with ray = ((x - cx) / fx, (y - cy) / fy, 1) and
+// inverse depth w = d0 / (fx B). Scaling P' by w gives n = R ray + t w, so
+//   x' = fx n0 / n2 + cx,  y' = fy n1 / n2 + cy,  d1 = d0 / n2,
+// which stays finite for d0 -> 0 (points at infinity move by the rotation only).
+#include <algorithm>
+#include <cmath>
+
+#include "interpolation/ego_motion.hpp"
+
+namespace lidarflow::interp {
+namespace {
+
+struct Rng {  // splitmix64, reproducible everywhere
+    uint64_t s;
+    explicit Rng(uint64_t seed) : s(seed) {}
+    uint64_t next() {
+        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    int below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(n)); }
+};
+
+// Points behind (or at) the camera after the motion have no projection; clamping the depth
+// ratio keeps a wild hypothesis finite (it is then simply a bad one).
+constexpr double kMinDepthRatio = 0.05;
+
+struct Rigid {
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
+};
+
+// R <- exp([dw]x) R (Rodrigues).
+void rotate_by(Rigid &m, const double dw[3]) {
+    const double th = std::sqrt(dw[0] * dw[0] + dw[1] * dw[1] + dw[2] * dw[2]);
+    double E[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    if (th > 1e-15) {
+        const double k[3] = {dw[0] / th, dw[1] / th, dw[2] / th};
+        const double s = std::sin(th), c = 1 - std::cos(th);
+        const double K[9] = {0, -k[2], k[1], k[2], 0, -k[0], -k[1], k[0], 0};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                double k2 = 0;
+                for (int l = 0; l < 3; ++l) k2 += K[i * 3 + l] * K[l * 3 + j];
+                E[i * 3 + j] += s * K[i * 3 + j] + c * k2;
+            }
+    }
+    double out[9];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double acc = 0;
+            for (int l = 0; l < 3; ++l) acc += E[i * 3 + l] * m.R[l * 3 + j];
+            out[i * 3 + j] = acc;
+        }
+    std::copy(out, out + 9, m.R);
+}
+
+struct Prediction {
+    double m[3];  // R ray
+    double n[3];  // R ray + t w
+    double w;     // inverse depth d0 / (fx B)
+    double xp, yp, d1;
+};
+
+Prediction project(const Rigid &m, const StereoCamera &c, double x, double y, double d0) {
+    Prediction p;
+    const double ray[3] = {(x - c.cx) / c.fx, (y - c.cy) / c.fy, 1.0};
+    p.w = d0 / (c.fx * c.baseline);
+    for (int i = 0; i < 3; ++i) {
+        p.m[i] = m.R[i * 3] * ray[0] + m.R[i * 3 + 1] * ray[1] + m.R[i * 3 + 2] * ray[2];
+        p.n[i] = p.m[i] + m.t[i] * p.w;
+    }
+    const double n2 = std::max(p.n[2], kMinDepthRatio);
+    p.xp = c.fx * p.n[0] / n2 + c.cx;
+    p.yp = c.fy * p.n[1] / n2 + c.cy;
+    p.d1 = d0 / n2;
+    return p;
+}
+
+struct Data {
+    const std::vector<float> &x, &y, &d0, &d1, &u, &v;
+    const StereoCamera &cam;
+    double d_scale;  // flow_inlier / disparity_inlier: both residuals in "flow pixels"
+
+    void errors(const Rigid &m, int i, double &e_d, double &e_f) const {
+        const Prediction p = project(m, cam, x[i], y[i], d0[i]);
+        e_d = std::fabs(p.d1 - d1[i]);
+        e_f = std::hypot(p.xp - x[i] - u[i], p.yp - y[i] - v[i]);
+    }
+
+    // One damped Gauss-Newton step on the points `ids`; false when the system is singular.
+    bool step(Rigid &m, const std::vector<int> &ids) const {
+        double A[36] = {}, b[6] = {};
+        for (int i : ids) {
+            const Prediction p = project(m, cam, x[i], y[i], d0[i]);
+            if (p.n[2] < kMinDepthRatio) continue;
+            const double iz = 1.0 / p.n[2];
+            // d(x', y', d1) / dn
+            const double gx[3] = {cam.fx * iz, 0, -cam.fx * p.n[0] * iz * iz};
+            const double gy[3] = {0, cam.fy * iz, -cam.fy * p.n[1] * iz * iz};
+            const double gd[3] = {0, 0, -d_scale * d0[i] * iz * iz};
+            const double r[3] = {p.xp - x[i] - u[i], p.yp - y[i] - v[i], d_scale * (p.d1 - d1[i])};
+            const double *g[3] = {gx, gy, gd};
+            for (int k = 0; k < 3; ++k) {
+                // dn / d(dw) = -[m]x, dn / d(dt) = w I
+                const double *q = g[k];
+                double J[6];
+                J[0] = q[2] * p.m[1] - q[1] * p.m[2];
+                J[1] = q[0] * p.m[2] - q[2] * p.m[0];
+                J[2] = q[1] * p.m[0] - q[0] * p.m[1];
+                J[3] = q[0] * p.w, J[4] = q[1] * p.w, J[5] = q[2] * p.w;
+                for (int a = 0; a < 6; ++a) {
+                    b[a] -= J[a] * r[k];
+                    for (int c = 0; c < 6; ++c) A[a * 6 + c] += J[a] * J[c];
+                }
+            }
+        }
+        // Levenberg damping: components the points cannot see (translation when all are far)
+        // stay where they are instead of exploding.
+        for (int a = 0; a < 6; ++a) A[a * 6 + a] += 1e-6 * A[a * 6 + a] + 1e-3;
+        // Cholesky solve of the 6x6 system.
+        double L[36] = {};
+        for (int i = 0; i < 6; ++i)
+            for (int j = 0; j <= i; ++j) {
+                double s = A[i * 6 + j];
+                for (int k = 0; k < j; ++k) s -= L[i * 6 + k] * L[j * 6 + k];
+                if (i == j) {
+                    if (!(s > 0)) return false;
+                    L[i * 6 + i] = std::sqrt(s);
+                } else {
+                    L[i * 6 + j] = s / L[j * 6 + j];
+                }
+            }
+        double z[6], d[6];
+        for (int i = 0; i < 6; ++i) {
+            double s = b[i];
+            for (int k = 0; k < i; ++k) s -= L[i * 6 + k] * z[k];
+            z[i] = s / L[i * 6 + i];
+        }
+        for (int i = 5; i >= 0; --i) {
+            double s = z[i];
+            for (int k = i + 1; k < 6; ++k) s -= L[k * 6 + i] * d[k];
+            d[i] = s / L[i * 6 + i];
+        }
+        for (double e : d)
+            if (!std::isfinite(e)) return false;
+        rotate_by(m, d);
+        for (int k = 0; k < 3; ++k) m.t[k] += d[3 + k];
+        return true;
+    }
+};
+
+}  // namespace
+
+void detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, float &d1, float &u, float &v) {
+    Rigid m;
+    std::copy(em.R, em.R + 9, m.R);
+    std::copy(em.t, em.t + 3, m.t);
+    const Prediction p = project(m, em.camera, x, y, std::max(0.0f, d0));
+    d1 = static_cast<float>(p.d1);
+    u = static_cast<float>(p.xp - x);
+    v = static_cast<float>(p.yp - y);
+}
+
+EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,
+                               const std::vector<float> &d1, const std::vector<float> &u,
+                               const std::vector<float> &v, const EgoMotionOptions &o,
+                               const StereoCamera &camera) {
+    EgoMotion em;
+    for (double c : {camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline})
+        if (!std::isfinite(c)) return em;
+    if (!camera.valid()) return em;
+    const size_t len = x.size();
+    if (y.size() != len || d0.size() != len || d1.size() != len || u.size() != len || v.size() != len) return em;
+    const Data data{x, y, d0, d1, u, v, camera, o.flow_inlier / o.disparity_inlier};
+    std::vector<int> ids;
+    for (int i = 0; i < static_cast<int>(len); ++i)
+        if (d0[i] > 0.5f && d1[i] > 0.5f) ids.push_back(i);
+    const int n = static_cast<int>(ids.size());
+    if (n < std::max(o.min_inliers, 8)) return em;
+    std::vector<int> probe;
+    const int stride = std::max(1, n / 3000);
+    for (int k = 0; k < n; k += stride) probe.push_back(ids[k]);
+    Rng rng(0x516ull ^ (static_cast<uint64_t>(o.seed) << 17));
+
+    auto inliers_of = [&](const Rigid &m, const std::vector<int> &set, std::vector<int> *out) {
+        int count = 0;
+        if (out) out->clear();
+        for (int i : set) {
+            double ed, ef;
+            data.errors(m, i, ed, ef);
+            if (ed < o.disparity_inlier && ef < o.flow_inlier) {
+                ++count;
+                if (out) out->push_back(i);
+            }
+        }
+        return count;
+    };
+    Rigid best;
+    int best_count = -1;
+    std::vector<int> sample(3);
+    for (int h = 0; h < o.hypotheses; ++h) {
+        for (int k = 0; k < 3; ++k) {
+            int tries = 0;
+            do {
+                sample[k] = probe[rng.below(static_cast<int>(probe.size()))];
+            } while (std::find(sample.begin(), sample.begin() + k, sample[k]) != sample.begin() + k && ++tries < 8);
+        }
+        Rigid m;
+        bool ok = true;
+        for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, sample);
+        if (!ok) continue;
+        const int count = inliers_of(m, probe, nullptr);
+        if (count > best_count) best_count = count, best = m;
+    }
+    if (best_count < 4) return em;
+    // Refit on the inliers of all matches; the inlier set is re-selected each round.
+    std::vector<int> in;
+    for (int round = 0; round < 3; ++round) {
+        if (inliers_of(best, ids, &in) < 4) break;
+        Rigid m = best;
+        bool ok = true;
+        for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in);
+        if (!ok) break;
+        best = m;
+    }
+    em.calibrated = true;
+    em.camera = camera;
+    std::copy(best.R, best.R + 9, em.R);
+    std::copy(best.t, best.t + 3, em.t);
+    em.inliers = inliers_of(best, ids, nullptr);
+    em.valid = em.inliers >= std::max(o.min_inliers, static_cast<int>(std::ceil(o.min_inlier_share * n)));
+    return em;
+}
+
+}  // namespace lidarflow::interp

@@ -1,0 +1,277 @@
+// Stage 4 with a known camera: the rigid ego-motion fit (fit_rigid_ego_motion) recovers an
+// exact rigid motion from clean and from outlier-ridden matches and refuses without a camera or
+// support; the interpolator uses it when run() gets a valid camera; occlusion reasoning gives
+// matches hidden at t1 (d1 matched on a near object) the background's d1; new options are
+// validated.
+#include "test_support.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "core/error.hpp"
+#include "interpolation/ego_motion.hpp"
+#include "interpolation/interpolator.hpp"
+#include "interpolation_scene.hpp"
+
+using namespace lidarflow;
+
+namespace {
+
+StereoCamera kitti_camera() {
+    StereoCamera c;
+    c.fx = c.fy = 720;
+    c.cx = 610;
+    c.cy = 175;
+    c.baseline = 0.54;
+    return c;
+}
+
+// The true motion as an EgoMotion (exact rotation, not a linearisation): a car turning while
+// driving forward.
+interp::EgoMotion true_motion(const StereoCamera &cam) {
+    interp::EgoMotion m;
+    m.valid = m.calibrated = true;
+    m.camera = cam;
+    const double w[3] = {0.004, -0.015, 0.002};
+    const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    const double k[3] = {w[0] / th, w[1] / th, w[2] / th};
+    const double K[9] = {0, -k[2], k[1], k[2], 0, -k[0], -k[1], k[0], 0};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double k2 = 0;
+            for (int l = 0; l < 3; ++l) k2 += K[i * 3 + l] * K[l * 3 + j];
+            m.R[i * 3 + j] = (i == j) + std::sin(th) * K[i * 3 + j] + (1 - std::cos(th)) * k2;
+        }
+    m.t[0] = 0.06, m.t[1] = -0.02, m.t[2] = -1.1;
+    return m;
+}
+
+struct Points {
+    std::vector<float> x, y, d0, d1, u, v;
+};
+
+Points make_points(const interp::EgoMotion &truth, int n, uint64_t seed) {
+    test::TestRng rng(seed);
+    Points p;
+    for (int i = 0; i < n; ++i) {
+        const float x = static_cast<float>(1242 * rng.uniform()), y = static_cast<float>(375 * rng.uniform());
+        const float d0 = static_cast<float>(4 + 70 * rng.uniform());  // 5.5 .. 97 m
+        float d1, u, v;
+        truth.predict(x, y, d0, d1, u, v);
+        p.x.push_back(x), p.y.push_back(y), p.d0.push_back(d0), p.d1.push_back(d1), p.u.push_back(u), p.v.push_back(v);
+    }
+    return p;
+}
+
+void max_errors(const interp::EgoMotion &m, const Points &p, double &e_d1, double &e_fl) {
+    e_d1 = e_fl = 0;
+    for (size_t i = 0; i < p.x.size(); ++i) {
+        float d1, u, v;
+        m.predict(p.x[i], p.y[i], p.d0[i], d1, u, v);
+        e_d1 = std::max(e_d1, static_cast<double>(std::fabs(d1 - p.d1[i])));
+        e_fl = std::max(e_fl, std::hypot(static_cast<double>(u - p.u[i]), static_cast<double>(v - p.v[i])));
+    }
+}
+
+void rigid_fit_exact(void **) {
+    const StereoCamera cam = kitti_camera();
+    const interp::EgoMotion truth = true_motion(cam);
+    const Points fit = make_points(truth, 2000, 1), held = make_points(truth, 500, 2);
+    const interp::EgoMotion m = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    assert_true(m.valid && m.calibrated);
+    assert_int_equal(m.inliers, 2000);
+    double e_d1, e_fl;
+    max_errors(m, held, e_d1, e_fl);
+    std::printf("rigid fit, exact matches: max error d1 %.4f px, flow %.4f px; t %.3f %.3f %.3f m\n", e_d1, e_fl,
+                m.t[0], m.t[1], m.t[2]);
+    assert_true(e_d1 < 0.01 && e_fl < 0.01);
+    for (int k = 0; k < 3; ++k) assert_true(std::fabs(m.t[k] - truth.t[k]) < 1e-3);
+    for (int k = 0; k < 9; ++k) assert_true(std::fabs(m.R[k] - truth.R[k]) < 1e-5);
+}
+
+void rigid_fit_robust_and_deterministic(void **) {
+    const StereoCamera cam = kitti_camera();
+    const interp::EgoMotion truth = true_motion(cam);
+    Points fit = make_points(truth, 3000, 3);
+    const Points held = make_points(truth, 500, 4);
+    test::TestRng rng(5);
+    int bad = 0;
+    for (size_t i = 0; i < fit.x.size(); ++i) {
+        if (rng.uniform() >= 0.35) continue;  // independent movers / mismatches
+        auto off = [&] { return static_cast<float>((rng.uniform() < 0.5 ? -1 : 1) * (3 + 20 * rng.uniform())); };
+        fit.u[i] += off();
+        fit.v[i] += off();
+        fit.d1[i] = std::max(1.0f, fit.d1[i] + off());
+        ++bad;
+    }
+    // Small matching noise on everything.
+    for (size_t i = 0; i < fit.x.size(); ++i) {
+        fit.u[i] += static_cast<float>(0.4 * (rng.uniform() - 0.5));
+        fit.d1[i] += static_cast<float>(0.2 * (rng.uniform() - 0.5));
+    }
+    const interp::EgoMotion m = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    assert_true(m.valid);
+    const int good = static_cast<int>(fit.x.size()) - bad;
+    double e_d1, e_fl;
+    max_errors(m, held, e_d1, e_fl);
+    std::printf("rigid fit, %d of %zu outliers: %d inliers, max error d1 %.3f px, flow %.3f px\n", bad, fit.x.size(),
+                m.inliers, e_d1, e_fl);
+    assert_true(m.inliers >= good - 20 && m.inliers <= good + bad / 20);
+    assert_true(e_d1 < 0.1 && e_fl < 0.2);
+    const interp::EgoMotion again = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    assert_int_equal(again.inliers, m.inliers);
+    for (int k = 0; k < 9; ++k) assert_true(again.R[k] == m.R[k]);
+    for (int k = 0; k < 3; ++k) assert_true(again.t[k] == m.t[k]);
+}
+
+void rigid_fit_refuses(void **) {
+    const StereoCamera cam = kitti_camera();
+    const interp::EgoMotion truth = true_motion(cam);
+    const Points p = make_points(truth, 500, 6);
+    // No camera: nothing to triangulate with.
+    assert_false(interp::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, p.u, p.v, {}, StereoCamera{}).valid);
+    // Too few matches.
+    const Points few = make_points(truth, 20, 7);
+    assert_false(interp::fit_rigid_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}, cam).valid);
+    // Mismatched array lengths are refused, not read out of bounds.
+    std::vector<float> shorter(p.u.begin(), p.u.end() - 1);
+    assert_false(interp::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, shorter, p.v, {}, cam).valid);
+    // Pure noise has no dominant motion.
+    test::TestRng rng(8);
+    Points noise = p;
+    for (size_t i = 0; i < noise.x.size(); ++i) {
+        noise.u[i] = static_cast<float>(80 * rng.uniform() - 40);
+        noise.v[i] = static_cast<float>(80 * rng.uniform() - 40);
+        noise.d1[i] = static_cast<float>(1 + 100 * rng.uniform());
+    }
+    assert_false(interp::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
+}
+
+// A static street front: a wall at 20 m and, before it, a post at 5 m, seen by a camera that
+// drives forward. The wall just left of the post is hidden by it in the right view at t1, so
+// the stereo matcher found the post's d1 there (what a real matcher does).
+struct OcclusionCase {
+    cv::Mat image;
+    SceneFlowField truth, matches;
+    cv::Mat1b hidden;  // wall pixels whose d1 match is the post's
+    StereoCamera cam;
+};
+
+OcclusionCase occlusion_case() {
+    OcclusionCase c;
+    const int w = 320, h = 160;
+    c.cam.fx = c.cam.fy = 200;
+    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
+    interp::EgoMotion ego;
+    ego.valid = ego.calibrated = true;
+    ego.camera = c.cam;
+    ego.t[2] = -0.5;
+    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
+    const cv::Rect post(150, 30, 30, 110);
+    c.image(post).setTo(cv::Scalar(30, 40, 200));
+    c.truth = SceneFlowField::zeros(w, h);
+    c.truth.valid.setTo(1);
+    cv::Mat1f right_post(h, w, -1.0f);  // post's d1 where the post lands in the right view at t1
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float d0 = post.contains({x, y}) ? 20.0f : 5.0f;
+            float d1, u, v;
+            ego.predict(static_cast<float>(x), static_cast<float>(y), d0, d1, u, v);
+            c.truth.d0(y, x) = d0, c.truth.d1(y, x) = d1, c.truth.u(y, x) = u, c.truth.v(y, x) = v;
+            if (!post.contains({x, y})) continue;
+            const int rx = static_cast<int>(std::lround(x + u - d1)), ry = static_cast<int>(std::lround(y + v));
+            if (rx >= 0 && rx < w && ry >= 0 && ry < h) right_post(ry, rx) = d1;
+        }
+    c.hidden = cv::Mat1b(h, w, uint8_t{0});
+    c.matches = SceneFlowField::zeros(w, h);
+    test::TestRng rng(3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (rng.uniform() >= 0.12) continue;
+            c.matches.u(y, x) = c.truth.u(y, x), c.matches.v(y, x) = c.truth.v(y, x);
+            c.matches.d0(y, x) = c.truth.d0(y, x), c.matches.d1(y, x) = c.truth.d1(y, x);
+            c.matches.valid(y, x) = 1;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (post.contains({x, y})) continue;
+            const int rx = static_cast<int>(std::lround(x + c.truth.u(y, x) - c.truth.d1(y, x)));
+            const int ry = static_cast<int>(std::lround(y + c.truth.v(y, x)));
+            if (rx < 0 || rx >= w || ry < 0 || ry >= h || right_post(ry, rx) < 0) continue;
+            c.hidden(y, x) = 255;
+            if (c.matches.valid(y, x)) c.matches.d1(y, x) = right_post(ry, rx);
+        }
+    return c;
+}
+
+double mean_d1_error(const SceneFlowField &est, const OcclusionCase &c) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y < c.hidden.rows; ++y)
+        for (int x = 0; x < c.hidden.cols; ++x)
+            if (c.hidden(y, x)) sum += std::fabs(est.d1(y, x) - c.truth.d1(y, x)), ++n;
+    return n ? sum / n : 0.0;
+}
+
+void occlusion_reasoning_fixes_hidden_d1(void **) {
+    const OcclusionCase c = occlusion_case();
+    assert_true(cv::countNonZero(c.hidden) > 500);
+    interp::InterpolationOptions o;
+    o.occlusion_reasoning = false;
+    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+    o.occlusion_reasoning = true;
+    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+    const double e_off = mean_d1_error(off.dense, c), e_on = mean_d1_error(on.dense, c);
+    std::printf("hidden band (%d px): %d matches released; d1 error off %.2f px, on %.2f px\n",
+                cv::countNonZero(c.hidden), on.occluded_seeds, e_off, e_on);
+    assert_true(on.ego.valid && on.ego.calibrated);
+    assert_int_equal(off.occluded_seeds, 0);
+    assert_true(on.occluded_seeds > 30);
+    assert_true(e_off > 3.0);
+    assert_true(e_on < 0.5);
+    // Elsewhere (all visible) nothing gets worse: the whole field stays near-exact.
+    const test::OutlierRates r = test::outlier_rates(on.dense, c.truth);
+    assert_true(r.sf < 1.0);
+    // Without the camera the calibration-free model is used and the run still succeeds.
+    const interp::InterpolationResult nocam = interp::RobustInterpolator(o).run(c.matches, {}, c.image);
+    assert_false(nocam.ego.calibrated);
+}
+
+template <class F>
+void expect_error(F &&f, ErrorCode code) {
+    try {
+        f();
+    } catch (const Error &e) {
+        assert_int_equal(static_cast<int>(e.code()), static_cast<int>(code));
+        return;
+    }
+    fail_msg("expected lidarflow::Error");
+}
+
+void rejects_bad_rigid_options(void **) {
+    using O = interp::InterpolationOptions;
+    auto bad = [](void (*edit)(O &)) {
+        O o;
+        edit(o);
+        expect_error([&] { interp::RobustInterpolator ri(o); }, ErrorCode::InvalidArgument);
+    };
+    bad([](O &o) { o.background_preference = 0; });
+    bad([](O &o) { o.background_preference = 1.5f; });
+    bad([](O &o) { o.background_preference = std::nanf(""); });
+    bad([](O &o) { o.occlusion_margin = 0; });
+    bad([](O &o) { o.occlusion_margin = std::nanf(""); });
+}
+
+}  // namespace
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(rigid_fit_exact),
+        cmocka_unit_test(rigid_fit_robust_and_deterministic),
+        cmocka_unit_test(rigid_fit_refuses),
+        cmocka_unit_test(occlusion_reasoning_fixes_hidden_d1),
+        cmocka_unit_test(rejects_bad_rigid_options),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

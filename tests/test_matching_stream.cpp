@@ -1,0 +1,118 @@
+// Streaming reuse of stage 1 and the estimator presets: descriptors of a frame's t1 pair are
+// reused by the next frame only when its t0 pair is pixel-identical, and reuse never changes
+// a result; presets are named, distinct and validated.
+#include "test_support.hpp"
+
+#include <string>
+
+#include "core/error.hpp"
+#include "matching/scene_flow_matcher.hpp"
+#include "pipeline/estimator.hpp"
+#include "synth/scene.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::matching;
+
+namespace {
+
+const synth::SynthScene &scene() {
+    static const synth::SynthScene s = [] {
+        synth::SynthConfig c;
+        c.width = 160;
+        c.height = 80;
+        c.seed = 11;
+        c.threads = 1;
+        c.lidar_points = 40;
+        return synth::render(c);
+    }();
+    return s;
+}
+
+MatchingOptions small() {
+    MatchingOptions o;
+    o.min_coarsest_height = 20;
+    o.threads = 2;
+    return o;
+}
+
+bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
+    const cv::Mat1f *fa[] = {&a.u, &a.v, &a.d0, &a.d1, &a.confidence};
+    const cv::Mat1f *fb[] = {&b.u, &b.v, &b.d0, &b.d1, &b.confidence};
+    for (int i = 0; i < 5; ++i)
+        if (cv::norm(*fa[i], *fb[i], cv::NORM_INF) != 0) return false;
+    return cv::norm(a.valid, b.valid, cv::NORM_INF) == 0;
+}
+
+// Frame k+1 = the time-reversed pair: its t0 images are frame k's t1 images.
+void matcher_reuses_t1_of_previous_frame(void **) {
+    const auto &s = scene();
+    const MatchInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    const MatchInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0};
+    const SceneFlowMatcher first(fwd, small());
+    assert_false(first.reused_t0());
+    const SceneFlowMatcher cached(rev, small(), first.features_t1());
+    assert_true(cached.reused_t0());
+    const SceneFlowMatcher fresh(rev, small());
+    for (Direction d : {Direction::Forward, Direction::Backward})
+        assert_true(same_field(cached.run(d).dense, fresh.run(d).dense));
+
+    // Not the same images (one pixel differs) or other descriptor settings: recomputed.
+    cv::Mat changed = s.left1.clone();
+    changed.ptr<uint8_t>(3)[5] ^= 1;
+    const MatchInput other{changed, s.right1, s.left0, s.right0, s.lidar1, s.lidar0};
+    assert_false(SceneFlowMatcher(other, small(), first.features_t1()).reused_t0());
+    MatchingOptions o64 = small();
+    o64.sift.dim = 64;
+    assert_false(SceneFlowMatcher(rev, o64, first.features_t1()).reused_t0());
+    MatchingOptions fewer = small();
+    fewer.max_levels = 1;
+    assert_false(SceneFlowMatcher(rev, fewer, first.features_t1()).reused_t0());
+}
+
+void estimator_stream_cache_keeps_results(void **) {
+    const auto &s = scene();
+    pipeline::EstimatorOptions o;
+    o.matching.min_coarsest_height = 20;
+    o.threads = 2;
+    o.last_stage = pipeline::Stage::Consistency;
+    const pipeline::Estimator est(o);
+    pipeline::FrameInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}};
+    pipeline::FrameInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0, StereoCamera{}};
+    pipeline::StreamCache cache;
+    est.run(fwd, &cache);
+    assert_false(cache.last_reused());
+    const pipeline::EstimatorResult streamed = est.run(rev, &cache);
+    assert_true(cache.last_reused());
+    const pipeline::EstimatorResult alone = est.run(rev);
+    assert_true(same_field(streamed.forward, alone.forward));
+    assert_true(same_field(streamed.backward, alone.backward));
+    assert_true(same_field(streamed.after_fb, alone.after_fb));
+    cache.clear();
+    est.run(rev, &cache);
+    assert_false(cache.last_reused());
+}
+
+void presets(void **) {
+    const pipeline::EstimatorOptions d = pipeline::EstimatorOptions::preset("default");
+    const pipeline::EstimatorOptions plain;
+    assert_int_equal(d.matching.grid_step, plain.matching.grid_step);
+    assert_int_equal(d.matching.iterations, plain.matching.iterations);
+    const pipeline::EstimatorOptions f = pipeline::EstimatorOptions::preset("fast");
+    assert_true(f.matching.grid_step > d.matching.grid_step);
+    assert_true(f.matching.iterations < d.matching.iterations);
+    f.validate();
+    pipeline::EstimatorOptions::preset("balanced").validate();
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset("turbo"); }));
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset(""); }));
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(matcher_reuses_t1_of_previous_frame),
+        cmocka_unit_test(estimator_stream_cache_keeps_results),
+        cmocka_unit_test(presets),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -1,5 +1,7 @@
 #include "interpolation/ego_motion.hpp"
 
+#include "core/random.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -11,17 +13,7 @@ namespace {
 // Scaled coordinates keep the 4x4 systems well conditioned (pixels ~1000, disparities ~100).
 constexpr double kXY = 1e-3, kD = 1e-2;
 
-struct Rng {  // splitmix64, reproducible everywhere
-    uint64_t s;
-    explicit Rng(uint64_t seed) : s(seed) {}
-    uint64_t next() {
-        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    int below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(n)); }
-};
+using Rng = SplitMix64;
 
 // d0 / d1 - 1 as modelled; the divisor is kept away from 0 so a wild model cannot explode.
 double depth_ratio(const double a[4], double x, double y, double d0) {

@@ -8,22 +8,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/random.hpp"
 #include "interpolation/ego_motion.hpp"
 
 namespace lidarflow::interp {
 namespace {
 
-struct Rng {  // splitmix64, reproducible everywhere
-    uint64_t s;
-    explicit Rng(uint64_t seed) : s(seed) {}
-    uint64_t next() {
-        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    int below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(n)); }
-};
+using Rng = SplitMix64;
 
 // Points behind (or at) the camera after the motion have no projection; clamping the depth
 // ratio keeps a wild hypothesis finite (it is then simply a bad one).

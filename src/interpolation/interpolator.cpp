@@ -1,5 +1,7 @@
 #include "interpolation/interpolator.hpp"
 
+#include "core/random.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -266,19 +268,7 @@ int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const
     return added;
 }
 
-// splitmix64: tiny, statistically fine, and reproducible across platforms (std::
-// distributions are not).
-struct Rng {
-    uint64_t s;
-    explicit Rng(uint64_t seed) : s(seed) {}
-    uint64_t next() {
-        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    float uniform() { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }  // [0, 1)
-};
+using Rng = SplitMix64;
 
 uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
     Rng r(base * 0x100000001B3ull ^ (static_cast<uint64_t>(sp) << 20) ^

@@ -368,7 +368,7 @@ bool Engine::evaluate(int i, Scored &out, const Scored *reuse, float bound) cons
     const float *w = kCaseWeights[out.cas];
     const float budget = bound * kCaseWeightSum[out.cas];
     float sum = 0;
-    uint8_t todo = 0;
+    uint8_t pending = 0;
     // Terms whose two image positions did not move are taken from `reuse` first, so that the
     // remaining ones can stop as soon as the candidate cannot beat the bound.
     for (int t = 0; t < kNumTerms; ++t) {
@@ -384,10 +384,10 @@ bool Engine::evaluate(int i, Scored &out, const Scored *reuse, float bound) cons
                 continue;
             }
         }
-        todo |= static_cast<uint8_t>(1u << t);
+        pending |= static_cast<uint8_t>(1u << t);
     }
     for (int t = 0; t < kNumTerms; ++t) {
-        if (!(todo >> t & 1)) continue;
+        if (!(pending >> t & 1)) continue;
         if (sum > budget) return false;
         const Slot a = kTermA[t], b = kTermB[t];
         const float e = patch_cost(*desc_[a], *desc_[b], sx[a], sy[a], sx[b], sy[b], shape_, opt_.norm,
@@ -665,25 +665,25 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
     // (streaming: that frame's t1); everything else is computed here.
     const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options, nlev);
     auto fresh0 = std::make_shared<StereoFeatures>(), fresh1 = std::make_shared<StereoFeatures>();
-    StereoFeatures *todo[2] = {reuse0 ? nullptr : fresh0.get(), fresh1.get()};
+    StereoFeatures *pending[2] = {reuse0 ? nullptr : fresh0.get(), fresh1.get()};
     const cv::Mat *src[2][2] = {{&in.left0, &in.right0}, {&in.left1, &in.right1}};
     for (int t = 0; t < 2; ++t)
-        if (todo[t]) {
-            todo[t]->left = src[t][0]->clone();
-            todo[t]->right = src[t][1]->clone();
-            todo[t]->sift = options.sift;
-            todo[t]->desc[0].resize(nlev);
-            todo[t]->desc[1].resize(nlev);
+        if (pending[t]) {
+            pending[t]->left = src[t][0]->clone();
+            pending[t]->right = src[t][1]->clone();
+            pending[t]->sift = options.sift;
+            pending[t]->desc[0].resize(nlev);
+            pending[t]->desc[1].resize(nlev);
         }
     // Pyramids of the images still to describe; the images are independent.
     std::vector<std::pair<features::DescriptorImage *, cv::Mat1f>> jobs;
     for (int t = 0; t < 2; ++t)
-        for (int k = 0; k < 2 && todo[t]; ++k) {
+        for (int k = 0; k < 2 && pending[t]; ++k) {
             cv::Mat1f g = features::to_gray_float(*src[t][k]);
             for (int l = 0; l < nlev; ++l) {
                 cv::Mat1f next;
                 if (l + 1 < nlev) cv::pyrDown(g, next);
-                jobs.emplace_back(&todo[t]->desc[k][l], g);
+                jobs.emplace_back(&pending[t]->desc[k][l], g);
                 g = next;
             }
         }

@@ -2,6 +2,7 @@
 // Exactly piecewise-planar synthetic scene for the interpolation suites: four regions with
 // sharp colour boundaries whose u, v, d0, d1 fields are affine in (x, y), sparse matches
 // sampled from them (with gross outliers), and KITTI-style outlier rates of an estimate.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -10,6 +11,7 @@
 
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "interpolation/ego_motion.hpp"
 
 namespace lidarflow::test {
 
@@ -130,6 +132,22 @@ inline OutlierRates outlier_rates(const SceneFlowField &est, const SceneFlowFiel
         r.epe_d0 /= n, r.epe_fl /= n;
     }
     return r;
+}
+
+// Exact (x, y, d0) -> (d1, u, v) samples of a known motion, for the ego-motion fits.
+struct MotionSamples {
+    std::vector<float> x, y, d0, d1, u, v;
+};
+
+// Largest prediction errors of model m on samples p: d1 [px] and flow end point [px].
+inline void max_errors(const interp::EgoMotion &m, const MotionSamples &p, double &e_d1, double &e_fl) {
+    e_d1 = e_fl = 0;
+    for (size_t i = 0; i < p.x.size(); ++i) {
+        float d1, u, v;
+        m.predict(p.x[i], p.y[i], p.d0[i], d1, u, v);
+        e_d1 = std::max(e_d1, static_cast<double>(std::fabs(d1 - p.d1[i])));
+        e_fl = std::max(e_fl, std::hypot(static_cast<double>(u - p.u[i]), static_cast<double>(v - p.v[i])));
+    }
 }
 
 }  // namespace lidarflow::test

@@ -13,6 +13,7 @@
 #include "interpolation_scene.hpp"
 
 using namespace lidarflow;
+using test::expect_error;
 using lidarflow::test::outlier_rates;
 
 namespace {
@@ -248,17 +249,6 @@ void deterministic_for_any_thread_count(void **) {
     const SceneFlowField c = one.run(m, lidar, s.image).dense;
     assert_true(same_field(a, b));
     assert_true(same_field(a, c));
-}
-
-template <class F>
-void expect_error(F &&f, ErrorCode code) {
-    try {
-        f();
-    } catch (const Error &e) {
-        assert_int_equal(static_cast<int>(e.code()), static_cast<int>(code));
-        return;
-    }
-    fail_msg("expected lidarflow::Error");
 }
 
 void rejects_invalid_input(void **) {

@@ -15,6 +15,8 @@
 #include "interpolation_scene.hpp"
 
 using namespace lidarflow;
+using test::expect_error;
+using test::max_errors;
 
 namespace {
 
@@ -25,9 +27,7 @@ struct Rig {
     double wx = 0.004, wy = -0.012, wz = 0.002, tx = 0.05, ty = -0.02, tz = -1.2;
 };
 
-struct Truth {
-    std::vector<float> x, y, d0, d1, u, v;
-};
+using Truth = test::MotionSamples;
 
 // Exact projections before/after the motion P' = R P + t (R = exp of the small rotation, to
 // second order, so the first-order model is only approximately exact).
@@ -60,17 +60,6 @@ Truth make_points(const Rig &r, int n, uint64_t seed) {
         t.v.push_back(static_cast<float>(qy - py));
     }
     return t;
-}
-
-// Largest prediction errors of the model on held-out points: (d1, flow end point).
-void max_errors(const interp::EgoMotion &m, const Truth &t, double &e_d1, double &e_fl) {
-    e_d1 = e_fl = 0;
-    for (size_t i = 0; i < t.x.size(); ++i) {
-        float d1, u, v;
-        m.predict(t.x[i], t.y[i], t.d0[i], d1, u, v);
-        e_d1 = std::max(e_d1, static_cast<double>(std::fabs(d1 - t.d1[i])));
-        e_fl = std::max(e_fl, std::hypot(static_cast<double>(u - t.u[i]), static_cast<double>(v - t.v[i])));
-    }
 }
 
 void ego_motion_exact_matches(void **) {
@@ -226,17 +215,6 @@ void geometry_hint_rejected_by_lidar(void **) {
     interp::InterpolationOptions o;
     const interp::InterpolationResult r = interp::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
     assert_int_equal(r.hint_seeds, 0);
-}
-
-template <class F>
-void expect_error(F &&f, ErrorCode code) {
-    try {
-        f();
-    } catch (const Error &e) {
-        assert_int_equal(static_cast<int>(e.code()), static_cast<int>(code));
-        return;
-    }
-    fail_msg("expected lidarflow::Error");
 }
 
 void rejects_bad_background_options(void **) {

@@ -15,6 +15,8 @@
 #include "interpolation_scene.hpp"
 
 using namespace lidarflow;
+using test::expect_error;
+using test::max_errors;
 
 namespace {
 
@@ -47,9 +49,7 @@ interp::EgoMotion true_motion(const StereoCamera &cam) {
     return m;
 }
 
-struct Points {
-    std::vector<float> x, y, d0, d1, u, v;
-};
+using Points = test::MotionSamples;
 
 Points make_points(const interp::EgoMotion &truth, int n, uint64_t seed) {
     test::TestRng rng(seed);
@@ -62,16 +62,6 @@ Points make_points(const interp::EgoMotion &truth, int n, uint64_t seed) {
         p.x.push_back(x), p.y.push_back(y), p.d0.push_back(d0), p.d1.push_back(d1), p.u.push_back(u), p.v.push_back(v);
     }
     return p;
-}
-
-void max_errors(const interp::EgoMotion &m, const Points &p, double &e_d1, double &e_fl) {
-    e_d1 = e_fl = 0;
-    for (size_t i = 0; i < p.x.size(); ++i) {
-        float d1, u, v;
-        m.predict(p.x[i], p.y[i], p.d0[i], d1, u, v);
-        e_d1 = std::max(e_d1, static_cast<double>(std::fabs(d1 - p.d1[i])));
-        e_fl = std::max(e_fl, std::hypot(static_cast<double>(u - p.u[i]), static_cast<double>(v - p.v[i])));
-    }
 }
 
 void rigid_fit_exact(void **) {
@@ -236,17 +226,6 @@ void occlusion_reasoning_fixes_hidden_d1(void **) {
     // Without the camera the calibration-free model is used and the run still succeeds.
     const interp::InterpolationResult nocam = interp::RobustInterpolator(o).run(c.matches, {}, c.image);
     assert_false(nocam.ego.calibrated);
-}
-
-template <class F>
-void expect_error(F &&f, ErrorCode code) {
-    try {
-        f();
-    } catch (const Error &e) {
-        assert_int_equal(static_cast<int>(e.code()), static_cast<int>(code));
-        return;
-    }
-    fail_msg("expected lidarflow::Error");
 }
 
 void rejects_bad_rigid_options(void **) {

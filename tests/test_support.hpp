@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <utility>
 
 #include "core/error.hpp"
 
@@ -43,6 +44,12 @@ ErrorCode error_code_of(F &&f) {
     }
     fail_msg("expected a lidarflow::Error");
     return ErrorCode::Internal;
+}
+
+// Fails the test unless f throws lidarflow::Error with exactly `code`.
+template <class F>
+void expect_error(F &&f, ErrorCode code) {
+    assert_int_equal(static_cast<int>(error_code_of(std::forward<F>(f))), static_cast<int>(code));
 }
 
 // Path of the shared KITTI training folder, or "" when LIDARFLOW_KITTI_DIR is unset/missing.

@@ -75,6 +75,11 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
         by >= b.height)
         return penalty * static_cast<float>(n);
     const int dim = a.dim;
+    // Eq. 2's per-sample term: the descriptor distance of one patch sample.
+    const auto sample = [dim, norm](const uint8_t *da, const uint8_t *db) {
+        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, dim))
+                                          : std::sqrt(static_cast<float>(L2SQ(da, db, dim)));
+    };
     float sum = 0.0f;
     const int r = shape.radius;
     if (ax >= r && ay >= r && bx >= r && by >= r && ax + r < a.width && ay + r < a.height &&
@@ -93,12 +98,7 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
             }
         }
         for (int k = 0; k < n; ++k) {
-            const uint8_t *da = ca + shape.dy[k] * rowa + shape.dx[k] * dim;
-            const uint8_t *db = cb + shape.dy[k] * rowb + shape.dx[k] * dim;
-            if (norm == DescriptorNorm::L1)
-                sum += static_cast<float>(L1(da, db, dim));
-            else
-                sum += std::sqrt(static_cast<float>(L2SQ(da, db, dim)));
+            sum += sample(ca + shape.dy[k] * rowa + shape.dx[k] * dim, cb + shape.dy[k] * rowb + shape.dx[k] * dim);
             if (sum > bound) return sum;
         }
         return sum;
@@ -108,12 +108,7 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
         const int pay = std::clamp(ay + shape.dy[k], 0, a.height - 1);
         const int pbx = std::clamp(bx + shape.dx[k], 0, b.width - 1);
         const int pby = std::clamp(by + shape.dy[k], 0, b.height - 1);
-        const uint8_t *da = a.at(pax, pay);
-        const uint8_t *db = b.at(pbx, pby);
-        if (norm == DescriptorNorm::L1)
-            sum += static_cast<float>(L1(da, db, dim));
-        else
-            sum += std::sqrt(static_cast<float>(L2SQ(da, db, dim)));
+        sum += sample(a.at(pax, pay), b.at(pbx, pby));
         if (sum > bound) return sum;
     }
     return sum;

@@ -41,6 +41,7 @@ const OptionKey kKeys[] = {
     {"threads", KeyType::Int, 1, 256, false, Extra::None, LF_INT_FIELD(threads)},
     {"preset", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     {"use_lidar", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
+    {"processing_scale", KeyType::Float, 0.125, 1, false, Extra::None, LF_FLOAT_FIELD(processing_scale)},
     {"last_stage", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     // The paper has one support window: the matcher's and the consistency check's are the same.
     {"support_window", KeyType::Int, 1, 101, false, Extra::Odd,
@@ -54,6 +55,7 @@ const OptionKey kKeys[] = {
     {"matching.use_lidar1", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.use_lidar1)},
     {"matching.grid_step", KeyType::Int, 1, 32, false, Extra::None, LF_INT_FIELD(matching.grid_step)},
     {"matching.iterations", KeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.iterations)},
+    {"matching.thin_from_level", KeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.thin_from_level)},
     {"matching.max_levels", KeyType::Int, 1, 10, false, Extra::None, LF_INT_FIELD(matching.max_levels)},
     {"matching.min_coarsest_height", KeyType::Int, 8, 4096, false, Extra::None,
      LF_INT_FIELD(matching.min_coarsest_height)},

@@ -27,6 +27,7 @@ typedef struct key_t_ {
 static const key_t_ kKeys[] = {
     {"threads", INT, 1, 256, 0, NONE, 1},
     {"use_lidar", BOOL, 0, 1, 0, NONE, 1},
+    {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 1},
     {"support_window", INT, 1, 101, 0, ODD, 15},
     {"matching.support_windows", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.const1", BOOL, 0, 1, 0, NONE, NAN},
@@ -34,6 +35,7 @@ static const key_t_ kKeys[] = {
     {"matching.use_lidar1", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.grid_step", INT, 1, 32, 0, NONE, NAN},
     {"matching.iterations", INT, 1, 100, 0, NONE, NAN},
+    {"matching.thin_from_level", INT, 1, 100, 0, NONE, NAN},
     {"matching.max_levels", INT, 1, 10, 0, NONE, NAN},
     {"matching.min_coarsest_height", INT, 8, 4096, 0, NONE, NAN},
     {"matching.patch_radius", INT, 0, 16, 0, NONE, NAN},

@@ -1,15 +1,15 @@
 // LiDAR rules of the matcher (a LiDAR pixel's d0 is never replaced; constraint 2 bounds d0 in
 // D_l^0 windows and d1 for targets in D_l^1 windows), the ablation switches, determinism and
 // input validation. Small synthetic scenes keep it fast.
-#include "test_support.hpp"
-
 #include <cmath>
 #include <functional>
 #include <limits>
 
 #include "core/error.hpp"
+#include "eval/metrics.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "synth/scene.hpp"
+#include "test_support.hpp"
 
 using namespace lidarflow;
 using namespace lidarflow::matching;
@@ -145,6 +145,39 @@ void deterministic(void **) {
     assert_false(same_field(a.dense, d.dense));
 }
 
+// Share of pixels with a KITTI flow outlier against the scene's ground truth.
+double flow_outlier_pct(const SceneFlowField &est) {
+    const FlowField &gt = scene().flow_occ;
+    long n = 0, bad = 0;
+    for (int y = 0; y < est.height(); ++y)
+        for (int x = 0; x < est.width(); ++x) {
+            if (!gt.valid(y, x)) continue;
+            ++n;
+            bad += eval::flow_outlier(gt.u(y, x), gt.v(y, x), est.u(y, x), est.v(y, x)) ? 1 : 0;
+        }
+    return 100.0 * bad / std::max(1L, n);
+}
+
+// Coarse levels with every 2nd (4th) seed per axis: the LiDAR rules hold, results do not
+// depend on the thread count, and the match is about as good as with every seed.
+void thinned_coarse_levels(void **) {
+    MatchingOptions every = small(MatchVariant::Full);
+    every.thin_from_level = 100;
+    MatchingOptions thin = every;
+    thin.thin_from_level = 1;  // strides 2 and 4 on the 1/2 and 1/4 levels
+    thin.threads = 1;
+    const MatchResult a = match_scene_flow(input(), thin, Direction::Forward);
+    thin.threads = 3;
+    assert_true(same_field(a.dense, match_scene_flow(input(), thin, Direction::Forward).dense));
+    const MatchResult full = match_scene_flow(input(), every, Direction::Forward);
+    assert_false(same_field(a.dense, full.dense));  // the option does act
+    for (const LidarPoint &p : scene().lidar0.points) assert_true(a.dense.d0(p.y, p.x) == p.disparity);
+    const double thin_pct = flow_outlier_pct(a.dense), full_pct = flow_outlier_pct(full.dense);
+    std::printf("flow outliers: every seed %.2f %%, thinned %.2f %%\n", full_pct, thin_pct);
+    assert_true(thin_pct <= full_pct + 5.0);
+    assert_true(thin_pct < 30.0);
+}
+
 void expect_error(ErrorCode code, const std::function<void()> &fn) {
     try {
         fn();
@@ -203,6 +236,11 @@ void validates_input(void **) {
     });
     expect_error(ErrorCode::InvalidArgument, [&] {
         MatchingOptions bad = o;
+        bad.thin_from_level = 0;  // the full-resolution level always has every seed
+        SceneFlowMatcher m(input(), bad);
+    });
+    expect_error(ErrorCode::InvalidArgument, [&] {
+        MatchingOptions bad = o;
         bad.max_disparity = std::numeric_limits<float>::infinity();
         SceneFlowMatcher m(input(), bad);
     });
@@ -222,6 +260,7 @@ int main() {
         cmocka_unit_test(constraint2_bounds_disparities_in_windows),
         cmocka_unit_test(image_only_ignores_lidar),
         cmocka_unit_test(deterministic),
+        cmocka_unit_test(thinned_coarse_levels),
         cmocka_unit_test(validates_input),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

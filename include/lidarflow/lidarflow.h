@@ -98,6 +98,9 @@ typedef struct lf_options lf_options_t;
  *   "preset"           string "default"  resets every option except "threads" to the preset
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
+ *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
+ *                                        factor, results brought back to the input size
+ *                                        (default 1; the "half" preset uses 0.5)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and
@@ -111,6 +114,8 @@ typedef struct lf_options lf_options_t;
  *   "matching.use_lidar1"       0/1  use the LiDAR of the second frame
  *   "matching.grid_step"        int   [1, 32]     seed grid step
  *   "matching.iterations"       int   [1, 100]    PatchMatch iterations per level
+ *   "matching.thin_from_level"  int   [1, 100]    from this pyramid level on, each coarser
+ *                                                 level keeps every 2nd seed per axis
  *   "matching.max_levels"       int   [1, 10]     pyramid levels at most
  *   "matching.min_coarsest_height" int [8, 4096]
  *   "matching.patch_radius"     int   [0, 16]

@@ -1,5 +1,7 @@
 #include "core/lidar.hpp"
 
+#include <cmath>
+
 #include "core/error.hpp"
 
 namespace lidarflow {
@@ -13,6 +15,19 @@ DisparityMap SparseLidar::to_map() const {
         map(p.y, p.x) = p.disparity;
     }
     return map;
+}
+
+void SparseLidar::validate(int w, int h, const std::string &what) const {
+    if (points.empty()) return;
+    require(width == w && height == h, ErrorCode::SizeMismatch,
+            what + " is " + std::to_string(width) + "x" + std::to_string(height) + " but the images are " +
+                std::to_string(w) + "x" + std::to_string(h));
+    for (const LidarPoint &p : points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
+                what + " has a point outside the image");
+        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
+                what + " has a non-finite or negative disparity");
+    }
 }
 
 SparseLidar SparseLidar::from_map(const DisparityMap &map) {

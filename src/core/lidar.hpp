@@ -1,5 +1,6 @@
 #pragma once
 // Sparse LiDAR measurements aligned to one left image: a list of (pixel, disparity).
+#include <string>
 #include <vector>
 
 #include "core/maps.hpp"
@@ -19,6 +20,10 @@ struct SparseLidar {
     DisparityMap to_map() const;
     // Every valid pixel of a disparity map becomes a point (row-major order).
     static SparseLidar from_map(const DisparityMap &map);
+    // Checks that the points fit images of w x h (sizes must agree unless there are no points)
+    // with finite, non-negative disparities. Throws SizeMismatch / InvalidArgument, the message
+    // starting with `what` (e.g. "MatchInput: lidar0").
+    void validate(int w, int h, const std::string &what) const;
 };
 
 }  // namespace lidarflow

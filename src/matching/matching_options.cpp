@@ -17,8 +17,10 @@ const char *variant_name(MatchVariant v) {
     return "?";
 }
 
-MatchingOptions MatchingOptions::for_variant(MatchVariant v) {
-    MatchingOptions o;
+MatchingOptions MatchingOptions::for_variant(MatchVariant v) { return MatchingOptions{}.with_variant(v); }
+
+MatchingOptions MatchingOptions::with_variant(MatchVariant v) const {
+    MatchingOptions o = *this;
     o.use_lidar = v != MatchVariant::ImageOnly;
     o.support_window = v == MatchVariant::ImLidarWin || v == MatchVariant::ImLidarWinConst1 ||
                        v == MatchVariant::Full;
@@ -34,6 +36,7 @@ void MatchingOptions::validate() const {
     check(min_coarsest_height >= 8, "min_coarsest_height must be >= 8");
     check(max_levels >= 1 && max_levels <= 10, "max_levels must be in [1, 10]");
     check(grid_step >= 1 && grid_step <= 32, "grid_step must be in [1, 32]");
+    check(thin_from_level >= 1 && thin_from_level <= 100, "thin_from_level must be in [1, 100]");
     check(iterations >= 1 && iterations <= 100, "iterations must be in [1, 100]");
     check(std::isfinite(stop_ratio) && stop_ratio >= 0.0f && stop_ratio <= 1.0f,
           "stop_ratio must be in [0, 1]");

@@ -57,20 +57,6 @@ struct Rng {
 // Round half away from zero without a libm call (hot path).
 inline int iround(float f) { return static_cast<int>(f + (f >= 0.0f ? 0.5f : -0.5f)); }
 
-void validate_lidar(const SparseLidar &l, int w, int h, const char *name) {
-    if (l.points.empty()) return;
-    require(l.width == w && l.height == h, ErrorCode::SizeMismatch,
-            std::string("MatchInput: ") + name + " is " + std::to_string(l.width) + "x" +
-                std::to_string(l.height) + " but the images are " + std::to_string(w) + "x" +
-                std::to_string(h));
-    for (const LidarPoint &p : l.points) {
-        require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
-                std::string("MatchInput: ") + name + " has a point outside the image");
-        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
-                std::string("MatchInput: ") + name + " has a non-finite or negative disparity");
-    }
-}
-
 // One point per pixel; on duplicates the larger disparity (the nearer, visible surface) wins.
 std::vector<LidarPoint> dedupe(const SparseLidar &l) {
     std::map<std::pair<int, int>, float> by_pixel;
@@ -122,11 +108,21 @@ public:
 
 private:
     struct SeedInfo {
-        int x = 0, y = 0;   // full resolution
-        int lidar = -1;     // reference LiDAR point at this pixel (d0 fixed)
-        int window = -1;    // nearest reference LiDAR point whose support window holds the seed
-        int strip = -1;     // grid seeds: strip index; extra LiDAR seeds: -1
-        int nb_begin = 0, nb_end = 0;
+        int x = 0, y = 0;    // full resolution
+        int gx = -1, gy = -1;  // grid node; -1 for extra LiDAR seeds
+        int lidar = -1;      // reference LiDAR point at this pixel (d0 fixed)
+        int window = -1;     // nearest reference LiDAR point whose support window holds the seed
+    };
+    // The seeds one pyramid level works on: the grid nodes at multiples of `stride` plus every
+    // extra LiDAR seed, their neighbour graph and the strips that partition them.
+    struct Graph {
+        int stride = 1;
+        std::vector<char> active;           // per seed
+        std::vector<int> seeds;             // active seeds
+        std::vector<int> strip;             // per seed: strip index; -1 for extra or inactive seeds
+        std::vector<int> nb_begin, nb_end;  // per seed: range in nb
+        std::vector<int> nb;
+        std::vector<std::vector<int>> strip_seeds;  // row-major seed order within each strip
     };
     // A scored candidate: rounded positions in the four images and the term values.
     struct Scored {
@@ -139,6 +135,9 @@ private:
     };
 
     void setup_seeds();
+    void build_graph(Graph &g, int stride, const std::vector<int> &lidar_seed) const;
+    int level_stride(int l) const;
+    void activate(const Graph &coarse);
     void setup_level(int l);
     void init_coarsest();
     int target_hit(int i, const State &s) const;
@@ -156,10 +155,10 @@ private:
     const std::vector<LidarPoint> &ref_lidar_;
     const std::vector<LidarPoint> &tgt_lidar_;
 
-    int gw_ = 0, gh_ = 0, num_grid_ = 0, num_strips_ = 0;
+    int gw_ = 0, gh_ = 0, num_grid_ = 0, xoff_ = 0, yoff_ = 0;
     std::vector<SeedInfo> info_;
-    std::vector<int> neighbours_;
-    std::vector<std::vector<int>> strip_seeds_;  // row-major seed order within each strip
+    std::vector<Graph> graphs_;     // by increasing stride
+    const Graph *graph_ = nullptr;  // the current level's
     std::vector<int> extra_seeds_;
 
     // Per level.
@@ -176,7 +175,7 @@ private:
     std::vector<Scored> best_;
     std::vector<int> visited_;
     // Active set (exact): version_[n] counts the changes of seed n's match; seen_[k] is the
-    // version of neighbour neighbours_[k] that its seed last tried. A neighbour whose match has
+    // version of neighbour nb[k] (of the current level's graph) that its seed last tried. A neighbour whose match has
     // not changed since lost against a best that has only improved since (same cost formula),
     // so trying it again cannot win.
     std::vector<uint32_t> version_, seen_;
@@ -201,6 +200,8 @@ void Engine::setup_seeds() {
     gh_ = std::max(1, H / step);
     const int xoff = std::min(W - 1, (W - (gw_ - 1) * step) / 2);
     const int yoff = std::min(H - 1, (H - (gh_ - 1) * step) / 2);
+    xoff_ = xoff;
+    yoff_ = yoff;
     num_grid_ = gw_ * gh_;
     info_.assign(num_grid_, SeedInfo{});
     for (int gy = 0; gy < gh_; ++gy)
@@ -208,9 +209,9 @@ void Engine::setup_seeds() {
             SeedInfo &s = info_[gy * gw_ + gx];
             s.x = std::min(W - 1, gx * step + xoff);
             s.y = std::min(H - 1, gy * step + yoff);
-            s.strip = gy / opt_.strip_rows;
+            s.gx = gx;
+            s.gy = gy;
         }
-    num_strips_ = (gh_ + opt_.strip_rows - 1) / opt_.strip_rows;
 
     // LiDAR seeds: a grid seed on a LiDAR pixel becomes that point's seed, others get their own.
     std::vector<int> lidar_seed(ref_lidar_.size(), -1);
@@ -243,40 +244,20 @@ void Engine::setup_seeds() {
         }
     }
 
-    // Neighbour graph: 8-connected grid, the window's LiDAR seed for window seeds, and the 3x3
-    // grid neighbourhood of the nearest grid node for extra LiDAR seeds.
-    neighbours_.clear();
-    for (int i = 0; i < static_cast<int>(info_.size()); ++i) {
-        SeedInfo &s = info_[i];
-        s.nb_begin = static_cast<int>(neighbours_.size());
-        int cgx, cgy;
-        if (i < num_grid_) {
-            cgx = i % gw_;
-            cgy = i / gw_;
-        } else {
-            cgx = std::clamp(iround(float(s.x - xoff) / step), 0, gw_ - 1);
-            cgy = std::clamp(iround(float(s.y - yoff) / step), 0, gh_ - 1);
-        }
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                const int nx = cgx + dx, ny = cgy + dy;
-                if (nx < 0 || ny < 0 || nx >= gw_ || ny >= gh_) continue;
-                const int n = ny * gw_ + nx;
-                if (n != i) neighbours_.push_back(n);
-            }
-        if (i < num_grid_ && s.window >= 0 && lidar_seed[s.window] != i)
-            neighbours_.push_back(lidar_seed[s.window]);
-        s.nb_end = static_cast<int>(neighbours_.size());
+    // One graph per distinct stride of the pyramid.
+    const int nlev = static_cast<int>(m_.levels.size());
+    graphs_.clear();
+    for (int l = 0; l < nlev; ++l) {
+        const int stride = level_stride(l);
+        if (!graphs_.empty() && graphs_.back().stride == stride) continue;
+        graphs_.emplace_back();
+        build_graph(graphs_.back(), stride, lidar_seed);
     }
-
-    strip_seeds_.assign(num_strips_, {});
-    for (int i = 0; i < num_grid_; ++i) strip_seeds_[info_[i].strip].push_back(i);
 
     const size_t n = info_.size();
     best_.assign(n, Scored{});
     visited_.assign(n, -1);
     version_.assign(n, 0);
-    seen_.assign(neighbours_.size(), 0);
     radius_.assign(n, 0);
     radius_d0_.assign(n, 0);
     radius_d1_.assign(n, 0);
@@ -284,9 +265,89 @@ void Engine::setup_seeds() {
     py_.assign(n, 0);
 }
 
+// CPM keeps every seed on every level; coarse levels then hold many seeds per level pixel that
+// all find the same match (3 px seeds are 3/8 px apart on the 1/8 level). From
+// opt_.thin_from_level on, each coarser level keeps every second grid node per axis.
+int Engine::level_stride(int l) const {
+    const int k = l - opt_.thin_from_level + 1;
+    return k <= 0 ? 1 : 1 << std::min(k, 16);
+}
+
+// Neighbour graph of one stride: 8-connected on the thinned grid, plus the window's LiDAR seed
+// for window seeds; extra LiDAR seeds are linked to the 3x3 active nodes around them.
+void Engine::build_graph(Graph &g, int stride, const std::vector<int> &lidar_seed) const {
+    const int n = static_cast<int>(info_.size());
+    g.stride = stride;
+    g.active.assign(n, 0);
+    g.seeds.clear();
+    g.strip.assign(n, -1);
+    g.nb_begin.assign(n, 0);
+    g.nb_end.assign(n, 0);
+    g.nb.clear();
+    const int last_gx = (gw_ - 1) / stride * stride, last_gy = (gh_ - 1) / stride * stride;
+    auto on_grid = [&](int i) { return info_[i].gx % stride == 0 && info_[i].gy % stride == 0; };
+    for (int i = 0; i < n; ++i) {
+        const SeedInfo &s = info_[i];
+        const bool grid = i < num_grid_;
+        if (grid && !on_grid(i)) continue;
+        g.active[i] = 1;
+        g.seeds.push_back(i);
+        int cgx, cgy;
+        if (grid) {
+            cgx = s.gx;
+            cgy = s.gy;
+            g.strip[i] = s.gy / stride / opt_.strip_rows;
+        } else {
+            const float f = static_cast<float>(opt_.grid_step * stride);
+            cgx = std::clamp(iround(float(s.x - xoff_) / f) * stride, 0, last_gx);
+            cgy = std::clamp(iround(float(s.y - yoff_) / f) * stride, 0, last_gy);
+        }
+        g.nb_begin[i] = static_cast<int>(g.nb.size());
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int nx = cgx + dx * stride, ny = cgy + dy * stride;
+                if (nx < 0 || ny < 0 || nx >= gw_ || ny >= gh_) continue;
+                const int k = ny * gw_ + nx;
+                if (k != i) g.nb.push_back(k);
+            }
+        if (grid && s.window >= 0) {
+            const int k = lidar_seed[s.window];
+            if (k != i && (k >= num_grid_ || on_grid(k))) g.nb.push_back(k);
+        }
+        g.nb_end[i] = static_cast<int>(g.nb.size());
+    }
+    const int rows = (gh_ - 1) / stride + 1;
+    g.strip_seeds.assign((rows + opt_.strip_rows - 1) / opt_.strip_rows, {});
+    for (int i : g.seeds)
+        if (g.strip[i] >= 0) g.strip_seeds[g.strip[i]].push_back(i);
+}
+
+// Seeds that join on a finer level start from the nearest seed of the coarser one (its match
+// and search radii); propagation then lets them pick a better neighbour's.
+void Engine::activate(const Graph &coarse) {
+    const int S = coarse.stride;
+    const int last_gx = (gw_ - 1) / S * S, last_gy = (gh_ - 1) / S * S;
+    for (int i : graph_->seeds) {
+        if (coarse.active[i]) continue;
+        const int gx = std::min(last_gx, (info_[i].gx + S / 2) / S * S);
+        const int gy = std::min(last_gy, (info_[i].gy + S / 2) / S * S);
+        const int d = gy * gw_ + gx;
+        best_[i].s = best_[d].s;
+        radius_[i] = radius_[d];
+        radius_d0_[i] = radius_d0_[d];
+        radius_d1_[i] = radius_d1_[d];
+    }
+}
+
 void Engine::setup_level(int l) {
     level_ = l;
     scale_ = std::ldexp(1.0f, -l);
+    {
+        const int stride = level_stride(l);
+        for (const Graph &g : graphs_)
+            if (g.stride == stride) graph_ = &g;
+        seen_.assign(graph_->nb.size(), 0);
+    }
     const auto &lev = m_.levels[l];
     lw_ = lev.w;
     lh_ = lev.h;
@@ -420,6 +481,7 @@ bool Engine::try_candidate(int i, const State &cand, Scored &best, bool d1case) 
 
 bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
     const SeedInfo &si = info_[i];
+    const Graph &g = *graph_;
     Scored &best = best_[i];
     bool improved = false;
     const bool d1case = target_hit(i, best.s) >= 0;
@@ -427,13 +489,12 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         // Another cost formula: earlier comparisons say nothing about the new one.
         const State cur = best.s;
         score(i, cur, best, d1case);
-        for (int k = si.nb_begin; k < si.nb_end; ++k) seen_[k] = version_[neighbours_[k]] - 1;
+        for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) seen_[k] = version_[g.nb[k]] - 1;
     }
     // Propagation (constraint 1 everywhere; LiDAR rules applied inside score()).
-    for (int k = si.nb_begin; k < si.nb_end; ++k) {
-        const int n = neighbours_[k];
-        const SeedInfo &ni = info_[n];
-        const bool fresh = consider_all_in_strip || ni.strip != si.strip || ni.strip < 0 ||
+    for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) {
+        const int n = g.nb[k];
+        const bool fresh = consider_all_in_strip || g.strip[n] != g.strip[i] || g.strip[n] < 0 ||
                            visited_[n] == iteration;
         if (!fresh || seen_[k] == version_[n]) continue;
         seen_[k] = version_[n];
@@ -466,7 +527,7 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
 }
 
 int Engine::run_strip(int strip, bool reverse, int iteration) {
-    const std::vector<int> &seeds = strip_seeds_[strip];
+    const std::vector<int> &seeds = graph_->strip_seeds[strip];
     int updates = 0;
     const int n = static_cast<int>(seeds.size());
     for (int k = 0; k < n; ++k) {
@@ -502,11 +563,12 @@ void Engine::init_coarsest() {
 void Engine::update_radii(int l) {
     const float maxr = std::max(1.0f, opt_.max_flow * std::ldexp(1.0f, -l));
     const float maxd = std::max(1.0f, opt_.max_disparity * std::ldexp(1.0f, -l));
-    for (size_t i = 0; i < info_.size(); ++i) {
+    const Graph &g = *graph_;
+    for (int i : g.seeds) {
         const State &s = best_[i].s;
         float rf = 0, r0 = 0, r1 = 0;
-        for (int k = info_[i].nb_begin; k < info_[i].nb_end; ++k) {
-            const State &n = best_[neighbours_[k]].s;
+        for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) {
+            const State &n = best_[g.nb[k]].s;
             rf = std::max(rf, std::hypot(n.u - s.u, n.v - s.v));
             r0 = std::max(r0, std::abs(n.d0 - s.d0));
             r1 = std::max(r1, std::abs(n.d1 - s.d1));
@@ -523,11 +585,15 @@ MatchResult Engine::run() {
     const int threads = opt_.threads;
     int iteration_stamp = 0;
     for (int l = nlev - 1; l >= 0; --l) {
+        const Graph *coarser = graph_;
         setup_level(l);
+        const Graph &g = *graph_;
+        const int na = static_cast<int>(g.seeds.size());
         if (l == nlev - 1) {
             init_coarsest();
         } else {
-            for (int i = 0; i < n; ++i) {
+            if (coarser != graph_) activate(*coarser);
+            for (int i : g.seeds) {
                 State &s = best_[i].s;
                 s.u *= 2;
                 s.v *= 2;
@@ -536,13 +602,15 @@ MatchResult Engine::run() {
             }
         }
 #pragma omp parallel for schedule(static) num_threads(threads)
-        for (int i = 0; i < n; ++i) {
+        for (int k = 0; k < na; ++k) {
+            const int i = g.seeds[k];
             const State s = best_[i].s;
             score(i, s, best_[i], target_hit(i, s) >= 0);
         }
         // New level, new costs: every neighbour is worth one try.
-        for (int i = 0; i < n; ++i)
-            for (int k = info_[i].nb_begin; k < info_[i].nb_end; ++k) seen_[k] = version_[neighbours_[k]] - 1;
+        for (int i : g.seeds)
+            for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) seen_[k] = version_[g.nb[k]] - 1;
+        const int num_strips = static_cast<int>(g.strip_seeds.size());
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp++;
             const bool reverse = it % 2 == 1;
@@ -550,12 +618,12 @@ MatchResult Engine::run() {
             for (int phase = 0; phase < 2; ++phase) {
                 const int parity = reverse ? 1 - phase : phase;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : updates)
-                for (int k = parity; k < num_strips_; k += 2) updates += run_strip(k, reverse, stamp);
+                for (int k = parity; k < num_strips; k += 2) updates += run_strip(k, reverse, stamp);
             }
             const int ne = static_cast<int>(extra_seeds_.size());
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(+ : updates)
             for (int k = 0; k < ne; ++k) updates += process_seed(extra_seeds_[k], stamp, true) ? 1 : 0;
-            if (static_cast<float>(updates) < opt_.stop_ratio * static_cast<float>(n)) break;
+            if (static_cast<float>(updates) < opt_.stop_ratio * static_cast<float>(na)) break;
         }
         if (l > 0) update_radii(l);
     }
@@ -651,8 +719,8 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
     m.width = in.left0.cols;
     m.height = in.left0.rows;
     require(m.width >= 2 && m.height >= 2, ErrorCode::InvalidArgument, "MatchInput: images must be at least 2x2");
-    validate_lidar(in.lidar0, m.width, m.height, "lidar0");
-    validate_lidar(in.lidar1, m.width, m.height, "lidar1");
+    in.lidar0.validate(m.width, m.height, "MatchInput: lidar0");
+    in.lidar1.validate(m.width, m.height, "MatchInput: lidar1");
     if (options.use_lidar) {
         m.lidar[0] = dedupe(in.lidar0);
         m.lidar[1] = dedupe(in.lidar1);

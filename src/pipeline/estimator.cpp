@@ -1,10 +1,12 @@
 #include "pipeline/estimator.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include "consistency/consistency.hpp"
 #include "core/error.hpp"
 #include "matching/scene_flow_matcher.hpp"
+#include "pipeline/resolution.hpp"
 
 namespace lidarflow::pipeline {
 namespace {
@@ -56,6 +58,8 @@ void EstimatorOptions::validate() const {
     require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "threads must be in [1, 256]");
     require(last_stage >= Stage::Matching && last_stage <= Stage::Interpolation, ErrorCode::InvalidArgument,
             "last_stage out of range");
+    require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
+            ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");
     matching_options(*this).validate();
 }
 
@@ -63,7 +67,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
     EstimatorOptions o;
     if (name == "default") return o;
     if (name == "balanced") {
-        o.matching.iterations = 4;
+        o.matching.thin_from_level = 2;  // the 1/4 level thinned too
         return o;
     }
     if (name == "fast") {
@@ -74,7 +78,11 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.matching.min_coarsest_height = 80;
         return o;
     }
-    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast)");
+    if (name == "half") {
+        o.processing_scale = 0.5;
+        return o;
+    }
+    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast, half)");
 }
 
 const SceneFlowField &EstimatorResult::output() const {
@@ -93,6 +101,28 @@ Estimator::Estimator(const EstimatorOptions &options)
 EstimatorResult Estimator::run(const FrameInput &frame) const { return run(frame, nullptr); }
 
 EstimatorResult Estimator::run(const FrameInput &frame, StreamCache *cache) const {
+    if (options_.processing_scale >= 1.0) return run_native(frame, cache);
+    const auto t_total = Clock::now();
+    require(!frame.left0.empty(), ErrorCode::InvalidArgument, "FrameInput: left0 is empty");
+    const int W = frame.left0.cols, H = frame.left0.rows;
+    const cv::Size size = scaled_size(W, H, options_.processing_scale);
+    if (size.width >= W && size.height >= H) return run_native(frame, cache);
+    auto t = Clock::now();
+    const FrameInput small = downscale_frame(frame, size);
+    const double t_down = seconds_since(t);
+    EstimatorResult r = run_native(small, cache);
+    r.timings.insert(r.timings.begin(), {"downscale", t_down});
+    t = Clock::now();
+    for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
+        *f = upscale_field(*f, W, H);
+        if (options_.use_lidar && f != &r.backward) restore_lidar_d0(*f, frame.lidar0);
+    }
+    r.timings.push_back({"upscale", seconds_since(t)});
+    r.total_seconds = seconds_since(t_total);
+    return r;
+}
+
+EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cache) const {
     const auto t_total = Clock::now();
     EstimatorResult r;
     r.last_stage = options_.last_stage;

@@ -32,6 +32,9 @@ struct EstimatorOptions {
     bool use_lidar = true;
     Stage last_stage = Stage::Interpolation;
     int threads = 1;  // OpenMP threads for every stage (num_threads clauses; never global)
+    // Every stage runs on the frame resized by this factor, in [0.125, 1]; the results are
+    // brought back to the input size (pipeline/resolution.hpp). 1 = full resolution.
+    double processing_scale = 1.0;
 
     matching::MatchingOptions matching;
     consistency::ConsistencyOptions consistency;
@@ -40,11 +43,12 @@ struct EstimatorOptions {
     // Throws Error(InvalidArgument) naming the first bad field.
     void validate() const;
 
-    // Named speed/accuracy trade-offs of the matcher (everything else at its default):
+    // Named speed/accuracy trade-offs (everything else at its default; the README's preset
+    // table has the measured curve):
     //  "default"  the reference settings;
-    //  "balanced" 4 PatchMatch iterations per level (final SF unchanged on the shared KITTI
-    //             frames, ~15 % less CPU);
-    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels (~2.3x less CPU, SF +3.5 pts).
+    //  "balanced" the matcher's 1/4 pyramid level thinned as well (thin_from_level 2);
+    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels;
+    //  "half"     every stage at half resolution (processing_scale 0.5).
     // Throws Error(InvalidArgument) for another name.
     static EstimatorOptions preset(const std::string &name);
 };
@@ -109,6 +113,8 @@ public:
     const EstimatorOptions &options() const { return options_; }
 
 private:
+    EstimatorResult run_native(const FrameInput &frame, StreamCache *cache) const;
+
     EstimatorOptions options_;
     interp::RobustInterpolator interpolator_;
 };

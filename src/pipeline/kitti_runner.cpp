@@ -203,12 +203,12 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
             table.add("Matching", "im-only", eval::FillMode::Filled, gt, img.forward, seeds, id);
             for (MatchVariant v : {MatchVariant::ImLidar, MatchVariant::ImLidarWin, MatchVariant::ImLidarWinConst1}) {
                 if (progress) progress(i, ids.size(), id + ": matching " + matching::variant_name(v));
-                matching::MatchingOptions mo = matching::MatchingOptions::for_variant(v);
-                mo.threads = main_opt.threads;
-                const matching::MatchInput mi{frame.input.left0, frame.input.right0, frame.input.left1,
-                                              frame.input.right1, frame.input.lidar0, frame.input.lidar1};
+                // The main run's settings (preset, scale) with this row's LiDAR switches.
+                EstimatorOptions vo = main_opt;
+                vo.matching = main_opt.matching.with_variant(v);
+                vo.last_stage = Stage::Matching;
                 table.add("Matching", matching::variant_name(v), eval::FillMode::Filled, gt,
-                          matching::match_scene_flow(mi, mo, matching::Direction::Forward).dense, seeds, id);
+                          Estimator(vo).run(frame.input).forward, seeds, id);
             }
         }
         table.add("Matching", main_name, eval::FillMode::Filled, gt, r.forward, seeds, id);

@@ -7,6 +7,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "pipeline/kitti_runner.hpp"
 
@@ -23,7 +24,10 @@ int run_kitti_command(int argc, char **argv) {
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | half"},
+               {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
+               {"scale", true, "S    processing scale in [0.125, 1] (default: the preset's)"},
+               {"seed", true, "N    random seed of the matcher and the interpolation (default 1)"},
                {"out", true, "DIR  write disp_0/, disp_1/, flow/, viz/ and report.json here"},
                {"no-viz", false, "do not write pictures"}});
     if (args.help_requested()) {
@@ -44,6 +48,14 @@ int run_kitti_command(int argc, char **argv) {
     o.estimator = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     o.estimator.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
     o.estimator.threads = args.integer("threads", 2);
+    if (args.has("scale")) o.estimator.processing_scale = args.number("scale", 1.0);
+    if (args.has("seed")) {
+        const int seed = args.integer("seed", 1);
+        require(seed >= 0, ErrorCode::InvalidArgument, "kitti: --seed must be >= 0");
+        o.estimator.matching.random_seed = static_cast<uint64_t>(seed);
+        o.estimator.interpolation.random_seed = static_cast<unsigned>(seed);
+    }
+    apply_option_assignments(o.estimator, args.list("set"));
     o.ablation = args.flag("ablation");
     o.out = args.str("out", "");
     o.write_viz = !args.flag("no-viz");

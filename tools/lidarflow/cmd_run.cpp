@@ -6,6 +6,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_png.hpp"
@@ -37,7 +38,8 @@ int run(int argc, char **argv) {
                {"no-lidar", false, "image-only pipeline (ignore --lidar0/--lidar1)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | half"},
+               {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
                {"id", true, "ID   frame id of the output files (default 000000)"}});
     if (args.help_requested()) {
@@ -67,6 +69,7 @@ int run(int argc, char **argv) {
     opt.use_lidar = !args.flag("no-lidar");
     opt.threads = args.integer("threads", 2);
     opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
+    apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);
     const pipeline::EstimatorResult r = estimator.run(in);
     const SceneFlowField &f = r.output();

@@ -1,0 +1,111 @@
+#include "pipeline/resolution.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+
+namespace lidarflow::pipeline {
+namespace {
+
+SparseLidar downscale_lidar(const SparseLidar &l, cv::Size size, double sx, double sy) {
+    SparseLidar out{size.width, size.height, {}};
+    if (l.points.empty()) return out;
+    std::map<std::pair<int, int>, float> by_pixel;
+    for (const LidarPoint &p : l.points) {
+        const int x = std::min(size.width - 1, static_cast<int>(std::floor((p.x + 0.5) * sx)));
+        const int y = std::min(size.height - 1, static_cast<int>(std::floor((p.y + 0.5) * sy)));
+        const float d = static_cast<float>(p.disparity * sx);
+        auto [it, inserted] = by_pixel.emplace(std::make_pair(y, x), d);
+        if (!inserted) it->second = std::max(it->second, d);
+    }
+    for (const auto &[yx, d] : by_pixel) out.points.push_back({yx.second, yx.first, d});
+    return out;
+}
+
+}  // namespace
+
+cv::Size scaled_size(int w, int h, double scale) {
+    return {std::max(2, static_cast<int>(std::lround(w * scale))), std::max(2, static_cast<int>(std::lround(h * scale)))};
+}
+
+FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
+    const cv::Mat *imgs[4] = {&f.left0, &f.right0, &f.left1, &f.right1};
+    const char *names[4] = {"left0", "right0", "left1", "right1"};
+    for (int i = 0; i < 4; ++i) {
+        require(!imgs[i]->empty(), ErrorCode::InvalidArgument, std::string("FrameInput: ") + names[i] + " is empty");
+        require(imgs[i]->size() == f.left0.size(), ErrorCode::SizeMismatch,
+                std::string("FrameInput: ") + names[i] + " differs in size from left0");
+    }
+    const int W = f.left0.cols, H = f.left0.rows;
+    require(size.width >= 2 && size.height >= 2 && size.width <= W && size.height <= H, ErrorCode::InvalidArgument,
+            "downscale_frame: target size must be at least 2x2 and no larger than the frame");
+    f.lidar0.validate(W, H, "FrameInput: lidar0");
+    f.lidar1.validate(W, H, "FrameInput: lidar1");
+    const double sx = double(size.width) / W, sy = double(size.height) / H;
+    FrameInput out;
+    cv::Mat *dst[4] = {&out.left0, &out.right0, &out.left1, &out.right1};
+    for (int i = 0; i < 4; ++i) cv::resize(*imgs[i], *dst[i], size, 0, 0, cv::INTER_AREA);
+    out.lidar0 = downscale_lidar(f.lidar0, size, sx, sy);
+    out.lidar1 = downscale_lidar(f.lidar1, size, sx, sy);
+    out.camera = f.camera;
+    if (f.camera.valid()) {
+        out.camera.fx = f.camera.fx * sx;
+        out.camera.fy = f.camera.fy * sy;
+        out.camera.cx = (f.camera.cx + 0.5) * sx - 0.5;
+        out.camera.cy = (f.camera.cy + 0.5) * sy - 0.5;
+    }
+    return out;
+}
+
+SceneFlowField upscale_field(const SceneFlowField &small, int width, int height) {
+    if (small.u.empty()) return {};
+    const int w = small.width(), h = small.height();
+    require(width >= w && height >= h, ErrorCode::InvalidArgument, "upscale_field: target smaller than the field");
+    SceneFlowField out = SceneFlowField::zeros(width, height);
+    const float rx = float(width) / w, ry = float(height) / h;
+    const cv::Mat1f *in[5] = {&small.u, &small.v, &small.d0, &small.d1, &small.confidence};
+    cv::Mat1f *res[5] = {&out.u, &out.v, &out.d0, &out.d1, &out.confidence};
+    const float gain[5] = {rx, ry, rx, rx, 1.0f};
+    for (int y = 0; y < height; ++y) {
+        const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
+        const int y0 = std::min(h - 2 >= 0 ? h - 2 : 0, static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);
+        const float ay = fy - y0;
+        const int yn = std::min(h - 1, static_cast<int>(y / ry));
+        for (int x = 0; x < width; ++x) {
+            const float fx = std::clamp((x + 0.5f) / rx - 0.5f, 0.0f, float(w - 1));
+            const int x0 = std::min(w - 2 >= 0 ? w - 2 : 0, static_cast<int>(fx)), x1 = std::min(w - 1, x0 + 1);
+            const float ax = fx - x0;
+            if (small.valid(y0, x0) && small.valid(y0, x1) && small.valid(y1, x0) && small.valid(y1, x1)) {
+                for (int c = 0; c < 5; ++c) {
+                    const cv::Mat1f &m = *in[c];
+                    const float top = m(y0, x0) + ax * (m(y0, x1) - m(y0, x0));
+                    const float bot = m(y1, x0) + ax * (m(y1, x1) - m(y1, x0));
+                    (*res[c])(y, x) = gain[c] * (top + ay * (bot - top));
+                }
+                out.valid(y, x) = 1;
+                continue;
+            }
+            const int xn = std::min(w - 1, static_cast<int>(x / rx));
+            if (!small.valid(yn, xn)) continue;
+            for (int c = 0; c < 5; ++c) (*res[c])(y, x) = gain[c] * (*in[c])(yn, xn);
+            out.valid(y, x) = 1;
+        }
+    }
+    return out;
+}
+
+void restore_lidar_d0(SceneFlowField &field, const SparseLidar &lidar0) {
+    if (field.u.empty()) return;
+    for (const LidarPoint &p : lidar0.points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < field.width() && p.y < field.height(), ErrorCode::InvalidArgument,
+                "restore_lidar_d0: point outside the field");
+        if (field.valid(p.y, p.x)) field.d0(p.y, p.x) = p.disparity;
+    }
+}
+
+}  // namespace lidarflow::pipeline

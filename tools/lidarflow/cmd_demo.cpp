@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "args.hpp"
+#include "option_assignments.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
@@ -71,7 +72,9 @@ int run_demo(int argc, char **argv) {
     Args args("demo", argc, argv,
                         {{"out", true, "DIR  output folder (default demo-out)"},
                {"seed", true, "S  scene seed (default 1)"},
-               {"threads", true, "N  OpenMP threads of the estimator (default 2)"}});
+               {"threads", true, "N  OpenMP threads of the estimator (default 2)"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | half"},
+               {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -122,9 +125,10 @@ int run_demo(int argc, char **argv) {
     gt_hard.occ = masked_gt(s.disp0_occ, s.disp1_occ, s.flow_occ, hard);
     std::vector<DemoRun> runs;
     for (const bool lidar : {true, false}) {
-        pipeline::EstimatorOptions opt;
-        opt.use_lidar = lidar;
+        pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
         opt.threads = args.integer("threads", 2);
+        apply_option_assignments(opt, args.list("set"));
+        opt.use_lidar = lidar;
         DemoRun r{lidar ? "lidarflow" : "image-only", pipeline::Estimator(opt).run(in), {}, {}};
         const SceneFlowField &f = r.result.dense;
         r.all = eval::evaluate_frame(gt, f, eval::EvalOptions{});

@@ -1,5 +1,6 @@
 #include "pipeline/estimator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -33,6 +34,21 @@ matching::MatchingOptions matching_options(const EstimatorOptions &o) {
         mo.support_window = mo.const1 = mo.const2 = false;
     }
     return mo;
+}
+
+// The stages' search ranges follow the processing scale: they describe how far things move in
+// the scene, so at half size half the pixels cover them (and the pyramid keeps its depth).
+// Tolerances and window sizes stay (pipeline/resolution.hpp says why).
+EstimatorOptions search_ranges_at_scale(const EstimatorOptions &o) {
+    EstimatorOptions s = o;
+    const double k = o.processing_scale;
+    if (k >= 1.0) return s;
+    s.matching.max_flow = std::max(1.0f, static_cast<float>(o.matching.max_flow * k));
+    s.matching.max_disparity = std::max(1.0f, static_cast<float>(o.matching.max_disparity * k));
+    s.matching.min_coarsest_height = std::max(8, static_cast<int>(std::lround(o.matching.min_coarsest_height * k)));
+    s.consistency.sgm.num_disparities =
+        std::max(16, (static_cast<int>(std::ceil(o.consistency.sgm.num_disparities * k)) + 15) / 16 * 16);
+    return s;
 }
 
 }  // namespace
@@ -96,7 +112,8 @@ const SceneFlowField &EstimatorResult::output() const {
 }
 
 Estimator::Estimator(const EstimatorOptions &options)
-    : options_((options.validate(), options)), interpolator_(interpolation_options(options)) {}
+    : options_((options.validate(), options)), stage_options_(search_ranges_at_scale(options_)),
+      interpolator_(interpolation_options(options)) {}
 
 EstimatorResult Estimator::run(const FrameInput &frame) const { return run(frame, nullptr); }
 
@@ -134,7 +151,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     // Stage 1. Descriptors are computed once and shared by both directions.
     auto t = Clock::now();
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
-    const matching::SceneFlowMatcher matcher(mi, matching_options(options_), cache ? cache->t1_ : nullptr);
+    const matching::SceneFlowMatcher matcher(mi, matching_options(stage_options_), cache ? cache->t1_ : nullptr);
     if (cache) {
         cache->t1_ = matcher.features_t1();
         cache->last_reused_ = matcher.reused_t0();
@@ -154,7 +171,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     // Stages 2-3.
     t = Clock::now();
     consistency::ConsistencyResult c = consistency::run_consistency(r.forward, r.backward, frame.left0,
-                                                                     frame.right0, lidar0, options_.consistency);
+                                                                     frame.right0, lidar0, stage_options_.consistency);
     r.after_sgm = std::move(c.after_sgm);
     r.after_fb = std::move(c.after_fb);
     r.sparse = std::move(c.sparse);

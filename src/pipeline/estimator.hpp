@@ -33,7 +33,9 @@ struct EstimatorOptions {
     Stage last_stage = Stage::Interpolation;
     int threads = 1;  // OpenMP threads for every stage (num_threads clauses; never global)
     // Every stage runs on the frame resized by this factor, in [0.125, 1]; the results are
-    // brought back to the input size (pipeline/resolution.hpp). 1 = full resolution.
+    // brought back to the input size (pipeline/resolution.hpp). 1 = full resolution. The
+    // search ranges (matching.max_flow, max_disparity, min_coarsest_height and the SGM range)
+    // are taken at full resolution and scaled with it; the other pixel options are not.
     double processing_scale = 1.0;
 
     matching::MatchingOptions matching;
@@ -116,6 +118,7 @@ private:
     EstimatorResult run_native(const FrameInput &frame, StreamCache *cache) const;
 
     EstimatorOptions options_;
+    EstimatorOptions stage_options_;  // options_ with search ranges at processing_scale
     interp::RobustInterpolator interpolator_;
 };
 

@@ -2,9 +2,10 @@
 // Running the estimator below the input resolution (EstimatorOptions::processing_scale): the
 // frame is brought down before stage 1 and every result field back up after the last stage.
 // Why: every stage's cost grows with the pixel count, so half resolution is about 4x faster;
-// the price is accuracy (see the README's preset table). The stages keep their pixel-unit
-// options: scaling windows, thresholds and superpixel size with the image measured worse
-// (KITTI SF 17.2 -> 17.7 % sizes only, 20.5 % with the thresholds too, at scale 0.5).
+// the price is accuracy (see the README's preset table). Only the search ranges scale with the
+// image (the estimator does that); windows, thresholds and superpixel size keep their pixel
+// values: scaling them too measured worse (KITTI SF at scale 0.5, seeds 1-3: 17.2 % as is,
+// 17.7 % with sizes scaled, 20.5 % with the tolerances scaled as well).
 #include "core/maps.hpp"
 #include "pipeline/estimator.hpp"
 

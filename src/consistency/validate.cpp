@@ -26,9 +26,10 @@ void check_field(const SceneFlowField &f, const std::string &name) {
             const bool finite = std::isfinite(f.u(y, x)) && std::isfinite(f.v(y, x)) &&
                                 std::isfinite(f.d0(y, x)) && std::isfinite(f.d1(y, x)) &&
                                 std::isfinite(confidence_at(f, y, x));
-            require(finite, ErrorCode::InvalidArgument,
-                    "consistency: " + name + " has a non-finite value at valid pixel (" + std::to_string(x) +
-                        ", " + std::to_string(y) + ")");
+            require(finite, ErrorCode::InvalidArgument, [&] {
+                return "consistency: " + name + " has a non-finite value at valid pixel (" + std::to_string(x) +
+                       ", " + std::to_string(y) + ")";
+            });
         }
 }
 

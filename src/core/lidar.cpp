@@ -24,9 +24,9 @@ void SparseLidar::validate(int w, int h, const std::string &what) const {
                 std::to_string(w) + "x" + std::to_string(h));
     for (const LidarPoint &p : points) {
         require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
-                what + " has a point outside the image");
+                [&] { return what + " has a point outside the image"; });
         require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
-                what + " has a non-finite or negative disparity");
+                [&] { return what + " has a non-finite or negative disparity"; });
     }
 }
 

@@ -52,6 +52,8 @@ void apply_override(MatchingOptions &o, const std::string &kv) {
     else if (k == "const2_abs") o.const2_abs = float(v);
     else if (k == "const2_rel") o.const2_rel = float(v);
     else if (k == "use_lidar1") o.use_lidar1 = v != 0;
+    else if (k == "paper_d1_terms") o.d1_terms = v != 0 ? D1Terms::Paper : D1Terms::ReferenceAnchored;
+    else if (k == "keep_disparity_change") o.keep_disparity_change = v != 0;
     else if (k == "const1") o.const1 = v != 0;
     else if (k == "const2") o.const2 = v != 0;
     else if (k == "strip_rows") o.strip_rows = int(v);

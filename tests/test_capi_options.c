@@ -33,6 +33,8 @@ static const key_t_ kKeys[] = {
     {"matching.const1", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.const2", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.use_lidar1", BOOL, 0, 1, 0, NONE, NAN},
+    {"matching.keep_disparity_change", BOOL, 0, 1, 0, NONE, 1},
+    {"matching.d1_terms_anchored", BOOL, 0, 1, 0, NONE, 0},
     {"matching.grid_step", INT, 1, 32, 0, NONE, NAN},
     {"matching.iterations", INT, 1, 100, 0, NONE, NAN},
     {"matching.thin_from_level", INT, 1, 100, 0, NONE, NAN},

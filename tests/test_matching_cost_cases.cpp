@@ -116,6 +116,23 @@ void four_cases_follow_the_paper(void **) {
     near(C(CostCase::LidarD0D1), (E_l0l1 + E_r0l1 + 2 * E_r0r1 + E_l1r1) / 5);      // Eq. 12
     // The cases differ (the test would notice a swapped term).
     assert_true(std::abs(C(CostCase::LidarD0) - C(CostCase::LidarD1)) > 1.0);
+
+    // Reference-anchored D_l^1 cases: E(l1, r1) replaced by E(l0, r1); C_I and C_{D_l^0} as is.
+    auto A = [&](CostCase c) {
+        return case_cost(s, c, x, y, u, v, d0, d1, full, DescriptorNorm::L2, 1e9f, D1Terms::ReferenceAnchored);
+    };
+    near(A(CostCase::Image), C(CostCase::Image));
+    near(A(CostCase::LidarD0), C(CostCase::LidarD0));
+    near(A(CostCase::LidarD1), (E_l0l1 + E_l0r0 + E_l0r1 + E_r0r1) / 4);
+    near(A(CostCase::LidarD0D1), (E_l0l1 + E_r0l1 + 2 * E_r0r1 + E_l0r1) / 5);
+    assert_true(std::abs(A(CostCase::LidarD1) - C(CostCase::LidarD1)) > 1.0);
+    for (int c = 0; c < 4; ++c) {
+        float sum = 0;
+        for (int t = 0; t < kNumTerms; ++t) sum += case_weights(CostCase(c), D1Terms::ReferenceAnchored)[t];
+        near(sum, kCaseWeightSum[c]);
+        // No anchored case compares two target patches (the t1 stereo term).
+        assert_true(case_weights(CostCase(c), D1Terms::ReferenceAnchored)[kTl1r1] == 0);
+    }
 }
 
 void case_cost_validates(void **) {
@@ -139,7 +156,7 @@ void case_cost_validates(void **) {
 
 // Every seed's reported cost is the case formula of its reported case at its match, and the
 // case follows the LiDAR rules: D0 part for LiDAR pixels (and, with const1, window seeds).
-void matcher_costs_are_the_case_formulas(void **) {
+void matcher_costs_are_the_case_formulas_for(D1Terms terms) {
     synth::SynthConfig sc;
     sc.width = 160;
     sc.height = 96;
@@ -149,6 +166,7 @@ void matcher_costs_are_the_case_formulas(void **) {
     MatchInput in{scene.left0, scene.right0, scene.left1, scene.right1, scene.lidar0, scene.lidar1};
     MatchingOptions o = MatchingOptions::for_variant(MatchVariant::Full);
     o.min_coarsest_height = 24;
+    o.d1_terms = terms;
     const MatchResult r = match_scene_flow(in, o, Direction::Forward);
 
     Four f;
@@ -162,7 +180,8 @@ void matcher_costs_are_the_case_formulas(void **) {
     int counts[4] = {0, 0, 0, 0};
     for (const SeedMatch &m : r.seeds) {
         const int u = rnd(m.u), v = rnd(m.v), d0 = rnd(m.d0), d1 = rnd(m.d1);
-        const double expect = case_cost(s, m.cost_case, m.x, m.y, u, v, d0, d1, shape, o.norm, o.out_of_image_penalty);
+        const double expect = case_cost(s, m.cost_case, m.x, m.y, u, v, d0, d1, shape, o.norm, o.out_of_image_penalty,
+                                        terms);
         near(m.cost, expect);
         const bool d0case = m.cost_case == CostCase::LidarD0 || m.cost_case == CostCase::LidarD0D1;
         assert_int_equal(d0case, m.is_lidar || m.in_window);
@@ -170,6 +189,14 @@ void matcher_costs_are_the_case_formulas(void **) {
     }
     // The scene exercises all four cases.
     for (int c = 0; c < 4; ++c) assert_true(counts[c] > 0);
+}
+
+// The matcher scores with the formulas its options select: the paper's Eqs. 10 / 12 (default)
+// and the reference-anchored D_l^1 cases.
+void matcher_costs_are_the_case_formulas(void **) {
+    assert_int_equal(int(MatchingOptions{}.d1_terms), int(D1Terms::Paper));
+    matcher_costs_are_the_case_formulas_for(D1Terms::Paper);
+    matcher_costs_are_the_case_formulas_for(D1Terms::ReferenceAnchored);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
+#include "matching/lidar_support.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "synth/scene.hpp"
 #include "test_support.hpp"
@@ -178,6 +179,30 @@ void thinned_coarse_levels(void **) {
     assert_true(thin_pct < 30.0);
 }
 
+// A LiDAR rule that moves the d0 of a propagated match moves its d1 by the same amount (it
+// keeps its disparity change) unless keep_disparity_change is off; image-only matching has no
+// LiDAR rule and no LiDAR case, so neither this nor d1_terms changes it.
+void lidar_d0_rule_keeps_disparity_change(void **) {
+    assert_true(d1_after_d0_rule(10.0f, 7.0f, 12.0f, true) == 15.0f);   // d0 +5: d1 +5
+    assert_true(d1_after_d0_rule(10.0f, 7.0f, 4.5f, true) == 7.5f);     // d0 -2.5: d1 -2.5
+    assert_true(d1_after_d0_rule(10.0f, 7.0f, 12.0f, false) == 10.0f);  // paper: d1 as is
+    assert_true(d1_after_d0_rule(10.0f, 7.0f, 7.0f, true) == 10.0f);    // d0 not moved
+    assert_true(MatchingOptions{}.keep_disparity_change);
+
+    MatchingOptions on = small(MatchVariant::Full), off = on;
+    off.keep_disparity_change = false;
+    const MatchResult a = match_scene_flow(input(), on, Direction::Forward);
+    const MatchResult b = match_scene_flow(input(), off, Direction::Forward);
+    assert_false(same_field(a.dense, b.dense));  // the rule is applied in LiDAR mode
+
+    MatchingOptions im = small(MatchVariant::ImageOnly), im_paper = im;
+    im_paper.keep_disparity_change = false;
+    im_paper.d1_terms = D1Terms::Paper;
+    const MatchResult c = match_scene_flow(input(), im, Direction::Forward);
+    const MatchResult d = match_scene_flow(input(), im_paper, Direction::Forward);
+    assert_true(same_field(c.dense, d.dense));
+}
+
 void expect_error(ErrorCode code, const std::function<void()> &fn) {
     try {
         fn();
@@ -261,6 +286,7 @@ int main() {
         cmocka_unit_test(image_only_ignores_lidar),
         cmocka_unit_test(deterministic),
         cmocka_unit_test(thinned_coarse_levels),
+        cmocka_unit_test(lidar_d0_rule_keeps_disparity_change),
         cmocka_unit_test(validates_input),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

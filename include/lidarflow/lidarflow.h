@@ -112,6 +112,10 @@ typedef struct lf_options lf_options_t;
  *                                    windows and the two constraints (need use_lidar; const1
  *                                    and const2 need support_windows)
  *   "matching.use_lidar1"       0/1  use the LiDAR of the second frame
+ *   "matching.keep_disparity_change" 0/1  a LiDAR rule that moves a propagated d0 moves its
+ *                                   d1 along (default 1)
+ *   "matching.d1_terms_anchored" 0/1  D_l^1 cases use E(l0,r1) instead of the paper's E(l1,r1)
+ *                                   (default 0)
  *   "matching.grid_step"        int   [1, 32]     seed grid step
  *   "matching.iterations"       int   [1, 100]    PatchMatch iterations per level
  *   "matching.thin_from_level"  int   [1, 100]    from this pyramid level on, each coarser

@@ -30,6 +30,24 @@ constexpr float kCaseWeights[4][kNumTerms] = {
 };
 constexpr float kCaseWeightSum[4] = {3, 4, 4, 5};
 
+// Which terms the two D_l^1 cases use (MatchingOptions::d1_terms; see matching_options.hpp).
+//  - Paper: Eqs. 10 and 12 as printed, with the t1 stereo term E(l1, r1) (Eq. 11).
+//  - ReferenceAnchored: E(l1, r1) is replaced by the cross term E(l0, r1) (Eq. 6), so that every
+//    flow-dependent term compares a target patch with a patch of the reference point itself
+//    (seen at t0 by the left or the right camera). Same number of terms and the same weight sums.
+enum class D1Terms { Paper, ReferenceAnchored };
+constexpr float kCaseWeightsAnchored[4][kNumTerms] = {
+    {1, 1, 1, 0, 0, 0},      // C_I (unchanged)
+    {1, 0, 1, 1, 1, 0},      // C_{D_l^0} (unchanged)
+    {1, 1, 1, 1, 0, 0},      // E(l0,l1) + E(l0,r0) + E(l0,r1) + E(r0,r1)
+    {1, 0, 1, 2, 1, 0},      // E(l0,l1) + E(r0,l1) + 2 E(r0,r1) + E(l0,r1)
+};
+// The term weights of case c (kNumTerms values; the sum is kCaseWeightSum[c]).
+inline const float *case_weights(CostCase c, D1Terms terms) {
+    return terms == D1Terms::Paper ? kCaseWeights[static_cast<int>(c)]
+                                   : kCaseWeightsAnchored[static_cast<int>(c)];
+}
+
 // Descriptor images of one direction's slots (borrowed; must outlive the call).
 struct SlotDescriptors {
     const features::DescriptorImage *image[4] = {nullptr, nullptr, nullptr, nullptr};
@@ -38,6 +56,7 @@ struct SlotDescriptors {
 // Weighted mean of the case's terms at integer positions (as the matcher rounds them).
 // Throws InvalidArgument when a slot is missing or the slots differ in size or dim.
 float case_cost(const SlotDescriptors &d, CostCase c, int x, int y, int u, int v, int d0, int d1,
-                const PatchShape &shape, DescriptorNorm norm, float penalty);
+                const PatchShape &shape, DescriptorNorm norm, float penalty,
+                D1Terms terms = D1Terms::Paper);
 
 }  // namespace lidarflow::matching

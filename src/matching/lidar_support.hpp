@@ -21,4 +21,10 @@ struct DisparityInterval {
 };
 DisparityInterval disparity_interval(float value, float abs_halfwidth, float rel_halfwidth);
 
+// The d1 of a candidate whose d0 a LiDAR rule moved from d0_before to d0_after: shifted by the
+// same amount when keep_change (the candidate keeps its disparity change d1 - d0), else as is.
+inline float d1_after_d0_rule(float d1, float d0_before, float d0_after, bool keep_change) {
+    return keep_change ? d1 + (d0_after - d0_before) : d1;
+}
+
 }  // namespace lidarflow::matching

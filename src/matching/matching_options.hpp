@@ -27,9 +27,28 @@
 //    than the C_I mean (Fl outliers +1.8 points).
 //  - A match whose image position leaves an image costs out_of_image_penalty per patch sample;
 //    300 (below the median matched cost) made out-of-image matches win everywhere (SF 59 %).
+//  - keep_disparity_change (default true): when a LiDAR rule moves the d0 of a neighbour's
+//    match propagated into a seed (LiDAR pixel: d0 := measurement; constraint 2: clamp into
+//    the interval), its d1 moves by the same amount: the seed takes the neighbour's motion
+//    (u, v, d1 - d0) on its own LiDAR depth instead of pairing the corrected d0 with a d1 that
+//    belonged to another d0. Random-search candidates are left alone (shifting their d1 too
+//    turned every clamped d0 sample into an extra d1 sample: same accuracy, matching +10 %).
+//    Measured (SF outliers 000002 / 000003, mean of seeds 1-8, `lidarflow kitti --seed N`):
+//    matching stage 26.36 / 26.74 -> 26.33 / 26.64 (image-only 27.11 / 26.85); final pipeline
+//    10.44 / 12.64 -> 10.22 / 12.96, i.e. neutral (single seeds spread +-0.5).
+//  - d1_terms (default Paper = Eqs. 10 / 12 as printed; ReferenceAnchored is opt-in): the t1
+//    stereo term E(l1, r1) of the D_l^1 cases compares two target patches and never the
+//    reference point, so with d1 tied to the LiDAR it rewards *any* flow target on the
+//    measured surface. ReferenceAnchored replaces it by the cross term E(l0, r1). Matching
+//    stage: 26.78 / 27.06 -> 26.71 / 27.00 alone, 26.66 / 26.91 with keep_disparity_change
+//    (Fl of pixels whose true target lies in a D_l^1 window 6.1 -> 4.9 % on 000002); but the
+//    final pipeline got worse on 000002 (8 seeds, measured with d0-rule shifts on all candidates:
+//    10.24 -> 10.79), so it is not the default.
+//    Image-only matching is unaffected by both (no LiDAR case, no LiDAR rule).
 #include <cstdint>
 
 #include "features/dense_sift.hpp"
+#include "matching/cost_cases.hpp"
 #include "matching/patch_cost.hpp"
 
 namespace lidarflow::matching {
@@ -82,6 +101,9 @@ struct MatchingOptions {
     int window_size = 15;  // odd, full-resolution support window side [px]
     float const2_abs = 2.0f;
     float const2_rel = 0.05f;  // 5 %: the KITTI outlier tolerance
+    // Terms of the D_l^1 cases and the d1 update of the LiDAR d0 rules (see the decisions above).
+    D1Terms d1_terms = D1Terms::Paper;
+    bool keep_disparity_change = true;
 
     // Strips of this many seed rows are the unit of (deterministic) parallel work.
     int strip_rows = 6;

@@ -141,10 +141,10 @@ private:
     void setup_level(int l);
     void init_coarsest();
     int target_hit(int i, const State &s) const;
-    void prepare(int i, State cand, Scored &out, bool d1case) const;
+    void prepare(int i, State cand, Scored &out, bool d1case, bool propagated = false) const;
     bool evaluate(int i, Scored &out, const Scored *reuse, float bound) const;
     void score(int i, const State &cand, Scored &out, bool d1case) const;
-    bool try_candidate(int i, const State &cand, Scored &best, bool d1case) const;
+    bool try_candidate(int i, const State &cand, Scored &best, bool d1case, bool propagated = false) const;
     bool process_seed(int i, int iteration, bool consider_all_in_strip);
     int run_strip(int strip, bool reverse, int iteration);
     void update_radii(int l);
@@ -387,16 +387,19 @@ int Engine::target_hit(int i, const State &s) const {
 // (from the seed's current match), not per candidate: candidates of one visit are compared with
 // one formula, so no candidate wins merely because its target enters or leaves a D_l^1 window
 // (the case formulas have different typical magnitudes).
-void Engine::prepare(int i, State c, Scored &out, bool d1case) const {
+void Engine::prepare(int i, State c, Scored &out, bool d1case, bool propagated) const {
     const SeedInfo &si = info_[i];
     const bool lidar = opt_.use_lidar;
     c.d0 = std::clamp(c.d0, 0.0f, dmax_);
+    const float d0_before = c.d0;
     if (lidar && si.lidar >= 0) {
         c.d0 = ref_lidar_[si.lidar].disparity * scale_;  // never propagated into a LiDAR pixel
     } else if (lidar && opt_.const2 && si.window >= 0) {
         c.d0 = disparity_interval(ref_lidar_[si.window].disparity, opt_.const2_abs, opt_.const2_rel)
                    .clamp(c.d0 / scale_) * scale_;
     }
+    // A neighbour's match keeps its disparity change when a LiDAR rule corrects its d0.
+    c.d1 = d1_after_d0_rule(c.d1, d0_before, c.d0, propagated && opt_.keep_disparity_change);
     const int x0 = px_[i];
     const int x1 = x0 + iround(c.u), y1 = py_[i] + iround(c.v);
     c.d1 = std::clamp(c.d1, 0.0f, dmax_);
@@ -426,7 +429,7 @@ bool Engine::evaluate(int i, Scored &out, const Scored *reuse, float bound) cons
     const int x0 = px_[i], y0 = py_[i];
     const int sx[4] = {x0, out.xr0, out.x1, out.xr1};
     const int sy[4] = {y0, y0, out.y1, out.y1};
-    const float *w = kCaseWeights[out.cas];
+    const float *w = case_weights(static_cast<CostCase>(out.cas), opt_.d1_terms);
     const float budget = bound * kCaseWeightSum[out.cas];
     float sum = 0;
     uint8_t pending = 0;
@@ -467,9 +470,9 @@ void Engine::score(int i, const State &c, Scored &out, bool d1case) const {
     evaluate(i, out, nullptr, std::numeric_limits<float>::infinity());
 }
 
-bool Engine::try_candidate(int i, const State &cand, Scored &best, bool d1case) const {
+bool Engine::try_candidate(int i, const State &cand, Scored &best, bool d1case, bool propagated) const {
     Scored s;
-    prepare(i, cand, s, d1case);
+    prepare(i, cand, s, d1case, propagated);
     if (s.x1 == best.x1 && s.y1 == best.y1 && s.xr0 == best.xr0 && s.xr1 == best.xr1 && s.cas == best.cas)
         return false;  // same positions: same cost
     if (evaluate(i, s, &best, best.cost) && s.cost < best.cost) {
@@ -498,7 +501,7 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
                            visited_[n] == iteration;
         if (!fresh || seen_[k] == version_[n]) continue;
         seen_[k] = version_[n];
-        improved |= try_candidate(i, best_[n].s, best, d1case);
+        improved |= try_candidate(i, best_[n].s, best, d1case, true);
     }
     // Random search with shrinking radius, separately for (u, v), d0 and d1.
     Rng rng(opt_.random_seed, level_, iteration, i);

@@ -164,6 +164,24 @@ void test_viz_pictures_and_error_maps(void **) {
     assert_true(worst > 100);
 }
 
+void expect_failure(const std::string &args, const fs::path &dir, int code);
+
+// `kitti` on rendered frames: options by key (--set), several seeds summarised (--seeds).
+void test_kitti_set_and_seeds(void **) {
+    const fs::path dir = test::scratch_dir("cli_kitti_seeds");
+    const fs::path root = dir / "kitti";
+    assert_int_equal(run("synth --out " + q(root) + " --width 320 --height 96", dir).code, 0);
+    const std::string base = "kitti --root " + q(root) + " --stage matching --no-viz";
+    Result r = run(base + " --seeds 2 --set matching.min_coarsest_height=16,matching.iterations=2", dir);
+    if (r.code != 0) fail_msg("kitti --seeds failed (%d): %s", r.code, r.output.c_str());
+    assert_true(r.output.find("Over 2 seeds") != std::string::npos);
+    assert_true(r.output.find("Matching: LiDAR-Flow") != std::string::npos);
+    expect_failure(base + " --set matching.iterations=0", dir, 2);   // out of bounds
+    expect_failure(base + " --set matching.nope=1", dir, 2);         // unknown key
+    expect_failure(base + " --set matching.iterations", dir, 2);     // no value
+    expect_failure(base + " --seeds 0", dir, 2);
+}
+
 void expect_failure(const std::string &args, const fs::path &dir, int code) {
     const Result r = run(args, dir);
     if (r.code != code) fail_msg("'%s' exited %d (want %d): %s", args.c_str(), r.code, code, r.output.c_str());
@@ -213,6 +231,7 @@ int main() {
         cmocka_unit_test(test_synth_frames_ids_and_options),
         cmocka_unit_test(test_viz_pictures_and_error_maps),
         cmocka_unit_test(test_bad_arguments_fail),
+        cmocka_unit_test(test_kitti_set_and_seeds),
     };
     return cmocka_run_group_tests_name("synth_cli", tests, nullptr, nullptr);
 }

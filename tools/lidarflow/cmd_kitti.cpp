@@ -2,6 +2,7 @@
 // protocol, scored against the ground truth (the paper's Tables I and II with --ablation).
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -9,10 +10,47 @@
 #include "commands.hpp"
 #include "option_assignments.hpp"
 #include "core/error.hpp"
+#include "eval/metrics.hpp"
 #include "pipeline/kitti_runner.hpp"
 
 namespace lidarflow::cli {
 namespace {
+
+// Per row and frame: mean (+- standard error of the mean) of the occ outlier rates over the
+// runs, which differ only in their random seeds.
+std::string format_seed_summary(const std::vector<pipeline::KittiRunReport> &runs) {
+    std::string out;
+    char line[256];
+    std::snprintf(line, sizeof line, "Over %zu seeds: outliers [%%] (occ), mean +- standard error of the mean\n",
+                  runs.size());
+    out += line;
+    std::snprintf(line, sizeof line, "%-52s %-8s %15s %15s %15s %15s\n", "variant", "frame", "D0", "D1", "Fl", "SF");
+    out += line;
+    const auto &rows = runs.front().rows;
+    for (size_t r = 0; r < rows.size(); ++r) {
+        const auto &frames = rows[r].evaluation.frames;
+        for (size_t f = 0; f < frames.size(); ++f) {
+            std::snprintf(line, sizeof line, "%-52s %-8s", (rows[r].group + ": " + rows[r].name).substr(0, 52).c_str(),
+                          frames[f].id.c_str());
+            out += line;
+            for (int c = 0; c < 4; ++c) {
+                std::vector<double> v;
+                for (const auto &run : runs) {
+                    const eval::ComponentScores &s = run.rows[r].evaluation.frames[f].dense.occ;
+                    const eval::Counts *parts[4] = {&s.d0, &s.d1, &s.fl, &s.sf};
+                    v.push_back(parts[c]->outlier_pct());
+                }
+                double mean = 0, var = 0;
+                for (double x : v) mean += x / v.size();
+                for (double x : v) var += (x - mean) * (x - mean) / (v.size() - 1);
+                std::snprintf(line, sizeof line, " %8.2f +-%4.2f", mean, std::sqrt(var / v.size()));
+                out += line;
+            }
+            out += "\n";
+        }
+    }
+    return out;
+}
 
 int run_kitti_command(int argc, char **argv) {
     Args args("kitti", argc, argv,
@@ -28,6 +66,7 @@ int run_kitti_command(int argc, char **argv) {
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"scale", true, "S    processing scale in [0.125, 1] (default: the preset's)"},
                {"seed", true, "N    random seed of the matcher and the interpolation (default 1)"},
+               {"seeds", true, "K    run seeds N .. N+K-1 and print per-frame means (+- standard error)"},
                {"out", true, "DIR  write disp_0/, disp_1/, flow/, viz/ and report.json here"},
                {"no-viz", false, "do not write pictures"}});
     if (args.help_requested()) {
@@ -60,10 +99,23 @@ int run_kitti_command(int argc, char **argv) {
     o.out = args.str("out", "");
     o.write_viz = !args.flag("no-viz");
 
+    const int seeds = args.integer("seeds", 1);
+    require(seeds >= 1 && seeds <= 1000, ErrorCode::InvalidArgument, "kitti: --seeds must be in [1, 1000]");
+
     const bool tty = isatty(fileno(stderr));
-    const pipeline::KittiRunReport rep = pipeline::run_kitti(o, [tty](size_t i, size_t n, const std::string &what) {
+    const auto progress = [tty](size_t i, size_t n, const std::string &what) {
         if (tty) std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
-    });
+    };
+    const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
+    // Further seeds: scored only (the first seed's run is the one written to --out).
+    std::vector<pipeline::KittiRunReport> more;
+    for (int k = 1; k < seeds; ++k) {
+        pipeline::KittiRunOptions ok = o;
+        ok.out.clear();
+        ok.estimator.matching.random_seed = o.estimator.matching.random_seed + static_cast<uint64_t>(k);
+        ok.estimator.interpolation.random_seed = o.estimator.interpolation.random_seed + static_cast<unsigned>(k);
+        more.push_back(pipeline::run_kitti(ok, progress));
+    }
     if (tty) std::fprintf(stderr, "\r\033[K");
 
     std::printf("lidarflow kitti: %zu frame(s), LiDAR %s, stage %s, %d thread(s)\n", rep.timings.size(),
@@ -77,6 +129,11 @@ int run_kitti_command(int argc, char **argv) {
         std::printf(")\n");
     }
     std::printf("\n%s", pipeline::format_report(rep).c_str());
+    if (seeds > 1) {
+        std::vector<pipeline::KittiRunReport> all{rep};
+        all.insert(all.end(), more.begin(), more.end());
+        std::printf("\n%s", format_seed_summary(all).c_str());
+    }
     if (!o.out.empty()) std::printf("\nwrote %s/{disp_0,disp_1,flow,viz}/ and %s/report.json\n", o.out.c_str(), o.out.c_str());
     return 0;
 }

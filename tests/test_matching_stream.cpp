@@ -101,7 +101,13 @@ void presets(void **) {
     assert_true(f.matching.grid_step > d.matching.grid_step);
     assert_true(f.matching.iterations < d.matching.iterations);
     f.validate();
-    pipeline::EstimatorOptions::preset("balanced").validate();
+    assert_true(f.processing_scale < 1.0);
+    const pipeline::EstimatorOptions b = pipeline::EstimatorOptions::preset("balanced");
+    b.validate();
+    assert_true(b.matching.thin_from_level < d.matching.thin_from_level);
+    const pipeline::EstimatorOptions h = pipeline::EstimatorOptions::preset("half");
+    h.validate();
+    assert_true(h.processing_scale == 0.5 && d.processing_scale == 1.0);
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset("turbo"); }));
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset(""); }));
 }

@@ -49,7 +49,7 @@ struct EstimatorOptions {
     // table has the measured curve):
     //  "default"  the reference settings;
     //  "balanced" the matcher's 1/4 pyramid level thinned as well (thin_from_level 2);
-    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels;
+    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels, at 3/4 resolution;
     //  "half"     every stage at half resolution (processing_scale 0.5).
     // Throws Error(InvalidArgument) for another name.
     static EstimatorOptions preset(const std::string &name);

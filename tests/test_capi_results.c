@@ -297,6 +297,41 @@ static void test_sparse_stage(void **state) {
     lf_destroy(e);
 }
 
+/* "processing_scale" 0.5: the estimator works at half size and the result comes back at the
+ * input size, dense and about as accurate on this plane scene. */
+static void test_half_resolution(void **state) {
+    fixture_t *f = (fixture_t *)*state;
+    lf_options_t *o = scene_options(1);
+    assert_int_equal(lf_options_set_float(o, "processing_scale", 0.5), LF_OK);
+    lf_calibration_t c = scene_calibration(&f->scene);
+    lf_estimator_t *e = NULL;
+    assert_int_equal(lf_create(o, &c, &e), LF_OK);
+    lf_options_destroy(o);
+    assert_int_equal(scene_push_pair(e, &f->scene, 0, 1), LF_OK);
+    lf_result_info_t info;
+    lf_result_info_init(&info);
+    assert_int_equal(lf_get_result_info(e, &info), LF_OK);
+    assert_int_equal(info.width, W);
+    assert_int_equal(info.height, H);
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    int n_valid = 0;
+    for (int i = 0; i < W * H; ++i) n_valid += r.valid[i] != 0;
+    assert_int_equal(n_valid, W * H);
+    /* Matches are whole pixels of the half-size image, i.e. 2 px steps here: judge by the
+     * KITTI outlier threshold (3 px) instead of scene_result_accuracy's 1 px. */
+    int good = 0;
+    for (int i = 0; i < W * H; ++i) {
+        const float e0 = r.d0[i] - 10, e1 = r.d1[i] - 10, eu = r.u[i] - 3, ev = r.v[i] - 1;
+        good += e0 * e0 < 9 && e1 * e1 < 9 && eu * eu + ev * ev < 9;
+    }
+    printf("within 3 px at half resolution: %.3f (within 1 px: %.3f)\n", (double)good / (W * H),
+           scene_result_accuracy(&r, 3, 1, 10));
+    assert_true(good > 0.95 * W * H);
+    scene_result_free(&r);
+    lf_destroy(e);
+}
+
 /* The same LiDAR as disparities, camera-frame points and LiDAR-frame points (strided like
  * KITTI's x, y, z, reflectance) must become the same measurements. They are made visible by
  * a LiDAR that disagrees with the images (disparity 12.5, z = 4 m, where the plane is at
@@ -441,6 +476,7 @@ int main(void) {
         cmocka_unit_test(test_views_borrow_the_result),
         cmocka_unit_test(test_points3d),
         cmocka_unit_test(test_sparse_stage),
+        cmocka_unit_test(test_half_resolution),
         cmocka_unit_test(test_lidar_kinds_agree),
         cmocka_unit_test(test_lidar_goes_with_its_frame),
         cmocka_unit_test(test_colour_orders_and_threads_agree),

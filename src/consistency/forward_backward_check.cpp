@@ -63,6 +63,8 @@ ForwardBackwardResult forward_backward_check(const SceneFlowField &forward, cons
     const bool bilinear = opt.fb_lookup == BackwardLookup::Bilinear;
     const int radius = opt.fb_search_radius;
 
+    // Rows are independent: each pixel writes only its own outputs.
+#pragma omp parallel for schedule(static) num_threads(opt.threads)
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             if (!forward.valid(y, x)) continue;

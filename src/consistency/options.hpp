@@ -26,6 +26,7 @@ enum class BackwardLookup {
 };
 
 struct ConsistencyOptions {
+    int threads = 1;  // OpenMP threads of the per-pixel checks; results do not depend on it
     // --- LiDAR (ignored in image-only mode, i.e. when the SparseLidar has no points) ---
     int support_window = 15;  // side of the square window around each D_l^0 pixel (odd, >= 1)
 

@@ -41,6 +41,8 @@ void check_positive(float v, const char *what) {
 }  // namespace
 
 void check_options(const ConsistencyOptions &opt) {
+    require(opt.threads >= 1 && opt.threads <= 1024, ErrorCode::InvalidArgument,
+            "consistency: option threads must be in [1, 1024]");
     check_positive(opt.sgm_max_diff, "sgm_max_diff");
     check_positive(opt.fb_max_flow, "fb_max_flow");
     check_positive(opt.fb_max_d0, "fb_max_d0");

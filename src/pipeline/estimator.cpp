@@ -26,6 +26,12 @@ interp::InterpolationOptions interpolation_options(const EstimatorOptions &o) {
     return io;
 }
 
+consistency::ConsistencyOptions consistency_options(const EstimatorOptions &o) {
+    consistency::ConsistencyOptions co = o.consistency;
+    co.threads = o.threads;
+    return co;
+}
+
 matching::MatchingOptions matching_options(const EstimatorOptions &o) {
     matching::MatchingOptions mo = o.matching;
     mo.threads = o.threads;
@@ -83,7 +89,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
     EstimatorOptions o;
     if (name == "default") return o;
     if (name == "balanced") {
-        o.matching.thin_from_level = 2;  // the 1/4 level thinned too
+        o.matching.thin_from_level = 1;  // every level below full resolution thinned
         return o;
     }
     if (name == "fast") {
@@ -172,7 +178,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     // Stages 2-3.
     t = Clock::now();
     consistency::ConsistencyResult c = consistency::run_consistency(r.forward, r.backward, frame.left0,
-                                                                     frame.right0, lidar0, stage_options_.consistency);
+                                                                     frame.right0, lidar0, consistency_options(stage_options_));
     r.after_sgm = std::move(c.after_sgm);
     r.after_fb = std::move(c.after_fb);
     r.sparse = std::move(c.sparse);

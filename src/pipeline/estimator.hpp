@@ -48,7 +48,7 @@ struct EstimatorOptions {
     // Named speed/accuracy trade-offs (everything else at its default; the README's preset
     // table has the measured curve):
     //  "default"  the reference settings;
-    //  "balanced" the matcher's 1/4 pyramid level thinned as well (thin_from_level 2);
+    //  "balanced" every matcher level below full resolution thinned (thin_from_level 1);
     //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels, at 3/4 resolution;
     //  "half"     every stage at half resolution (processing_scale 0.5).
     // Throws Error(InvalidArgument) for another name.

@@ -105,9 +105,7 @@ void presets(void **) {
     const pipeline::EstimatorOptions b = pipeline::EstimatorOptions::preset("balanced");
     b.validate();
     assert_true(b.matching.thin_from_level < d.matching.thin_from_level);
-    const pipeline::EstimatorOptions h = pipeline::EstimatorOptions::preset("half");
-    h.validate();
-    assert_true(h.processing_scale == 0.5 && d.processing_scale == 1.0);
+    assert_true(d.processing_scale == 1.0);
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset("turbo"); }));
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset(""); }));
 }

@@ -1,4 +1,4 @@
-// Running the estimator below the input resolution (processing_scale, the "half" preset): how
+// Running the estimator below the input resolution (processing_scale): how
 // frames are brought down (images, LiDAR, camera), how fields come back up, and the complete
 // estimator at half resolution on a synthetic scene.
 #include <cmath>
@@ -109,7 +109,8 @@ void half_resolution_estimator(void **) {
     c.threads = 2;
     const synth::SynthScene s = synth::render(c);
     FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
-    EstimatorOptions o = EstimatorOptions::preset("half");
+    EstimatorOptions o;
+    o.processing_scale = 0.5;
     o.threads = 2;
     o.matching.min_coarsest_height = 16;
     const EstimatorResult r = Estimator(o).run(in);

@@ -100,7 +100,7 @@ typedef struct lf_options lf_options_t;
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
- *                                        (default 1; the "half" preset uses 0.5)
+ *                                        (default 1; the "fast" preset uses 0.7)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and

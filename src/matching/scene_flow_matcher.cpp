@@ -270,7 +270,11 @@ void Engine::setup_seeds() {
 // opt_.thin_from_level on, each coarser level keeps every second grid node per axis.
 int Engine::level_stride(int l) const {
     const int k = l - opt_.thin_from_level + 1;
-    return k <= 0 ? 1 : 1 << std::min(k, 16);
+    int stride = k <= 0 ? 1 : 1 << std::min(k, 16);
+    // Small images: keep enough seeds for the random initialisation to find every motion.
+    auto nodes = [&](int s) { return static_cast<long>((gw_ + s - 1) / s) * ((gh_ + s - 1) / s); };
+    while (stride > 1 && nodes(stride) < opt_.min_level_seeds) stride /= 2;
+    return stride;
 }
 
 // Neighbour graph of one stride: 8-connected on the thinned grid, plus the window's LiDAR seed

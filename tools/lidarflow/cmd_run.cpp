@@ -38,7 +38,7 @@ int run(int argc, char **argv) {
                {"no-lidar", false, "image-only pipeline (ignore --lidar0/--lidar1)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | half"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
                {"id", true, "ID   frame id of the output files (default 000000)"}});

@@ -256,16 +256,22 @@ static void test_points3d(void **state) {
     assert_int_equal(lf_get_points3d(e, &only_valid), LF_OK);
 }
 
+/* Creates an estimator from `o` (destroyed here) and pushes the scene's pair into it. */
+static lf_estimator_t *create_and_push(lf_options_t *o, const scene_t *s) {
+    lf_calibration_t c = scene_calibration(s);
+    lf_estimator_t *e = NULL;
+    assert_int_equal(lf_create(o, &c, &e), LF_OK);
+    lf_options_destroy(o);
+    assert_int_equal(scene_push_pair(e, s, 0, 1), LF_OK);
+    return e;
+}
+
 /* Stopping after the sparsification: a sparse result with zeros where invalid, and NaN points. */
 static void test_sparse_stage(void **state) {
     fixture_t *f = (fixture_t *)*state;
     lf_options_t *o = scene_options(1);
     assert_int_equal(lf_options_set_string(o, "last_stage", "sparse"), LF_OK);
-    lf_calibration_t c = scene_calibration(&f->scene);
-    lf_estimator_t *e = NULL;
-    assert_int_equal(lf_create(o, &c, &e), LF_OK);
-    lf_options_destroy(o);
-    assert_int_equal(scene_push_pair(e, &f->scene, 0, 1), LF_OK);
+    lf_estimator_t *e = create_and_push(o, &f->scene);
     lf_result_info_t info;
     lf_result_info_init(&info);
     assert_int_equal(lf_get_result_info(e, &info), LF_OK);
@@ -303,11 +309,7 @@ static void test_half_resolution(void **state) {
     fixture_t *f = (fixture_t *)*state;
     lf_options_t *o = scene_options(1);
     assert_int_equal(lf_options_set_float(o, "processing_scale", 0.5), LF_OK);
-    lf_calibration_t c = scene_calibration(&f->scene);
-    lf_estimator_t *e = NULL;
-    assert_int_equal(lf_create(o, &c, &e), LF_OK);
-    lf_options_destroy(o);
-    assert_int_equal(scene_push_pair(e, &f->scene, 0, 1), LF_OK);
+    lf_estimator_t *e = create_and_push(o, &f->scene);
     lf_result_info_t info;
     lf_result_info_init(&info);
     assert_int_equal(lf_get_result_info(e, &info), LF_OK);

@@ -176,6 +176,14 @@ static inline int scene_result_equal(const scene_result_t *a, const scene_result
            memcmp(a->valid, b->valid, n) == 0;
 }
 
+/* Whether the estimator's current result is bit-identical to `ref`; 0 when it cannot be fetched. */
+static inline int scene_result_matches(lf_estimator_t *e, const scene_result_t *ref) {
+    scene_result_t r;
+    const int same = scene_result_fetch(e, &r) == LF_OK && scene_result_equal(&r, ref);
+    scene_result_free(&r);
+    return same;
+}
+
 /* Share of valid pixels whose (u, v, d0, d1) are within 1 px of the truth (tu, tv, d, d). */
 static inline double scene_result_accuracy(const scene_result_t *r, int tu, int tv, int d) {
     size_t good = 0;

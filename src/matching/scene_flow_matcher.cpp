@@ -120,7 +120,7 @@ private:
         std::vector<char> active;           // per seed
         std::vector<int> seeds;             // active seeds
         std::vector<int> strip;             // per seed: strip index; -1 for extra or inactive seeds
-        std::vector<int> nb_begin, nb_end;  // per seed: range in nb
+        std::vector<int> nb_offset;         // n + 1: seed i's neighbours are nb[nb_offset[i], nb_offset[i + 1])
         std::vector<int> nb;
         std::vector<std::vector<int>> strip_seeds;  // row-major seed order within each strip
     };
@@ -285,12 +285,12 @@ void Engine::build_graph(Graph &g, int stride, const std::vector<int> &lidar_see
     g.active.assign(n, 0);
     g.seeds.clear();
     g.strip.assign(n, -1);
-    g.nb_begin.assign(n, 0);
-    g.nb_end.assign(n, 0);
+    g.nb_offset.assign(n + 1, 0);
     g.nb.clear();
     const int last_gx = (gw_ - 1) / stride * stride, last_gy = (gh_ - 1) / stride * stride;
     auto on_grid = [&](int i) { return info_[i].gx % stride == 0 && info_[i].gy % stride == 0; };
     for (int i = 0; i < n; ++i) {
+        g.nb_offset[i] = static_cast<int>(g.nb.size());
         const SeedInfo &s = info_[i];
         const bool grid = i < num_grid_;
         if (grid && !on_grid(i)) continue;
@@ -306,7 +306,6 @@ void Engine::build_graph(Graph &g, int stride, const std::vector<int> &lidar_see
             cgx = std::clamp(iround(float(s.x - xoff_) / f) * stride, 0, last_gx);
             cgy = std::clamp(iround(float(s.y - yoff_) / f) * stride, 0, last_gy);
         }
-        g.nb_begin[i] = static_cast<int>(g.nb.size());
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
                 const int nx = cgx + dx * stride, ny = cgy + dy * stride;
@@ -318,8 +317,8 @@ void Engine::build_graph(Graph &g, int stride, const std::vector<int> &lidar_see
             const int k = lidar_seed[s.window];
             if (k != i && (k >= num_grid_ || on_grid(k))) g.nb.push_back(k);
         }
-        g.nb_end[i] = static_cast<int>(g.nb.size());
     }
+    g.nb_offset[n] = static_cast<int>(g.nb.size());
     const int rows = (gh_ - 1) / stride + 1;
     g.strip_seeds.assign((rows + opt_.strip_rows - 1) / opt_.strip_rows, {});
     for (int i : g.seeds)
@@ -496,10 +495,10 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         // Another cost formula: earlier comparisons say nothing about the new one.
         const State cur = best.s;
         score(i, cur, best, d1case);
-        for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) seen_[k] = version_[g.nb[k]] - 1;
+        for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
     }
     // Propagation (constraint 1 everywhere; LiDAR rules applied inside score()).
-    for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) {
+    for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) {
         const int n = g.nb[k];
         const bool fresh = consider_all_in_strip || g.strip[n] != g.strip[i] || g.strip[n] < 0 ||
                            visited_[n] == iteration;
@@ -574,7 +573,7 @@ void Engine::update_radii(int l) {
     for (int i : g.seeds) {
         const State &s = best_[i].s;
         float rf = 0, r0 = 0, r1 = 0;
-        for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) {
+        for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) {
             const State &n = best_[g.nb[k]].s;
             rf = std::max(rf, std::hypot(n.u - s.u, n.v - s.v));
             r0 = std::max(r0, std::abs(n.d0 - s.d0));
@@ -616,7 +615,7 @@ MatchResult Engine::run() {
         }
         // New level, new costs: every neighbour is worth one try.
         for (int i : g.seeds)
-            for (int k = g.nb_begin[i]; k < g.nb_end[i]; ++k) seen_[k] = version_[g.nb[k]] - 1;
+            for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
         const int num_strips = static_cast<int>(g.strip_seeds.size());
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp++;

@@ -73,12 +73,12 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height)
     const float gain[5] = {rx, ry, rx, rx, 1.0f};
     for (int y = 0; y < height; ++y) {
         const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
-        const int y0 = std::min(h - 2 >= 0 ? h - 2 : 0, static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);
+        const int y0 = std::min(std::max(0, h - 2), static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);
         const float ay = fy - y0;
         const int yn = std::min(h - 1, static_cast<int>(y / ry));
         for (int x = 0; x < width; ++x) {
             const float fx = std::clamp((x + 0.5f) / rx - 0.5f, 0.0f, float(w - 1));
-            const int x0 = std::min(w - 2 >= 0 ? w - 2 : 0, static_cast<int>(fx)), x1 = std::min(w - 1, x0 + 1);
+            const int x0 = std::min(std::max(0, w - 2), static_cast<int>(fx)), x1 = std::min(w - 1, x0 + 1);
             const float ax = fx - x0;
             if (small.valid(y0, x0) && small.valid(y0, x1) && small.valid(y1, x0) && small.valid(y1, x1)) {
                 for (int c = 0; c < 5; ++c) {

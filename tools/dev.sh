@@ -5,6 +5,7 @@
 #   tools/dev.sh test-asan   the same under AddressSanitizer + UBSan (build-asan/)
 #   tools/dev.sh deps        only install the Debian packages
 #   tools/dev.sh build       only configure + build (build/)
+#   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -60,5 +61,9 @@ case "${1:-}" in
         deps
         build build-asan -DLIDARFLOW_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
         ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 run_tests build-asan ;;
-    *) sed -n '2,8p' "$0"; exit 2 ;;
+    build-clang)
+        deps
+        packages=(clang-14); deps  # only this verb needs the second compiler
+        CC=clang-14 CXX=clang++-14 build build-clang ;;
+    *) sed -n '2,9p' "$0"; exit 2 ;;
 esac

@@ -124,6 +124,8 @@ typedef struct lf_options lf_options_t;
  *   "matching.min_coarsest_height" int [8, 4096]
  *   "matching.patch_radius"     int   [0, 16]
  *   "matching.stop_ratio"       float [0, 1]
+ *   "matching.lazy_random_search" 0/1  after a level's first iteration, random search only
+ *                                      for seeds whose match changed in the last visit
  *   "matching.max_flow"         float [1, 10000]
  *   "matching.max_disparity"    float [1, 10000]
  *   "matching.const2_abs"       float [0, 10000]

@@ -621,7 +621,8 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     std::vector<int> chosen(pairs.size() * kNumChannels);
 #pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 256)
     for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
-        const auto [seed, s] = pairs[pi];
+        // Plain names, not a structured binding: the lambda below captures them (C++17).
+        const int seed = pairs[pi].first, s = pairs[pi].second;
         for (int c = 0; c < kNumChannels; ++c) {
             int pick = s;
             // The LiDAR point's own cell keeps the anchored model: there the measurement is

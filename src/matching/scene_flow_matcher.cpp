@@ -174,6 +174,9 @@ private:
 
     std::vector<Scored> best_;
     std::vector<int> visited_;
+    // Iteration stamp at which seed n last improved, and the first stamp of the current level.
+    std::vector<int> improved_at_;
+    int level_first_stamp_ = 0;
     // Active set (exact): version_[n] counts the changes of seed n's match; seen_[k] is the
     // version of neighbour nb[k] (of the current level's graph) that its seed last tried. A neighbour whose match has
     // not changed since lost against a best that has only improved since (same cost formula),
@@ -257,6 +260,7 @@ void Engine::setup_seeds() {
     const size_t n = info_.size();
     best_.assign(n, Scored{});
     visited_.assign(n, -1);
+    improved_at_.assign(n, -1);
     version_.assign(n, 0);
     radius_.assign(n, 0);
     radius_d0_.assign(n, 0);
@@ -507,6 +511,12 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         improved |= try_candidate(i, best_[n].s, best, d1case, true);
     }
     // Random search with shrinking radius, separately for (u, v), d0 and d1.
+    const bool explore = !opt_.lazy_random_search || iteration == level_first_stamp_ || improved ||
+                         improved_at_[i] == iteration - 1;
+    if (!explore) {
+        visited_[i] = iteration;
+        return false;
+    }
     Rng rng(opt_.random_seed, level_, iteration, i);
     for (int mag = iround(radius_[i]); mag >= 1; mag /= 2) {
         State c = best.s;
@@ -528,7 +538,10 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         improved |= try_candidate(i, c, best, d1case);
     }
     visited_[i] = iteration;
-    if (improved) ++version_[i];
+    if (improved) {
+        ++version_[i];
+        improved_at_[i] = iteration;
+    }
     return improved;
 }
 
@@ -617,6 +630,7 @@ MatchResult Engine::run() {
         for (int i : g.seeds)
             for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
         const int num_strips = static_cast<int>(g.strip_seeds.size());
+        level_first_stamp_ = iteration_stamp;
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp++;
             const bool reverse = it % 2 == 1;

@@ -1,0 +1,107 @@
+// The estimator's results do not depend on the thread count: every stage's fields are the
+// same bit for bit with 1, 2 and 3 threads. Also the matcher's opt-in lazy random search:
+// deterministic, it changes the search, and its result stays close to the full search.
+#include <cstring>
+
+#include "eval/metrics.hpp"
+#include "pipeline/estimator.hpp"
+#include "synth/scene.hpp"
+#include "test_support.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::pipeline;
+
+namespace {
+
+synth::SynthScene scene() {
+    synth::SynthConfig c;
+    c.width = 320;
+    c.height = 96;
+    c.seed = 5;
+    c.threads = 2;
+    return synth::render(c);
+}
+
+FrameInput frame_of(const synth::SynthScene &s) {
+    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+}
+
+EstimatorOptions small_options(int threads) {
+    EstimatorOptions o;
+    o.threads = threads;
+    o.matching.min_coarsest_height = 16;
+    return o;
+}
+
+bool same_mat(const cv::Mat &a, const cv::Mat &b) {
+    if (a.size() != b.size() || a.type() != b.type()) return false;
+    for (int y = 0; y < a.rows; ++y)
+        if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
+    return true;
+}
+
+bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
+    return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&
+           same_mat(a.valid, b.valid) && same_mat(a.confidence, b.confidence);
+}
+
+double sf_outliers(const synth::SynthScene &s, const SceneFlowField &f) {
+    long n = 0, bad = 0;
+    for (int y = 0; y < f.height(); ++y)
+        for (int x = 0; x < f.width(); ++x) {
+            if (s.disp0_occ(y, x) < 0 || s.disp1_occ(y, x) < 0 || !s.flow_occ.valid(y, x)) continue;
+            ++n;
+            bad += (eval::disparity_outlier(s.disp0_occ(y, x), f.d0(y, x)) ||
+                    eval::disparity_outlier(s.disp1_occ(y, x), f.d1(y, x)) ||
+                    eval::flow_outlier(s.flow_occ.u(y, x), s.flow_occ.v(y, x), f.u(y, x), f.v(y, x)))
+                       ? 1
+                       : 0;
+        }
+    return n ? 100.0 * bad / n : 100.0;
+}
+
+void thread_count_does_not_change_results(void **) {
+    const synth::SynthScene s = scene();
+    const FrameInput in = frame_of(s);
+    const EstimatorResult one = Estimator(small_options(1)).run(in);
+    for (int threads : {2, 3}) {
+        const EstimatorResult many = Estimator(small_options(threads)).run(in);
+        assert_true(same_field(one.forward, many.forward));
+        assert_true(same_field(one.backward, many.backward));
+        assert_true(same_field(one.after_sgm, many.after_sgm));
+        assert_true(same_field(one.after_fb, many.after_fb));
+        assert_true(same_field(one.dense, many.dense));
+    }
+    // Every stage reports its time.
+    int named = 0;
+    for (const StageTime &t : one.timings)
+        for (const char *n : {"features", "matching_forward", "matching_backward", "sgm", "consistency", "interpolation"})
+            named += t.name == n ? 1 : 0;
+    assert_int_equal(named, 6);
+}
+
+void lazy_random_search_is_deterministic_and_accurate(void **) {
+    const synth::SynthScene s = scene();
+    const FrameInput in = frame_of(s);
+    EstimatorOptions lazy = small_options(2);
+    lazy.matching.lazy_random_search = true;
+    const EstimatorResult a = Estimator(lazy).run(in);
+    lazy.threads = 1;
+    const EstimatorResult b = Estimator(lazy).run(in);
+    assert_true(same_field(a.dense, b.dense));
+    const EstimatorResult full = Estimator(small_options(2)).run(in);
+    assert_false(same_field(a.forward, full.forward));  // the option does change the search
+    const double sf_lazy = sf_outliers(s, a.dense), sf_full = sf_outliers(s, full.dense);
+    std::printf("SF outliers: lazy random search %.2f %%, full %.2f %%\n", sf_lazy, sf_full);
+    assert_true(sf_lazy < sf_full + 3.0);
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(thread_count_does_not_change_results),
+        cmocka_unit_test(lazy_random_search_is_deterministic_and_accurate),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -174,9 +174,9 @@ private:
 
     std::vector<Scored> best_;
     std::vector<int> visited_;
-    // Iteration stamp at which seed n last improved, and the first stamp of the current level.
-    std::vector<int> improved_at_;
-    int level_first_stamp_ = 0;
+    // Lazy random search: whether seed n searches randomly on its next visit (set for every
+    // seed when a level starts, then "its last visit improved it").
+    std::vector<char> explore_;
     // Active set (exact): version_[n] counts the changes of seed n's match; seen_[k] is the
     // version of neighbour nb[k] (of the current level's graph) that its seed last tried. A neighbour whose match has
     // not changed since lost against a best that has only improved since (same cost formula),
@@ -260,7 +260,7 @@ void Engine::setup_seeds() {
     const size_t n = info_.size();
     best_.assign(n, Scored{});
     visited_.assign(n, -1);
-    improved_at_.assign(n, -1);
+    explore_.assign(n, 1);
     version_.assign(n, 0);
     radius_.assign(n, 0);
     radius_d0_.assign(n, 0);
@@ -511,9 +511,7 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         improved |= try_candidate(i, best_[n].s, best, d1case, true);
     }
     // Random search with shrinking radius, separately for (u, v), d0 and d1.
-    const bool explore = !opt_.lazy_random_search || iteration == level_first_stamp_ || improved ||
-                         improved_at_[i] == iteration - 1;
-    if (!explore) {
+    if (opt_.lazy_random_search && !improved && !explore_[i]) {
         visited_[i] = iteration;
         return false;
     }
@@ -538,10 +536,8 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         improved |= try_candidate(i, c, best, d1case);
     }
     visited_[i] = iteration;
-    if (improved) {
-        ++version_[i];
-        improved_at_[i] = iteration;
-    }
+    if (improved) ++version_[i];
+    explore_[i] = improved;
     return improved;
 }
 
@@ -630,7 +626,7 @@ MatchResult Engine::run() {
         for (int i : g.seeds)
             for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
         const int num_strips = static_cast<int>(g.strip_seeds.size());
-        level_first_stamp_ = iteration_stamp;
+        std::fill(explore_.begin(), explore_.end(), 1);
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp++;
             const bool reverse = it % 2 == 1;

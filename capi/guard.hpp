@@ -34,7 +34,7 @@ private:
 const std::string &thread_last_error();
 
 // Runs body() (which returns an lf_status_t value) and maps exceptions:
-// lidarflow::Error -> its code, std::bad_alloc -> LF_ERR_OUT_OF_MEMORY, anything else ->
+// lidarflow::Error -> its code, std::bad_alloc and OpenCV's StsNoMem -> LF_ERR_OUT_OF_MEMORY, anything else ->
 // LF_ERR_INTERNAL. Never throws.
 template <class Body>
 int32_t guarded(const ErrorSink &sink, const char *function, Body &&body) noexcept {
@@ -46,6 +46,9 @@ int32_t guarded(const ErrorSink &sink, const char *function, Body &&body) noexce
     } catch (const std::bad_alloc &) {
         return sink.fail(LF_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory");
     } catch (const cv::Exception &e) {
+        // cv::Mat allocation failures arrive as cv::Exception, not std::bad_alloc.
+        if (e.code == cv::Error::StsNoMem)
+            return sink.fail(LF_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory (OpenCV)");
         // OpenCV asserting on our data is a lidarflow bug: inputs are validated before.
         return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": OpenCV: " + e.what());
     } catch (const std::exception &e) {

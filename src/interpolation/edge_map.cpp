@@ -37,6 +37,7 @@ SedModel::SedModel(const std::string &path) {
         require(!impl->sed.empty(), ErrorCode::Format, "OpenCV rejected the SED model: " + path);
         impl_ = impl;
     } catch (const cv::Exception &e) {
+        if (e.code == cv::Error::StsNoMem) throw;  // out of memory, not a bad file
         throw Error(ErrorCode::Format, "cannot load SED model " + path + ": " + e.what());
     }
 }
@@ -54,6 +55,7 @@ cv::Mat1f SedModel::detect(const cv::Mat &image) const {
     try {
         impl_->sed->detectEdges(rgbf, edges);
     } catch (const cv::Exception &e) {
+        if (e.code == cv::Error::StsNoMem) throw;
         throw Error(ErrorCode::Format, std::string("SED edge detection failed: ") + e.what());
     }
     cv::Mat1f out = edges;

@@ -7,11 +7,13 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
 #include "interpolation/ego_motion.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
@@ -468,23 +470,26 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     // Neighbourhoods, flat: geometry (d0) and motion (u, v, d1) lists of up to K seeds each.
     const int K = o.num_neighbors;
     std::vector<std::vector<std::pair<int, float>>> geo_nb(sp.count), mot_nb(sp.count);
+    ParallelErrors errors;
 #pragma omp parallel num_threads(o.num_threads)
     {
-        SeedSearch search(seeds.size());
+        std::unique_ptr<SeedSearch> search;
+        errors.run([&] { search = std::make_unique<SeedSearch>(seeds.size()); });
 #pragma omp for schedule(dynamic, 16)
-        for (int s = 0; s < sp.count; ++s) {
+        for (int s = 0; s < sp.count; ++s) errors.run([&] {
             const int ga = anchors.geometry[s], ma = anchors.motion[s];
             const cv::Point gp = ga >= 0 ? seeds.pos[ga] : sp.anchor[s];
             const cv::Point mp = ma >= 0 ? seeds.pos[ma] : sp.anchor[s];
-            search.nearest(graph, gp, K, [](int) { return true; }, geo_nb[s]);
+            search->nearest(graph, gp, K, [](int) { return true; }, geo_nb[s]);
             bool reuse = gp == mp;
             for (const auto &e : geo_nb[s]) reuse = reuse && seeds.has_motion[e.first];
             if (reuse)
                 mot_nb[s] = geo_nb[s];
             else
-                search.nearest(graph, mp, K, [&](int i) { return seeds.has_motion[i] != 0; }, mot_nb[s]);
-        }
+                search->nearest(graph, mp, K, [&](int i) { return seeds.has_motion[i] != 0; }, mot_nb[s]);
+        });
     }
+    errors.rethrow_if_any();
     res.timings.geodesic_s = seconds_since(t);
     for (int s = 0; s < sp.count; ++s) {
         res.lidar_anchored_geometry += anchors.geometry[s] >= 0;
@@ -531,12 +536,13 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         }
     };
     for (int it = 0; it <= o.iterations; ++it) {
+        ParallelErrors iteration_errors;
 #pragma omp parallel num_threads(o.num_threads)
         {
             Problem p;
             Model m;
 #pragma omp for schedule(dynamic, 8)
-            for (int s = 0; s < S; ++s) {
+            for (int s = 0; s < S; ++s) iteration_errors.run([&] {
                 for (int c = 0; c < kNumChannels; ++c) {
                     build(s, c, p);
                     Rng rng(stream_seed(o.random_seed, s, it, c));
@@ -568,8 +574,9 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
                     next[slot] = best.m;
                     if (it == o.iterations) share[slot] = p.inlier_share(best.m);
                 }
-            }
+            });
         }
+        iteration_errors.rethrow_if_any();
         std::swap(cur, next);
     }
     res.timings.models_s = seconds_since(t);

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
 
 namespace lidarflow::interp {
 namespace {
@@ -111,11 +112,14 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     cv::Mat1i assign(h, w, 0);
     std::vector<double> acc(centres.size() * 6);
     for (int it = 0; it < o.iterations; ++it) {
+        ParallelErrors errors;
 #pragma omp parallel num_threads(o.num_threads)
         {
-            std::vector<float> best(w);
+            std::vector<float> best;
+            errors.run([&] { best.resize(w); });
 #pragma omp for schedule(static)
             for (int y = 0; y < h; ++y) {
+                if (errors.failed()) continue;
                 const int cy = std::min(gy - 1, static_cast<int>(y / step_y));
                 const float *L = lab[0][y], *A = lab[1][y], *B = lab[2][y];
                 int *arow = assign[y];
@@ -139,6 +143,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                     }
             }
         }
+        errors.rethrow_if_any();
         std::fill(acc.begin(), acc.end(), 0.0);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {

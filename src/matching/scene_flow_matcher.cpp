@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
 #include "matching/cost_cases.hpp"
 #include "matching/lidar_support.hpp"
 
@@ -774,12 +775,15 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
     const int nimg = static_cast<int>(jobs.size()) / nlev;
     const int outer = std::max(1, std::min(threads, nimg));
     const int inner = std::max(1, threads / outer);
+    ParallelErrors errors;  // descriptor images are large: bad_alloc is likely here
 #pragma omp parallel for schedule(static) num_threads(outer)
     for (int i = 0; i < nimg; ++i)
-        for (int l = 0; l < nlev; ++l) {
-            auto &job = jobs[static_cast<size_t>(i) * nlev + l];
-            *job.first = features::compute_dense_sift(job.second, options.sift, inner);
-        }
+        for (int l = 0; l < nlev; ++l)
+            errors.run([&] {
+                auto &job = jobs[static_cast<size_t>(i) * nlev + l];
+                *job.first = features::compute_dense_sift(job.second, options.sift, inner);
+            });
+    errors.rethrow_if_any();
     m.pair[0] = reuse0 ? reuse_t0 : std::shared_ptr<const StereoFeatures>(fresh0);
     m.pair[1] = fresh1;
     for (int l = 0; l < nlev; ++l) {

@@ -40,6 +40,29 @@ bool parse_double(const std::string &s, double *out) {
     return true;
 }
 
+// Sets one KEY=VALUE text option through the C ABI; returns "" or the reason it was refused.
+// The key's type is asked first (the getters accept exactly the keys of their type), so the
+// message is the setter's real one, e.g. the bounds of `threads`, not a type mismatch from
+// trying the text as each type in turn.
+std::string set_estimator_option(lf_options_t *options, const std::string &key, const std::string &value) {
+    int64_t i = 0;
+    double d = 0;
+    const char *text = nullptr;
+    int32_t st;
+    if (lf_options_get_int(options, key.c_str(), &i) == LF_OK) {
+        if (!parse_int(value, &i)) return "needs an integer";
+        st = lf_options_set_int(options, key.c_str(), i);
+    } else if (lf_options_get_float(options, key.c_str(), &d) == LF_OK) {
+        if (!parse_double(value, &d)) return "needs a number";
+        st = lf_options_set_float(options, key.c_str(), d);
+    } else if (lf_options_get_string(options, key.c_str(), &text) == LF_OK) {
+        st = lf_options_set_string(options, key.c_str(), value.c_str());
+    } else {
+        return lf_options_last_error(options);  // unknown key
+    }
+    return st == LF_OK ? std::string() : std::string(lf_options_last_error(options));
+}
+
 int64_t wall_utime() {
     return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
         .count();
@@ -75,14 +98,9 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         return nullptr;
     }
     for (const auto &[key, value] : config.options) {
-        int64_t i = 0;
-        double d = 0;
-        int32_t st = LF_ERR_INVALID_ARGUMENT;
-        if (parse_int(value, &i)) st = lf_options_set_int(b->options_, key.c_str(), i);
-        if (st != LF_OK && parse_double(value, &d)) st = lf_options_set_float(b->options_, key.c_str(), d);
-        if (st != LF_OK) st = lf_options_set_string(b->options_, key.c_str(), value.c_str());
-        if (st != LF_OK) {
-            *error = "estimator option " + key + "=" + value + ": " + lf_options_last_error(b->options_);
+        const std::string why = set_estimator_option(b->options_, key, value);
+        if (!why.empty()) {
+            *error = "estimator option " + key + "=" + value + ": " + why;
             return nullptr;
         }
     }

@@ -521,6 +521,31 @@ void test_calibration_file(void **) {
     std::remove(bad.c_str());
 }
 
+// --option KEY=VALUE: refusals carry the C ABI's real reason for the key's type.
+void test_option_errors(void **) {
+    lcm_t *lcm = lcm_create("memq://");
+    assert_non_null(lcm);
+    auto refusal = [&](const std::string &key, const std::string &value) {
+        BridgeConfig config;
+        config.options = {{key, value}};
+        std::string err;
+        auto bridge = Bridge::create(config, lcm, &err);
+        assert_null(bridge.get());
+        return err;
+    };
+    const std::string threads = refusal("threads", "0");
+    assert_non_null(strstr(threads.c_str(), "must be"));  // the bound, not a type mismatch
+    assert_null(strstr(threads.c_str(), "string"));
+    assert_non_null(strstr(refusal("threads", "two").c_str(), "needs an integer"));
+    assert_non_null(strstr(refusal("matching.stop_ratio", "x").c_str(), "needs a number"));
+    assert_non_null(strstr(refusal("no.such.key", "1").c_str(), "no.such.key"));
+    BridgeConfig ok;
+    ok.options = {{"threads", "1"}, {"last_stage", "matching"}, {"matching.stop_ratio", "0.01"}};
+    std::string err;
+    assert_non_null(Bridge::create(ok, lcm, &err).get());
+    lcm_destroy(lcm);
+}
+
 }  // namespace
 
 int main(void) {
@@ -535,6 +560,7 @@ int main(void) {
         cmocka_unit_test(test_burst_and_shutdown),
         cmocka_unit_test(test_status_heartbeat),
         cmocka_unit_test(test_calibration_file),
+        cmocka_unit_test(test_option_errors),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -186,6 +186,7 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
         return;
     }
     const lidarflow_stereo_t &m = frame->stereo.msg();
+    count_transport_gap(m.frame_number);
     if (config_.fixed_calibration) {
         frame->calibration = config_.calibration;
     } else if (!have_calibration_) {
@@ -222,6 +223,20 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     counters_.queue_depth = static_cast<int32_t>(queue_.size());
     counters_.max_queue_depth = std::max(counters_.max_queue_depth, counters_.queue_depth);
     cv_.notify_all();
+}
+
+// Called with mutex_ held, for every decodable stereo message. Only forward jumps count: UDP
+// multicast on one network hardly reorders, and a smaller number is a publisher restart.
+void Bridge::count_transport_gap(int64_t frame_number) {
+    // Unsigned difference: the numbers are the publisher's and may sit anywhere in int64.
+    const uint64_t step = static_cast<uint64_t>(frame_number) - static_cast<uint64_t>(last_frame_number_);
+    if (have_frame_number_ && frame_number > last_frame_number_ && step > 1) {
+        const auto lost = static_cast<int64_t>(step - 1);
+        counters_.stereo_lost_in_transport += lost;
+        log("%" PRId64 " stereo frame(s) lost in transport before frame number %" PRId64, lost, frame_number);
+    }
+    have_frame_number_ = true;
+    last_frame_number_ = frame_number;
 }
 
 void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
@@ -447,6 +462,7 @@ void Bridge::publish_status() {
     s.utime = wall_utime();
     s.uptime_seconds = monotonic_seconds() - start_seconds_;
     s.stereo_received = c.stereo_received;
+    s.stereo_lost_in_transport = c.stereo_lost_in_transport;
     s.stereo_processed = c.stereo_processed;
     s.results_published = c.results_published;
     s.frames_with_lidar = c.frames_with_lidar;

@@ -56,6 +56,7 @@ struct BridgeConfig {
 // Snapshot of the counters (status_t has the same meaning).
 struct Counters {
     int64_t stereo_received = 0, stereo_processed = 0, results_published = 0, frames_with_lidar = 0;
+    int64_t stereo_lost_in_transport = 0;  // gaps in stereo_t.frame_number
     int64_t dropped_stale = 0, dropped_out_of_order = 0, dropped_no_calibration = 0,
             dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
             dropped_shutdown = 0;
@@ -106,6 +107,7 @@ private:
     static void on_lidar(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_calibration(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     void handle_stereo(const lcm_recv_buf_t *rbuf);
+    void count_transport_gap(int64_t frame_number);
     void handle_lidar(const lcm_recv_buf_t *rbuf);
     void handle_calibration(const lcm_recv_buf_t *rbuf);
     void worker_loop();
@@ -133,6 +135,8 @@ private:
     int32_t calibration_width_ = 0, calibration_height_ = 0;
     bool warned_no_calibration_ = false;
     bool have_last_ = false;          // the last accepted frame, for the order check
+    bool have_frame_number_ = false;  // the last decodable stereo message, for transport gaps
+    int64_t last_frame_number_ = 0;
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;

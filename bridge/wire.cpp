@@ -63,8 +63,9 @@ std::string check_wire(const void *data, size_t size, const char *type, int64_t 
 }
 
 // Wire layouts (bytes after the 8-byte fingerprint; see the .lcm files).
-// stereo_t: utime 8, sequence 4, width 4, height 4, row_stride 4, pixel_format 1, size 4 = 29.
-constexpr int kStereoFixed = 29;
+// stereo_t: utime 8, sequence 4, frame_number 8, width 4, height 4, row_stride 4, pixel_format 1,
+// size 4 = 37.
+constexpr int kStereoFixed = 37;
 // lidar_t: utime 8, frame 1, lidar_to_camera 128, num_points 4 = 141.
 constexpr int kLidarFixed = 141;
 // calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
@@ -131,7 +132,7 @@ lf_image_t StereoMessage::right() const {
 
 std::string decode_stereo(const void *data, size_t size, StereoMessage &out) {
     std::string err = check_wire(data, size, "lidarflow.stereo_t", __lidarflow_stereo_t_get_hash(), kStereoFixed,
-                                 {{"size", 25, 2}});
+                                 {{"size", 33, 2}});
     if (!err.empty()) return err;
     lidarflow_stereo_t m;
     std::memset(&m, 0, sizeof m);

@@ -39,11 +39,15 @@ const std::vector<std::pair<std::string, std::string>> kOptions = {{"matching.mi
 
 scene_t g_scene;
 
-std::vector<uint8_t> stereo_bytes(const uint8_t *left, const uint8_t *right, int64_t utime, int32_t sequence = 0) {
+// frame_number < 0: the next number of this test process's own publisher counter.
+std::vector<uint8_t> stereo_bytes(const uint8_t *left, const uint8_t *right, int64_t utime, int32_t sequence = 0,
+                                  int64_t frame_number = -1) {
+    static int64_t next_number = 0;
     lidarflow_stereo_t m;
     std::memset(&m, 0, sizeof m);
     m.utime = utime;
     m.sequence = sequence;
+    m.frame_number = frame_number >= 0 ? frame_number : next_number++;
     m.width = W;
     m.height = H;
     m.row_stride = W;
@@ -208,16 +212,16 @@ void test_wire_checks(void **) {
     b[3] ^= 0x40;
     assert_non_null(strstr(stereo_err(b).c_str(), "bad fingerprint"));
     assert_non_null(strstr(stereo_err(std::vector<uint8_t>(good.begin(), good.begin() + 5)).c_str(), "truncated"));
-    b = good;  // the size field (8 + 25) made negative, then huge: checked before any allocation
-    b[33] = 0xff;
+    b = good;  // the size field (8 + 33) made negative, then huge: checked before any allocation
+    b[41] = 0xff;
     assert_non_null(strstr(stereo_err(b).c_str(), "bad length field size"));
-    b[33] = 0x7f;
+    b[41] = 0x7f;
     assert_non_null(strstr(stereo_err(b).c_str(), "truncated"));
-    b = good;  // width (8 + 12, big-endian) + 256: arrays consistent, dimensions not
-    b[22] = 1;
+    b = good;  // width (8 + 20, big-endian) + 256: arrays consistent, dimensions not
+    b[30] = 1;
     assert_non_null(strstr(stereo_err(b).c_str(), "inconsistent dimensions"));
-    b = good;  // pixel format (8 + 24)
-    b[32] = 9;
+    b = good;  // pixel format (8 + 32)
+    b[40] = 9;
     assert_non_null(strstr(stereo_err(b).c_str(), "unknown pixel_format 9"));
 
     LidarSweep s;
@@ -370,7 +374,7 @@ void test_malformed_messages(void **) {
     Rig rig(config);
     const auto good0 = stereo_bytes(g_scene.left0, g_scene.right0, 0);
     std::vector<uint8_t> truncated(good0.begin(), good0.begin() + good0.size() / 2), inconsistent = good0, trailing = good0;
-    inconsistent[22] = 1;  // width + 256 > row_stride
+    inconsistent[30] = 1;  // width + 256 > row_stride
     trailing.push_back(1);
     const std::vector<uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
     const auto lidar = lidar_bytes(scene_disparities(), LIDARFLOW_LIDAR_T_FRAME_DISPARITY, 0);
@@ -521,6 +525,35 @@ void test_calibration_file(void **) {
     std::remove(bad.c_str());
 }
 
+// stereo_t.frame_number: forward jumps count as frames lost in transport; a restart of the
+// publisher's counter (a smaller number) does not; lost frames are not "received".
+void test_transport_gaps(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    config.options = {{"matching.min_coarsest_height", "16"}, {"threads", "1"}, {"last_stage", "matching"}};
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    const int64_t numbers[] = {10, 11, 14, 15, 3, 4, 6, INT64_MAX - 1, INT64_MAX};
+    int64_t t = 0;
+    for (int64_t n : numbers) {
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, t, 0, n));
+        t += 100000;
+    }
+    rig.bridge->stop();
+    const Counters c = rig.bridge->counters();
+    assert_int_equal(c.stereo_received, 9);
+    assert_int_equal(c.stereo_lost_in_transport, 2 + 1 + (INT64_MAX - 1 - 6 - 1));
+    assert_accounted(c);
+    lcm_handle_timeout(rig.lcm, 100);  // deliver the final status stop() published
+    assert_false(rig.statuses.empty());
+    lidarflow_status_t s;
+    std::memset(&s, 0, sizeof s);
+    const auto &last = rig.statuses.back();
+    assert_int_equal(lidarflow_status_t_decode(last.data(), 0, (int)last.size(), &s), (int)last.size());
+    assert_int_equal(s.stereo_lost_in_transport, c.stereo_lost_in_transport);
+    lidarflow_status_t_decode_cleanup(&s);
+}
+
 // --option KEY=VALUE: refusals carry the C ABI's real reason for the key's type.
 void test_option_errors(void **) {
     lcm_t *lcm = lcm_create("memq://");
@@ -561,6 +594,7 @@ int main(void) {
         cmocka_unit_test(test_status_heartbeat),
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_option_errors),
+        cmocka_unit_test(test_transport_gaps),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -72,7 +72,7 @@ void publish_lidar(lcm_t *lcm, const Channels &ch, const SparseLidar &lidar, int
 }
 
 void publish_stereo(lcm_t *lcm, const Channels &ch, const cv::Mat &left, const cv::Mat &right, int64_t utime,
-                    int32_t sequence) {
+                    int32_t sequence, int64_t frame_number) {
     require(left.isContinuous() && right.isContinuous() && left.type() == right.type() &&
                 (left.type() == CV_8UC1 || left.type() == CV_8UC3),
             ErrorCode::Format, "publish-kitti: images must be 8-bit gray or colour");
@@ -80,6 +80,7 @@ void publish_stereo(lcm_t *lcm, const Channels &ch, const cv::Mat &left, const c
     std::memset(&m, 0, sizeof m);
     m.utime = utime;
     m.sequence = sequence;
+    m.frame_number = frame_number;
     m.width = left.cols;
     m.height = left.rows;
     m.row_stride = static_cast<int32_t>(left.step[0]);
@@ -167,7 +168,8 @@ int run(int argc, char **argv) {
                     publish_lidar(lcm, ch, lidar, utime);
                     ++sweeps;
                 }
-                publish_stereo(lcm, ch, t == 0 ? in.left0 : in.left1, t == 0 ? in.right0 : in.right1, utime, sequence);
+                publish_stereo(lcm, ch, t == 0 ? in.left0 : in.left1, t == 0 ? in.right0 : in.right1, utime, sequence,
+                               frames);
                 ++frames;
             }
             ++sequence;

@@ -226,10 +226,10 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k) {
 }
 
 OptionValues preset_values(const std::string &name, const OptionValues &current) {
-    // The core has one tuned configuration; it is the only preset.
-    require(name == "default", ErrorCode::InvalidArgument,
-            "unknown preset '" + name + "' (known presets: default)");
+    // The core owns the preset table, so the C ABI, the CLI's --preset, --set preset=..,
+    // Python and the bridge all get the same values.
     OptionValues v;
+    v.estimator = pipeline::EstimatorOptions::preset(name);
     v.preset = name;
     v.estimator.threads = current.estimator.threads;
     return v;

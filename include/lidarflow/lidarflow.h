@@ -95,7 +95,12 @@ typedef struct lf_options lf_options_t;
  * general
  *   "threads"          int    [1, 256]   OpenMP threads of this handle (default 1); results do
  *                                        not depend on it
- *   "preset"           string "default"  resets every option except "threads" to the preset
+ *   "preset"           string "default"  resets every option except "threads" to the preset:
+ *                                        "default" (reference accuracy), "balanced" (matcher
+ *                                        levels below full resolution thinned: thin_from_level
+ *                                        1) or "fast" (grid_step 6, iterations 3,
+ *                                        min_coarsest_height 80, processing_scale 0.7); set it
+ *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this

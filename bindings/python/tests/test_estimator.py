@@ -206,6 +206,30 @@ class BadInput(unittest.TestCase):
         self.assertEqual(cm.exception.status, lidarflow.ERR_INVALID_ARGUMENT)
 
 
+class Presets(unittest.TestCase):
+    def test_named_presets_reach_the_library(self):
+        # "fast" works at 0.7 resolution with a coarser grid: it needs more than 160x64 pixels.
+        w, h = 320, 160
+        scene, lidar = make_scene(width=w, height=h), grid_lidar(10, width=w, height=h)
+        with lidarflow.Estimator(options={"preset": "default"}, **CAL) as est:
+            est.push(scene[0], scene[1], lidar)
+            est.push(scene[2], scene[3], lidar)
+            default = est.result()
+        results = {}
+        for name in ("balanced", "fast"):
+            with lidarflow.Estimator(options={"preset": name, "threads": 2}, **CAL) as est:
+                self.assertFalse(est.push(scene[0], scene[1], lidar))
+                self.assertTrue(est.push(scene[2], scene[3], lidar))
+                results[name] = est.result()
+        self.assertFalse(same(results["fast"], default))
+        self.assertFalse(same(results["balanced"], results["fast"]))
+        for r in results.values():
+            self.assertGreater(accuracy(r), 0.9)
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            lidarflow.Estimator(options={"preset": "turbo"}, **CAL)
+        self.assertIn("unknown preset 'turbo'", cm.exception.message)
+
+
 class Lifetime(unittest.TestCase):
     def test_double_close_and_context_manager(self):
         est = lidarflow.Estimator(**CAL)

@@ -120,7 +120,14 @@ class RoundTrip(unittest.TestCase):
         noise = np.random.RandomState(3).randint(0, 256, (4, H, W)).astype(np.uint8)
         rgb = [np.ascontiguousarray(np.stack([g, 255 - g, n], axis=2)) for g, n in zip(self.scene, noise)]
         bgr = [np.ascontiguousarray(c[..., ::-1]) for c in rgb]
-        self.assertTrue(same(run_pair(rgb, colour_order="rgb"), run_pair(bgr, colour_order="bgr")))
+        self.assertTrue(same(run_pair(rgb, colour_order="rgb"), run_pair(bgr, color_order="bgr")))
+        # A colour frame without an order is refused, with the fix in the message.
+        with lidarflow.Estimator(options=FAST, **CAL) as est:
+            with self.assertRaises(ValueError) as cm:
+                est.push(bgr[0], bgr[1])
+            self.assertIn('colour_order="bgr"', str(cm.exception))
+            self.assertIn("cv2", str(cm.exception))
+            self.assertFalse(est.has_result)
 
 
 class BadInput(unittest.TestCase):
@@ -154,6 +161,7 @@ class BadInput(unittest.TestCase):
         self.assertValueError("packed rows", push, l[:, ::-1], r)
         self.assertValueError("differ in shape", push, l, r[:, :W - 2])
         self.assertValueError("colour_order", push, l, r, colour_order="rgba")
+        self.assertValueError("disagree", push, l, r, colour_order="rgb", color_order="bgr")
         lid = grid_lidar(10)
         self.assertValueError("float32", push, l, r, lid.astype(np.float64))
         self.assertValueError("(N, 3)", push, l, r, lid[:, :2])

@@ -144,6 +144,7 @@ def _declare(lib):
         "lf_get_result": (i32, [c.c_void_p, P(ResultBuffers)]),
         "lf_get_points3d": (i32, [c.c_void_p, P(Points3dBuffers)]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
+        "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
     }
     for name, (restype, argtypes) in protos.items():
         f = getattr(lib, name)

@@ -238,6 +238,32 @@ class Presets(unittest.TestCase):
         self.assertIn("unknown preset 'turbo'", cm.exception.message)
 
 
+class KittiCalibration(unittest.TestCase):
+    def test_reads_files_into_estimator_arguments(self):
+        import tempfile
+        with tempfile.TemporaryDirectory() as tmp:
+            cam, velo = os.path.join(tmp, "cam.txt"), os.path.join(tmp, "velo.txt")
+            with open(cam, "w") as f:
+                f.write("R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 700 0 600 35 0 710 180 0 0 0 1 0\n"
+                        "P_rect_03: 700 0 600 -315 0 710 180 0 0 0 1 0\n")
+            with open(velo, "w") as f:
+                f.write("R: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 -0.3\n")
+            cal = lidarflow.read_kitti_calibration(cam)
+            self.assertIsNone(cal["lidar_to_camera"])
+            self.assertAlmostEqual(cal["baseline"], 0.5, places=12)
+            cal = lidarflow.read_kitti_calibration(cam, velo)
+            self.assertEqual((cal["fx"], cal["fy"], cal["cx"], cal["cy"]), (700, 710, 600, 180))
+            # camera 0 -> camera 2 is +0.05 m in x; the Velodyne sits 0.3 m behind camera 0.
+            np.testing.assert_allclose(cal["lidar_to_camera"] @ [10, 1, 0, 1], [-0.95, 0, 9.7, 1], atol=1e-12)
+            lidarflow.Estimator(**cal).close()
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                lidarflow.read_kitti_calibration(os.path.join(tmp, "missing.txt"))
+            self.assertEqual(cm.exception.status, lidarflow.ERR_IO)
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                lidarflow.read_kitti_calibration(cam, cam)
+            self.assertEqual(cm.exception.status, lidarflow.ERR_FORMAT)
+
+
 class Lifetime(unittest.TestCase):
     def test_double_close_and_context_manager(self):
         est = lidarflow.Estimator(**CAL)

@@ -36,6 +36,7 @@ const char *kUsage =
     "                           to the number of CPUs\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
+    "  --version                print the lidarflow library version and exit\n"
     "  --help\n"
     "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n";
 
@@ -57,6 +58,10 @@ int main(int argc, char **argv) {
         const std::string a = argv[i];
         if (a == "--help" || a == "-h") {
             std::printf("%s", kUsage);
+            return 0;
+        }
+        if (a == "--version") {
+            std::printf("lidarflow-lcm-bridge %s (ABI %u)\n", lf_version_string(), lf_abi_major());
             return 0;
         }
         if (a == "--verbose") {

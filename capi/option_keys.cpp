@@ -178,6 +178,36 @@ const OptionKey *find_option_key(const std::string &key) {
 
 KeyType option_key_type(const OptionKey &k) { return k.type; }
 
+std::vector<std::string> option_key_names() {
+    std::vector<std::string> names;
+    for (const OptionKey &k : kKeys) names.emplace_back(k.name);
+    return names;
+}
+
+std::vector<OptionKeyDescription> describe_option_keys() {
+    const OptionValues fresh;
+    std::vector<OptionKeyDescription> rows;
+    for (const OptionKey &k : kKeys) {
+        OptionKeyDescription d;
+        d.name = k.name;
+        switch (k.type) {
+        case KeyType::Int: d.type = "int"; break;
+        case KeyType::Bool: d.type = "0/1"; break;
+        case KeyType::Float: d.type = "float"; break;
+        case KeyType::String: d.type = "string"; break;
+        }
+        if (k.type != KeyType::String) d.bounds = bounds_text(k);
+        else if (is_key(k, "preset")) d.bounds = "default | balanced | fast";
+        else if (is_key(k, "last_stage")) d.bounds = "matching | consistency | sparse | interpolation";
+        else d.bounds = "a file path, or \"\"";
+        if (k.type == KeyType::String) d.defaults = std::string("\"") + get_option_string(fresh, k) + "\"";
+        else if (k.type == KeyType::Float) d.defaults = number(get_option_float(fresh, k));
+        else d.defaults = std::to_string(get_option_int(fresh, k));
+        rows.push_back(std::move(d));
+    }
+    return rows;
+}
+
 void set_option_int(OptionValues &values, const OptionKey &k, int64_t v) {
     if (k.type == KeyType::Float) return set_option_float(values, k, static_cast<double>(v));
     if (k.type == KeyType::String) wrong_type(k, "lf_options_set_int");
@@ -226,10 +256,10 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k) {
 }
 
 OptionValues preset_values(const std::string &name, const OptionValues &current) {
-    // The core has one tuned configuration; it is the only preset.
-    require(name == "default", ErrorCode::InvalidArgument,
-            "unknown preset '" + name + "' (known presets: default)");
+    // The core owns the preset table, so the C ABI, the CLI's --preset, --set preset=..,
+    // Python and the bridge all get the same values.
     OptionValues v;
+    v.estimator = pipeline::EstimatorOptions::preset(name);
     v.preset = name;
     v.estimator.threads = current.estimator.threads;
     return v;

@@ -4,6 +4,7 @@
 // checks both ends of each.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "pipeline/estimator.hpp"
 
@@ -21,6 +22,17 @@ struct OptionKey;
 
 // Looks a key up; nullptr when unknown.
 const OptionKey *find_option_key(const std::string &key);
+// Every key's name, in table order.
+std::vector<std::string> option_key_names();
+
+// One row of `lidarflow options`: the table itself, not a copy of the header's documentation.
+struct OptionKeyDescription {
+    std::string name;
+    std::string type;      // "int", "0/1", "float", "string"
+    std::string bounds;    // e.g. "[1, 256]", "(0, 10000]", "[1, 101] and odd"; the names a string key takes
+    std::string defaults;  // the value of a fresh lf_options_t
+};
+std::vector<OptionKeyDescription> describe_option_keys();
 KeyType option_key_type(const OptionKey &k);
 
 // Setters: check type and bounds, then write. Throw Error(InvalidArgument) naming the key,

@@ -1,6 +1,7 @@
 // lf_options_*: the key/value settings object of the C ABI (keys in option_keys.cpp).
 #include <new>
 
+#include "core/closest_name.hpp"
 #include "guard.hpp"
 #include "handles.hpp"
 
@@ -13,7 +14,9 @@ namespace {
 const OptionKey &lookup(const char *key) {
     require_non_null(key, "key");
     const OptionKey *k = find_option_key(key);
-    require(k != nullptr, ErrorCode::InvalidArgument, std::string("unknown option key '") + key + "'");
+    require(k != nullptr, ErrorCode::InvalidArgument, [&] {
+        return std::string("unknown option key '") + key + "'" + lidarflow::did_you_mean(key, option_key_names());
+    });
     return *k;
 }
 

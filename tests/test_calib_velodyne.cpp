@@ -12,6 +12,8 @@
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/velodyne.hpp"
+#include "io/velo_to_left.hpp"
+#include "lidar/projection.hpp"
 // cmocka.h defines fail(), which breaks <ios>, and its 1.1.5 header lacks extern "C": include
 // it last, wrapped (test_support.hpp's own include is then a no-op).
 #include <setjmp.h>
@@ -164,6 +166,46 @@ void test_velodyne_bin(void **) {
         assert_true(throws_code(ErrorCode::Format, [&] { io::read_velodyne_bin((dir / name).string()); }));
 }
 
+// A rig like KITTI's (camera 2 offset from camera 0, a small rectifying rotation, a LiDAR
+// mounted above and behind): projecting through the composed Velodyne -> left rectified
+// transform with the offset-free K gives exactly the devkit chain's pixels and disparities.
+void test_velo_to_left_rect(void **) {
+    io::CamToCamCalib c;
+    c.P_rect_02 = {700, 0, 600, 45.0, 0, 710, 180, 0.2, 0, 0, 1, 0.003};
+    c.P_rect_03 = {700, 0, 600, -330.0, 0, 710, 180, 2.3, 0, 0, 1, 0.003};
+    c.camera = {700, 710, 600, 180, (45.0 + 330.0) / 700};
+    const double a = 0.01;  // rotation about y
+    c.R_rect_00 = {std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a)};
+    // Velodyne (x forward, y left, z up) -> camera 0 (x right, y down, z forward), offset.
+    const cv::Matx44d velo(0, -1, 0, 0.01, 0, 0, -1, -0.08, 1, 0, 0, -0.27, 0, 0, 0, 1);
+    const cv::Matx44d T = io::velo_to_left_rect(c, velo);
+    assert_true(T(3, 0) == 0 && T(3, 1) == 0 && T(3, 2) == 0 && T(3, 3) == 1);
+
+    std::vector<io::VelodynePoint> scan;
+    std::vector<cv::Point3d> left;
+    for (int i = 0; i < 400; ++i) {
+        const io::VelodynePoint q{5.0f + 0.1f * i, -8.0f + 0.04f * i, -1.5f + 0.006f * i, 0};
+        scan.push_back(q);
+        const cv::Vec4d x = T * cv::Vec4d(q.x, q.y, q.z, 1);
+        left.emplace_back(x[0], x[1], x[2]);
+    }
+    const cv::Size image(1242, 375);
+    const SparseLidar devkit = lidar::project_to_left(scan, c, velo, image);
+    const SparseLidar composed = lidar::project_to_left(left, io::calib_from_camera(c.camera), image);
+    assert_true(devkit.points.size() > 100);
+    assert_int_equal(devkit.points.size(), composed.points.size());
+    for (size_t i = 0; i < devkit.points.size(); ++i) {
+        assert_true(devkit.points[i].x == composed.points[i].x && devkit.points[i].y == composed.points[i].y);
+        assert_true(std::fabs(devkit.points[i].disparity - composed.points[i].disparity) < 1e-4);
+    }
+    io::CamToCamCalib bad = c;
+    bad.P_rect_02(2, 2) = 0.5;
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { io::velo_to_left_rect(bad, velo); }));
+    bad = c;
+    bad.R_rect_00(0, 0) = std::numeric_limits<double>::quiet_NaN();
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { io::velo_to_left_rect(bad, velo); }));
+}
+
 void test_real_files(void **) {
     const std::string root = test::kitti_dir();
     if (root.empty()) {
@@ -202,6 +244,7 @@ int main() {
         cmocka_unit_test(test_missing_files),
         cmocka_unit_test(test_writer_round_trip),
         cmocka_unit_test(test_velodyne_bin),
+        cmocka_unit_test(test_velo_to_left_rect),
         cmocka_unit_test(test_real_files),
     };
     return cmocka_run_group_tests_name("calib_velodyne", tests, nullptr, nullptr);

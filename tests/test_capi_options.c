@@ -266,6 +266,58 @@ static void test_preset_resets_all_but_threads(void **state) {
     assert_string_equal(s, "");
 }
 
+/* The named presets hold the values lidarflow.h documents, keep "threads", and a key set after
+ * the preset overrides it. */
+static void test_named_presets(void **state) {
+    lf_options_t *o = (lf_options_t *)*state;
+    lf_options_t *fresh = NULL;
+    assert_int_equal(lf_options_create(&fresh), LF_OK);
+    assert_int_equal(lf_options_set_int(o, "threads", 4), LF_OK);
+    const char *s = NULL;
+
+    assert_int_equal(lf_options_set_string(o, "preset", "fast"), LF_OK);
+    assert_int_equal(lf_options_get_string(o, "preset", &s), LF_OK);
+    assert_string_equal(s, "fast");
+    assert_true(get_number(o, "threads") == 4.0);
+    assert_true(get_number(o, "matching.grid_step") == 6.0);
+    assert_true(get_number(o, "matching.iterations") == 3.0);
+    assert_true(get_number(o, "matching.min_coarsest_height") == 80.0);
+    assert_true(fabs(get_number(o, "processing_scale") - 0.7) < 1e-12);
+    assert_true(get_number(o, "matching.thin_from_level") == get_number(fresh, "matching.thin_from_level"));
+    assert_true(get_number(o, "matching.grid_step") != get_number(fresh, "matching.grid_step"));
+
+    assert_int_equal(lf_options_set_int(o, "matching.iterations", 5), LF_OK); /* after the preset */
+    assert_true(get_number(o, "matching.iterations") == 5.0);
+
+    assert_int_equal(lf_options_set_string(o, "preset", "balanced"), LF_OK);
+    assert_true(get_number(o, "matching.thin_from_level") == 1.0);
+    assert_true(get_number(o, "matching.iterations") == get_number(fresh, "matching.iterations"));
+    assert_true(get_number(o, "processing_scale") == 1.0);
+    assert_true(get_number(o, "matching.thin_from_level") != get_number(fresh, "matching.thin_from_level"));
+
+    /* An estimator accepts every preset. */
+    static const char *names[] = {"default", "balanced", "fast"};
+    lf_calibration_t cal;
+    lf_calibration_init(&cal);
+    cal.fx = cal.fy = 700;
+    cal.cx = 320;
+    cal.cy = 240;
+    cal.baseline = 0.5;
+    for (int i = 0; i < 3; ++i) {
+        assert_int_equal(lf_options_set_string(o, "preset", names[i]), LF_OK);
+        lf_estimator_t *h = NULL;
+        assert_int_equal(lf_create(o, &cal, &h), LF_OK);
+        lf_destroy(h);
+    }
+
+    /* Unknown names list the known ones. */
+    assert_int_equal(lf_options_set_string(o, "preset", "Fast"), LF_ERR_INVALID_ARGUMENT);
+    assert_non_null(strstr(lf_options_last_error(o), "balanced"));
+    assert_int_equal(lf_options_get_string(o, "preset", &s), LF_OK);
+    assert_string_equal(s, "fast");
+    lf_options_destroy(fresh);
+}
+
 static void test_unknown_keys_and_nulls(void **state) {
     lf_options_t *o = (lf_options_t *)*state;
     assert_int_equal(lf_options_set_int(o, "thread", 2), LF_ERR_INVALID_ARGUMENT);
@@ -311,6 +363,7 @@ int main(void) {
         cmocka_unit_test_setup_teardown(test_support_window_sets_both_stages, setup, teardown),
         cmocka_unit_test_setup_teardown(test_string_keys, setup, teardown),
         cmocka_unit_test_setup_teardown(test_preset_resets_all_but_threads, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_named_presets, setup, teardown),
         cmocka_unit_test_setup_teardown(test_unknown_keys_and_nulls, setup, teardown),
     };
     return cmocka_run_group_tests_name("capi_options", tests, NULL, NULL);

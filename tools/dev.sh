@@ -14,7 +14,8 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libopencv-contrib-dev libeigen3-dev libcmocka-dev
           liblcm-dev liblcm-bin libglib2.0-dev iproute2 util-linux
-          abigail-tools python3 python3-numpy)
+          abigail-tools python3 python3-numpy
+          python3-pip python3-setuptools python3-wheel python3-venv)
 
 deps() {
     local missing=()

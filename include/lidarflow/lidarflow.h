@@ -95,7 +95,12 @@ typedef struct lf_options lf_options_t;
  * general
  *   "threads"          int    [1, 256]   OpenMP threads of this handle (default 1); results do
  *                                        not depend on it
- *   "preset"           string "default"  resets every option except "threads" to the preset
+ *   "preset"           string "default"  resets every option except "threads" to the preset:
+ *                                        "default" (reference accuracy), "balanced" (matcher
+ *                                        levels below full resolution thinned: thin_from_level
+ *                                        1) or "fast" (grid_step 6, iterations 3,
+ *                                        min_coarsest_height 80, processing_scale 0.7); set it
+ *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
@@ -223,6 +228,18 @@ static inline void lf_calibration_init(lf_calibration_t *c) {
     memset(c, 0, sizeof *c);
     c->struct_size = (uint32_t)sizeof *c;
 }
+
+/* Fills *out from KITTI calibration files: fx, fy, cx, cy and baseline from cam_to_cam_path
+ * (calib_cam_to_cam.txt: P_rect_02 / P_rect_03), and, when velo_to_cam_path is not NULL,
+ * lidar_to_camera from it (calib_velo_to_cam.txt: R, T) composed with R_rect_00 and camera 2's
+ * offset in P_rect_02, i.e. the Velodyne -> left rectified camera transform that
+ * LF_LIDAR_POINTS_LIDAR expects (has_lidar_to_camera = 1; without it 0 and
+ * lidar_to_camera all zero). out->struct_size must be set (lf_calibration_init); *out is written only on
+ * success. Errors: LF_ERR_INVALID_ARGUMENT (NULL cam_to_cam_path or out, struct_size too small),
+ * LF_ERR_IO (a file cannot be read), LF_ERR_FORMAT (a missing, duplicated or malformed entry, not
+ * a rectified pair, R not a rotation); the message is in lf_last_error(NULL). Thread-safe. */
+LF_API int32_t lf_read_kitti_calibration(const char *cam_to_cam_path, const char *velo_to_cam_path,
+                                         lf_calibration_t *out);
 
 /* Pixel formats of lf_image_t. */
 typedef enum lf_pixel_format_t {

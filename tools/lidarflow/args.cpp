@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "core/closest_name.hpp"
 #include "core/error.hpp"
 
 namespace lidarflow::cli {
@@ -27,8 +28,13 @@ Args::Args(std::string command, int argc, char **argv, std::vector<OptionSpec> s
             name = name.substr(0, eq);
         }
         const OptionSpec *s = find(name);
-        require(s != nullptr, ErrorCode::InvalidArgument,
-                command_ + ": unknown option --" + name + " (see --help)");
+        require(s != nullptr, ErrorCode::InvalidArgument, [&] {
+            std::vector<std::string> names;
+            for (const OptionSpec &o : spec_) names.push_back(o.name);
+            const std::string near = closest_name(name, names);
+            return command_ + ": unknown option --" + name +
+                   (near.empty() ? std::string() : " (did you mean --" + near + "?)") + " (see --help)";
+        });
         if (s->takes_value && !inline_value) {
             require(i + 1 < argc, ErrorCode::InvalidArgument,
                     command_ + ": option --" + name + " needs a value");

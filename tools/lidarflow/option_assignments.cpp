@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "core/closest_name.hpp"
 #include "core/error.hpp"
 #include "option_keys.hpp"
 
@@ -18,7 +19,10 @@ void apply_option_assignments(pipeline::EstimatorOptions &options, const std::ve
                 "--set: expected KEY=VALUE, got '" + a + "'");
         const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
         const capi::OptionKey *k = capi::find_option_key(key);
-        require(k != nullptr, ErrorCode::InvalidArgument, "--set: unknown option key '" + key + "'");
+        require(k != nullptr, ErrorCode::InvalidArgument, [&] {
+            return "--set: unknown option key '" + key + "'" + did_you_mean(key, capi::option_key_names()) +
+                   " (lidarflow options lists them)";
+        });
         const char *begin = value.c_str();
         char *end = nullptr;
         errno = 0;

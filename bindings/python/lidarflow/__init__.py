@@ -8,8 +8,12 @@ lidarflow._lib for where it is looked for) and checks its ABI version.
         est.push(left0, right0, lidar0)
         if est.push(left1, right1, lidar1):
             flow = est.result()          # dict of numpy arrays u, v, d0, d1, valid, confidence
+
+    cal = lidarflow.read_kitti_calibration("calib_cam_to_cam/000002.txt", "calib_velo_to_cam/000002.txt")
+    est = lidarflow.Estimator(**cal)     # Velodyne points then go in with lidar_kind="lidar"
 """
 from ._lib import ABI_MAJOR, lib as _lib_handle
+from .calibration import read_kitti_calibration
 from .estimator import Estimator, LidarflowError
 
 __version__ = _lib_handle.lf_version_string().decode()
@@ -18,5 +22,5 @@ __version__ = _lib_handle.lf_version_string().decode()
 from ._lib import (ERR_BAD_STATE, ERR_FORMAT, ERR_INTERNAL, ERR_INVALID_ARGUMENT, ERR_IO,  # noqa: E402
                    ERR_NOT_READY, ERR_OUT_OF_MEMORY, ERR_SIZE_MISMATCH, OK)
 
-__all__ = ["Estimator", "LidarflowError", "ABI_MAJOR", "OK", "ERR_INVALID_ARGUMENT", "ERR_SIZE_MISMATCH",
+__all__ = ["Estimator", "LidarflowError", "read_kitti_calibration", "ABI_MAJOR", "OK", "ERR_INVALID_ARGUMENT", "ERR_SIZE_MISMATCH",
            "ERR_IO", "ERR_FORMAT", "ERR_BAD_STATE", "ERR_NOT_READY", "ERR_OUT_OF_MEMORY", "ERR_INTERNAL"]

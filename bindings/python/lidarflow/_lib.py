@@ -1,10 +1,16 @@
 """ctypes declarations of the lidarflow C ABI (include/lidarflow/lidarflow.h) and the loader.
 
-The shared library is found, in this order, at:
-  1. the path in the environment variable LIDARFLOW_LIBRARY;
-  2. next to this package (liblidarflow.so.N copied into lidarflow/);
-  3. the build tree of the checkout this package sits in (build*/capi/);
-  4. the system's library search path (LD_LIBRARY_PATH, ld.so.cache).
+The shared library is looked for, in this order (no environment variable is needed once
+lidarflow is installed):
+  1. the path in the environment variable LIDARFLOW_LIBRARY (then the only candidate);
+  2. next to this package (liblidarflow.so.N copied into lidarflow/, e.g. a wheel-like tree);
+  3. the lib folders of the installation prefix this package sits in: for a package in
+     PREFIX/lib/python3/dist-packages/lidarflow (Debian) or PREFIX/lib/python3.X/site-packages/
+     lidarflow, that is PREFIX/lib and PREFIX/lib/<multiarch>;
+  4. the build tree of the checkout this package sits in (build*/capi/);
+  5. the system's loader by SONAME (LD_LIBRARY_PATH, ld.so.cache: /usr/lib/<multiarch>).
+A copy in the package's own prefix comes before the system's, so a prefix install is not
+shadowed by an older system package.
 Its ABI major must equal ABI_MAJOR, else importing lidarflow raises ImportError.
 """
 import ctypes
@@ -69,6 +75,18 @@ class Points3dBuffers(ctypes.Structure):
                 ("points", Plane), ("motion", Plane), ("valid", Plane)]
 
 
+def _prefix_lib_dirs(package_dir):
+    """PREFIX/lib and PREFIX/lib/<multiarch> for the prefix whose lib/pythonX/...-packages
+    holds package_dir; none when the package does not sit in such a layout."""
+    parts = os.path.normpath(package_dir).split(os.sep)
+    # .../PREFIX/lib/python3[.X]/{dist,site}-packages/lidarflow
+    if len(parts) < 5 or parts[-2] not in ("dist-packages", "site-packages") or \
+            not parts[-3].startswith("python") or parts[-4] not in ("lib", "lib64"):
+        return []
+    libdir = os.sep.join(parts[:-3])
+    return [libdir] + sorted(d for d in glob.glob(os.path.join(libdir, "*-linux-gnu*")) if os.path.isdir(d))
+
+
 def _candidates():
     env = os.environ.get("LIDARFLOW_LIBRARY")
     if env:
@@ -76,9 +94,10 @@ def _candidates():
         return [env]
     here = os.path.dirname(os.path.abspath(__file__))
     found = [os.path.join(here, _SONAME)]
+    found += [os.path.join(d, _SONAME) for d in _prefix_lib_dirs(here)]
     repo = os.path.dirname(os.path.dirname(os.path.dirname(here)))  # bindings/python/lidarflow
     found += sorted(glob.glob(os.path.join(repo, "build*", "capi", _SONAME)))
-    found.append(_SONAME)  # the system search path
+    found.append(_SONAME)  # the system loader
     return found
 
 
@@ -92,7 +111,8 @@ def _load():
             return ctypes.CDLL(path)
         except OSError as e:
             errors.append("%s: %s" % (path, e))
-    raise ImportError("lidarflow: cannot load %s (set LIDARFLOW_LIBRARY to its path):\n  %s"
+    raise ImportError("lidarflow: cannot load %s (install liblidarflow, or set LIDARFLOW_LIBRARY to its "
+                      "path):\n  %s"
                       % (_SONAME, "\n  ".join(errors)))
 
 
@@ -124,6 +144,7 @@ def _declare(lib):
         "lf_get_result": (i32, [c.c_void_p, P(ResultBuffers)]),
         "lf_get_points3d": (i32, [c.c_void_p, P(Points3dBuffers)]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
+        "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
     }
     for name, (restype, argtypes) in protos.items():
         f = getattr(lib, name)

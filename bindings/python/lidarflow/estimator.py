@@ -34,6 +34,10 @@ def _image_view(name, a, colour_order):
     if a.ndim == 2:
         channels, fmt = 1, _lib.PIXEL_GRAY8
     elif a.ndim == 3 and a.shape[2] == 3:
+        if colour_order is None:
+            raise ValueError("%s is a colour image (shape %s): pass its channel order, "
+                             "colour_order=\"bgr\" for cv2.imread images or colour_order=\"rgb\" "
+                             "for PIL/imageio ones (or convert it to gray)" % (name, a.shape))
         channels, fmt = 3, _COLOUR_FORMATS[colour_order]
     else:
         raise ValueError("%s must have shape (H, W) or (H, W, 3), got %s" % (name, a.shape))
@@ -46,6 +50,16 @@ def _image_view(name, a, colour_order):
                          "use np.ascontiguousarray" % (name, channels, ", 1" if channels == 3 else "",
                                                        a.shape[1] * channels, a.strides))
     return _lib.Image(a.ctypes.data, a.shape[1], a.shape[0], a.strides[0], fmt)
+
+
+def _colour_order(colour_order, color_order):
+    """The one channel order given (None: none given; gray images need none)."""
+    if colour_order is not None and color_order is not None and colour_order != color_order:
+        raise ValueError("colour_order=%r and color_order=%r disagree; pass one" % (colour_order, color_order))
+    order = colour_order if colour_order is not None else color_order
+    if order is not None and order not in _COLOUR_FORMATS:
+        raise ValueError("colour_order must be 'rgb' or 'bgr', got %r" % (order,))
+    return order
 
 
 def _lidar_view(lidar, kind):
@@ -143,19 +157,21 @@ class Estimator:
         return self._handle
 
     # --- frames ---
-    def push(self, left, right, lidar=None, timestamp=None, lidar_kind="disparity", colour_order="rgb"):
+    def push(self, left, right, lidar=None, timestamp=None, lidar_kind="disparity", colour_order=None,
+             color_order=None):
         """Adds a stereo frame; returns True when a result (previous frame -> this one) is ready.
 
-        left, right: uint8 arrays (H, W) gray or (H, W, 3) colour in colour_order ("rgb" or
-        "bgr"), packed pixels, any row stride; both the same shape. They are copied.
+        left, right: uint8 arrays (H, W) gray or (H, W, 3) colour, packed pixels, any row
+        stride; both the same shape. They are copied. Colour arrays need colour_order (or its
+        spelling color_order) "bgr" (cv2.imread) or "rgb" (PIL, imageio): there is no default,
+        because the wrong order silently changes the flow.
         lidar: None, or a float32 (N, K >= 3) array whose first three columns are (x, y, d)
         pixel + disparity (lidar_kind="disparity"), (x, y, z) metres in the left camera frame
         ("camera") or in the LiDAR frame ("lidar"). timestamp: int microseconds, increasing;
         None = the previous frame's + 1. Raises ValueError for malformed arrays and
         LidarflowError when the library rejects the frame (the Estimator is then unchanged).
         """
-        if colour_order not in _COLOUR_FORMATS:
-            raise ValueError("colour_order must be 'rgb' or 'bgr', got %r" % (colour_order,))
+        colour_order = _colour_order(colour_order, color_order)
         li = _image_view("left", left, colour_order)
         ri = _image_view("right", right, colour_order)
         if left.shape != right.shape:

@@ -120,7 +120,14 @@ class RoundTrip(unittest.TestCase):
         noise = np.random.RandomState(3).randint(0, 256, (4, H, W)).astype(np.uint8)
         rgb = [np.ascontiguousarray(np.stack([g, 255 - g, n], axis=2)) for g, n in zip(self.scene, noise)]
         bgr = [np.ascontiguousarray(c[..., ::-1]) for c in rgb]
-        self.assertTrue(same(run_pair(rgb, colour_order="rgb"), run_pair(bgr, colour_order="bgr")))
+        self.assertTrue(same(run_pair(rgb, colour_order="rgb"), run_pair(bgr, color_order="bgr")))
+        # A colour frame without an order is refused, with the fix in the message.
+        with lidarflow.Estimator(options=FAST, **CAL) as est:
+            with self.assertRaises(ValueError) as cm:
+                est.push(bgr[0], bgr[1])
+            self.assertIn('colour_order="bgr"', str(cm.exception))
+            self.assertIn("cv2", str(cm.exception))
+            self.assertFalse(est.has_result)
 
 
 class BadInput(unittest.TestCase):
@@ -154,6 +161,7 @@ class BadInput(unittest.TestCase):
         self.assertValueError("packed rows", push, l[:, ::-1], r)
         self.assertValueError("differ in shape", push, l, r[:, :W - 2])
         self.assertValueError("colour_order", push, l, r, colour_order="rgba")
+        self.assertValueError("disagree", push, l, r, colour_order="rgb", color_order="bgr")
         lid = grid_lidar(10)
         self.assertValueError("float32", push, l, r, lid.astype(np.float64))
         self.assertValueError("(N, 3)", push, l, r, lid[:, :2])
@@ -204,6 +212,56 @@ class BadInput(unittest.TestCase):
         with self.assertRaises(lidarflow.LidarflowError) as cm:
             lidarflow.Estimator(100, 100, 80, 32, 0.0)
         self.assertEqual(cm.exception.status, lidarflow.ERR_INVALID_ARGUMENT)
+
+
+class Presets(unittest.TestCase):
+    def test_named_presets_reach_the_library(self):
+        # "fast" works at 0.7 resolution with a coarser grid: it needs more than 160x64 pixels.
+        w, h = 320, 160
+        scene, lidar = make_scene(width=w, height=h), grid_lidar(10, width=w, height=h)
+        with lidarflow.Estimator(options={"preset": "default"}, **CAL) as est:
+            est.push(scene[0], scene[1], lidar)
+            est.push(scene[2], scene[3], lidar)
+            default = est.result()
+        results = {}
+        for name in ("balanced", "fast"):
+            with lidarflow.Estimator(options={"preset": name, "threads": 2}, **CAL) as est:
+                self.assertFalse(est.push(scene[0], scene[1], lidar))
+                self.assertTrue(est.push(scene[2], scene[3], lidar))
+                results[name] = est.result()
+        self.assertFalse(same(results["fast"], default))
+        self.assertFalse(same(results["balanced"], results["fast"]))
+        for r in results.values():
+            self.assertGreater(accuracy(r), 0.9)
+        with self.assertRaises(lidarflow.LidarflowError) as cm:
+            lidarflow.Estimator(options={"preset": "turbo"}, **CAL)
+        self.assertIn("unknown preset 'turbo'", cm.exception.message)
+
+
+class KittiCalibration(unittest.TestCase):
+    def test_reads_files_into_estimator_arguments(self):
+        import tempfile
+        with tempfile.TemporaryDirectory() as tmp:
+            cam, velo = os.path.join(tmp, "cam.txt"), os.path.join(tmp, "velo.txt")
+            with open(cam, "w") as f:
+                f.write("R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 700 0 600 35 0 710 180 0 0 0 1 0\n"
+                        "P_rect_03: 700 0 600 -315 0 710 180 0 0 0 1 0\n")
+            with open(velo, "w") as f:
+                f.write("R: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 -0.3\n")
+            cal = lidarflow.read_kitti_calibration(cam)
+            self.assertIsNone(cal["lidar_to_camera"])
+            self.assertAlmostEqual(cal["baseline"], 0.5, places=12)
+            cal = lidarflow.read_kitti_calibration(cam, velo)
+            self.assertEqual((cal["fx"], cal["fy"], cal["cx"], cal["cy"]), (700, 710, 600, 180))
+            # camera 0 -> camera 2 is +0.05 m in x; the Velodyne sits 0.3 m behind camera 0.
+            np.testing.assert_allclose(cal["lidar_to_camera"] @ [10, 1, 0, 1], [-0.95, 0, 9.7, 1], atol=1e-12)
+            lidarflow.Estimator(**cal).close()
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                lidarflow.read_kitti_calibration(os.path.join(tmp, "missing.txt"))
+            self.assertEqual(cm.exception.status, lidarflow.ERR_IO)
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                lidarflow.read_kitti_calibration(cam, cam)
+            self.assertEqual(cm.exception.status, lidarflow.ERR_FORMAT)
 
 
 class Lifetime(unittest.TestCase):

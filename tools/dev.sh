@@ -6,6 +6,8 @@
 #   tools/dev.sh deps        only install the Debian packages
 #   tools/dev.sh build       only configure + build (build/)
 #   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
+#   tools/dev.sh test-tsan   build everything with clang 14 + ThreadSanitizer (build-tsan/), run the
+#                            C ABI concurrency suite under it (N handles on N threads)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -66,5 +68,13 @@ case "${1:-}" in
         deps
         packages=(clang-14); deps  # only this verb needs the second compiler
         CC=clang-14 CXX=clang++-14 build build-clang ;;
-    *) sed -n '2,9p' "$0"; exit 2 ;;
+    test-tsan)
+        deps
+        packages=(clang-14); deps
+        CC=clang-14 CXX=clang++-14 build build-tsan -DLIDARFLOW_SANITIZE_THREAD=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
+        # OpenMP stays at one thread per handle in the suite: libgomp is not instrumented, so its
+        # barriers would be reported as races. The threads under test are the caller's.
+        TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" LF_TEST_THREADS=4 LF_TEST_ROUNDS=6 \
+            "$root/build-tsan/tests/test_capi_concurrent" ;;
+    *) sed -n '2,11p' "$0"; exit 2 ;;
 esac

@@ -86,11 +86,23 @@ __attribute__((always_inline)) inline void describe_row_impl(const float *const 
 }
 
 // Compiled for AVX2 and for the baseline ISA; the loader picks one (GCC function multiversioning).
-__attribute__((target_clones("avx2", "default"))) void describe_row8(const float *const rows[4], const RowParams &p,
+// The pick runs in an IFUNC resolver during relocation, before a ThreadSanitizer runtime is
+// up, and crashes there: TSan builds keep only the baseline version.
+#if defined(__SANITIZE_THREAD__)
+#define LF_AVX2_CLONES
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define LF_AVX2_CLONES
+#endif
+#endif
+#ifndef LF_AVX2_CLONES
+#define LF_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+LF_AVX2_CLONES void describe_row8(const float *const rows[4], const RowParams &p,
                                                                     uint8_t *dst) {
     describe_row_impl<8>(rows, p, dst);
 }
-__attribute__((target_clones("avx2", "default"))) void describe_row4(const float *const rows[4], const RowParams &p,
+LF_AVX2_CLONES void describe_row4(const float *const rows[4], const RowParams &p,
                                                                     uint8_t *dst) {
     describe_row_impl<4>(rows, p, dst);
 }

@@ -7,6 +7,7 @@
 // known and never LF_ERR_INTERNAL, a failed call leaves a message and a successful one none,
 // results have the size of the pushed frames, valid is 0/1 with zeros elsewhere, and the
 // planes of views can be read whole.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -295,11 +296,16 @@ void check_plane_values(const uint8_t *valid, const float *const planes[5], size
 }
 
 void info_op(Program &in, Session &s) {
-    lf_result_info_t info;
+    // A newer caller's struct may be larger (its tail zeroed): give the library those bytes.
+    struct {
+        lf_result_info_t info;
+        uint8_t tail[64];
+    } storage{};
+    lf_result_info_t &info = storage.info;
     lf_result_info_init(&info);
     const uint8_t mode = in.u8() % 3;
     if (mode == 1) info.struct_size = 4;
-    if (mode == 2) info.struct_size += 64;  // a newer caller's larger struct is fine
+    if (mode == 2) info.struct_size += sizeof storage.tail;
     const int32_t rc = lf_get_result_info(s.est, &info);
     check_status(rc, lf_last_error(s.est), "lf_get_result_info");
     if (rc == LF_OK) {
@@ -326,7 +332,9 @@ void result_op(Program &in, Session &s) {
     const uint8_t mask = in.u8();
     const int delta = in.u8() % 3 - 1;
     const uint8_t stride_mode = in.u8() % 3;
-    const uint32_t w = s.width ? s.width + delta : 1 + (delta + 1), h = s.height ? s.height : 1;
+    // At least 1 px wide: the harness's own stride arithmetic must not wrap.
+    const uint32_t w = s.width ? std::max<int64_t>(1, int64_t(s.width) + delta) : 1 + (delta + 1),
+                   h = s.height ? s.height : 1;
     const uint64_t pad = stride_mode == 1 ? 4 : 0;
     std::vector<float> planes[6];
     std::vector<uint8_t> valid;
@@ -384,7 +392,7 @@ void points_op(Program &in, Session &s) {
     const uint8_t mask = in.u8();
     const int delta = in.u8() % 3 - 1;
     const uint8_t stride_mode = in.u8() % 3;
-    const uint32_t w = s.width ? s.width + delta : 1, h = s.height ? s.height : 1;
+    const uint32_t w = s.width ? std::max<int64_t>(1, int64_t(s.width) + delta) : 1, h = s.height ? s.height : 1;
     lf_points3d_buffers_t b;
     lf_points3d_buffers_init(&b);
     b.width = w;

@@ -40,6 +40,9 @@ struct LengthField {
 std::string check_wire(const void *data, size_t size, const char *type, int64_t hash, int64_t fixed,
                        const std::vector<LengthField> &lengths) {
     const auto *p = static_cast<const uint8_t *>(data);
+    // lcm-gen's decoders count bytes in int.
+    if (size > static_cast<size_t>(std::numeric_limits<int>::max()))
+        return fmt("oversized: %zu bytes, a %s holds at most %d", size, type, std::numeric_limits<int>::max());
     if (size < 8) return fmt("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
     const int64_t got = read_be(p, 8);
     if (got != hash)
@@ -70,6 +73,9 @@ constexpr int kStereoFixed = 37;
 constexpr int kLidarFixed = 141;
 // calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
 constexpr int kCalibrationFixed = 56;
+// status_t: utime 8, uptime 8, 17 int64 counters 136, queue_depth 4, queue_capacity 4, busy 1,
+// 5 floats 20, length of last_error 4 = 185.
+constexpr int kStatusFixed = 185;
 // scene_flow_t: utime 8, utime0 8, sequence 4, lidar_flags 1, lidar_utime0 8, lidar_utime1 8,
 // last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
 // compute_seconds 4, plane_size 4, valid_size 4 = 72.
@@ -134,24 +140,28 @@ std::string decode_stereo(const void *data, size_t size, StereoMessage &out) {
     std::string err = check_wire(data, size, "lidarflow.stereo_t", __lidarflow_stereo_t_get_hash(), kStereoFixed,
                                  {{"size", 33, 2}});
     if (!err.empty()) return err;
+    // The dimensions are checked on the wire, before decoding: lcm-gen's decoder copies a
+    // zero-sized array with memcpy from a NULL allocation (undefined behaviour), and valid
+    // dimensions rule that out (size >= 1).
+    const auto *p = static_cast<const uint8_t *>(data) + 8;
+    const int64_t width = read_be(p + 20, 4), height = read_be(p + 24, 4), row_stride = read_be(p + 28, 4);
+    const auto pixel_format = static_cast<int8_t>(p[32]);
+    const int64_t image_size = read_be(p + 33, 4);
+    const int bpp = bytes_per_pixel(pixel_format);
+    if (bpp == 0) return fmt("unknown pixel_format %d (1 gray8, 2 rgb8, 3 bgr8)", pixel_format);
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        return fmt("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)width, (long long)height);
+    if (row_stride < width * bpp)
+        return fmt("inconsistent dimensions: row_stride %lld < width %lld x %d bytes", (long long)row_stride,
+                   (long long)width, bpp);
+    if (image_size != row_stride * height)
+        return fmt("inconsistent dimensions: size %lld != row_stride %lld x height %lld", (long long)image_size,
+                   (long long)row_stride, (long long)height);
     lidarflow_stereo_t m;
     std::memset(&m, 0, sizeof m);
     if (lidarflow_stereo_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
         lidarflow_stereo_t_decode_cleanup(&m);
         return "decoding failed";
-    }
-    const int bpp = bytes_per_pixel(m.pixel_format);
-    if (bpp == 0)
-        err = fmt("unknown pixel_format %d (1 gray8, 2 rgb8, 3 bgr8)", m.pixel_format);
-    else if (m.width < 1 || m.height < 1 || m.width > 16384 || m.height > 16384)
-        err = fmt("inconsistent dimensions: %dx%d (each side 1..16384)", m.width, m.height);
-    else if (static_cast<int64_t>(m.row_stride) < static_cast<int64_t>(m.width) * bpp)
-        err = fmt("inconsistent dimensions: row_stride %d < width %d x %d bytes", m.row_stride, m.width, bpp);
-    else if (static_cast<int64_t>(m.size) != static_cast<int64_t>(m.row_stride) * m.height)
-        err = fmt("inconsistent dimensions: size %d != row_stride %d x height %d", m.size, m.row_stride, m.height);
-    if (!err.empty()) {
-        lidarflow_stereo_t_decode_cleanup(&m);
-        return err;
     }
     out.msg_ = m;
     out.decoded_ = true;
@@ -186,23 +196,30 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i)
         if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]) || !std::isfinite(m.z[i]))
             err = fmt("point %d is not finite", i);
+    std::vector<float> xyz;
+    if (err.empty()) xyz.resize(3 * static_cast<size_t>(m.num_points));
+    for (int32_t i = 0; i < m.num_points && err.empty(); ++i) {
+        float *o = &xyz[3 * static_cast<size_t>(i)];
+        if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
+            // In double: the bridge's transform must not add more rounding than one float cast.
+            const double x = m.x[i], y = m.y[i], z = m.z[i];
+            for (int r = 0; r < 3; ++r) {
+                const double c = T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3];
+                // Finite inputs can still leave float's range (or give inf - inf = NaN).
+                if (!(std::fabs(c) <= std::numeric_limits<float>::max()))
+                    err = fmt("point %d is out of float range after lidar_to_camera", i);
+                o[r] = static_cast<float>(c);
+            }
+        } else {
+            o[0] = m.x[i];
+            o[1] = m.y[i];
+            o[2] = m.z[i];
+        }
+    }
     if (err.empty()) {
         out.utime = m.utime;
         out.kind = m.frame == LIDARFLOW_LIDAR_T_FRAME_DISPARITY ? LF_LIDAR_DISPARITY : LF_LIDAR_POINTS_CAMERA;
-        out.xyz.resize(3 * static_cast<size_t>(m.num_points));
-        for (int32_t i = 0; i < m.num_points; ++i) {
-            float *o = &out.xyz[3 * static_cast<size_t>(i)];
-            if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
-                // In double: the bridge's transform must not add more rounding than one float cast.
-                const double x = m.x[i], y = m.y[i], z = m.z[i];
-                for (int r = 0; r < 3; ++r)
-                    o[r] = static_cast<float>(T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3]);
-            } else {
-                o[0] = m.x[i];
-                o[1] = m.y[i];
-                o[2] = m.z[i];
-            }
-        }
+        out.xyz = std::move(xyz);
     }
     lidarflow_lidar_t_decode_cleanup(&m);
     return err;
@@ -322,20 +339,38 @@ std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
     std::string err = check_wire(data, size, "lidarflow.scene_flow_t", __lidarflow_scene_flow_t_get_hash(),
                                  kFlowFixed, {{"plane_size", 64, 4}, {"valid_size", 68, 1}});
     if (!err.empty()) return err;
+    // Sizes are checked on the wire before decoding, as for stereo_t: sides in 1..16384 keep
+    // width x height x 4 far from overflow, and no plane is empty.
+    const auto *p = static_cast<const uint8_t *>(data) + 8;
+    const int64_t image_width = read_be(p + 38, 4), image_height = read_be(p + 42, 4);
+    const int64_t step = static_cast<int8_t>(p[46]);
+    const int64_t width = read_be(p + 47, 4), height = read_be(p + 51, 4);
+    const auto encoding = static_cast<int8_t>(p[55]);
+    const int64_t plane_size = read_be(p + 64, 4), valid_size = read_be(p + 68, 4);
+    const int value_bytes = encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_FLOAT32 ? 4
+                            : encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 ? 2
+                                                                                : 0;
+    if (value_bytes == 0) return fmt("unknown encoding %d (1 float32, 2 int16)", encoding);
+    if (image_width < 1 || image_height < 1 || image_width > 16384 || image_height > 16384 || step < 1 || step > 16)
+        return fmt("inconsistent dimensions: image %lldx%lld (each side 1..16384), step %lld (1..16)",
+                   (long long)image_width, (long long)image_height, (long long)step);
+    if (width != (image_width + step - 1) / step || height != (image_height + step - 1) / step)
+        return fmt("inconsistent dimensions: planes %lldx%lld, image %lldx%lld subsampled by %lld", (long long)width,
+                   (long long)height, (long long)image_width, (long long)image_height, (long long)step);
+    const int64_t n = width * height;
+    if (plane_size != n * value_bytes || valid_size != n)
+        return fmt("inconsistent dimensions: %lldx%lld with plane_size %lld, valid_size %lld", (long long)width,
+                   (long long)height, (long long)plane_size, (long long)valid_size);
     lidarflow_scene_flow_t m;
     std::memset(&m, 0, sizeof m);
     if (lidarflow_scene_flow_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
         lidarflow_scene_flow_t_decode_cleanup(&m);
         return "decoding failed";
     }
-    const int64_t n = static_cast<int64_t>(m.width) * m.height;
-    const int value_bytes = m.encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_FLOAT32 ? 4
-                            : m.encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 ? 2
-                                                                                  : 0;
-    if (value_bytes == 0) err = fmt("unknown encoding %d", m.encoding);
-    else if (m.width < 0 || m.height < 0 || m.plane_size != n * value_bytes || m.valid_size != n)
-        err = fmt("inconsistent dimensions: %dx%d with plane_size %d, valid_size %d", m.width, m.height, m.plane_size,
-                  m.valid_size);
+    if (encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 && !(std::isfinite(m.scale) && m.scale > 0))
+        err = fmt("int16 encoding with scale %g (finite, > 0)", m.scale);
+    for (int64_t i = 0; i < n && err.empty(); ++i)
+        if (m.valid[i] > 1) err = fmt("valid[%lld] = %d, not 0 or 1", (long long)i, m.valid[i]);
     if (err.empty()) {
         const uint8_t *src[4] = {m.u, m.v, m.d0, m.d1};
         std::vector<float> *dst[4] = {&out.u, &out.v, &out.d0, &out.d1};
@@ -351,6 +386,27 @@ std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
     out.header = m;
     out.header.u = out.header.v = out.header.d0 = out.header.d1 = out.header.valid = nullptr;
     return err;
+}
+
+std::string decode_status(const void *data, size_t size, StatusMessage &out) {
+    const std::string err = check_wire(data, size, "lidarflow.status_t", __lidarflow_status_t_get_hash(), kStatusFixed,
+                                       {{"last_error length", kStatusFixed - 4, 1}});
+    if (!err.empty()) return err;
+    // The string's length counts its terminating NUL: lcm-gen's decoder neither checks that
+    // nor that the length is positive.
+    const auto *p = static_cast<const uint8_t *>(data);
+    if (size == 8 + kStatusFixed || p[size - 1] != 0) return "last_error is not a NUL-terminated string";
+    lidarflow_status_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_status_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size)) {
+        lidarflow_status_t_decode_cleanup(&m);
+        return "decoding failed";
+    }
+    out.last_error = m.last_error;
+    out.fields = m;
+    out.fields.last_error = nullptr;
+    lidarflow_status_t_decode_cleanup(&m);
+    return "";
 }
 
 }  // namespace lidarflow::bridge

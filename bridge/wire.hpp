@@ -16,6 +16,7 @@
 #include "lidarflow_calibration_t.h"
 #include "lidarflow_lidar_t.h"
 #include "lidarflow_scene_flow_t.h"
+#include "lidarflow_status_t.h"
 #include "lidarflow_stereo_t.h"
 
 namespace lidarflow::bridge {
@@ -52,8 +53,9 @@ struct LidarSweep {
     lf_lidar_t view() const;  // borrows xyz
 };
 
-// Decodes, checks (frame, finite values, rigid transform with last row 0 0 0 1) and converts a
-// raw lidar_t. Returns "" on success, else one line saying what is wrong.
+// Decodes, checks (frame, finite values, rigid transform with last row 0 0 0 1, transformed
+// points within float range) and converts a raw lidar_t. Returns "" on success, else one line
+// saying what is wrong; `out` is then unchanged.
 std::string decode_lidar(const void *data, size_t size, LidarSweep &out);
 
 // Decodes and checks a raw calibration_t into *out (finite values, fx, fy, baseline > 0,
@@ -99,8 +101,20 @@ struct DecodedFlow {
     std::vector<uint8_t> valid;
 };
 
-// Decodes a raw scene_flow_t (checked like the inputs) into float planes. Returns "" or the
-// problem.
+// Decodes a raw scene_flow_t (checked like the inputs, and for consistent plane sizes,
+// step 1..16, valid bytes 0/1 and an int16 scale that is finite and > 0) into float planes.
+// Returns "" or the problem.
 std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out);
+
+// A decoded status_t: every scalar in `fields` (its last_error pointer cleared), the string in
+// last_error.
+struct StatusMessage {
+    lidarflow_status_t fields{};
+    std::string last_error;
+};
+
+// Decodes a raw status_t, checked like the inputs (and for a NUL-terminated last_error).
+// Returns "" or the problem.
+std::string decode_status(const void *data, size_t size, StatusMessage &out);
 
 }  // namespace lidarflow::bridge

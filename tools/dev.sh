@@ -8,6 +8,8 @@
 #   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
 #   tools/dev.sh test-tsan   build everything with clang 14 + ThreadSanitizer (build-tsan/), run the
 #                            C ABI concurrency suite under it (N handles on N threads)
+#   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
+#                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -55,6 +57,38 @@ run_tests() {  # run_tests DIR
     ctest --test-dir "$root/$1" --output-on-failure -j "$jobs"
 }
 
+# fuzz SECONDS [TARGET...]: each target (default: all of tests/fuzz) for SECONDS, one after the
+# other, from its committed seeds (tests/fuzz/corpus/T) plus what earlier runs found
+# (build-fuzz/corpus/T). Findings land in build-fuzz/findings/; logs in build-fuzz/fuzz-logs/.
+fuzz() {
+    local seconds="$1"; shift
+    local dir="$root/build-fuzz" targets=("$@") failed=()
+    [ ${#targets[@]} -gt 0 ] || targets=(fuzz_targets)
+    CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+        -DLIDARFLOW_FUZZ=ON -DLIDARFLOW_BUILD_TESTS=OFF >/dev/null
+    cmake --build "$dir" -j "$jobs" --target "${targets[@]}"
+    [ "${targets[0]}" != fuzz_targets ] || targets=($(cd "$dir/tests/fuzz" && ls fuzz_* | sort))
+    mkdir -p "$dir/findings" "$dir/fuzz-logs"
+    for t in "${targets[@]}"; do
+        local log="$dir/fuzz-logs/$t.log"
+        mkdir -p "$dir/corpus/$t"
+        # -timeout: a C ABI program of 24 calls on images of at most 64x48 px takes well under a
+        # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too.
+        if ASAN_OPTIONS=detect_leaks=1 "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
+               -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/findings/$t-" \
+               "$dir/corpus/$t" "$root/tests/fuzz/corpus/$t" >"$log" 2>&1; then
+            printf 'dev.sh fuzz: %-22s %10s runs %7s exec/s  ok\n' "$t" \
+                "$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")" \
+                "$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")"
+        else
+            echo "dev.sh fuzz: $t FAILED (log $log):"
+            grep -E '^(==[0-9]+==ERROR|SUMMARY|fuzz_capi:|.*runtime error)|Test unit written' "$log" | head -5
+            failed+=("$t")
+        fi
+    done
+    [ ${#failed[@]} -eq 0 ] || { echo "dev.sh fuzz: findings in ${failed[*]}"; return 1; }
+}
+
 case "${1:-}" in
     deps) deps ;;
     build) deps; build build ;;
@@ -76,5 +110,10 @@ case "${1:-}" in
         # barriers would be reported as races. The threads under test are the caller's.
         TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" LF_TEST_THREADS=4 LF_TEST_ROUNDS=6 \
             "$root/build-tsan/tests/test_capi_concurrent" ;;
-    *) sed -n '2,11p' "$0"; exit 2 ;;
+    fuzz)
+        deps
+        packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP
+        shift
+        fuzz "${1:-60}" "${@:2}" ;;
+    *) sed -n '2,13p' "$0"; exit 2 ;;
 esac

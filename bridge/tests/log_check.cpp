@@ -129,13 +129,14 @@ int main(int argc, char **argv) {
             if (e.channel == "LIDARFLOW_FLOW") flows.push_back(e.data);
             if (e.channel == "LIDARFLOW_STATUS") last_status = &e;
         }
-        lidarflow_status_t s;
-        std::memset(&s, 0, sizeof s);
-        if (!last_status ||
-            lidarflow_status_t_decode(last_status->data.data(), 0, static_cast<int>(last_status->data.size()), &s) < 0) {
-            std::fprintf(stderr, "log_check: no decodable status message in %s\n", path.c_str());
+        StatusMessage status;
+        const std::string serr =
+            last_status ? decode_status(last_status->data.data(), last_status->data.size(), status) : "none in the log";
+        if (!serr.empty()) {
+            std::fprintf(stderr, "log_check: no decodable status message in %s: %s\n", path.c_str(), serr.c_str());
             return 1;
         }
+        const lidarflow_status_t &s = status.fields;
         const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
                                 s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
                                 s.dropped_shutdown;
@@ -147,7 +148,6 @@ int main(int argc, char **argv) {
         const bool accounted = s.stereo_received == s.stereo_processed + dropped && s.queue_depth == 0 && s.busy == 0 &&
                                s.stereo_received == stereo_in_log &&
                                s.results_published == static_cast<int64_t>(flows.size());
-        lidarflow_status_t_decode_cleanup(&s);
         if (!accounted) {
             std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result\n");
             return 1;

@@ -2,10 +2,13 @@
 // equal to the C ABI's for the same frames (float32, int16, subsampled; LiDAR as disparities,
 // camera-frame and LiDAR-frame points; no LiDAR), malformed and truncated messages, frames
 // before the calibration, out-of-order timestamps, a burst faster than the estimator, shutdown
-// with frames queued, and the status heartbeat. Every case checks that each received stereo
+// with frames queued, the status heartbeat, transport gaps, option errors and a soak of
+// 10,000 mixed messages. Every case checks that each received stereo
 // message ends processed or dropped with a reason.
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -105,10 +108,11 @@ struct Rig {
     lcm_subscription_t *subs[2] = {nullptr, nullptr};
     FILE *log = nullptr;
 
-    explicit Rig(BridgeConfig config) {
+    // quiet: the bridge's log goes to /dev/null instead of a file the test can read.
+    explicit Rig(BridgeConfig config, bool quiet = false) {
         lcm = lcm_create("memq://");
         assert_non_null(lcm);
-        log = std::tmpfile();
+        log = quiet ? std::fopen("/dev/null", "w") : std::tmpfile();
         assert_non_null(log);
         config.log = log;
         if (config.options.empty()) config.options = kOptions;
@@ -554,6 +558,148 @@ void test_transport_gaps(void **) {
     lidarflow_status_t_decode_cleanup(&s);
 }
 
+// Resident set size in bytes (/proc/self/statm).
+long resident_bytes() {
+    long pages = 0, resident = 0;
+    FILE *f = std::fopen("/proc/self/statm", "r");
+    if (!f) return -1;
+    const int n = std::fscanf(f, "%ld %ld", &pages, &resident);
+    std::fclose(f);
+    return n == 2 ? resident * sysconf(_SC_PAGESIZE) : -1;
+}
+
+// Soak: LF_SOAK_MESSAGES (default 10,000) messages on all three input channels, good ones mixed
+// with malformed, out-of-order, wrong-size, lost-in-transport and foreign ones, at a pace where
+// the estimator keeps up only with some frames. Every stereo message must be accounted for, each
+// kind of drop exactly as often as a model of the bridge's rules predicts, and memory must stay
+// flat (no growth per message once warmed up).
+void test_soak(void **) {
+    const char *env = getenv("LF_SOAK_MESSAGES");
+    const int total = env ? std::max(1000, atoi(env)) : 10000;
+    BridgeConfig config;
+    config.status_period_s = 0;
+    config.queue_capacity = 2;
+    Rig rig(config, true);  // thousands of log lines: not kept
+
+    uint64_t rng = 0x9e3779b97f4a7c15ull;
+    auto next = [&](uint32_t n) {
+        rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<uint32_t>((rng >> 33) % n);
+    };
+    // The model of the receive side (bridge_core.cpp: handle_stereo / handle_calibration).
+    bool have_cal = false, cal_fits = false, have_last = false;
+    int32_t sequence = 0, last_sequence = 0;
+    int64_t utime = 0, last_utime = 0, frame_number = 0;
+    int64_t stereo = 0, malformed = 0, out_of_order = 0, no_cal = 0, mismatch = 0, lost = 0;
+    int64_t lidar_malformed = 0, cal_malformed = 0, results = 0;
+    const std::vector<float> disparities = scene_disparities();
+    auto decodable_stereo = [&](int64_t t) {
+        ++stereo;
+        if (!have_cal) ++no_cal;
+        else if (!cal_fits) ++mismatch;
+        else if (have_last && sequence == last_sequence && t <= last_utime) ++out_of_order;
+        else {
+            have_last = true;
+            last_sequence = sequence;
+            last_utime = t;
+        }
+        const bool odd = frame_number % 2 != 0;
+        return stereo_bytes(odd ? g_scene.left1 : g_scene.left0, odd ? g_scene.right1 : g_scene.right0, t, sequence,
+                            frame_number++);
+    };
+    long rss_warm = 0;
+    for (int i = 0; i < total; ++i) {
+        const uint32_t r = next(100);
+        if (r < 55) {  // the next frame of the stream, sometimes a new sequence
+            utime += 100000;
+            if (next(40) == 0) ++sequence;
+            rig.send_nowait("LIDARFLOW_STEREO", decodable_stereo(utime));
+        } else if (r < 60) {  // a frame from the past
+            rig.send_nowait("LIDARFLOW_STEREO", decodable_stereo(utime - 50000));
+        } else if (r < 63) {  // the publisher's counter jumps: frames lost in transport
+            const int64_t gap = 1 + next(3);
+            frame_number += gap;
+            lost += gap;
+            utime += 100000;
+            rig.send_nowait("LIDARFLOW_STEREO", decodable_stereo(utime));
+        } else if (r < 72) {  // broken stereo: truncated, trailing byte, foreign type, garbage
+            std::vector<uint8_t> b = stereo_bytes(g_scene.left0, g_scene.right0, utime + 1, sequence, 0);
+            const uint32_t kind = next(4);
+            if (kind == 0) b.resize(next(static_cast<uint32_t>(b.size())));
+            else if (kind == 1) b.push_back(0);
+            else if (kind == 2) b = lidar_bytes(disparities, LIDARFLOW_LIDAR_T_FRAME_DISPARITY, utime);
+            else b.assign(1 + next(64), static_cast<uint8_t>(next(256)));
+            ++stereo;
+            ++malformed;
+            rig.send_nowait("LIDARFLOW_STEREO", b);
+        } else if (r < 86) {  // a sweep near the current frame, or a broken one
+            std::vector<uint8_t> b =
+                lidar_bytes(disparities, LIDARFLOW_LIDAR_T_FRAME_DISPARITY, utime + 100000 + next(3) * 1000);
+            if (next(4) == 0) {
+                b.resize(b.size() - 1 - next(8));
+                ++lidar_malformed;
+            }
+            rig.send_nowait("LIDARFLOW_LIDAR", b);
+        } else if (r < 94) {  // calibration: right, for another image size, or broken
+            const uint32_t kind = next(6);
+            if (kind == 0) {
+                rig.send_nowait("LIDARFLOW_CALIB", calibration_bytes(W + 2, H));
+                have_cal = true;
+                cal_fits = false;
+            } else if (kind == 1) {
+                std::vector<uint8_t> b = calibration_bytes();
+                b.pop_back();
+                ++cal_malformed;
+                rig.send_nowait("LIDARFLOW_CALIB", b);
+            } else {
+                rig.send_nowait("LIDARFLOW_CALIB", calibration_bytes());
+                have_cal = cal_fits = true;
+            }
+        } else {  // noise on a random input channel
+            static const char *channels[] = {"LIDARFLOW_STEREO", "LIDARFLOW_LIDAR", "LIDARFLOW_CALIB"};
+            const uint32_t c = next(3);
+            const std::vector<uint8_t> b(1 + next(200), static_cast<uint8_t>(next(256)));
+            if (c == 0) ++stereo, ++malformed;
+            if (c == 1) ++lidar_malformed;
+            if (c == 2) ++cal_malformed;
+            rig.send_nowait(channels[c], b);
+        }
+        if (i % 100 == 99) {  // let the estimator finish what it has, then forget the results
+            for (int k = 0; k < 3000 && !rig.bridge->idle(); ++k) rig.bridge->run_once(10);
+            for (int k = 0; k < 3; ++k) rig.bridge->run_once(0);
+            results += static_cast<int64_t>(rig.flows.size());
+            rig.flows.clear();
+            rig.flows.shrink_to_fit();
+            if (i + 1 == total / 4) rss_warm = resident_bytes();
+        }
+    }
+    for (int k = 0; k < 3000 && !rig.bridge->idle(); ++k) rig.bridge->run_once(10);
+    for (int k = 0; k < 3; ++k) rig.bridge->run_once(0);
+    results += static_cast<int64_t>(rig.flows.size());
+    const long rss_end = resident_bytes();
+    const Counters c = rig.bridge->counters();
+    print_message("soak: %d messages, %lld stereo, %lld processed, %lld results, %lld stale, RSS %.1f -> %.1f MiB\n",
+                  total, (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.results_published,
+                  (long long)c.dropped_stale, rss_warm / 1048576.0, rss_end / 1048576.0);
+    assert_accounted(c);
+    assert_int_equal(c.stereo_received, stereo);
+    assert_int_equal(c.dropped_malformed, malformed);
+    assert_int_equal(c.dropped_out_of_order, out_of_order);
+    assert_int_equal(c.dropped_no_calibration, no_cal);
+    assert_int_equal(c.dropped_calibration_mismatch, mismatch);
+    assert_int_equal(c.stereo_lost_in_transport, lost);
+    assert_int_equal(c.lidar_malformed, lidar_malformed);
+    assert_int_equal(c.calibration_malformed, cal_malformed);
+    assert_int_equal(c.dropped_shutdown, 0);
+    assert_int_equal(c.dropped_estimator_error, 0);
+    assert_int_equal(c.results_published, results);
+    assert_true(c.results_published > total / 200);  // the estimator did work throughout
+    // Flat memory: after the first quarter, growth stays below what 1 % of the messages would
+    // leak even at the size of one small image each.
+    assert_true(rss_warm > 0 && rss_end > 0);
+    assert_true(rss_end - rss_warm < 8L * 1024 * 1024);
+}
+
 // --option KEY=VALUE: refusals carry the C ABI's real reason for the key's type.
 void test_option_errors(void **) {
     lcm_t *lcm = lcm_create("memq://");
@@ -595,6 +741,7 @@ int main(void) {
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_option_errors),
         cmocka_unit_test(test_transport_gaps),
+        cmocka_unit_test(test_soak),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

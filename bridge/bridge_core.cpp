@@ -260,7 +260,15 @@ void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
 void Bridge::handle_calibration(const lcm_recv_buf_t *rbuf) {
     lf_calibration_t cal;
     int32_t w = 0, h = 0;
-    const std::string err = decode_calibration(rbuf->data, rbuf->data_size, &cal, &w, &h);
+    std::string err = decode_calibration(rbuf->data, rbuf->data_size, &cal, &w, &h);
+    if (err.empty()) {
+        // The C ABI's ranges decide (finite values can still overflow fx * baseline): taking a
+        // camera every push would then fail on would stall the stream until the next good one.
+        // Default options, so that only the camera is judged here.
+        lf_estimator_t *probe = nullptr;
+        if (lf_create(nullptr, &cal, &probe) != LF_OK) err = lf_last_error(nullptr);
+        lf_destroy(probe);
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.calibration_received;
     if (!err.empty()) {

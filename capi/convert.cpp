@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "io/calib.hpp"
 #include "lidar/projection.hpp"
 
@@ -53,7 +54,9 @@ SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) 
         require(x >= 0 && y >= 0 && x < size.width && y < size.height, ErrorCode::InvalidArgument,
                 entry_text(i, e) + " lies outside the " + std::to_string(size.width) + "x" +
                     std::to_string(size.height) + " image");
-        require(e[2] >= 0.0f, ErrorCode::InvalidArgument, entry_text(i, e) + " has a negative disparity");
+        require(e[2] >= 0.0f && e[2] <= kMaxLidarDisparity, ErrorCode::InvalidArgument,
+                entry_text(i, e) + " has a disparity outside [0, " +
+                    std::to_string(static_cast<int>(kMaxLidarDisparity)) + "] px");
         float &cell = map(static_cast<int>(y), static_cast<int>(x));
         if (e[2] > cell) cell = e[2];
     }
@@ -81,13 +84,11 @@ SparseLidar from_points(const lf_lidar_t &l, size_t stride, cv::Size size, const
 }  // namespace
 
 Calibration convert_calibration(const lf_calibration_t &c) {
-    const double cam[5] = {c.fx, c.fy, c.cx, c.cy, c.baseline};
-    require(finite_all(cam, 5), ErrorCode::InvalidArgument, "calibration: fx, fy, cx, cy and baseline must be finite");
-    require(c.fx > 0 && c.fy > 0 && c.baseline > 0, ErrorCode::InvalidArgument,
-            "calibration: fx, fy and baseline must be > 0");
-    require(c.has_lidar_to_camera <= 1, ErrorCode::InvalidArgument, "calibration: has_lidar_to_camera must be 0 or 1");
     Calibration out;
     out.camera = {c.fx, c.fy, c.cx, c.cy, c.baseline};
+    const std::string range = camera_range_error(out.camera);
+    require(range.empty(), ErrorCode::InvalidArgument, "calibration: " + range);
+    require(c.has_lidar_to_camera <= 1, ErrorCode::InvalidArgument, "calibration: has_lidar_to_camera must be 0 or 1");
     out.has_lidar_to_camera = c.has_lidar_to_camera == 1;
     if (out.has_lidar_to_camera) {
         require(finite_all(c.lidar_to_camera, 16), ErrorCode::InvalidArgument,
@@ -105,7 +106,8 @@ cv::Mat convert_image(const lf_image_t &image, const char *what) {
     require(image.data != nullptr, ErrorCode::InvalidArgument, name + ".data is NULL");
     require(image.width > 0 && image.height > 0, ErrorCode::InvalidArgument,
             name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ": empty");
-    require(image.width <= kMaxImageSide && image.height <= kMaxImageSide, ErrorCode::InvalidArgument,
+    constexpr auto max_side = static_cast<uint32_t>(kMaxImageSide);
+    require(image.width <= max_side && image.height <= max_side, ErrorCode::InvalidArgument,
             name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", larger than " +
                 std::to_string(kMaxImageSide) + " px per side");
     const int channels = channels_of(image.format);

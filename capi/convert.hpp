@@ -5,13 +5,12 @@
 #include <opencv2/core.hpp>
 
 #include "core/lidar.hpp"
+#include "core/limits.hpp"
 #include "handles.hpp"
 #include "lidarflow/lidarflow.h"
 
 namespace lidarflow::capi {
 
-// Largest accepted image side: keeps every byte count far from overflow.
-constexpr uint32_t kMaxImageSide = 16384;
 
 // lf_calibration_t -> Calibration. Throws InvalidArgument (see lf_create).
 Calibration convert_calibration(const lf_calibration_t &c);
@@ -23,7 +22,7 @@ cv::Mat convert_image(const lf_image_t &image, const char *what);
 
 // LiDAR entries -> SparseLidar in an image of `size`. lidar may be NULL (no points). Throws
 // InvalidArgument (unknown kind, NULL data with count > 0, non-finite values, disparity entries
-// outside the image or negative, LF_LIDAR_POINTS_LIDAR without a transform) or SizeMismatch
+// outside the image or outside [0, kMaxLidarDisparity], LF_LIDAR_POINTS_LIDAR without a transform) or SizeMismatch
 // (stride below 12 bytes).
 SparseLidar convert_lidar(const lf_lidar_t *lidar, cv::Size size, const Calibration &calibration);
 

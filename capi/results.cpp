@@ -172,12 +172,21 @@ LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buff
                 const double x0 = (x - cam.cx) * z0 / cam.fx, y0 = (y - cam.cy) * z0 / cam.fy;
                 const double x1 = (x + r.field.u(y, x) - cam.cx) * z1 / cam.fx;
                 const double y1 = (y + r.field.v(y, x) - cam.cy) * z1 / cam.fy;
-                p[0] = static_cast<float>(x0);
-                p[1] = static_cast<float>(y0);
-                p[2] = static_cast<float>(z0);
-                m[0] = static_cast<float>(x1 - x0);
-                m[1] = static_cast<float>(y1 - y0);
-                m[2] = static_cast<float>(z1 - z0);
+                const double out[6] = {x0, y0, z0, x1 - x0, y1 - y0, z1 - z0};
+                // A disparity near 0 puts the point at a depth no float holds; such a point is
+                // not valid rather than infinite (and the cast of an out-of-range double would
+                // be undefined).
+                bool fits = true;
+                for (double o : out) fits = fits && std::fabs(o) <= std::numeric_limits<float>::max();
+                if (!fits) {
+                    valid[x] = 0;
+                    p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
+                    continue;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    p[k] = static_cast<float>(out[k]);
+                    m[k] = static_cast<float>(out[3 + k]);
+                }
             }
             auto row = [&](const lf_plane_t &pl) {
                 return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;

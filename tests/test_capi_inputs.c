@@ -95,16 +95,40 @@ static void test_create_arguments(void **state) {
     EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "struct_size");
     bad = c;
     bad.fx = 0;
-    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "must be > 0");
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "fx = 0 px is outside [1, 1e+06]");
     bad = c;
     bad.baseline = -0.5;
-    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "must be > 0");
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "baseline = -0.5 m is outside");
     bad = c;
     bad.cy = NAN;
-    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "finite");
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "cy = nan px is outside");
     bad = c;
     bad.fy = INFINITY;
-    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "finite");
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "fy = inf px is outside");
+    /* Finite but absurd: depths fx * baseline / d would overflow or lose every digit. */
+    bad = c;
+    bad.fx = 1e-300;
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "fx = 1e-300 px is outside");
+    bad = c;
+    bad.fx = bad.baseline = 1e200; /* fx * baseline = inf */
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "fx = 1e+200 px is outside");
+    bad.fx = 1e6;
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "baseline = 1e+200 m is outside");
+    bad = c;
+    bad.cx = -2e6;
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "cx = -2e+06 px is outside");
+    /* The bounds themselves are accepted. */
+    bad = c;
+    bad.fx = 1;
+    bad.fy = 1e6;
+    bad.cx = -1e6;
+    bad.baseline = 1e4;
+    assert_int_equal(lf_create(NULL, &bad, &e), LF_OK);
+    lf_destroy(e);
+    bad.baseline = 1e-4;
+    assert_int_equal(lf_create(NULL, &bad, &e), LF_OK);
+    lf_destroy(e);
+    e = NULL;
     bad = c;
     bad.has_lidar_to_camera = 2;
     EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "has_lidar_to_camera");
@@ -223,7 +247,11 @@ static void test_bad_lidar(void **state) {
     EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "outside");
     pts[1][1] = 30;
     pts[1][2] = -1;
-    EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "negative disparity");
+    EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "disparity outside [0, 16384]");
+    pts[1][2] = 3e38f; /* finite, but overflowed the matcher's float -> int conversions */
+    EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "disparity outside [0, 16384]");
+    pts[1][2] = 16384.5f;
+    EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "disparity outside [0, 16384]");
     pts[1][2] = 10;
     /* 3-D points: non-finite coordinates are errors ... */
     bad = l;

@@ -256,6 +256,55 @@ static void test_points3d(void **state) {
     assert_int_equal(lf_get_points3d(e, &only_valid), LF_OK);
 }
 
+/* A LiDAR disparity of 1e-40 px is accepted (in [0, 16384]) and the result keeps it, but its
+ * depth fx * baseline / d = 5e41 m fits no float: such pixels are not valid 3-D points (they
+ * were valid with z = inf). Every valid point is finite. */
+static void test_points3d_beyond_float_range(void **state) {
+    fixture_t *f = (fixture_t *)*state;
+    const scene_t *s = &f->scene;
+    lf_estimator_t *e = new_estimator(s, 1, NULL);
+    assert_non_null(e);
+    float xyz[3 * 64];
+    const uint32_t n = scene_lidar(s, 16, xyz);
+    xyz[3 * 5 + 2] = 1e-40f;
+    const lf_lidar_t lidar = {LF_LIDAR_DISPARITY, n, xyz, 0};
+    const lf_image_t l0 = scene_image(s->left0, W, H), r0 = scene_image(s->right0, W, H);
+    const lf_image_t l1 = scene_image(s->left1, W, H), r1 = scene_image(s->right1, W, H);
+    if (lf_push_frame(e, 0, &l0, &r0, &lidar) != LF_OK || lf_push_frame(e, 1, &l1, &r1, &lidar) != LF_OK)
+        fail_msg("push: %s", lf_last_error(e));
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    static float pts[W * H * 3], mot[W * H * 3];
+    static uint8_t valid[W * H];
+    lf_points3d_buffers_t b;
+    lf_points3d_buffers_init(&b);
+    b.width = W;
+    b.height = H;
+    b.points.data = pts;
+    b.points.stride_bytes = W * 12;
+    b.motion.data = mot;
+    b.motion.stride_bytes = W * 12;
+    b.valid.data = valid;
+    b.valid.stride_bytes = W;
+    assert_int_equal(lf_get_points3d(e, &b), LF_OK);
+    int tiny = 0;
+    for (int i = 0; i < W * H; ++i) {
+        const int far = r.valid[i] && r.d0[i] > 0 && r.d0[i] < 1e-30f;
+        tiny += far;
+        if (far) {
+            assert_int_equal(valid[i], 0);
+            assert_true(isnan(pts[3 * i + 2]) && isnan(mot[3 * i + 2]));
+        }
+        if (!valid[i]) continue;
+        for (int k = 0; k < 3; ++k) assert_true(isfinite(pts[3 * i + k]) && isfinite(mot[3 * i + k]));
+    }
+    /* The LiDAR pixel itself keeps its value (interpolation.keep_lidar_values), so the case is
+     * exercised, not assumed. */
+    assert_true(tiny >= 1);
+    scene_result_free(&r);
+    lf_destroy(e);
+}
+
 /* Creates an estimator from `o` (destroyed here) and pushes the scene's pair into it. */
 static lf_estimator_t *create_and_push(lf_options_t *o, const scene_t *s) {
     lf_calibration_t c = scene_calibration(s);
@@ -474,6 +523,7 @@ int main(void) {
         cmocka_unit_test(test_copy_into_strided_planes),
         cmocka_unit_test(test_views_borrow_the_result),
         cmocka_unit_test(test_points3d),
+        cmocka_unit_test(test_points3d_beyond_float_range),
         cmocka_unit_test(test_sparse_stage),
         cmocka_unit_test(test_half_resolution),
         cmocka_unit_test(test_lidar_kinds_agree),

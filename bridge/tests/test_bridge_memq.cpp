@@ -437,6 +437,61 @@ void test_calibration_and_order(void **) {
     assert_int_equal(rig.flows.size(), 1);
 }
 
+// Calibrations that decode but lie outside the C ABI's ranges (fx * baseline = inf, fx =
+// 1e-300) are malformed: counted, logged, and the previous calibration stays in use. (They were
+// taken, and every frame after them failed in lf_create until a good calibration came.)
+void test_calibration_out_of_range(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    const lf_calibration_t good = scene_calibration(&g_scene);
+    for (const double fx : {1e200, 1e-300}) {
+        lf_calibration_t cal = good;
+        cal.fx = fx;
+        if (fx > 1) cal.baseline = fx;
+        lidarflow_calibration_t m = calibration_message(cal, 2, W, H);
+        std::vector<uint8_t> b(lidarflow_calibration_t_encoded_size(&m));
+        assert_int_equal(lidarflow_calibration_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+        rig.send("LIDARFLOW_CALIB", b);
+    }
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    const Counters c = rig.bridge->counters();
+    assert_accounted(c);
+    assert_int_equal(c.calibration_received, 3);
+    assert_int_equal(c.calibration_malformed, 2);
+    assert_int_equal(c.dropped_estimator_error, 0);
+    assert_int_equal(c.results_published, 1);
+    assert_int_equal(rig.flows.size(), 1);
+    const std::string log = rig.log_text();
+    assert_non_null(strstr(log.c_str(), "fx = 1e+200 px is outside"));
+    assert_non_null(strstr(log.c_str(), "fx = 1e-300 px is outside"));
+
+    // A --calib file whose finite entries give an infinite baseline stops the bridge at start.
+    const std::string dir = std::string(getenv("LIDARFLOW_TEST_TMP") ? getenv("LIDARFLOW_TEST_TMP") : ".");
+    mkdir(dir.c_str(), 0755);  // may exist
+    const std::string path = dir + "/bridge_memq_calib_inf.txt";
+    FILE *f = std::fopen(path.c_str(), "w");
+    assert_non_null(f);
+    std::fprintf(f, "P_rect_02: 100 0 80 1e308 0 100 32 0 0 0 1 0\nP_rect_03: 100 0 80 -1e308 0 100 32 0 0 0 1 0\n");
+    std::fclose(f);
+    BridgeConfig fixed;
+    fixed.status_period_s = 0;
+    fixed.options = kOptions;
+    fixed.log = rig.log;
+    const std::string read_err = read_kitti_calibration(path, &fixed.calibration);
+    fixed.fixed_calibration = true;
+    lcm_t *lcm = lcm_create("memq://");
+    assert_non_null(lcm);
+    std::string err;
+    const bool refused = !read_err.empty() || !Bridge::create(fixed, lcm, &err);
+    lcm_destroy(lcm);
+    std::remove(path.c_str());
+    assert_true(refused);
+    assert_non_null(strstr((read_err + err).c_str(), "baseline"));
+}
+
 // Frames far faster than the estimator: the queue never grows past its capacity, stale frames
 // are dropped and counted, the bridge keeps publishing; stopping with frames queued counts them.
 void test_burst_and_shutdown(void **) {
@@ -736,6 +791,7 @@ int main(void) {
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),
         cmocka_unit_test(test_calibration_and_order),
+        cmocka_unit_test(test_calibration_out_of_range),
         cmocka_unit_test(test_burst_and_shutdown),
         cmocka_unit_test(test_status_heartbeat),
         cmocka_unit_test(test_calibration_file),

@@ -211,13 +211,16 @@ LF_API const char *lf_options_last_error(const lf_options_t *options);
 /* ===================================================================================== */
 
 /* The rectified stereo camera. All lengths in metres, pixel quantities in pixels of the
- * (full-resolution) images pushed later. */
+ * (full-resolution) images pushed later. Accepted ranges (lf_create checks them; NaN and
+ * infinities are outside every range): fx, fy in [1, 1e6] px; cx, cy in [-1e6, 1e6] px;
+ * baseline in [1e-4, 1e4] m. Hence fx * baseline lies in [1e-4, 1e10] px m, and every depth
+ * fx * baseline / d the library computes stays finite or is reported not valid. */
 typedef struct lf_calibration_t {
     uint32_t struct_size;          /* sizeof(lf_calibration_t) */
     uint32_t has_lidar_to_camera;  /* 1: lidar_to_camera is set (needed by LF_LIDAR_POINTS_LIDAR) */
-    double fx, fy;                 /* focal lengths [px], > 0 */
-    double cx, cy;                 /* principal point [px] */
-    double baseline;               /* distance of the rectified left and right centres [m], > 0 */
+    double fx, fy;                 /* focal lengths [px], [1, 1e6] */
+    double cx, cy;                 /* principal point [px], [-1e6, 1e6] */
+    double baseline;               /* distance of the rectified left and right centres [m], [1e-4, 1e4] */
     /* Row-major 4x4 rigid transform from the LiDAR frame to the left rectified camera frame
      * (x right, y down, z forward); last row 0 0 0 1. */
     double lidar_to_camera[16];
@@ -261,15 +264,16 @@ typedef struct lf_image_t {
 typedef enum lf_lidar_kind_t {
     LF_LIDAR_NONE = 0,
     /* float32 (x, y, z) [m] in the left rectified camera frame. Points behind the camera
-     * (z <= 0.1 m) or outside the image are dropped, as the camera does not see them; where
-     * several points land on one pixel the nearest wins. */
+     * (z <= 0.1 m), outside the image, or so close that their disparity fx * baseline / z
+     * exceeds 16384 px are dropped, as the camera pair does not see them; where several points
+     * land on one pixel the nearest wins. */
     LF_LIDAR_POINTS_CAMERA = 1,
     /* float32 (x, y, z) [m] in the LiDAR frame, moved by the calibration's lidar_to_camera,
      * then as LF_LIDAR_POINTS_CAMERA. */
     LF_LIDAR_POINTS_LIDAR = 2,
     /* float32 (x, y, d): pixel column, row (rounded to the nearest pixel, which must lie in
-     * the image) and disparity d = fx * baseline / z >= 0 [px]. Where two entries share a
-     * pixel the larger disparity wins. */
+     * the image) and disparity d = fx * baseline / z [px] in [0, 16384] (0: at infinity; no
+     * image is wider). Where two entries share a pixel the larger disparity wins. */
     LF_LIDAR_DISPARITY = 3
 } lf_lidar_kind_t;
 
@@ -293,8 +297,8 @@ typedef struct lf_estimator lf_estimator_t;
 /* Creates an estimator. options may be NULL (defaults); it is copied and may be destroyed
  * afterwards; calibration is copied. *out receives the handle (NULL on failure), owned by the
  * caller until lf_destroy(). Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
- * struct_size too small, non-finite or non-positive fx / fy / baseline, a lidar_to_camera that
- * is not finite with last row 0 0 0 1, inconsistent options such as const1 without support
+ * struct_size too small, fx / fy / cx / cy / baseline outside the ranges of lf_calibration_t,
+ * a lidar_to_camera that is not finite with last row 0 0 0 1, inconsistent options such as const1 without support
  * windows), LF_ERR_IO / LF_ERR_FORMAT (the "interpolation.sed_model" file), LF_ERR_OUT_OF_MEMORY;
  * the message is in lf_last_error(NULL). Thread-safe. */
 LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *calibration,
@@ -314,7 +318,8 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
  * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
  * timestamp not increasing, NULL LiDAR data with count > 0, non-finite LiDAR values,
- * disparity entries outside the image or negative,
+ * disparity entries outside the image or outside [0, 16384] px, 3-D points that the
+ * calibration's lidar_to_camera moves to non-finite coordinates,
  * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
  * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes
  * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes),
@@ -436,8 +441,9 @@ typedef struct lf_points3d_buffers_t {
     /* float32 (dx, dy, dz) per pixel [m]: its position at t1, in the left camera frame at
      * t1, minus its position at t0 (scene flow relative to the camera: includes ego-motion). */
     lf_plane_t motion;
-    /* uint8: 1 where the result is valid with d0 > 0 and d1 > 0; elsewhere points and motion
-     * are NaN. */
+    /* uint8: 1 where the result is valid with d0 > 0 and d1 > 0 and every coordinate of
+     * points and motion fits a float32 (a disparity near 0 puts the point at a depth none
+     * holds); elsewhere points and motion are NaN. */
     lf_plane_t valid;
 } lf_points3d_buffers_t;
 

@@ -1,5 +1,6 @@
 #include "consistency/sgm_check.hpp"
 
+#include <climits>
 #include <cmath>
 
 #include <opencv2/calib3d.hpp>
@@ -29,6 +30,14 @@ DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, co
     // them be matched against the part of I_r^0 that exists (the padded part repeats the edge
     // and costs the same for every candidate, so it cannot win over a real match by texture).
     const int pad = opt.pad_left_border ? opt.num_disparities : 0;
+    // OpenCV's speckle filter keeps pixel coordinates in 16-bit integers: a wider or taller
+    // image overwrites its heap (65535x2 frames crashed). The estimator's own bound on image
+    // sides keeps far below this; other callers get an error instead of the corruption.
+    require(left.cols + pad <= SHRT_MAX && left.rows <= SHRT_MAX, ErrorCode::InvalidArgument, [&] {
+        return "SGM: " + std::to_string(left.cols) + "x" + std::to_string(left.rows) + " images (+" +
+               std::to_string(pad) + " px padding) exceed the " + std::to_string(SHRT_MAX) +
+               " px per side OpenCV's SGBM handles";
+    });
     cv::Mat l = left, r = right;
     if (pad > 0) {
         cv::copyMakeBorder(left, l, 0, 0, pad, 0, cv::BORDER_REPLICATE);

@@ -10,8 +10,9 @@ namespace lidarflow::consistency {
 
 // OpenCV StereoSGBM disparity of a rectified pair (8-bit, gray or BGR, same size and type).
 // Returns a new map: disparity [px] where SGM found one, kInvalidDisparity where it rejected the
-// pixel. Throws InvalidArgument for empty / non-8-bit images or bad settings, SizeMismatch for
-// images of different size or type.
+// pixel. Throws InvalidArgument for empty / non-8-bit images, images wider (with the left
+// padding) or taller than 32767 px, or bad settings; SizeMismatch for images of different size
+// or type.
 DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmOptions &opt = {});
 
 // Keeps the valid matches of `forward` whose |d0 - sgm| <= opt.sgm_max_diff. Never removed:

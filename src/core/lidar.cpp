@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lidarflow {
 
@@ -25,8 +26,12 @@ void SparseLidar::validate(int w, int h, const std::string &what) const {
     for (const LidarPoint &p : points) {
         require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
                 [&] { return what + " has a point outside the image"; });
-        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
-                [&] { return what + " has a non-finite or negative disparity"; });
+        // Negated so that NaN fails as well.
+        require(p.disparity >= 0.0f && p.disparity <= kMaxLidarDisparity, ErrorCode::InvalidArgument, [&] {
+            return what + " has a disparity of " + std::to_string(p.disparity) + " px at (" + std::to_string(p.x) +
+                   ", " + std::to_string(p.y) + "), outside [0, " + std::to_string(static_cast<int>(kMaxLidarDisparity)) +
+                   "]";
+        });
     }
 }
 

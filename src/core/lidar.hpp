@@ -21,8 +21,8 @@ struct SparseLidar {
     // Every valid pixel of a disparity map becomes a point (row-major order).
     static SparseLidar from_map(const DisparityMap &map);
     // Checks that the points fit images of w x h (sizes must agree unless there are no points)
-    // with finite, non-negative disparities. Throws SizeMismatch / InvalidArgument, the message
-    // starting with `what` (e.g. "MatchInput: lidar0").
+    // with disparities in [0, kMaxLidarDisparity] (core/limits.hpp). Throws SizeMismatch /
+    // InvalidArgument, the message starting with `what` (e.g. "MatchInput: lidar0").
     void validate(int w, int h, const std::string &what) const;
 };
 

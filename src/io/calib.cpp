@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -121,6 +122,10 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
     c.camera.baseline = (P2(0, 3) - P3(0, 3)) / c.camera.fx;
     require(c.camera.baseline > 0, ErrorCode::Format,
             source + ": P_rect_02 / P_rect_03 give a non-positive baseline (right camera not right of left)");
+    // Finite entries can still give an infinite baseline (1e308 - -1e308) or one no depth
+    // computation survives.
+    const std::string range = camera_range_error(c.camera);
+    require(range.empty(), ErrorCode::Format, source + ": P_rect_02 / P_rect_03 give " + range);
     return c;
 }
 
@@ -163,9 +168,8 @@ void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib)
 }
 
 CamToCamCalib calib_from_camera(const StereoCamera &camera) {
-    require(camera.valid() && std::isfinite(camera.fx) && std::isfinite(camera.fy) && std::isfinite(camera.cx) &&
-                std::isfinite(camera.cy) && std::isfinite(camera.baseline),
-            ErrorCode::InvalidArgument, "calib_from_camera: camera needs finite fx, fy, baseline > 0");
+    const std::string range = camera_range_error(camera);
+    require(range.empty(), ErrorCode::InvalidArgument, "calib_from_camera: " + range);
     const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
     CamToCamCalib c;
     c.R_rect_00 = cv::Matx33d::eye();

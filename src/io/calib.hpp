@@ -27,8 +27,9 @@ struct CamToCamCalib {
 };
 
 // Parses calib_cam_to_cam text. Throws Error: Io when the file cannot be opened; Format for a
-// missing or duplicated key, a wrong number of values, a non-numeric or non-finite value, or a
-// geometry that is not a rectified stereo pair (fx, fy or baseline <= 0).
+// missing or duplicated key, a wrong number of values, a non-numeric or non-finite value, a
+// geometry that is not a rectified stereo pair (fx, fy or baseline <= 0), or a camera outside
+// the ranges of core/limits.hpp (e.g. an infinite baseline from finite entries).
 CamToCamCalib read_calib_cam_to_cam(const std::string &path);
 
 // Same as read_calib_cam_to_cam on text already in memory; `source` names it in messages.
@@ -47,7 +48,7 @@ void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib)
 
 // The ideal rectified pair of a StereoCamera: P_rect_02 = K[I|0], P_rect_03 = K[I|t] with
 // t = (-B, 0, 0) (so P_rect_03(0,3) = -fx*B), R_rect_00 = I; camera is copied. Throws
-// Error(InvalidArgument) when !camera.valid() or an entry is non-finite.
+// Error(InvalidArgument) when the camera lies outside the ranges of core/limits.hpp.
 CamToCamCalib calib_from_camera(const StereoCamera &camera);
 
 }  // namespace lidarflow::io

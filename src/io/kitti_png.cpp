@@ -7,14 +7,46 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lidarflow::io {
 namespace {
 
-cv::Mat read_png16(const std::string &path, int channels) {
-    require(std::ifstream(path).good(), ErrorCode::Io, "cannot open " + path);
+// Checks, before anything is decoded, that `path` is a PNG (signature and IHDR chunk) of
+// accepted size: cv::imread would decode any format it knows (JPEG 2000, TIFF, ...), each one
+// more decoder exposed to the file, and would allocate whatever size the header claims.
+cv::Size check_png_header(const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    require(in.good(), ErrorCode::Io, "cannot open " + path);
+    unsigned char h[24] = {};
+    in.read(reinterpret_cast<char *>(h), sizeof h);
+    const size_t got = static_cast<size_t>(in.gcount());
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    require(got >= 8 && std::equal(kSignature, kSignature + 8, h), ErrorCode::Format,
+            path + ": not a PNG file (no PNG signature)");
+    require(got == sizeof h && std::equal(h + 12, h + 16, "IHDR"), ErrorCode::Format,
+            path + ": corrupt PNG (no IHDR chunk after the signature)");
+    auto be32 = [](const unsigned char *p) {
+        return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+    };
+    const uint32_t w = be32(h + 16), ht = be32(h + 20);
+    require(w > 0 && ht > 0, ErrorCode::Format, path + ": corrupt PNG (zero width or height)");
+    constexpr auto max_side = static_cast<uint32_t>(kMaxImageSide);
+    require(w <= max_side && ht <= max_side, ErrorCode::InvalidArgument,
+            path + " is " + std::to_string(w) + "x" + std::to_string(ht) + ", larger than " +
+                std::to_string(kMaxImageSide) + " px per side");
+    return {static_cast<int>(w), static_cast<int>(ht)};
+}
+
+cv::Mat decode_png(const std::string &path) {
+    const cv::Size size = check_png_header(path);
     cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-    require(!m.empty(), ErrorCode::Format, path + ": not a readable image");
+    require(!m.empty() && m.size() == size, ErrorCode::Format, path + ": not a readable PNG");
+    return m;
+}
+
+cv::Mat read_png16(const std::string &path, int channels) {
+    cv::Mat m = decode_png(path);
     require(m.depth() == CV_16U && m.channels() == channels, ErrorCode::Format,
             path + ": expected a " + std::to_string(channels) + "-channel 16-bit PNG");
     return m;
@@ -106,9 +138,7 @@ void write_flow_png(const std::string &path, const FlowField &flow) {
 }
 
 cv::Mat read_image(const std::string &path) {
-    require(std::ifstream(path).good(), ErrorCode::Io, "cannot open " + path);
-    cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-    require(!m.empty(), ErrorCode::Format, path + ": not a readable image");
+    cv::Mat m = decode_png(path);
     require(m.depth() == CV_8U && (m.channels() == 1 || m.channels() == 3), ErrorCode::Format,
             path + ": expected an 8-bit gray or colour image");
     return m;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lidarflow::lidar {
 namespace {
@@ -33,7 +34,11 @@ public:
         // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit.
         const double u = std::floor(p[0] / w + 0.5), v = std::floor(p[1] / w + 0.5);
         if (!(u >= 0 && v >= 0 && u < map_.cols && v < map_.rows)) return;
-        const float d = static_cast<float>(fb_ / w);
+        // A point so close that its disparity leaves the accepted range is not seen by the
+        // right camera of any accepted image either.
+        const double dd = fb_ / w;
+        if (!(dd <= kMaxLidarDisparity)) return;
+        const float d = static_cast<float>(dd);
         float &cell = map_(static_cast<int>(v), static_cast<int>(u));
         if (d > cell) cell = d;
     }

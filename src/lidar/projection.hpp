@@ -5,8 +5,9 @@
 //   pixel = (round(u / w), round(v / w)),           d = fx * B / w.
 // w is the point's depth in camera 2's rectified frame (P_rect_02's third row is (0 0 1 t_z)),
 // so d is the disparity of the left/right pair that P_rect_02 / P_rect_03 describe.
-// Only points with w > min_depth that land inside the image are kept; where several land on one
-// pixel the nearest (largest disparity) wins, as a LiDAR beam would be blocked by it.
+// Only points with w > min_depth and d <= kMaxLidarDisparity (core/limits.hpp) that land inside
+// the image are kept; where several land on one pixel the nearest (largest disparity) wins, as
+// a LiDAR beam would be blocked by it.
 #include <vector>
 
 #include <opencv2/core.hpp>

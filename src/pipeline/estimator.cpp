@@ -6,6 +6,7 @@
 
 #include "consistency/consistency.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -55,6 +56,29 @@ EstimatorOptions search_ranges_at_scale(const EstimatorOptions &o) {
     s.consistency.sgm.num_disparities =
         std::max(16, (static_cast<int>(std::ceil(o.consistency.sgm.num_disparities * k)) + 15) / 16 * 16);
     return s;
+}
+
+// The core's own check of the accepted ranges (core/limits.hpp), whatever the entry point: the
+// stages below assume them (SGM's speckle filter, for one, corrupts memory on wider images).
+void check_frame(const FrameInput &f) {
+    const cv::Mat *imgs[4] = {&f.left0, &f.right0, &f.left1, &f.right1};
+    const char *names[4] = {"left0", "right0", "left1", "right1"};
+    for (int i = 0; i < 4; ++i) {
+        const cv::Mat &m = *imgs[i];
+        require(!m.empty(), ErrorCode::InvalidArgument, std::string("FrameInput: ") + names[i] + " is empty");
+        require(m.cols <= kMaxImageSide && m.rows <= kMaxImageSide, ErrorCode::InvalidArgument, [&] {
+            return std::string("FrameInput: ") + names[i] + " is " + std::to_string(m.cols) + "x" +
+                   std::to_string(m.rows) + ", larger than " + std::to_string(kMaxImageSide) + " px per side";
+        });
+        require(m.size() == f.left0.size(), ErrorCode::SizeMismatch,
+                std::string("FrameInput: ") + names[i] + " differs in size from left0");
+    }
+    if (!camera_unknown(f.camera)) {
+        const std::string e = camera_range_error(f.camera);
+        require(e.empty(), ErrorCode::InvalidArgument, "FrameInput: camera: " + e);
+    }
+    f.lidar0.validate(f.left0.cols, f.left0.rows, "FrameInput: lidar0");
+    f.lidar1.validate(f.left0.cols, f.left0.rows, "FrameInput: lidar1");
 }
 
 }  // namespace
@@ -123,9 +147,9 @@ Estimator::Estimator(const EstimatorOptions &options)
 EstimatorResult Estimator::run(const FrameInput &frame) const { return run(frame, nullptr); }
 
 EstimatorResult Estimator::run(const FrameInput &frame, StreamCache *cache) const {
+    check_frame(frame);
     if (options_.processing_scale >= 1.0) return run_native(frame, cache);
     const auto t_total = Clock::now();
-    require(!frame.left0.empty(), ErrorCode::InvalidArgument, "FrameInput: left0 is empty");
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
     if (size.width >= W && size.height >= H) return run_native(frame, cache);

@@ -60,7 +60,8 @@ struct FrameInput {
     cv::Mat left0, right0, left1, right1;  // rectified, 8-bit gray or BGR, all one size
     SparseLidar lidar0;  // D_l^0 in I_l^0 (may have no points)
     SparseLidar lidar1;  // D_l^1 in I_l^1 (may have no points, e.g. a real scan only at t0)
-    StereoCamera camera; // the rectified rig; invalid (default) = unknown (calibration-free models)
+    StereoCamera camera; // the rectified rig; all zero (default) = unknown (calibration-free
+                         // models); anything else must lie in the ranges of core/limits.hpp
 };
 
 struct StageTime {
@@ -106,7 +107,9 @@ public:
     explicit Estimator(const EstimatorOptions &options);
 
     // Runs the stages up to options.last_stage. Throws Error(SizeMismatch / InvalidArgument)
-    // for bad inputs; the estimator stays usable. Const and thread-safe: distinct threads may
+    // for bad inputs, among them inputs outside the ranges of core/limits.hpp (image sides,
+    // LiDAR disparities, a camera that is neither all-zero "unknown" nor in range); the
+    // estimator stays usable. Const and thread-safe: distinct threads may
     // run distinct frames on one Estimator.
     EstimatorResult run(const FrameInput &frame) const;
     // Same, for a sequence: reuses and then updates *cache (see StreamCache); cache may be null.

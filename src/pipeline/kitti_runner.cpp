@@ -12,6 +12,7 @@
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
+#include "io/output_folder.hpp"
 #include "io/velodyne.hpp"
 #include "lidar/paper_protocol.hpp"
 #include "lidar/velodyne_protocol.hpp"
@@ -152,6 +153,9 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     const io::KittiLayout k{o.root};
     const std::vector<std::string> ids = o.ids.empty() ? k.frame_ids() : o.ids;
     require(!ids.empty(), ErrorCode::InvalidArgument, "kitti: no frames in " + o.root);
+    // Bad ids and an unwritable output folder fail now, not after the frames before them.
+    for (const std::string &id : ids) io::KittiLayout::check_id(id);
+    if (!o.out.empty()) io::prepare_output_folder(o.out);
 
     EstimatorOptions main_opt = o.estimator;
     main_opt.use_lidar = o.lidar.protocol != LidarProtocol::None && o.estimator.use_lidar;
@@ -239,7 +243,10 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     for (size_t i = 0; i < rep.rows.size(); ++i)
         if (rep.rows[i].name.rfind(main_name, 0) == 0 && rep.rows[i].group == group_of(last)) rep.main_row = i;
     if (!o.out.empty()) {
-        std::ofstream(o.out + "/report.json") << report_json(o, rep);
+        std::ofstream f(o.out + "/report.json");
+        f << report_json(o, rep);
+        f.close();
+        require(!f.fail(), ErrorCode::Io, "cannot write " + o.out + "/report.json");
     }
     return rep;
 }

@@ -67,7 +67,9 @@ struct KittiRunReport {
 using Progress = std::function<void(size_t, size_t, const std::string &)>;
 
 // Runs everything; writes OUT/{disp_0,disp_1,flow}/ID_10.png (the main result), OUT/viz/ and
-// OUT/report.json when out is set. Frames without ground truth are run but not scored.
+// OUT/report.json when out is set. Frames without ground truth are run but not scored. Ids
+// that are not 6 digits (InvalidArgument) and an output folder that cannot be written (Io)
+// fail before the first frame.
 KittiRunReport run_kitti(const KittiRunOptions &options, const Progress &progress = {});
 
 // Table I style text: per row the per-frame mean of EPE / outliers / density (occ), then

@@ -8,6 +8,7 @@
 #include "eval/json_report.hpp"
 #include "eval/kitti_eval.hpp"
 #include "eval/text_report.hpp"
+#include "io/kitti_layout.hpp"
 
 namespace {
 
@@ -39,6 +40,7 @@ int run_eval(int argc, char **argv) {
     std::vector<std::string> ids = args.list("ids");
     if (ids.empty()) ids = eval::submission_ids(est);
     require(!ids.empty(), ErrorCode::InvalidArgument, "eval: no disp_0/*_10.png frames in " + est);
+    for (const std::string &id : ids) io::KittiLayout::check_id(id);
 
     const eval::KittiEvaluation ev = eval::evaluate_kitti(root, est, ids, opt, args.str("lidar", ""));
     std::printf("%s", eval::format_tables(ev).c_str());

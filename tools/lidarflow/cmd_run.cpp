@@ -9,8 +9,10 @@
 #include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
+#include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
+#include "io/output_folder.hpp"
 #include "pipeline/estimator.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/flow_color.hpp"
@@ -47,6 +49,9 @@ int run(int argc, char **argv) {
         return 0;
     }
     const std::string out = args.required("out"), id = args.str("id", "000000");
+    // Both name output files: checked before minutes of estimation, not after.
+    io::KittiLayout::check_id(id);
+    io::prepare_output_folder(out);
     pipeline::FrameInput in;
     in.left0 = io::read_image(args.required("left0"));
     in.right0 = io::read_image(args.required("right0"));

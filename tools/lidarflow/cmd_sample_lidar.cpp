@@ -10,6 +10,7 @@
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
+#include "io/output_folder.hpp"
 #include "io/velodyne.hpp"
 #include "lidar/paper_protocol.hpp"
 #include "lidar/velodyne_protocol.hpp"
@@ -55,6 +56,8 @@ int run_sample_lidar(int argc, char **argv) {
     std::vector<std::string> ids = args.list("ids");
     if (ids.empty()) ids = in.frame_ids();
     require(!ids.empty(), ErrorCode::InvalidArgument, "sample-lidar: no frames in " + in.root);
+    for (const std::string &id : ids) io::KittiLayout::check_id(id);
+    io::prepare_output_folder(out.root);
 
     std::vector<FrameRow> rows;
     for (const std::string &id : ids) {

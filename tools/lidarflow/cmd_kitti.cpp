@@ -56,7 +56,7 @@ int run_kitti_command(int argc, char **argv) {
     Args args("kitti", argc, argv,
               {{"root", true, "DIR  KITTI training folder (image_2, image_3, disp_occ_*, flow_occ, calib, velodyne)"},
                {"ids", true, "A,B  frames (default: every image_2/*_10.png)"},
-               {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne | none"},
+               {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne (t1: velodyne/ID_11.bin if present) | none"},
                {"points", true, "N    LiDAR points per map (paper: default 88; velodyne: thin to N, 0 = full scan)"},
                {"beams", true, "K    velodyne: keep K beams (default all)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
@@ -127,6 +127,15 @@ int run_kitti_command(int argc, char **argv) {
         for (size_t j = 0; j < t.stages.size(); ++j)
             std::printf("%s%s %.2f", j ? ", " : "", t.stages[j].name.c_str(), t.stages[j].seconds);
         std::printf(")\n");
+    }
+    if (velodyne) {
+        std::string without_t1;
+        for (const pipeline::FrameTimings &t : rep.timings)
+            if (t.lidar1_points == 0) without_t1 += (without_t1.empty() ? "" : ", ") + t.id;
+        if (!without_t1.empty())
+            std::printf("  no scan at t1 (velodyne/ID_11.bin) for %s: D1 is empty there, the estimator uses the t0 "
+                        "scan only\n",
+                        without_t1.c_str());
     }
     std::printf("\n%s", pipeline::format_report(rep).c_str());
     if (seeds > 1) {

@@ -12,7 +12,7 @@
 namespace lidarflow::io {
 namespace {
 
-constexpr size_t kRecordBytes = 9 * 4 + 3;
+constexpr size_t kRecordBytes = 6 * 4 + 3;  // x y z dx dy dz float32, red green blue uchar
 
 const char *const kHeaderProperties =
     "property float x\nproperty float y\nproperty float z\n"

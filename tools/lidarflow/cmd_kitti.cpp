@@ -103,8 +103,13 @@ int run_kitti_command(int argc, char **argv) {
     require(seeds >= 1 && seeds <= 1000, ErrorCode::InvalidArgument, "kitti: --seeds must be in [1, 1000]");
 
     const bool tty = isatty(fileno(stderr));
+    // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one line per step, so a
+    // long run still shows where it is without control characters in the log.
     const auto progress = [tty](size_t i, size_t n, const std::string &what) {
-        if (tty) std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
+        if (tty)
+            std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
+        else
+            std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, n, what.c_str());
     };
     const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
     // Further seeds: scored only (the first seed's run is the one written to --out).

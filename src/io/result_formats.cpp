@@ -230,7 +230,7 @@ cv::Mat read_npy(const std::string &path) {
         return a;
     };
     const size_t d = value_of("descr");
-    require(header.compare(d, 6, "'<f4'") == 0, ErrorCode::Format, path + ": expected little-endian float32 ('<f4')");
+    require(header.compare(d, 5, "'<f4'") == 0, ErrorCode::Format, path + ": expected little-endian float32 ('<f4')");
     const size_t f = value_of("fortran_order");
     require(header.compare(f, 5, "False") == 0, ErrorCode::Format, path + ": Fortran-order arrays are not read");
     const size_t s = value_of("shape");

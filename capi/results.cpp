@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/points3d.hpp"
 #include "guard.hpp"
 #include "handles.hpp"
 
@@ -153,40 +154,28 @@ LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buff
         check_plane(b.valid, b.width, 1, "valid");
 
         const lidarflow::StereoCamera &cam = estimator->calibration.camera;
-        const double fb = cam.fx * cam.baseline;
         const int w = r.field.u.cols, h = r.field.u.rows;
         const float nan = std::numeric_limits<float>::quiet_NaN();
         std::vector<float> points(3 * static_cast<size_t>(w)), motion(points.size());
         std::vector<unsigned char> valid(static_cast<size_t>(w));
         for (int y = 0; y < h; ++y) {
             for (int x = 0; x < w; ++x) {
-                const float d0 = r.field.d0(y, x), d1 = r.field.d1(y, x);
-                const bool ok = r.field.valid(y, x) && d0 > 0.0f && d1 > 0.0f;
+                lidarflow::ScenePoint3 q;
+                const bool ok = r.field.valid(y, x) &&
+                                lidarflow::triangulate_scene_flow(cam, x, y, r.field.u(y, x), r.field.v(y, x),
+                                                                  r.field.d0(y, x), r.field.d1(y, x), &q);
                 valid[x] = ok ? 1 : 0;
                 float *p = &points[3 * x], *m = &motion[3 * x];
                 if (!ok) {
                     p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
                     continue;
                 }
-                const double z0 = fb / d0, z1 = fb / d1;
-                const double x0 = (x - cam.cx) * z0 / cam.fx, y0 = (y - cam.cy) * z0 / cam.fy;
-                const double x1 = (x + r.field.u(y, x) - cam.cx) * z1 / cam.fx;
-                const double y1 = (y + r.field.v(y, x) - cam.cy) * z1 / cam.fy;
-                const double out[6] = {x0, y0, z0, x1 - x0, y1 - y0, z1 - z0};
-                // A disparity near 0 puts the point at a depth no float holds; such a point is
-                // not valid rather than infinite (and the cast of an out-of-range double would
-                // be undefined).
-                bool fits = true;
-                for (double o : out) fits = fits && std::fabs(o) <= std::numeric_limits<float>::max();
-                if (!fits) {
-                    valid[x] = 0;
-                    p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
-                    continue;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    p[k] = static_cast<float>(out[k]);
-                    m[k] = static_cast<float>(out[3 + k]);
-                }
+                p[0] = static_cast<float>(q.x);
+                p[1] = static_cast<float>(q.y);
+                p[2] = static_cast<float>(q.z);
+                m[0] = static_cast<float>(q.dx);
+                m[1] = static_cast<float>(q.dy);
+                m[2] = static_cast<float>(q.dz);
             }
             auto row = [&](const lf_plane_t &pl) {
                 return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;

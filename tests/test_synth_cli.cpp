@@ -131,15 +131,34 @@ void test_viz_pictures_and_error_maps(void **) {
     const fs::path out = dir / "kitti";
     assert_int_equal(run("synth --out " + q(out) + " --width 320 --height 96", dir).code, 0);
     const io::KittiLayout k{out.string()};
-    Result r = run("viz --disp " + q(k.gt_disp0("000000")) + " --out " + q(dir / "d.png") + " --max 60", dir);
+    Result r = run("viz --disp " + q(k.gt_disp0("000000")) + " --out " + q(dir / "d.png") + " --max 60 --no-legend",
+                   dir);
     if (r.code != 0) fail_msg("viz --disp failed: %s", r.output.c_str());
     cv::Mat m = io::read_image((dir / "d.png").string());
     assert_int_equal(m.type(), CV_8UC3);
     assert_true(m.size() == cv::Size(320, 96));
+    // With the legend (the default) the map is unchanged on top and a strip is added below.
+    r = run("viz --disp " + q(k.gt_disp0("000000")) + " --out " + q(dir / "dl.png") + " --max 60", dir);
+    assert_int_equal(r.code, 0);
+    const cv::Mat with_legend = io::read_image((dir / "dl.png").string());
+    assert_true(with_legend.cols >= 320);  // a narrow map is widened to fit the scale
+    assert_true(with_legend.rows > 96 + 20);
+    assert_int_equal(cv::norm(with_legend(cv::Rect(0, 0, 320, 96)), m, cv::NORM_INF), 0);
 
-    r = run("viz --flow " + q(k.gt_flow("000000")) + " --out " + q(dir / "f.png") + " --style middlebury", dir);
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --out " + q(dir / "f.png") + " --style middlebury --no-legend",
+            dir);
     assert_int_equal(r.code, 0);
     assert_true(io::read_image((dir / "f.png").string()).size() == cv::Size(320, 96));
+    // Over the camera image: pixels without flow show the image dimmed, so the picture differs
+    // from the bare colour map exactly there.
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --image " + q(k.left("000000", 0)) + " --out " +
+                q(dir / "fi.png") + " --style middlebury --no-legend",
+            dir);
+    assert_int_equal(r.code, 0);
+    assert_true(io::read_image((dir / "fi.png").string()).size() == cv::Size(320, 96));
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --out " + q(dir / "fw.png"), dir);
+    assert_int_equal(r.code, 0);
+    assert_true(io::read_image((dir / "fw.png").string()).rows > 96 + 40);  // the wheel's strip
 
     // Error map of the GT against itself: every pixel with GT is in the lowest band, the rest
     // black; against the noc GT (a worse "estimate" at occluded pixels) higher bands appear.
@@ -209,11 +228,15 @@ void test_bad_arguments_fail(void **) {
     expect_failure("viz --disp a.png", dir, 2);  // --out missing
     expect_failure("viz --disp a.png --gt b.png --max 3 --out x.png", dir, 2);
     expect_failure("viz --disp a.png --style kitti --out x.png", dir, 2);
+    expect_failure("viz --disp a.png --points b.ply --out x.png", dir, 2);
+    expect_failure("viz --disp a.png --range 30 --out x.png", dir, 2);  // --range: --points only
+    expect_failure("viz --points " + q(dir / "missing.ply") + " --out " + q(dir / "x.png"), dir, 1);
     expect_failure("viz --disp " + q(dir / "missing.png") + " --out " + q(dir / "x.png"), dir, 1);  // Io
     {
         std::ofstream(dir / "junk.png") << "not a png";
     }
     expect_failure("viz --flow " + q(dir / "junk.png") + " --out " + q(dir / "x.png"), dir, 1);  // Format
+    expect_failure("viz --points " + q(dir / "junk.png") + " --out " + q(dir / "x.png"), dir, 1);  // not a PLY
     assert_false(fs::exists(dir / "x.png"));
 }
 

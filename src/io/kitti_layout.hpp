@@ -29,6 +29,9 @@ struct KittiLayout {
         return root + "/calib_velo_to_cam/" + checked(id) + ".txt";
     }
     std::string velodyne(const std::string &id) const { return root + "/velodyne/" + checked(id) + ".bin"; }
+    // The scan at t1, named like the t1 image. KITTI 2015 ships none (its velodyne/ID.bin is
+    // the t0 scan); a layout built from KITTI raw, which has a scan per frame, can add it.
+    std::string velodyne_t1(const std::string &id) const { return root + "/velodyne/" + checked(id) + "_11.bin"; }
     // Submission (estimate) layout, and the sparse LiDAR inputs written by sample-lidar.
     std::string est_disp0(const std::string &id) const { return file("disp_0", id, 0); }
     std::string est_disp1(const std::string &id) const { return file("disp_1", id, 0); }

@@ -140,11 +140,16 @@ KittiFrame load_kitti_frame(const std::string &root, const std::string &id, cons
         lidar::VelodyneProtocolOptions vo;
         vo.target_points = lidar.points;
         vo.beams = lidar.beams;
-        lidar::VelodyneSamples s = lidar::sample_velodyne_protocol(
-            io::read_velodyne_bin(k.velodyne(id)), io::read_calib_cam_to_cam(k.calib_cam_to_cam(id)),
-            io::read_calib_velo_to_cam(k.calib_velo_to_cam(id)), size, vo);
-        f.input.lidar0 = std::move(s.d0);
-        f.input.lidar1 = std::move(s.d1);
+        const io::CamToCamCalib calib = io::read_calib_cam_to_cam(k.calib_cam_to_cam(id));
+        const cv::Matx44d velo_to_cam = io::read_calib_velo_to_cam(k.calib_velo_to_cam(id));
+        f.input.lidar0 =
+            lidar::sample_velodyne_protocol(io::read_velodyne_bin(k.velodyne(id)), calib, velo_to_cam, size, vo).d0;
+        // Without a t1 scan D1 stays empty and stage 4 works from D0 alone, as the estimator
+        // allows; the caller sees it as 0 points at t1.
+        if (std::filesystem::exists(k.velodyne_t1(id)))
+            f.input.lidar1 =
+                lidar::sample_velodyne_protocol(io::read_velodyne_bin(k.velodyne_t1(id)), calib, velo_to_cam, size, vo)
+                    .d0;
     }
     return f;
 }

@@ -29,8 +29,8 @@ struct KittiFrame {
 };
 
 // Loads the four images of `id` and makes the LiDAR inputs by the chosen protocol (paper: from
-// the ground truth; velodyne: from the raw scan and calibration). Throws Io/Format naming the
-// file that is missing or bad.
+// the ground truth; velodyne: from the raw scans and calibration, D1 from velodyne/ID_11.bin
+// when the layout has it, else empty). Throws Io/Format naming the file that is missing or bad.
 KittiFrame load_kitti_frame(const std::string &root, const std::string &id, const LidarInputOptions &lidar);
 
 // One row of a results table: a named variant scored on every frame.

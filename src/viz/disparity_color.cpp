@@ -35,17 +35,21 @@ cv::Vec3b ramp(double t) {
 
 }  // namespace
 
+double disparity_color_scale(const DisparityMap &disp, float max_disp) {
+    require(std::isfinite(max_disp), ErrorCode::InvalidArgument, "disparity_to_color: max_disp must be finite");
+    if (max_disp > 0) return max_disp;
+    double max_d = 0;
+    for (int y = 0; y < disp.rows; ++y)
+        for (int x = 0; x < disp.cols; ++x)
+            if (disparity_valid(disp(y, x)) && std::isfinite(disp(y, x))) max_d = std::max(max_d, double(disp(y, x)));
+    return max_d > 0 ? max_d : 1.0;
+}
+
+cv::Vec3b disparity_color(double d, double max_disp) { return ramp(std::min(std::max(d / max_disp, 0.0), 1.0)); }
+
 cv::Mat disparity_to_color(const DisparityMap &disp, float max_disp) {
     require(!disp.empty(), ErrorCode::InvalidArgument, "disparity_to_color: empty disparity map");
-    require(std::isfinite(max_disp), ErrorCode::InvalidArgument, "disparity_to_color: max_disp must be finite");
-    double max_d = max_disp;
-    if (max_d <= 0) {
-        max_d = 0;
-        for (int y = 0; y < disp.rows; ++y)
-            for (int x = 0; x < disp.cols; ++x)
-                if (disparity_valid(disp(y, x)) && std::isfinite(disp(y, x))) max_d = std::max(max_d, double(disp(y, x)));
-        if (max_d <= 0) max_d = 1;
-    }
+    const double max_d = disparity_color_scale(disp, max_disp);
     cv::Mat out(disp.rows, disp.cols, CV_8UC3, cv::Scalar(0, 0, 0));
     for (int y = 0; y < disp.rows; ++y) {
         cv::Vec3b *row = out.ptr<cv::Vec3b>(y);

@@ -14,4 +14,11 @@ namespace lidarflow::viz {
 // max_disp.
 cv::Mat disparity_to_color(const DisparityMap &disp, float max_disp = 0);
 
+// The scale disparity_to_color uses: max_disp when > 0, else the largest valid disparity (1 when
+// there is none). Throws Error(InvalidArgument) for a non-finite max_disp.
+double disparity_color_scale(const DisparityMap &disp, float max_disp = 0);
+
+// The colour of one valid disparity d at scale max_disp > 0 (d is clamped to [0, max_disp]).
+cv::Vec3b disparity_color(double d, double max_disp);
+
 }  // namespace lidarflow::viz

@@ -89,23 +89,30 @@ cv::Vec3b middlebury_color(double u, double v, double max_flow) {
 
 }  // namespace
 
+cv::Vec3b flow_color(double u, double v, double max_flow, FlowColorStyle style) {
+    return style == FlowColorStyle::Kitti ? kitti_color(u, v, max_flow) : middlebury_color(u, v, max_flow);
+}
+
+double flow_color_scale(const FlowField &flow, const FlowColorOptions &options) {
+    require(std::isfinite(options.max_flow), ErrorCode::InvalidArgument, "flow_to_color: max_flow must be finite");
+    if (options.max_flow > 0) return options.max_flow;
+    const bool kitti = options.style == FlowColorStyle::Kitti;
+    double max_flow = 0;
+    for (int y = 0; y < flow.height(); ++y)
+        for (int x = 0; x < flow.width(); ++x) {
+            if (!usable(flow, y, x)) continue;
+            const double u = flow.u(y, x), v = flow.v(y, x);
+            max_flow = std::max(max_flow, kitti ? std::max(std::fabs(u), std::fabs(v)) : std::sqrt(u * u + v * v));
+        }
+    return max_flow > 0 ? max_flow : 1.0;  // all zero or nothing valid: any scale will do
+}
+
 cv::Mat flow_to_color(const FlowField &flow, const FlowColorOptions &options) {
     require(!flow.u.empty(), ErrorCode::InvalidArgument, "flow_to_color: empty flow field");
     require(flow.u.size() == flow.v.size() && flow.u.size() == flow.valid.size(), ErrorCode::SizeMismatch,
             "flow_to_color: u, v and valid differ in size");
-    require(std::isfinite(options.max_flow), ErrorCode::InvalidArgument, "flow_to_color: max_flow must be finite");
     const bool kitti = options.style == FlowColorStyle::Kitti;
-    double max_flow = options.max_flow;
-    if (max_flow <= 0) {
-        max_flow = 0;
-        for (int y = 0; y < flow.height(); ++y)
-            for (int x = 0; x < flow.width(); ++x) {
-                if (!usable(flow, y, x)) continue;
-                const double u = flow.u(y, x), v = flow.v(y, x);
-                max_flow = std::max(max_flow, kitti ? std::max(std::fabs(u), std::fabs(v)) : std::sqrt(u * u + v * v));
-            }
-        if (max_flow <= 0) max_flow = 1;  // all zero (or nothing valid): any scale draws white/black
-    }
+    const double max_flow = flow_color_scale(flow, options);
     cv::Mat out(flow.height(), flow.width(), CV_8UC3, cv::Scalar(0, 0, 0));
     for (int y = 0; y < flow.height(); ++y) {
         cv::Vec3b *row = out.ptr<cv::Vec3b>(y);

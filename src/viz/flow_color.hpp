@@ -28,4 +28,11 @@ struct FlowColorOptions {
 // a non-finite max_flow, SizeMismatch when u, v and valid differ in size.
 cv::Mat flow_to_color(const FlowField &flow, const FlowColorOptions &options = {});
 
+// The normalisation flow_to_color uses: options.max_flow when > 0, else the automatic one
+// (1 when nothing valid moves). Throws Error(InvalidArgument) for a non-finite max_flow.
+double flow_color_scale(const FlowField &flow, const FlowColorOptions &options = {});
+
+// The colour flow_to_color gives to one displacement (u, v) at normalisation max_flow > 0.
+cv::Vec3b flow_color(double u, double v, double max_flow, FlowColorStyle style);
+
 }  // namespace lidarflow::viz

@@ -24,6 +24,25 @@ cv::Mat to_bgr(const cv::Mat &image, const char *who) {
 
 }  // namespace
 
+cv::Mat blend_over(const cv::Mat &image, const cv::Mat &colors, const cv::Mat1b &mask, double alpha) {
+    cv::Mat out = to_bgr(image, "blend_over");
+    require(!colors.empty() && colors.type() == CV_8UC3, ErrorCode::InvalidArgument,
+            "blend_over: the colours must be an 8-bit BGR image");
+    require(alpha >= 0 && alpha <= 1, ErrorCode::InvalidArgument, "blend_over: alpha must be in [0, 1]");
+    require(colors.size() == out.size() && mask.size() == out.size(), ErrorCode::SizeMismatch,
+            "blend_over: image, colours and mask differ in size");
+    for (int y = 0; y < out.rows; ++y) {
+        cv::Vec3b *o = out.ptr<cv::Vec3b>(y);
+        const cv::Vec3b *c = colors.ptr<cv::Vec3b>(y);
+        for (int x = 0; x < out.cols; ++x)
+            for (int k = 0; k < 3; ++k) {
+                const double v = mask(y, x) ? alpha * c[x][k] + (1 - alpha) * o[x][k] : 0.5 * o[x][k];
+                o[x][k] = static_cast<uchar>(std::lround(v));
+            }
+    }
+    return out;
+}
+
 cv::Mat draw_lidar(const cv::Mat &image, const SparseLidar &lidar, float max_disp, int radius) {
     cv::Mat out = to_bgr(image, "draw_lidar");
     require(radius >= 1, ErrorCode::InvalidArgument, "draw_lidar: radius must be >= 1");

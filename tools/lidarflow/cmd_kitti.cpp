@@ -56,7 +56,7 @@ int run_kitti_command(int argc, char **argv) {
     Args args("kitti", argc, argv,
               {{"root", true, "DIR  KITTI training folder (image_2, image_3, disp_occ_*, flow_occ, calib, velodyne)"},
                {"ids", true, "A,B  frames (default: every image_2/*_10.png)"},
-               {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne | none"},
+               {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne (t1: velodyne/ID_11.bin if present) | none"},
                {"points", true, "N    LiDAR points per map (paper: default 88; velodyne: thin to N, 0 = full scan)"},
                {"beams", true, "K    velodyne: keep K beams (default all)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
@@ -103,8 +103,13 @@ int run_kitti_command(int argc, char **argv) {
     require(seeds >= 1 && seeds <= 1000, ErrorCode::InvalidArgument, "kitti: --seeds must be in [1, 1000]");
 
     const bool tty = isatty(fileno(stderr));
+    // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one line per step, so a
+    // long run still shows where it is without control characters in the log.
     const auto progress = [tty](size_t i, size_t n, const std::string &what) {
-        if (tty) std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
+        if (tty)
+            std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
+        else
+            std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, n, what.c_str());
     };
     const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
     // Further seeds: scored only (the first seed's run is the one written to --out).
@@ -127,6 +132,15 @@ int run_kitti_command(int argc, char **argv) {
         for (size_t j = 0; j < t.stages.size(); ++j)
             std::printf("%s%s %.2f", j ? ", " : "", t.stages[j].name.c_str(), t.stages[j].seconds);
         std::printf(")\n");
+    }
+    if (velodyne) {
+        std::string without_t1;
+        for (const pipeline::FrameTimings &t : rep.timings)
+            if (t.lidar1_points == 0) without_t1 += (without_t1.empty() ? "" : ", ") + t.id;
+        if (!without_t1.empty())
+            std::printf("  no scan at t1 (velodyne/ID_11.bin) for %s: D1 is empty there, the estimator uses the t0 "
+                        "scan only\n",
+                        without_t1.c_str());
     }
     std::printf("\n%s", pipeline::format_report(rep).c_str());
     if (seeds > 1) {

@@ -1,8 +1,10 @@
 // lidarflow run: the complete estimator on one frame pair of one's own data (four rectified
-// images, optional sparse LiDAR maps as KITTI disparity PNGs), written in the KITTI
-// submission layout plus pictures.
+// images, optional sparse LiDAR as KITTI disparity PNGs or raw Velodyne scans), written in the
+// KITTI submission layout or float formats, plus pictures and optionally a point cloud.
+#include <algorithm>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -13,6 +15,10 @@
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "io/output_folder.hpp"
+#include "io/point_cloud.hpp"
+#include "io/result_formats.hpp"
+#include "io/velodyne.hpp"
+#include "lidar/velodyne_protocol.hpp"
 #include "pipeline/estimator.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/flow_color.hpp"
@@ -28,22 +34,51 @@ SparseLidar read_lidar(const std::string &path, const cv::Size &size, const char
     return SparseLidar::from_map(map);
 }
 
+// A raw scan projected into the left image of its own time (the t1 scan lands in I_l^1, which is
+// where the estimator takes D_l^1), with the whole scan kept: thinning is a protocol choice of
+// `kitti` / `sample-lidar`, not of one's own data.
+SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib, const cv::Matx44d &velo_to_cam,
+                         const cv::Size &size, const char *what) {
+    const io::VelodyneScan scan = io::read_velodyne_bin(path);
+    SparseLidar l = lidar::sample_velodyne_protocol(scan, calib, velo_to_cam, size).d0;
+    std::fprintf(stderr, "run: %s %s: %zu points, %zu in the image%s\n", what, path.c_str(), scan.points.size(),
+                 l.points.size(),
+                 scan.dropped_nonfinite ? (", " + std::to_string(scan.dropped_nonfinite) + " non-finite dropped").c_str()
+                                        : "");
+    return l;
+}
+
+std::vector<io::ResultFormat> parse_formats(const std::vector<std::string> &names) {
+    std::vector<io::ResultFormat> out;
+    for (const std::string &n : names) {
+        const io::ResultFormat f = io::parse_result_format(n);
+        if (std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
+    }
+    require(!out.empty(), ErrorCode::InvalidArgument, "run: --format needs at least one of kitti, flo, pfm, npy");
+    return out;
+}
+
 int run(int argc, char **argv) {
     Args args("run", argc, argv,
               {{"left0", true, "PNG  rectified left image at t0 (reference)"},
                {"right0", true, "PNG  rectified right image at t0"},
                {"left1", true, "PNG  rectified left image at t1"},
                {"right1", true, "PNG  rectified right image at t1"},
-               {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; printed with the result)"},
+               {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; needed by --velo0/1 and --points)"},
                {"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 as a KITTI disparity PNG"},
                {"lidar1", true, "PNG  sparse LiDAR D_l^1 in left1 as a KITTI disparity PNG"},
-               {"no-lidar", false, "image-only pipeline (ignore --lidar0/--lidar1)"},
+               {"velo0", true, "BIN  raw Velodyne scan at t0 (KITTI .bin; instead of --lidar0)"},
+               {"velo1", true, "BIN  raw Velodyne scan at t1 (instead of --lidar1)"},
+               {"calib-velo", true, "FILE KITTI calib_velo_to_cam.txt (Velodyne -> camera 0), for --velo0/1"},
+               {"no-lidar", false, "image-only pipeline (ignore the LiDAR inputs)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
-               {"id", true, "ID   frame id of the output files (default 000000)"}});
+               {"id", true, "ID   frame id of the output files (default 000000)"},
+               {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
+               {"points", true, "PLY  also write the 3-D points at t0 with their motion and colour"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -52,6 +87,27 @@ int run(int argc, char **argv) {
     // Both name output files: checked before minutes of estimation, not after.
     io::KittiLayout::check_id(id);
     io::prepare_output_folder(out);
+    const std::vector<io::ResultFormat> formats =
+        parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"});
+    require(!(args.has("lidar0") && args.has("velo0")), ErrorCode::InvalidArgument,
+            "run: give --lidar0 or --velo0, not both");
+    require(!(args.has("lidar1") && args.has("velo1")), ErrorCode::InvalidArgument,
+            "run: give --lidar1 or --velo1, not both");
+    const bool velodyne = args.has("velo0") || args.has("velo1");
+    require(!velodyne || (args.has("calib") && args.has("calib-velo")), ErrorCode::InvalidArgument,
+            "run: --velo0/--velo1 need --calib (calib_cam_to_cam.txt) and --calib-velo (calib_velo_to_cam.txt)");
+    require(velodyne || !args.has("calib-velo"), ErrorCode::InvalidArgument,
+            "run: --calib-velo is only used with --velo0/--velo1");
+    require(!args.has("points") || args.has("calib"), ErrorCode::InvalidArgument,
+            "run: --points needs --calib: metric 3-D points come from the rig's focal length and baseline");
+    pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
+    opt.use_lidar = !args.flag("no-lidar");
+    opt.threads = args.integer("threads", 2);
+    opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
+    apply_option_assignments(opt, args.list("set"));
+    const pipeline::Estimator estimator(opt);  // checks the options before any file is read
+
+    std::fprintf(stderr, "run: reading the images\n");
     pipeline::FrameInput in;
     in.left0 = io::read_image(args.required("left0"));
     in.right0 = io::read_image(args.required("right0"));
@@ -68,21 +124,35 @@ int run(int argc, char **argv) {
         const io::CamToCamCalib calib = io::read_calib_cam_to_cam(args.str("calib", ""));
         std::printf("camera    fx %.2f px, baseline %.4f m\n", calib.camera.fx, calib.camera.baseline);
         in.camera = calib.camera;  // enables the rigid background model of stage 4
+        if (velodyne) {
+            const cv::Matx44d velo_to_cam = io::read_calib_velo_to_cam(args.str("calib-velo", ""));
+            if (args.has("velo0"))
+                in.lidar0 = project_scan(args.str("velo0", ""), calib, velo_to_cam, size, "--velo0");
+            if (args.has("velo1"))
+                in.lidar1 = project_scan(args.str("velo1", ""), calib, velo_to_cam, size, "--velo1");
+        }
     }
 
-    pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
-    opt.use_lidar = !args.flag("no-lidar");
-    opt.threads = args.integer("threads", 2);
-    opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
-    apply_option_assignments(opt, args.list("set"));
-    const pipeline::Estimator estimator(opt);
+    std::fprintf(stderr, "run: estimating (%dx%d, up to stage %s)\n", size.width, size.height,
+                 pipeline::stage_name(opt.last_stage));
     const pipeline::EstimatorResult r = estimator.run(in);
     const SceneFlowField &f = r.output();
 
-    io::write_submission(out, id, f);
+    std::fprintf(stderr, "run: writing %s\n", out.c_str());
+    std::vector<std::string> written;
+    for (io::ResultFormat fmt : formats) {
+        for (const std::string &file : io::write_results(out, id, f, fmt))  // flo and pfm share the disparities
+            if (std::find(written.begin(), written.end(), file) == written.end()) written.push_back(file);
+    }
     io::write_image(out + "/viz/" + id + "_flow.png", viz::flow_to_color(io::field_flow(f)));
     io::write_image(out + "/viz/" + id + "_disp0.png", viz::disparity_to_color(io::field_disparity0(f)));
     io::write_image(out + "/viz/" + id + "_disp1.png", viz::disparity_to_color(io::field_disparity1(f)));
+    size_t cloud = 0;
+    if (args.has("points")) {
+        const std::vector<io::CloudPoint> pts = io::scene_points(f, in.camera, in.left0);
+        io::write_ply(args.str("points", ""), pts);
+        cloud = pts.size();
+    }
 
     std::printf("input     %dx%d, LiDAR %zu points at t0, %zu at t1%s\n", size.width, size.height,
                 in.lidar0.points.size(), in.lidar1.points.size(), opt.use_lidar ? "" : " (ignored: --no-lidar)");
@@ -90,7 +160,11 @@ int run(int argc, char **argv) {
                 100.0 * cv::countNonZero(f.valid) / static_cast<double>(f.valid.total()));
     for (const pipeline::StageTime &t : r.timings) std::printf("  %-18s %8.3f s\n", t.name.c_str(), t.seconds);
     std::printf("  %-18s %8.3f s\n", "total", r.total_seconds);
-    std::printf("wrote     %s/{disp_0,disp_1,flow}/%s_10.png and %s/viz/\n", out.c_str(), id.c_str(), out.c_str());
+    for (const std::string &w : written) std::printf("wrote     %s\n", w.c_str());
+    std::printf("wrote     %s/viz/%s_{flow,disp0,disp1}.png\n", out.c_str(), id.c_str());
+    if (args.has("points"))
+        std::printf("wrote     %s: %zu points (x y z, dx dy dz [m], red green blue)\n", args.str("points", "").c_str(),
+                    cloud);
     return 0;
 }
 

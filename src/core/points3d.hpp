@@ -1,0 +1,36 @@
+#pragma once
+// The 3-D reading of one scene-flow pixel, shared by lf_get_points3d and the CLI's point cloud
+// so the two can never disagree: Z = fx * B / d, X = (x - cx) Z / fx, Y = (y - cy) Z / fy, with
+// (x, y, d0) at t0 and (x + u, y + v, d1) at t1, both in the left rectified camera frame.
+#include <cmath>
+#include <limits>
+
+#include "core/camera.hpp"
+
+namespace lidarflow {
+
+struct ScenePoint3 {
+    double x = 0, y = 0, z = 0;     // position at t0 [m]
+    double dx = 0, dy = 0, dz = 0;  // position at t1 minus position at t0 [m] (includes ego-motion)
+};
+
+// False (and *out untouched) unless d0 > 0 and d1 > 0 and every value fits a float: a
+// disparity near 0 puts the point at a depth no float holds, and such a point is not valid
+// rather than infinite (a cast of the out-of-range double would be undefined). The camera must
+// be valid.
+inline bool triangulate_scene_flow(const StereoCamera &cam, double x, double y, double u, double v, double d0,
+                                   double d1, ScenePoint3 *out) {
+    if (!(d0 > 0.0) || !(d1 > 0.0)) return false;
+    const double fb = cam.fx * cam.baseline;
+    const double z0 = fb / d0, z1 = fb / d1;
+    const double x0 = (x - cam.cx) * z0 / cam.fx, y0 = (y - cam.cy) * z0 / cam.fy;
+    const double x1 = (x + u - cam.cx) * z1 / cam.fx, y1 = (y + v - cam.cy) * z1 / cam.fy;
+    const ScenePoint3 q{x0, y0, z0, x1 - x0, y1 - y0, z1 - z0};
+    const double limit = std::numeric_limits<float>::max();
+    for (double c : {q.x, q.y, q.z, q.dx, q.dy, q.dz})
+        if (!(std::fabs(c) <= limit)) return false;
+    *out = q;
+    return true;
+}
+
+}  // namespace lidarflow

@@ -1,0 +1,303 @@
+#include "io/result_formats.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <opencv2/video/tracking.hpp>
+
+#include "core/closest_name.hpp"
+#include "core/error.hpp"
+#include "io/kitti_layout.hpp"
+#include "io/kitti_submission.hpp"
+
+namespace lidarflow::io {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// Middlebury's "unknown flow" value; its readers test |value| > 1e9.
+constexpr float kFloUnknown = 1e10f;
+constexpr float kFloUnknownThreshold = 1e9f;
+
+void check_float_map(const cv::Mat &map, const std::string &path) {
+    require(!map.empty(), ErrorCode::InvalidArgument, "empty map for " + path);
+    require(map.type() == CV_32FC1 || map.type() == CV_32FC3, ErrorCode::InvalidArgument,
+            path + ": expected a float32 map with 1 or 3 channels");
+}
+
+std::ofstream open_for_writing(const std::string &path) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    require(out.good(), ErrorCode::Io, "cannot write " + path);
+    return out;
+}
+
+void finish(std::ofstream &out, const std::string &path) {
+    out.flush();
+    require(out.good(), ErrorCode::Io, "cannot write " + path);
+}
+
+std::string slurp(const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    require(in.good(), ErrorCode::Io, "cannot open " + path);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    require(!in.bad(), ErrorCode::Io, "cannot read " + path);
+    return ss.str();
+}
+
+// Byte order made explicit so the files are the same on any host.
+void put_le32(std::string &buf, float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    for (int k = 0; k < 4; ++k) buf.push_back(static_cast<char>((u >> (8 * k)) & 0xffu));
+}
+
+float get32(const char *p, bool little) {
+    uint32_t u = 0;
+    for (int k = 0; k < 4; ++k) {
+        const uint32_t byte = static_cast<unsigned char>(p[little ? k : 3 - k]);
+        u |= byte << (8 * k);
+    }
+    float f;
+    std::memcpy(&f, &u, 4);
+    return f;
+}
+
+// The whole file as float32 values once the header is consumed.
+void read_floats(const std::string &data, size_t offset, cv::Mat &m, bool little, bool bottom_up,
+                 const std::string &path) {
+    const size_t n = m.total() * static_cast<size_t>(m.channels());
+    require(data.size() - offset == 4 * n, ErrorCode::Format,
+            path + ": " + std::to_string(data.size() - offset) + " bytes of data, the header announces " +
+                std::to_string(4 * n));
+    const size_t row = static_cast<size_t>(m.cols) * static_cast<size_t>(m.channels());
+    for (int y = 0; y < m.rows; ++y) {
+        float *dst = m.ptr<float>(bottom_up ? m.rows - 1 - y : y);
+        const char *src = data.data() + offset + 4 * row * static_cast<size_t>(y);
+        for (size_t k = 0; k < row; ++k) dst[k] = get32(src + 4 * k, little);
+    }
+}
+
+// Parses "H, W" or "H, W, 3" of a .npy shape tuple.
+std::vector<long> parse_shape(const std::string &tuple) {
+    std::vector<long> dims;
+    std::stringstream ss(tuple);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        const size_t a = item.find_first_not_of(" ");
+        if (a == std::string::npos) continue;
+        char *end = nullptr;
+        const long v = std::strtol(item.c_str() + a, &end, 10);
+        if (*end != '\0' && *end != ' ') return {};
+        dims.push_back(v);
+    }
+    return dims;
+}
+
+}  // namespace
+
+const char *result_format_name(ResultFormat f) {
+    switch (f) {
+    case ResultFormat::Kitti: return "kitti";
+    case ResultFormat::Flo: return "flo";
+    case ResultFormat::Pfm: return "pfm";
+    case ResultFormat::Npy: return "npy";
+    }
+    return "unknown";
+}
+
+ResultFormat parse_result_format(const std::string &name) {
+    const ResultFormat all[] = {ResultFormat::Kitti, ResultFormat::Flo, ResultFormat::Pfm, ResultFormat::Npy};
+    std::vector<std::string> names;
+    for (ResultFormat f : all) {
+        if (name == result_format_name(f)) return f;
+        names.push_back(result_format_name(f));
+    }
+    throw Error(ErrorCode::InvalidArgument,
+                "unknown result format '" + name + "'" + did_you_mean(name, names) + " (kitti, flo, pfm, npy)");
+}
+
+cv::Mat1f disparity_with_nan(const DisparityMap &disp) {
+    cv::Mat1f out(disp.size());
+    for (int y = 0; y < disp.rows; ++y)
+        for (int x = 0; x < disp.cols; ++x) {
+            const float d = disp(y, x);
+            out(y, x) = disparity_valid(d) ? d : kNaN;
+        }
+    return out;
+}
+
+cv::Mat3f flow_with_valid(const FlowField &flow) {
+    cv::Mat3f out(flow.u.size());
+    for (int y = 0; y < out.rows; ++y)
+        for (int x = 0; x < out.cols; ++x) {
+            const float u = flow.u(y, x), v = flow.v(y, x);
+            const bool ok = flow.valid(y, x) && std::isfinite(u) && std::isfinite(v);
+            out(y, x) = ok ? cv::Vec3f(u, v, 1.0f) : cv::Vec3f(kNaN, kNaN, 0.0f);
+        }
+    return out;
+}
+
+void write_pfm(const std::string &path, const cv::Mat &map) {
+    check_float_map(map, path);
+    // Scale -1: little-endian data, which is how every PFM reader in use expects it.
+    std::string buf = std::string(map.channels() == 3 ? "PF" : "Pf") + "\n" + std::to_string(map.cols) + " " +
+                      std::to_string(map.rows) + "\n-1.0\n";
+    const size_t row = static_cast<size_t>(map.cols) * static_cast<size_t>(map.channels());
+    buf.reserve(buf.size() + 4 * row * static_cast<size_t>(map.rows));
+    for (int y = map.rows - 1; y >= 0; --y) {
+        const float *src = map.ptr<float>(y);
+        for (size_t k = 0; k < row; ++k) put_le32(buf, src[k]);
+    }
+    std::ofstream out = open_for_writing(path);
+    out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    finish(out, path);
+}
+
+cv::Mat read_pfm(const std::string &path) {
+    const std::string data = slurp(path);
+    // Header: three whitespace-separated tokens after the magic, then exactly one whitespace byte.
+    size_t pos = 0;
+    auto token = [&]() {
+        while (pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+        const size_t a = pos;
+        while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+        return data.substr(a, pos - a);
+    };
+    const std::string magic = token();
+    require(magic == "PF" || magic == "Pf", ErrorCode::Format, path + ": not a PFM file (magic '" + magic + "')");
+    const std::string ws = token(), hs = token(), ss = token();
+    require(pos < data.size(), ErrorCode::Format, path + ": truncated PFM header");
+    ++pos;
+    char *end = nullptr;
+    const long w = std::strtol(ws.c_str(), &end, 10);
+    const bool w_ok = !ws.empty() && *end == '\0';
+    const long h = std::strtol(hs.c_str(), &end, 10);
+    const bool h_ok = !hs.empty() && *end == '\0';
+    const double scale = std::strtod(ss.c_str(), &end);
+    const bool s_ok = !ss.empty() && *end == '\0' && std::isfinite(scale) && scale != 0;
+    require(w_ok && h_ok && s_ok && w > 0 && h > 0 && w <= 65536 && h <= 65536, ErrorCode::Format,
+            path + ": bad PFM header '" + ws + " " + hs + " " + ss + "'");
+    cv::Mat m(static_cast<int>(h), static_cast<int>(w), magic == "PF" ? CV_32FC3 : CV_32FC1);
+    read_floats(data, pos, m, scale < 0, true, path);
+    return m;
+}
+
+void write_npy(const std::string &path, const cv::Mat &map) {
+    check_float_map(map, path);
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(map.rows) + ", " +
+                         std::to_string(map.cols) + (map.channels() == 3 ? ", 3" : "") + "), }";
+    // Magic (6) + version (2) + length (2) + header, padded with spaces and ended by '\n' to a
+    // multiple of 64 bytes, as numpy writes it.
+    const size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
+    header.resize(total - 10 - 1, ' ');
+    header.push_back('\n');
+    std::string buf = std::string("\x93NUMPY\x01\x00", 8);
+    buf.push_back(static_cast<char>(header.size() & 0xff));
+    buf.push_back(static_cast<char>(header.size() >> 8));
+    buf += header;
+    const size_t row = static_cast<size_t>(map.cols) * static_cast<size_t>(map.channels());
+    for (int y = 0; y < map.rows; ++y) {
+        const float *src = map.ptr<float>(y);
+        for (size_t k = 0; k < row; ++k) put_le32(buf, src[k]);
+    }
+    std::ofstream out = open_for_writing(path);
+    out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    finish(out, path);
+}
+
+cv::Mat read_npy(const std::string &path) {
+    const std::string data = slurp(path);
+    require(data.size() >= 10 && data.compare(0, 6, "\x93NUMPY") == 0, ErrorCode::Format,
+            path + ": not a .npy file");
+    require(data[6] == 1 && data[7] == 0, ErrorCode::Format, path + ": only .npy version 1.0 is read");
+    const size_t len = static_cast<unsigned char>(data[8]) | static_cast<size_t>(static_cast<unsigned char>(data[9])) << 8;
+    require(data.size() >= 10 + len, ErrorCode::Format, path + ": truncated .npy header");
+    const std::string header = data.substr(10, len);
+    auto value_of = [&](const std::string &key) {
+        const size_t k = header.find("'" + key + "':");
+        require(k != std::string::npos, ErrorCode::Format, path + ": .npy header has no '" + key + "'");
+        size_t a = k + key.size() + 3;
+        while (a < header.size() && header[a] == ' ') ++a;
+        return a;
+    };
+    const size_t d = value_of("descr");
+    require(header.compare(d, 5, "'<f4'") == 0, ErrorCode::Format, path + ": expected little-endian float32 ('<f4')");
+    const size_t f = value_of("fortran_order");
+    require(header.compare(f, 5, "False") == 0, ErrorCode::Format, path + ": Fortran-order arrays are not read");
+    const size_t s = value_of("shape");
+    const size_t close = header.find(')', s);
+    require(header[s] == '(' && close != std::string::npos, ErrorCode::Format, path + ": bad .npy shape");
+    const std::vector<long> dims = parse_shape(header.substr(s + 1, close - s - 1));
+    const bool ok = (dims.size() == 2 || (dims.size() == 3 && dims[2] == 3)) && dims[0] > 0 && dims[1] > 0 &&
+                    dims[0] <= 65536 && dims[1] <= 65536;
+    require(ok, ErrorCode::Format, path + ": expected shape (H, W) or (H, W, 3)");
+    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), dims.size() == 3 ? CV_32FC3 : CV_32FC1);
+    read_floats(data, 10 + len, m, true, false, path);
+    return m;
+}
+
+void write_flo(const std::string &path, const FlowField &flow) {
+    require(!flow.u.empty(), ErrorCode::InvalidArgument, "empty flow for " + path);
+    cv::Mat2f uv(flow.u.size());
+    for (int y = 0; y < uv.rows; ++y)
+        for (int x = 0; x < uv.cols; ++x) {
+            const float u = flow.u(y, x), v = flow.v(y, x);
+            const bool ok = flow.valid(y, x) && std::isfinite(u) && std::isfinite(v);
+            uv(y, x) = ok ? cv::Vec2f(u, v) : cv::Vec2f(kFloUnknown, kFloUnknown);
+        }
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    require(cv::writeOpticalFlow(path, uv), ErrorCode::Io, "cannot write " + path);
+}
+
+FlowField read_flo(const std::string &path) {
+    require(std::ifstream(path).good(), ErrorCode::Io, "cannot open " + path);
+    const cv::Mat uv = cv::readOpticalFlow(path);
+    require(!uv.empty() && uv.type() == CV_32FC2, ErrorCode::Format, path + ": not a readable .flo file");
+    FlowField f = FlowField::zeros(uv.cols, uv.rows);
+    for (int y = 0; y < uv.rows; ++y)
+        for (int x = 0; x < uv.cols; ++x) {
+            const cv::Vec2f p = uv.at<cv::Vec2f>(y, x);
+            const bool ok = std::fabs(p[0]) <= kFloUnknownThreshold && std::fabs(p[1]) <= kFloUnknownThreshold;
+            f.u(y, x) = ok ? p[0] : 0.0f;
+            f.v(y, x) = ok ? p[1] : 0.0f;
+            f.valid(y, x) = ok ? 1 : 0;
+        }
+    return f;
+}
+
+std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
+                                       ResultFormat format) {
+    require(!f.u.empty(), ErrorCode::InvalidArgument, "write_results: empty scene-flow field");
+    const KittiLayout k{out_root};
+    if (format == ResultFormat::Kitti) {
+        write_submission(out_root, id, f);
+        return {k.est_disp0(id), k.est_disp1(id), k.est_flow(id)};
+    }
+    // Same names as the KITTI layout, another extension.
+    auto with_ext = [](std::string png, const char *ext) { return png.substr(0, png.size() - 3) + ext; };
+    const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
+    const char *flow_ext = result_format_name(format);
+    const std::string d0 = with_ext(k.est_disp0(id), disp_ext), d1 = with_ext(k.est_disp1(id), disp_ext),
+                      fl = with_ext(k.est_flow(id), flow_ext);
+    const auto write_map = format == ResultFormat::Npy ? write_npy : write_pfm;
+    write_map(d0, disparity_with_nan(field_disparity0(f)));
+    write_map(d1, disparity_with_nan(field_disparity1(f)));
+    if (format == ResultFormat::Flo)
+        write_flo(fl, field_flow(f));
+    else
+        write_map(fl, flow_with_valid(field_flow(f)));
+    return {d0, d1, fl};
+}
+
+}  // namespace lidarflow::io

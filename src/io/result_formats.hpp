@@ -1,0 +1,51 @@
+#pragma once
+// Result files other than KITTI's 16-bit PNGs, for tools that expect float maps:
+//  - .flo (Middlebury): optical flow, written and read by OpenCV's writeOpticalFlow /
+//    readOpticalFlow. Invalid pixels hold 1e10 in u and v: Middlebury readers treat any
+//    |value| > 1e9 as unknown flow.
+//  - .pfm (Portable Float Map): "Pf" (1 channel) or "PF" (3 channels), little-endian float32
+//    (scale -1), rows stored bottom to top as the format demands.
+//  - .npy (NumPy v1.0): '<f4', C order, shape (H, W) or (H, W, 3).
+// In .pfm and .npy an invalid disparity is NaN; flow is (u, v, valid) per pixel like KITTI's flow
+// PNG, valid in {0, 1} and u = v = NaN where valid is 0, so a reader that ignores the third
+// channel still cannot take a hole for zero motion.
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/maps.hpp"
+
+namespace lidarflow::io {
+
+enum class ResultFormat { Kitti, Flo, Pfm, Npy };
+
+// "kitti", "flo", "pfm", "npy"; parse throws Error(InvalidArgument) naming the accepted ones.
+const char *result_format_name(ResultFormat f);
+ResultFormat parse_result_format(const std::string &name);
+
+// Writes OUT/disp_0/ID_10.EXT, OUT/disp_1/ID_10.EXT and OUT/flow/ID_10.EXT (creating the
+// folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
+// flo: the flow as .flo and, since .flo has no one-channel form, the disparities as .pfm.
+// Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
+std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
+                                       ResultFormat format);
+
+// CV_32FC1 or CV_32FC3 maps. Writers create missing parent folders and throw Error: Io when the
+// file cannot be written, InvalidArgument for an empty map or another type. Readers throw Io
+// when the file cannot be read and Format for anything but the float32 layouts above (a
+// big-endian PFM is accepted).
+void write_pfm(const std::string &path, const cv::Mat &map);
+cv::Mat read_pfm(const std::string &path);
+void write_npy(const std::string &path, const cv::Mat &map);
+cv::Mat read_npy(const std::string &path);
+
+// .flo through OpenCV; unknown flow (|u| or |v| > 1e9) reads back as valid = 0.
+void write_flo(const std::string &path, const FlowField &flow);
+FlowField read_flo(const std::string &path);
+
+// The float maps written for a field: disparity with NaN holes, flow as (u, v, valid).
+cv::Mat1f disparity_with_nan(const DisparityMap &disp);
+cv::Mat3f flow_with_valid(const FlowField &flow);
+
+}  // namespace lidarflow::io

@@ -1,0 +1,30 @@
+#pragma once
+// Bird's-eye view of a scene-flow point cloud: the ground plane seen from above (x right, z
+// forward, camera at the bottom centre), each point coloured by its speed |motion| (turbo colour
+// map, with a colour bar), and arrows of the mean ground-plane motion (dx, dz) of the points in
+// each cell, drawn to scale. Motion is relative to the camera, so the static scene shows the
+// ego-motion.
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "io/point_cloud.hpp"
+
+namespace lidarflow::viz {
+
+struct BirdsEyeOptions {
+    double range = 0;      // [m] shown ahead (and range / 2 to each side); 0 = the points' 98th percentile of z in [10, 80]
+    int height = 600;      // picture height [px] without the legend (the width is the same)
+    double max_speed = 0;  // [m per frame] colour scale; 0 = the 98th percentile of |motion|
+    double cell = 2.0;     // [m] one arrow per cell of cell x cell metres
+    int min_points = 20;   // cells with fewer points get no arrow
+};
+
+// CV_8UC3 picture with its speed legend. Throws Error(InvalidArgument) for no points, a
+// non-finite point, or options out of range (range < 0, height < 64, max_speed < 0, cell <= 0).
+cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEyeOptions &options = {});
+
+// The colour of speed s on the view's scale [0, max_speed].
+cv::Vec3b speed_color(double s, double max_speed);
+
+}  // namespace lidarflow::viz

@@ -1,0 +1,27 @@
+#pragma once
+// Legends for the colour-coded pictures: a strip appended below a picture, with a colour bar and
+// its scale (disparity, speed) or a colour wheel (flow), so a picture read on its own says what
+// its colours mean.
+#include <functional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "viz/flow_color.hpp"
+
+namespace lidarflow::viz {
+
+// Copy of `picture` (CV_8UC3) with a strip below: `label`, then a bar coloured by color(t) for t
+// from lo to hi, with five tick values. Throws Error(InvalidArgument) for an empty or non-BGR
+// picture, or a non-finite / empty range (hi <= lo).
+cv::Mat with_color_bar(const cv::Mat &picture, const std::function<cv::Vec3b(double)> &color, double lo, double hi,
+                       const std::string &label);
+
+// with_color_bar with disparity_color over [0, max_disp] (max_disp > 0).
+cv::Mat with_disparity_legend(const cv::Mat &picture, double max_disp);
+
+// Copy of `picture` with a strip holding the colour wheel of `style` at normalisation max_flow
+// (> 0): the wheel's rim is |f| = max_flow, +u to the right, +v down, as in the picture.
+cv::Mat with_flow_legend(const cv::Mat &picture, double max_flow, FlowColorStyle style);
+
+}  // namespace lidarflow::viz

@@ -1,0 +1,251 @@
+// `lidarflow run` on a rendered frame: raw Velodyne scans at t0 and t1 (--velo0/--velo1 with
+// --calib-velo) land in the images with the expected counts, `kitti --lidar velodyne` takes a
+// t1 scan when the layout has one; every --format reads back as the same result; the --points
+// PLY holds one finite point per valid pixel; progress lines appear when the output is piped;
+// bad arguments exit 2 and bad files 1. Runs the built binary ($LIDARFLOW_CLI, set by CTest).
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/calib.hpp"
+#include "io/kitti_layout.hpp"
+#include "io/kitti_png.hpp"
+#include "io/point_cloud.hpp"
+#include "io/result_formats.hpp"
+// cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+extern "C" {
+#include <cmocka.h>
+}
+#include "test_support.hpp"
+
+using namespace lidarflow;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string g_cli;
+
+struct Result {
+    int code = -1;
+    std::string output;
+};
+
+// stdout and stderr go to a file, as when a user pipes the program: no terminal.
+Result run(const std::string &args, const fs::path &dir) {
+    const fs::path log = dir / "cli.log";
+    const std::string cmd = "'" + g_cli + "' " + args + " > '" + log.string() + "' 2>&1";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.output = ss.str();
+    return r;
+}
+
+std::string q(const fs::path &p) { return "'" + p.string() + "'"; }
+
+void expect_contains(const Result &r, const std::string &what) {
+    if (r.output.find(what) != std::string::npos) return;
+    std::printf("%s", r.output.c_str());
+    fail_msg("expected \"%s\" in the output above", what.c_str());
+}
+
+// Velodyne axes (x forward, y left, z up) -> camera 0 (x right, y down, z forward), no offset.
+void write_velo_calib(const fs::path &path) {
+    fs::create_directories(path.parent_path());
+    std::ofstream(path) << "calib_time: test\nR: 0 -1 0 0 0 -1 1 0 0\nT: 0 0 0\n";
+}
+
+// A scan whose points project to the given pixels at depth z, plus `outside` points that must
+// not land in the image (behind the camera, or beyond its right edge).
+void write_scan(const fs::path &path, const StereoCamera &cam, const std::vector<cv::Point> &pixels, double z,
+                int outside) {
+    fs::create_directories(path.parent_path());
+    std::ofstream f(path, std::ios::binary);
+    auto put = [&](double xc, double yc, double zc) {
+        const float rec[4] = {static_cast<float>(zc), static_cast<float>(-xc), static_cast<float>(-yc), 0.5f};
+        f.write(reinterpret_cast<const char *>(rec), sizeof rec);
+    };
+    for (const cv::Point &p : pixels) put((p.x - cam.cx) * z / cam.fx, (p.y - cam.cy) * z / cam.fy, z);
+    for (int k = 0; k < outside; ++k) {
+        if (k % 2)
+            put(0.0, 0.0, -5.0);  // behind
+        else
+            put(10.0 * z, 0.0, z);  // far to the right
+    }
+}
+
+std::vector<cv::Point> grid_pixels(int n, int x0, int y0) {
+    std::vector<cv::Point> out;
+    for (int i = 0; i < n; ++i) out.emplace_back(x0 + 23 * (i % 10), y0 + 17 * (i / 10));
+    return out;
+}
+
+struct Scene {
+    fs::path dir, root;
+    io::KittiLayout k;
+    StereoCamera cam;
+    std::string images;  // the four --left0 .. --right1 options
+};
+
+Scene make_scene(const std::string &name) {
+    Scene s;
+    s.dir = test::scratch_dir(name);
+    s.root = s.dir / "kitti";
+    const Result r = run("synth --out " + q(s.root) + " --width 320 --height 96", s.dir);
+    if (r.code != 0) fail_msg("synth failed: %s", r.output.c_str());
+    s.k = io::KittiLayout{s.root.string()};
+    s.cam = io::read_calib_cam_to_cam(s.k.calib_cam_to_cam("000000")).camera;
+    s.images = " --left0 " + q(s.k.left("000000", 0)) + " --right0 " + q(s.k.right("000000", 0)) + " --left1 " +
+               q(s.k.left("000000", 1)) + " --right1 " + q(s.k.right("000000", 1));
+    write_velo_calib(s.k.calib_velo_to_cam("000000"));
+    write_scan(s.k.velodyne("000000"), s.cam, grid_pixels(12, 10, 10), 12.0, 4);
+    return s;
+}
+
+void test_velodyne_inputs(void **) {
+    const Scene s = make_scene("cli_run_velodyne");
+    const fs::path t1 = s.dir / "t1.bin";
+    write_scan(t1, s.cam, grid_pixels(7, 30, 40), 9.0, 3);
+    const std::string calib =
+        " --calib " + q(s.k.calib_cam_to_cam("000000")) + " --calib-velo " + q(s.k.calib_velo_to_cam("000000"));
+    Result r = run("run" + s.images + calib + " --velo0 " + q(s.k.velodyne("000000")) + " --velo1 " + q(t1) +
+                       " --stage matching --out " + q(s.dir / "o"),
+                   s.dir);
+    if (r.code != 0) fail_msg("run --velo0 --velo1 failed: %s", r.output.c_str());
+    expect_contains(r, "LiDAR 12 points at t0, 7 at t1");
+    expect_contains(r, "16 points, 12 in the image");
+    expect_contains(r, "run: estimating");  // progress, though nothing here is a terminal
+
+    // kitti --lidar velodyne: without velodyne/ID_11.bin D1 is empty and the output says so; with
+    // it, the t1 scan is used.
+    const std::string kitti = "kitti --root " + q(s.root) + " --lidar velodyne --stage matching --no-viz";
+    r = run(kitti, s.dir);
+    if (r.code != 0) fail_msg("kitti --lidar velodyne failed: %s", r.output.c_str());
+    expect_contains(r, "LiDAR 12 + 0 points");
+    expect_contains(r, "no scan at t1 (velodyne/ID_11.bin) for 000000");
+    expect_contains(r, "[1/1] 000000: loading");  // piped progress lines
+    fs::copy_file(t1, s.k.velodyne_t1("000000"));
+    r = run(kitti, s.dir);
+    assert_int_equal(r.code, 0);
+    expect_contains(r, "LiDAR 12 + 7 points");
+    assert_true(r.output.find("no scan at t1") == std::string::npos);
+}
+
+void test_formats_and_points(void **) {
+    const Scene s = make_scene("cli_run_formats");
+    const fs::path out = s.dir / "o", ply = s.dir / "cloud.ply";
+    // Stage sparse leaves holes, so the round trips cover invalid pixels too.
+    const Result r = run("run" + s.images + " --lidar0 " + q(s.k.lidar("000000", 0)) + " --calib " +
+                             q(s.k.calib_cam_to_cam("000000")) + " --stage sparse --format kitti,flo,pfm,npy --points " +
+                             q(ply) + " --id 000005 --out " + q(out),
+                         s.dir);
+    if (r.code != 0) fail_msg("run --format failed: %s", r.output.c_str());
+    const io::KittiLayout o{out.string()};
+    const DisparityMap d0_png = io::read_disparity_png(o.est_disp0("000005"));
+    const FlowField flow_png = io::read_flow_png(o.est_flow("000005"));
+    const cv::Mat d0_pfm = io::read_pfm((out / "disp_0" / "000005_10.pfm").string());
+    const cv::Mat d0_npy = io::read_npy((out / "disp_0" / "000005_10.npy").string());
+    const cv::Mat d1_npy = io::read_npy((out / "disp_1" / "000005_10.npy").string());
+    const cv::Mat fl_pfm = io::read_pfm((out / "flow" / "000005_10.pfm").string());
+    const cv::Mat fl_npy = io::read_npy((out / "flow" / "000005_10.npy").string());
+    const FlowField fl_flo = io::read_flo((out / "flow" / "000005_10.flo").string());
+    assert_true(d0_npy.size() == cv::Size(320, 96) && fl_npy.type() == CV_32FC3);
+    int valid = 0, holes = 0, with_point = 0;
+    for (int y = 0; y < 96; ++y)
+        for (int x = 0; x < 320; ++x) {
+            const float d = d0_npy.at<float>(y, x), dp = d0_pfm.at<float>(y, x);
+            const cv::Vec3f f = fl_npy.at<cv::Vec3f>(y, x), fp = fl_pfm.at<cv::Vec3f>(y, x);
+            const bool ok = f[2] == 1.0f;
+            assert_int_equal(ok, disparity_valid(d0_png(y, x)));
+            assert_int_equal(ok, flow_png.valid(y, x));
+            assert_int_equal(ok, fl_flo.valid(y, x));
+            if (!ok) {
+                ++holes;
+                assert_true(std::isnan(d) && std::isnan(dp) && std::isnan(f[0]) && fp[2] == 0.0f);
+                continue;
+            }
+            ++valid;
+            with_point += d > 0 && d1_npy.at<float>(y, x) > 0;
+            assert_true(d == dp && f[0] == fp[0] && f[1] == fp[1]);
+            assert_true(f[0] == fl_flo.u(y, x) && f[1] == fl_flo.v(y, x));
+            // The PNG is the same value quantised by the devkit (1/256 px, 1/64 px).
+            assert_true(std::fabs(d - d0_png(y, x)) <= 1.0f / 256 + 1e-4f);
+            assert_true(std::fabs(f[0] - flow_png.u(y, x)) <= 1.0f / 64 + 1e-4f);
+        }
+    assert_true(valid > 100 && holes > 100);
+
+    const std::vector<io::CloudPoint> cloud = io::read_ply(ply.string());
+    assert_int_equal(cloud.size(), with_point);
+    for (const io::CloudPoint &p : cloud) {
+        assert_true(cv::checkRange(p.position) && cv::checkRange(p.motion));
+        assert_true(p.position[2] > 0);
+    }
+    expect_contains(r, "wrote     " + ply.string() + ": " + std::to_string(cloud.size()) + " points");
+
+    // The bird's-eye view of it.
+    const Result v = run("viz --points " + q(ply) + " --out " + q(s.dir / "bev.png") + " --range 40", s.dir);
+    if (v.code != 0) fail_msg("viz --points failed: %s", v.output.c_str());
+    const cv::Mat bev = io::read_image((s.dir / "bev.png").string());
+    assert_int_equal(bev.cols, 600);
+    assert_true(bev.rows > 600);  // + the speed colour bar
+}
+
+void expect_failure(const std::string &args, const fs::path &dir, int code, const std::string &message) {
+    const Result r = run(args, dir);
+    if (r.code != code) fail_msg("'%s' exited %d, expected %d: %s", args.c_str(), r.code, code, r.output.c_str());
+    expect_contains(r, message);
+    assert_true(r.output.find("Segmentation") == std::string::npos);
+}
+
+void test_bad_arguments(void **) {
+    const Scene s = make_scene("cli_run_bad");
+    const std::string base = "run" + s.images + " --out " + q(s.dir / "o");
+    const std::string cc = " --calib " + q(s.k.calib_cam_to_cam("000000"));
+    const std::string cvelo = " --calib-velo " + q(s.k.calib_velo_to_cam("000000"));
+    const std::string v0 = " --velo0 " + q(s.k.velodyne("000000"));
+    expect_failure(base + v0 + cc, s.dir, 2, "need --calib");
+    expect_failure(base + v0 + cvelo, s.dir, 2, "need --calib");
+    expect_failure(base + cc + cvelo, s.dir, 2, "--calib-velo is only used with");
+    expect_failure(base + v0 + cc + cvelo + " --lidar0 " + q(s.k.lidar("000000", 0)), s.dir, 2, "not both");
+    expect_failure(base + " --format npz", s.dir, 2, "did you mean 'npy'");
+    expect_failure(base + " --format ,", s.dir, 2, "--format needs");
+    expect_failure(base + " --points " + q(s.dir / "c.ply"), s.dir, 2, "--points needs --calib");
+    expect_failure(base + " --velo-0 x", s.dir, 2, "did you mean --velo0");
+    {
+        std::ofstream(s.dir / "odd.bin", std::ios::binary) << "0123456789";
+    }
+    expect_failure(base + cc + cvelo + " --velo0 " + q(s.dir / "odd.bin"), s.dir, 1, "not a multiple of 16");
+    expect_failure(base + cc + cvelo + " --velo1 " + q(s.dir / "none.bin"), s.dir, 1, "cannot open");
+    assert_false(fs::exists(s.dir / "o" / "flow"));
+}
+
+}  // namespace
+
+int main() {
+    const char *cli = std::getenv("LIDARFLOW_CLI");
+    if (!cli || !*cli || !fs::exists(cli)) {
+        std::printf("run_cli: skipped: LIDARFLOW_CLI is not set to the built lidarflow binary\n");
+        return 77;
+    }
+    g_cli = cli;
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_velodyne_inputs),
+        cmocka_unit_test(test_formats_and_points),
+        cmocka_unit_test(test_bad_arguments),
+    };
+    return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
+}

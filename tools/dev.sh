@@ -6,6 +6,7 @@
 #   tools/dev.sh deps        only install the Debian packages
 #   tools/dev.sh build       only configure + build (build/)
 #   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
+#   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -14,7 +15,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libopencv-contrib-dev libeigen3-dev libcmocka-dev
           liblcm-dev liblcm-bin libglib2.0-dev iproute2 util-linux
-          abigail-tools python3 python3-numpy)
+          abigail-tools python3 python3-numpy dpkg-dev file)
 
 deps() {
     local missing=()
@@ -65,5 +66,14 @@ case "${1:-}" in
         deps
         packages=(clang-14); deps  # only this verb needs the second compiler
         CC=clang-14 CXX=clang++-14 build build-clang ;;
-    *) sed -n '2,9p' "$0"; exit 2 ;;
+    package)
+        deps
+        packages=(lintian); deps  # only this verb checks the packages
+        build build
+        rm -rf "$root/build/packages"
+        (cd "$root/build" && cpack -G DEB)
+        # lintian's errors fail the verb; its warnings are printed (docs/ARCHITECTURE.md lists them).
+        lintian --fail-on error "$root"/build/packages/*.deb
+        ls -1 "$root"/build/packages/*.deb ;;
+    *) sed -n '2,10p' "$0"; exit 2 ;;
 esac

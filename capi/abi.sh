@@ -19,7 +19,8 @@ mode="${1:-}"; lib="${2:-}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 committed="$root/capi/lidarflow.abi.xml"
 if [ -z "$lib" ] || { [ "$mode" != check ] && [ "$mode" != refresh ]; }; then
-    sed -n '2,13p' "$0"; exit 2
+    # The header comment, after the shebang, without the SPDX line.
+    awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0" | head -n 12; exit 2
 fi
 for tool in abidw abidiff; do
     command -v "$tool" >/dev/null || { echo "abi.sh: $tool not found (Debian abigail-tools; tools/dev.sh deps)"; exit 1; }

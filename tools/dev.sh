@@ -10,6 +10,7 @@
 #                            C ABI concurrency suite under it (N handles on N threads)
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
+#   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -18,7 +19,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libopencv-contrib-dev libeigen3-dev libcmocka-dev
           liblcm-dev liblcm-bin libglib2.0-dev iproute2 util-linux
-          abigail-tools python3 python3-numpy
+          abigail-tools python3 python3-numpy dpkg-dev file
           python3-pip python3-setuptools python3-wheel python3-venv)
 
 deps() {
@@ -115,5 +116,14 @@ case "${1:-}" in
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP
         shift
         fuzz "${1:-60}" "${@:2}" ;;
-    *) sed -n '2,13p' "$0"; exit 2 ;;
+    package)
+        deps
+        packages=(lintian); deps  # only this verb checks the packages
+        build build
+        rm -rf "$root/build/packages"
+        (cd "$root/build" && cpack -G DEB)
+        # lintian's errors fail the verb; its warnings are printed (docs/ARCHITECTURE.md lists them).
+        lintian --fail-on error "$root"/build/packages/*.deb
+        ls -1 "$root"/build/packages/*.deb ;;
+    *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;
 esac

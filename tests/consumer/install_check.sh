@@ -1,18 +1,55 @@
 #!/usr/bin/env bash
-# Installs the build tree into a scratch prefix, then builds consumer.c twice from the
-# installed tree only: once with pkg-config, once with CMake find_package(lidarflow). Both
-# consumers run the full pipeline on a synthetic scene and must write exactly the result
-# `lidarflow run` writes for the same input and settings (same KITTI PNG bytes).
-#   install_check.sh BUILD SRC WORK CLI HARNESS
+# Builds and runs programs against an installed lidarflow tree only, never the build tree:
+#   prefix  `cmake --install BUILD --prefix WORK/prefix`, then the README's "Install" commands
+#           verbatim from a scratch folder (HOME points into WORK)
+#   deb     the Debian packages (cpack -G DEB) unpacked with dpkg-deb -x into WORK/root;
+#           exits 77 (skipped) when dpkg-deb, dpkg-shlibdeps or cpack are missing
+# In both: consumer.c is built with pkg-config and with CMake find_package(lidarflow); both
+# run the full pipeline on a synthetic scene and must write exactly the result `lidarflow run`
+# writes for the same input and settings (same KITTI PNG bytes). The installed tools must start
+# without LD_LIBRARY_PATH, and the installed LCM types must compile.
+#   install_check.sh prefix|deb BUILD SRC WORK CLI HARNESS
 set -euo pipefail
-build="$1"; src="$2"; work="$3"; cli="$4"; harness="$5"
+mode="$1"; build="$2"; src="$3"; work="$4"; cli="$5"; harness="$6"
+root="$(cd "$src/../.." && pwd)"
 rm -rf "$work"; mkdir -p "$work"
-prefix="$work/prefix"
-cmake --install "$build" --prefix "$prefix" >/dev/null
-libdir="$(dirname "$(find "$prefix" -name lidarflow.pc | head -1)")/.."
+unset LD_LIBRARY_PATH PKG_CONFIG_PATH CMAKE_PREFIX_PATH
+
+case "$mode" in
+    prefix)
+        prefix="$work/prefix"
+        cmake --install "$build" --prefix "$prefix" >/dev/null ;;
+    deb)
+        for tool in dpkg-deb dpkg-shlibdeps cpack; do
+            command -v "$tool" >/dev/null || { echo "deb check skipped: no $tool"; exit 77; }
+        done
+        cpack -G DEB --config "$build/CPackConfig.cmake" -B "$work/packages" >"$work/cpack.log" 2>&1 ||
+            { cat "$work/cpack.log"; exit 1; }
+        debs=("$work"/packages/*.deb)
+        [ ${#debs[@]} -ge 5 ] || { echo "expected 5 packages, got: ${debs[*]}"; exit 1; }
+        for deb in "${debs[@]}"; do dpkg-deb -x "$deb" "$work/root"; done
+        prefix="$work/root/usr" ;;
+    *) echo "usage: install_check.sh prefix|deb BUILD SRC WORK CLI HARNESS"; exit 2 ;;
+esac
+
+pc="$(find "$prefix" -name lidarflow.pc | head -1)"
+[ -n "$pc" ] || { echo "no lidarflow.pc under $prefix"; exit 1; }
+libdir="$(cd "$(dirname "$pc")/.." && pwd)"
+grep -q '^prefix=${pcfiledir}/' "$pc" || { echo "lidarflow.pc is not relative to itself:"; cat "$pc"; exit 1; }
+if grep -rqs -- "$build" "$prefix"/lib*/cmake "$pc"; then
+    echo "installed CMake/pkg-config files name the build tree"; exit 1
+fi
+
+# The tools start from the installed tree alone (RUNPATH relative to themselves).
+for tool in lidarflow lidarflow-lcm-bridge; do
+    exe="$prefix/bin/$tool"
+    [ -x "$exe" ] || { [ "$tool" = lidarflow-lcm-bridge ] && [ ! -e "$build/bridge" ] && continue
+                       echo "$exe missing"; exit 1; }
+    readelf -d "$exe" | grep -q 'RUNPATH.*\$ORIGIN/\.\./lib' || { echo "$exe: no RUNPATH \$ORIGIN/../lib"; exit 1; }
+    "$exe" --help >/dev/null || { echo "$exe does not start"; exit 1; }
+done
+
 export PKG_CONFIG_PATH="$libdir/pkgconfig"
-# The .pc file bakes in the configure-time prefix; point it at the scratch prefix.
-sed -i "s|^prefix=.*|prefix=$prefix|" "$libdir/pkgconfig/lidarflow.pc"
 cc -std=c99 -Wall -Wextra -Werror -pedantic "$src/consumer.c" -o "$work/consumer_pc" \
    $(pkg-config --cflags --libs lidarflow)
 cmake -S "$src" -B "$work/cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
@@ -45,4 +82,47 @@ for consumer in "$work/consumer_pc" "$work/cmake-build/consumer"; do
     done
     echo "$consumer: same disp_0, disp_1 and flow as lidarflow run"
 done
-echo "install check: ok"
+
+# LCM types: definitions, generated C (header + source) and C++ headers, used together.
+if [ -d "$prefix/share/lidarflow/lcm" ]; then
+    [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 5 ] || { echo "missing .lcm files"; exit 1; }
+    cc -std=c99 -c "$prefix/share/lidarflow/lcm/c/lidarflow_status_t.c" -I"$prefix/include/lidarflow/lcm" \
+       $(pkg-config --cflags lcm) -o "$work/lidarflow_status_t.o"
+    c++ -std=c++17 -Wall -Wextra -Werror "$src/lcm_types_consumer.cpp" "$work/lidarflow_status_t.o" \
+        -I"$prefix/include" -I"$prefix/include/lidarflow/lcm" $(pkg-config --cflags --libs lcm) \
+        -o "$work/lcm_types_consumer"
+    "$work/lcm_types_consumer"
+elif [ -e "$build/lcm_types" ]; then
+    echo "LCM build has no installed LCM types"; exit 1
+fi
+
+# Licence and notices are installed.
+if [ "$mode" = prefix ]; then
+    for f in LICENSE THIRD_PARTY_NOTICES.md; do
+        [ -s "$prefix/share/doc/lidarflow/$f" ] || { echo "share/doc/lidarflow/$f missing"; exit 1; }
+    done
+else
+    for deb in "${debs[@]}"; do
+        pkg="$(dpkg-deb -f "$deb" Package)"
+        grep -q "^License: Expat" "$prefix/share/doc/$pkg/copyright" || { echo "$pkg: no copyright"; exit 1; }
+    done
+fi
+
+# The README's install commands, verbatim, typed by a user in a checkout (scratch folder with
+# the checkout's examples/ and the build tree as build/) whose HOME is in WORK.
+if [ "$mode" = prefix ]; then
+    user="$work/user"; mkdir -p "$user/home"
+    ln -s "$build" "$user/build"; ln -s "$root/examples" "$user/examples"
+    awk '/<!-- install-check: begin -->/ {on=1; next} /<!-- install-check: end -->/ {on=0}
+         on && !/^```/' "$root/README.md" > "$work/readme_install.sh"
+    [ -s "$work/readme_install.sh" ] || { echo "README has no install-check block"; exit 1; }
+    # Debian's python3 (with python3-numpy) first, as on a fresh bookworm machine.
+    (cd "$user" && HOME="$user/home" PATH="/usr/bin:/bin:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
+        > "$work/readme_install.log" 2>&1 || { cat "$work/readme_install.log"; echo "README install commands failed"; exit 1; }
+    # capi_example twice (pkg-config, CMake), python_example once: each with the true motion.
+    [ "$(grep -c "mean flow u 4.00 px (truth 4)" "$work/readme_install.log")" -eq 2 ] &&
+        grep -q "mean u 4.00 px (truth 4)" "$work/readme_install.log" ||
+        { cat "$work/readme_install.log"; echo "README examples did not print the true motion"; exit 1; }
+    echo "README install commands: ok"
+fi
+echo "install check ($mode): ok"

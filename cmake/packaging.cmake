@@ -1,0 +1,123 @@
+# Debian packages (CPack DEB), one per install component (cmake/install.cmake):
+#   liblidarflow0          runtime   the C ABI library (named for its SONAME, Debian policy 8.1)
+#   liblidarflow-dev       dev       headers, liblidarflow.so, CMake package, pkg-config file
+#   lidarflow-tools        tools     lidarflow, lidarflow-lcm-bridge
+#   lidarflow-lcm-types    lcm       .lcm definitions, generated C and C++ types
+#   python3-lidarflow      python    the pure-Python binding in /usr/lib/python3/dist-packages
+# `tools/dev.sh package` (or `cpack -G DEB` in the build tree) writes them to build/packages/.
+# Run-time dependencies on system libraries come from dpkg-shlibdeps; the ones it cannot see
+# (between our own packages, Python, LCM headers) are declared below.
+
+set(LIDARFLOW_DEB_MAINTAINER "lidarflow maintainers <maintainers@lidarflow.invalid>" CACHE STRING
+    "Maintainer field of the Debian packages (the default is a placeholder: set a real address to publish)")
+set(LIDARFLOW_DEB_RELEASE 1 CACHE STRING "Debian revision of the packages")
+
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME lidarflow)
+set(CPACK_PACKAGE_VENDOR "The lidarflow authors")
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGE_CONTACT "${LIDARFLOW_DEB_MAINTAINER}")
+set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
+set(CPACK_PACKAGE_DIRECTORY ${PROJECT_BINARY_DIR}/packages)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_STRIP_FILES ON)
+
+set(CPACK_DEB_COMPONENT_INSTALL ON)
+set(CPACK_COMPONENTS_ALL runtime dev tools python)
+if(LIDARFLOW_WITH_LCM)
+  list(APPEND CPACK_COMPONENTS_ALL lcm)
+endif()
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_RELEASE ${LIDARFLOW_DEB_RELEASE})
+set(CPACK_DEBIAN_PACKAGE_HOMEPAGE "")
+set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# liblidarflow0's own shlibs file (and the ldconfig trigger CPack adds with it), so that
+# dpkg-shlibdeps can resolve the tools' dependency on it.
+set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
+set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY ">=")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+# ldconfig through dpkg's trigger, not CPack's default maintainer scripts that call it
+# directly (lintian: lacks-ldconfig-trigger, maintscript-calls-ldconfig). Providing postinst
+# and postrm stops CPack from generating its own.
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_CONTROL_EXTRA
+    ${PROJECT_SOURCE_DIR}/cmake/debian/triggers
+    ${PROJECT_SOURCE_DIR}/cmake/debian/postinst
+    ${PROJECT_SOURCE_DIR}/cmake/debian/postrm)
+# The tools need liblidarflow.so.0, which is in another package of the same build: let
+# dpkg-shlibdeps find it in the build tree (it has no shlibs information there, so CPack's
+# --ignore-missing-info applies); the dependency on liblidarflow0 is declared below.
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${PROJECT_BINARY_DIR}/capi)
+
+set(_lf_deb_version "${PROJECT_VERSION}-${LIDARFLOW_DEB_RELEASE}")
+set(_lf_description_tail
+"lidarflow computes dense scene flow (optical flow and disparity at two times\nfor every pixel) from a rectified stereo camera and a sparse LiDAR, an\nimplementation of LiDAR-Flow (IROS 2019) behind a stable C ABI.")
+
+macro(_lf_deb_component comp package section architecture summary)
+  string(TOUPPER ${comp} _C)
+  set(CPACK_DEBIAN_${_C}_PACKAGE_NAME ${package})
+  set(CPACK_DEBIAN_${_C}_PACKAGE_SECTION ${section})
+  if(${architecture} STREQUAL all)  # else CPack asks dpkg for the build machine's
+    set(CPACK_DEBIAN_${_C}_PACKAGE_ARCHITECTURE all)
+  endif()
+  # First line: the synopsis; CPack indents the rest and turns empty lines into " .".
+  set(CPACK_DEBIAN_${_C}_DESCRIPTION "${summary}\n${_lf_description_tail}\n\n${ARGN}")
+  # Debian policy 12.5/12.7: every package carries the licence and a changelog in its doc dir.
+  # EXCLUDE_FROM_ALL: only component installs (CPack) get these, not `cmake --install`.
+  install(FILES ${_lf_deb_dir}/copyright ${_lf_deb_dir}/changelog.Debian.gz
+          DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/${package} COMPONENT ${comp} EXCLUDE_FROM_ALL)
+endmacro()
+
+# copyright (machine-readable format) and changelog.Debian.gz, generated once per configuration.
+set(_lf_deb_dir ${PROJECT_BINARY_DIR}/debian)
+file(READ ${PROJECT_SOURCE_DIR}/LICENSE _lf_license)
+string(REGEX REPLACE "^MIT License\n\n[^\n]*\n\n" "" _lf_license "${_lf_license}")
+string(REGEX REPLACE "\n\n" "\n.\n" _lf_license "${_lf_license}")
+string(REGEX REPLACE "\n([^\n])" "\n \\1" _lf_license " ${_lf_license}")
+string(REGEX REPLACE "\n$" "" _lf_license "${_lf_license}")
+file(WRITE ${_lf_deb_dir}/copyright
+"Format: https://www.debian.org/doc/packaging-manuals/copyright-format/1.0/
+Upstream-Name: lidarflow
+Upstream-Contact: ${LIDARFLOW_DEB_MAINTAINER}
+Comment: The binaries link OpenCV (Apache-2.0), libgomp (GPL-3+ with the GCC
+ Runtime Library Exception), LCM and GLib (LGPL-2.1) dynamically and contain
+ template code of Eigen 3.4 (MPL-2.0, unmodified; see
+ /usr/share/common-licenses/MPL-2.0). See THIRD_PARTY_NOTICES.md in the source.
+
+Files: *
+Copyright: 2026 The lidarflow authors
+License: Expat
+${_lf_license}
+")
+string(TIMESTAMP _lf_deb_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+file(WRITE ${_lf_deb_dir}/changelog.Debian
+"lidarflow (${_lf_deb_version}) unstable; urgency=medium
+
+  * Binary packages built from the lidarflow source tree with CPack.
+
+ -- ${LIDARFLOW_DEB_MAINTAINER}  ${_lf_deb_date}
+")
+execute_process(COMMAND gzip -9nf ${_lf_deb_dir}/changelog.Debian RESULT_VARIABLE _lf_gzip_rc)
+if(NOT _lf_gzip_rc EQUAL 0)
+  message(FATAL_ERROR "gzip failed on ${_lf_deb_dir}/changelog.Debian")
+endif()
+
+_lf_deb_component(runtime liblidarflow0 libs any "dense scene flow from stereo and sparse LiDAR - library"
+  "This package holds the shared library with the C ABI.")
+_lf_deb_component(dev liblidarflow-dev libdevel any "dense scene flow from stereo and sparse LiDAR - development files"
+  "This package holds the C header, the CMake package (find_package(lidarflow))\nand the pkg-config file.")
+_lf_deb_component(tools lidarflow-tools science any "dense scene flow from stereo and sparse LiDAR - tools"
+  "This package holds the command-line program lidarflow and the LCM bridge\nlidarflow-lcm-bridge.")
+_lf_deb_component(python python3-lidarflow python all "dense scene flow from stereo and sparse LiDAR - Python 3"
+  "This package holds the Python 3 binding (ctypes and NumPy).")
+set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS "liblidarflow0 (= ${_lf_deb_version})")
+set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "python3, python3-numpy, liblidarflow0 (= ${_lf_deb_version})")
+# The tools are built from the same tree as the library: the exact version, not just >=.
+set(CPACK_DEBIAN_TOOLS_PACKAGE_DEPENDS "liblidarflow0 (= ${_lf_deb_version})")
+if(LIDARFLOW_WITH_LCM)
+  _lf_deb_component(lcm lidarflow-lcm-types libdevel all "dense scene flow from stereo and sparse LiDAR - LCM types"
+    "This package holds the LCM message definitions of the lidarflow channels and\nthe C and C++ code lcm-gen generates from them.")
+  set(CPACK_DEBIAN_LCM_PACKAGE_DEPENDS "liblcm-dev")
+endif()
+
+include(CPack)

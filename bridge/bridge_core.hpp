@@ -96,6 +96,9 @@ public:
     // run_once() thread only.
     void stop();
 
+    // Publishes a status now, besides the periodic ones (offline replay keeps its own clock).
+    void publish_status_now() { publish_status(); }
+
     Counters counters() const;
     // True when no frame is queued or being worked on and no result awaits publication.
     bool idle() const;

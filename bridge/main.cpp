@@ -2,6 +2,7 @@
 // publishes the scene flow and a status heartbeat. Uses only lidarflow's C ABI.
 #include <signal.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -21,14 +22,16 @@ void on_signal(int) { g_stop = 1; }
 const char *kUsage =
     "usage: lidarflow-lcm-bridge [options]\n"
     "  --lcm-url URL            LCM provider (default: $LCM_DEFAULT_URL or LCM's default)\n"
-    "  --stereo-channel NAME    stereo_t input (default LIDARFLOW_STEREO)\n"
-    "  --lidar-channel NAME     lidar_t input (default LIDARFLOW_LIDAR)\n"
+    "  --stereo-channel NAME    stereo_t or bot_core.images_t input (default LIDARFLOW_STEREO)\n"
+    "  --lidar-channel NAME     lidar_t or bot_core.pointcloud_t input (default LIDARFLOW_LIDAR)\n"
     "  --calib-channel NAME     calibration_t input (default LIDARFLOW_CALIB)\n"
     "  --flow-channel NAME      scene_flow_t output (default LIDARFLOW_FLOW)\n"
     "  --status-channel NAME    status_t output (default LIDARFLOW_STATUS)\n"
     "  --calib FILE             fixed calibration (KITTI calib_cam_to_cam.txt); default: from the channel\n"
     "  --lidar-tolerance-ms T   pair a LiDAR sweep with the stereo frame within T ms (default 20)\n"
     "  --lidar-wait-ms T        wait up to T ms for a sweep that arrives after its frame (default 30)\n"
+    "  --lidar-to-camera M      LiDAR -> left rectified camera, 16 numbers (row-major 4x4, comma- or\n"
+    "                           space-separated) for bot_core.pointcloud_t sweeps (LiDAR frame)\n"
     "  --lidar-buffer N         sweeps kept for pairing (default 8)\n"
     "  --queue N                frames waiting for the estimator, latest wins (default 1)\n"
     "  --encoding E             float32 | int16 (1/64 px fixed point; default)\n"
@@ -126,6 +129,23 @@ int main(int argc, char **argv) {
         else if (a == "--flow-channel") config.flow_channel = v;
         else if (a == "--status-channel") config.status_channel = v;
         else if (a == "--calib") calib_file = v;
+        else if (a == "--lidar-to-camera") {
+            std::string text = v;
+            std::replace(text.begin(), text.end(), ',', ' ');
+            char *p = &text[0];
+            int n = 0;
+            for (char *end = nullptr; n < 16; ++n, p = end) {
+                errno = 0;
+                config.lidar_to_camera[n] = std::strtod(p, &end);
+                if (end == p || errno != 0) break;
+            }
+            while (*p == ' ') ++p;
+            if (n != 16 || *p != '\0') {
+                std::fprintf(stderr, "lidarflow-lcm-bridge: --lidar-to-camera %s: expected 16 numbers\n", v);
+                return 2;
+            }
+            config.have_lidar_to_camera = true;
+        }
         else if (a == "--lidar-tolerance-ms") config.lidar_tolerance_us = static_cast<int64_t>(1000 * need_number(0, 1e6));
         else if (a == "--lidar-wait-ms") config.lidar_wait_ms = static_cast<int>(need_number(0, 10000));
         else if (a == "--lidar-buffer") config.lidar_buffer = static_cast<int>(need_number(1, 1000));

@@ -92,6 +92,13 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16";
         return nullptr;
     }
+    if (config.have_lidar_to_camera) {
+        const std::string why = check_lidar_to_camera(config.lidar_to_camera);
+        if (!why.empty()) {
+            *error = why;
+            return nullptr;
+        }
+    }
     std::unique_ptr<Bridge> b(new Bridge(config, lcm));
     if (lf_options_create(&b->options_) != LF_OK) {
         *error = std::string("estimator options: ") + lf_last_error(nullptr);
@@ -174,7 +181,10 @@ void Bridge::on_calibration(const lcm_recv_buf_t *rbuf, const char *, void *self
 
 void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     auto frame = std::make_unique<Frame>();
-    const std::string err = decode_stereo(rbuf->data, rbuf->data_size, frame->stereo);
+    // Per message by fingerprint: a channel may carry either type (and a driver may be swapped).
+    const std::string err = message_fingerprint(rbuf->data, rbuf->data_size) == __bot_core_images_t_get_hash()
+                                ? decode_bot_images(rbuf->data, rbuf->data_size, frame->stereo)
+                                : decode_stereo(rbuf->data, rbuf->data_size, frame->stereo);
     frame->received_seconds = monotonic_seconds();
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.stereo_received;
@@ -186,7 +196,7 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
         return;
     }
     const lidarflow_stereo_t &m = frame->stereo.msg();
-    count_transport_gap(m.frame_number);
+    if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
     if (config_.fixed_calibration) {
         frame->calibration = config_.calibration;
     } else if (!have_calibration_) {
@@ -241,7 +251,11 @@ void Bridge::count_transport_gap(int64_t frame_number) {
 
 void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
     auto sweep = std::make_shared<LidarSweep>();
-    const std::string err = decode_lidar(rbuf->data, rbuf->data_size, *sweep);
+    const std::string err =
+        message_fingerprint(rbuf->data, rbuf->data_size) == __bot_core_pointcloud_t_get_hash()
+            ? decode_bot_pointcloud(rbuf->data, rbuf->data_size,
+                                    config_.have_lidar_to_camera ? config_.lidar_to_camera : nullptr, *sweep)
+            : decode_lidar(rbuf->data, rbuf->data_size, *sweep);
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.lidar_received;
     if (!err.empty()) {

@@ -39,6 +39,10 @@ struct BridgeConfig {
     // A fixed calibration (--calib); when set, calibration messages are counted but not used.
     bool fixed_calibration = false;
     lf_calibration_t calibration{};
+    // LiDAR -> left rectified camera (row-major 4x4) for bot_core.pointcloud_t sweeps, which
+    // carry points in the LiDAR frame and no transform (lidar_t carries its own).
+    bool have_lidar_to_camera = false;
+    double lidar_to_camera[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     int64_t lidar_tolerance_us = 20000;  // |t_lidar - t_stereo| for pairing
     int lidar_wait_ms = 30;              // how long a frame waits for a late LiDAR sweep
     int lidar_buffer = 8;                // LiDAR sweeps kept for pairing (oldest dropped)
@@ -95,6 +99,9 @@ public:
     // dropped_shutdown, publishes the remaining results and a final status. Idempotent; the
     // run_once() thread only.
     void stop();
+
+    // Publishes a status now, besides the periodic ones (offline replay keeps its own clock).
+    void publish_status_now() { publish_status(); }
 
     Counters counters() const;
     // True when no frame is queued or being worked on and no result awaits publication.

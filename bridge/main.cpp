@@ -2,6 +2,7 @@
 // publishes the scene flow and a status heartbeat. Uses only lidarflow's C ABI.
 #include <signal.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
+#include "replay.hpp"
 
 namespace {
 
@@ -20,14 +22,16 @@ void on_signal(int) { g_stop = 1; }
 const char *kUsage =
     "usage: lidarflow-lcm-bridge [options]\n"
     "  --lcm-url URL            LCM provider (default: $LCM_DEFAULT_URL or LCM's default)\n"
-    "  --stereo-channel NAME    stereo_t input (default LIDARFLOW_STEREO)\n"
-    "  --lidar-channel NAME     lidar_t input (default LIDARFLOW_LIDAR)\n"
+    "  --stereo-channel NAME    stereo_t or bot_core.images_t input (default LIDARFLOW_STEREO)\n"
+    "  --lidar-channel NAME     lidar_t or bot_core.pointcloud_t input (default LIDARFLOW_LIDAR)\n"
     "  --calib-channel NAME     calibration_t input (default LIDARFLOW_CALIB)\n"
     "  --flow-channel NAME      scene_flow_t output (default LIDARFLOW_FLOW)\n"
     "  --status-channel NAME    status_t output (default LIDARFLOW_STATUS)\n"
     "  --calib FILE             fixed calibration (KITTI calib_cam_to_cam.txt); default: from the channel\n"
     "  --lidar-tolerance-ms T   pair a LiDAR sweep with the stereo frame within T ms (default 20)\n"
     "  --lidar-wait-ms T        wait up to T ms for a sweep that arrives after its frame (default 30)\n"
+    "  --lidar-to-camera M      LiDAR -> left rectified camera, 16 numbers (row-major 4x4, comma- or\n"
+    "                           space-separated) for bot_core.pointcloud_t sweeps (LiDAR frame)\n"
     "  --lidar-buffer N         sweeps kept for pairing (default 8)\n"
     "  --queue N                frames waiting for the estimator, latest wins (default 1)\n"
     "  --encoding E             float32 | int16 (1/64 px fixed point; default)\n"
@@ -36,6 +40,11 @@ const char *kUsage =
     "                           to the number of CPUs\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
+    "  --replay IN.log --out OUT.log\n"
+    "                           offline: every frame of the LCM log IN.log in log order at the\n"
+    "                           estimator's pace (no network, nothing stale), results and status into\n"
+    "                           OUT.log on IN.log's clock (--status-period in log seconds); exit 3\n"
+    "                           and a line per frame when a frame was not processed\n"
     "  --version                print the lidarflow library version and exit\n"
     "  --help\n"
     "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n";
@@ -47,12 +56,42 @@ bool number(const char *s, double *out) {
     return errno == 0 && end != s && *end == '\0';
 }
 
+// --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
+// 1 when the logs cannot be read or written.
+int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out) {
+    using namespace lidarflow::bridge;
+    ReplayReport r;
+    const double t0 = monotonic_seconds();
+    const std::string err = run_replay(config, in, out, &r, &g_stop);
+    const double seconds = monotonic_seconds() - t0;
+    if (!err.empty()) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: replay of %s: %s\n", in.c_str(), err.c_str());
+        return 1;
+    }
+    const Counters &c = r.counters;
+    for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
+    if (r.stereo_not_replayed)
+        std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",
+                     (long long)r.stereo_not_replayed);
+    std::fprintf(stderr,
+                 "lidarflow-lcm-bridge: replayed %s -> %s in %.1f s: %lld events (stereo %lld, lidar %lld, "
+                 "calibration %lld, other channels %lld, left out); stereo processed %lld, dropped %lld, missing "
+                 "from the log %lld; lidar malformed %lld, rejected %lld; calibration malformed %lld; %lld results, "
+                 "%lld status messages written\n",
+                 in.c_str(), out.c_str(), seconds, (long long)r.events, (long long)r.stereo_events,
+                 (long long)r.lidar_events, (long long)r.calibration_events, (long long)r.other_events,
+                 (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
+                 (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
+                 (long long)r.flows_written, (long long)r.status_written);
+    return r.lost.empty() && r.stereo_not_replayed == 0 ? 0 : 3;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
     using namespace lidarflow::bridge;
     BridgeConfig config;
-    std::string url, calib_file;
+    std::string url, calib_file, replay_in, replay_out;
     bool threads_given = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -82,12 +121,31 @@ int main(int argc, char **argv) {
             return x;
         };
         if (a == "--lcm-url") url = v;
+        else if (a == "--replay") replay_in = v;
+        else if (a == "--out") replay_out = v;
         else if (a == "--stereo-channel") config.stereo_channel = v;
         else if (a == "--lidar-channel") config.lidar_channel = v;
         else if (a == "--calib-channel") config.calibration_channel = v;
         else if (a == "--flow-channel") config.flow_channel = v;
         else if (a == "--status-channel") config.status_channel = v;
         else if (a == "--calib") calib_file = v;
+        else if (a == "--lidar-to-camera") {
+            std::string text = v;
+            std::replace(text.begin(), text.end(), ',', ' ');
+            char *p = &text[0];
+            int n = 0;
+            for (char *end = nullptr; n < 16; ++n, p = end) {
+                errno = 0;
+                config.lidar_to_camera[n] = std::strtod(p, &end);
+                if (end == p || errno != 0) break;
+            }
+            while (*p == ' ') ++p;
+            if (n != 16 || *p != '\0') {
+                std::fprintf(stderr, "lidarflow-lcm-bridge: --lidar-to-camera %s: expected 16 numbers\n", v);
+                return 2;
+            }
+            config.have_lidar_to_camera = true;
+        }
         else if (a == "--lidar-tolerance-ms") config.lidar_tolerance_us = static_cast<int64_t>(1000 * need_number(0, 1e6));
         else if (a == "--lidar-wait-ms") config.lidar_wait_ms = static_cast<int>(need_number(0, 10000));
         else if (a == "--lidar-buffer") config.lidar_buffer = static_cast<int>(need_number(1, 1000));
@@ -126,16 +184,22 @@ int main(int argc, char **argv) {
         config.fixed_calibration = true;
     }
 
-    lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
-    if (!lcm) {
-        std::fprintf(stderr, "lidarflow-lcm-bridge: cannot open LCM '%s'\n", url.c_str());
-        return 1;
+    if (replay_in.empty() != replay_out.empty() || (!replay_in.empty() && !url.empty())) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --replay and --out go together, and without --lcm-url\n");
+        return 2;
     }
     struct sigaction sa;
     std::memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    if (!replay_in.empty()) return replay(config, replay_in, replay_out);
+
+    lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
+    if (!lcm) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: cannot open LCM '%s'\n", url.c_str());
+        return 1;
+    }
 
     std::string error;
     int rc = 0;

@@ -18,6 +18,8 @@
 #include "lidarflow_scene_flow_t.h"
 #include "lidarflow_status_t.h"
 #include "lidarflow_stereo_t.h"
+#include "bot_core_images_t.h"
+#include "bot_core_pointcloud_t.h"
 
 namespace lidarflow::bridge {
 
@@ -33,11 +35,38 @@ public:
     lf_image_t left() const;
     lf_image_t right() const;
 
+    // False for sources without a publisher counter (bot_core.images_t): no transport-gap count.
+    bool has_frame_number() const { return has_frame_number_; }
+
 private:
     friend std::string decode_stereo(const void *, size_t, StereoMessage &);
+    friend std::string decode_bot_images(const void *, size_t, StereoMessage &);
     lidarflow_stereo_t msg_{};
-    bool decoded_ = false;
+    bool decoded_ = false;             // msg_ arrays from lcm-gen's decoder
+    std::vector<uint8_t> owned_;       // else msg_.left/right point here
+    bool has_frame_number_ = true;
 };
+
+struct LidarSweep;
+
+// The fingerprint (first 8 bytes) of a raw message; 0 when it is shorter.
+int64_t message_fingerprint(const void *data, size_t size);
+
+// Decodes and checks a raw bot_core.images_t: exactly one image tagged LEFT and one RIGHT (others,
+// e.g. DISPARITY, are ignored), both GRAY, RGB or BGR of the same size and format, the whole
+// message walked against its declared lengths (nested metadata included) before anything is
+// read. The pair becomes a stereo frame of sequence 0 at images_t.utime, packed rows, without a
+// frame number. Returns "" or the problem; `out` (fresh) then holds nothing.
+std::string decode_bot_images(const void *data, size_t size, StereoMessage &out);
+
+// Checks a row-major 4x4 LiDAR -> camera transform: finite, last row 0 0 0 1. "" or the problem.
+std::string check_lidar_to_camera(const double *T);
+
+// Decodes and checks a raw bot_core.pointcloud_t (sizes walked as above, finite points) and
+// moves its points into the camera frame with `lidar_to_camera` (row-major 4x4, checked with
+// check_lidar_to_camera; nullptr: the message is refused, as the bridge then has no transform).
+// Per-point channels are ignored. Returns "" or the problem; `out` is then unchanged.
+std::string decode_bot_pointcloud(const void *data, size_t size, const double *lidar_to_camera, LidarSweep &out);
 
 // Decodes and checks a raw stereo_t into `out` (which must be fresh). Returns "" on success,
 // else one line saying what is wrong (truncated, wrong size, bad fingerprint, inconsistent

@@ -4,12 +4,18 @@
 //       the C ABI's result for the inputs it names; the last status_t must account for every
 //       stereo message (received = processed + dropped, nothing queued) and have received all
 //       stereo messages in the log.
+//   log_check verify OUT.log --inputs IN.log [...]
+//       The same for a log of outputs only (lidarflow-lcm-bridge --replay IN.log --out OUT.log):
+//       the inputs come from IN.log.
+//   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
+//       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
 //       Replays LOG's input messages into an in-process bridge over memq://, one frame at a
 //       time (waiting for the bridge), and checks every result as above; no frame may drop.
 #include <lcm/eventlog.h>
 #include <lcm/lcm.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -99,6 +105,37 @@ int main(int argc, char **argv) {
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
+    if (mode == "edit") {
+        if (argc < 4) return 2;
+        std::map<std::string, std::vector<int>> drop;  // channel -> event indices
+        for (int i = 4; i + 1 < argc; i += 2) {
+            const std::string a = argv[i], v = argv[i + 1];
+            const size_t colon = v.rfind(':');
+            if (a != "--drop" || colon == std::string::npos) {
+                std::fprintf(stderr, "log_check: bad argument %s %s\n", a.c_str(), v.c_str());
+                return 2;
+            }
+            drop[v.substr(0, colon)].push_back(std::atoi(v.c_str() + colon + 1));
+        }
+        lcm_eventlog_t *in = lcm_eventlog_create(path.c_str(), "r");
+        lcm_eventlog_t *out = lcm_eventlog_create(argv[3], "w");
+        if (!in || !out) return 1;
+        std::map<std::string, int> seen;
+        int dropped = 0;
+        while (lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(in)) {
+            const std::string channel(e->channel, e->channellen);
+            const int index = seen[channel]++;
+            const auto &d = drop[channel];
+            if (std::find(d.begin(), d.end(), index) != d.end()) ++dropped;
+            else if (lcm_eventlog_write_event(out, e) != 0) return 1;
+            lcm_eventlog_free_event(e);
+        }
+        lcm_eventlog_destroy(in);
+        lcm_eventlog_destroy(out);
+        std::printf("log_check: %d event(s) left out\n", dropped);
+        return 0;
+    }
+    std::string inputs_path;
     std::vector<std::pair<std::string, std::string>> options;
     int min_results = 1, step = 1;
     FlowEncoding encoding = FlowEncoding::Int16;
@@ -106,6 +143,7 @@ int main(int argc, char **argv) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--option" && v.find('=') != std::string::npos)
             options.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
+        else if (a == "--inputs") inputs_path = v;
         else if (a == "--min-results") min_results = std::atoi(v.c_str());
         else if (a == "--step") step = std::atoi(v.c_str());
         else if (a == "--encoding" && parse_flow_encoding(v, &encoding)) {
@@ -118,6 +156,16 @@ int main(int argc, char **argv) {
     if (!read_log(path, events)) {
         std::fprintf(stderr, "log_check: cannot read %s\n", path.c_str());
         return 1;
+    }
+    // Inputs from another log: they precede the outputs (only their order among themselves and
+    // the outputs' among themselves matters below).
+    if (!inputs_path.empty()) {
+        std::vector<Event> inputs;
+        if (!read_log(inputs_path, inputs)) {
+            std::fprintf(stderr, "log_check: cannot read %s\n", inputs_path.c_str());
+            return 1;
+        }
+        events.insert(events.begin(), inputs.begin(), inputs.end());
     }
     int64_t stereo_in_log = 0;
     for (const Event &e : events) stereo_in_log += e.channel == "LIDARFLOW_STEREO";

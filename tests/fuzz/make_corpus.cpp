@@ -93,6 +93,41 @@ void lcm_seeds() {
         save("fuzz_lcm_lidar", frame_names[f], encode(m, lidarflow_lidar_t_encoded_size, lidarflow_lidar_t_encode));
     }
 
+    // bot_core.images_t: a padded gray pair with a metadata entry on the left image; a
+    // bot_core.pointcloud_t of 3 points with an intensity channel (lcm-gen's encoder).
+    {
+        uint8_t pixels[2][3 * 6];
+        for (int k = 0; k < 2; ++k)
+            for (int i = 0; i < 18; ++i) pixels[k][i] = static_cast<uint8_t>(11 * i + 50 * k);
+        char key[] = "gain";
+        uint8_t value[] = {4};
+        bot_core_image_metadata_t meta{key, 1, value};
+        bot_core_image_t ims[2]{};
+        for (int k = 0; k < 2; ++k) {
+            ims[k].utime = 1000;
+            ims[k].width = 4;
+            ims[k].height = 3;
+            ims[k].row_stride = 6;
+            ims[k].pixelformat = BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY;
+            ims[k].size = 18;
+            ims[k].data = pixels[k];
+            ims[k].nmetadata = k == 0 ? 1 : 0;
+            ims[k].metadata = &meta;
+        }
+        int16_t roles[2] = {BOT_CORE_IMAGES_T_LEFT, BOT_CORE_IMAGES_T_RIGHT};
+        bot_core_images_t m{1000, 2, roles, ims};
+        save("fuzz_lcm_bot_images", "gray_4x3_padded", encode(m, bot_core_images_t_encoded_size, bot_core_images_t_encode));
+        float p[3][3] = {{10, 1, -1}, {20, -2, 0.5f}, {5, 0, 0}};
+        float *rows[3] = {p[0], p[1], p[2]};
+        float intensity[3] = {0.1f, 0.2f, 0.3f};
+        float *channels[1] = {intensity};
+        char frame[] = "velodyne", name[] = "intensity";
+        char *names[1] = {name};
+        bot_core_pointcloud_t c{2000, 1, frame, 3, rows, 1, names, channels};
+        save("fuzz_lcm_bot_pointcloud", "three_points",
+             encode(c, bot_core_pointcloud_t_encoded_size, bot_core_pointcloud_t_encode));
+    }
+
     // calibration_t: KITTI-like, for a fixed size and for any size.
     lf_calibration_t cal;
     lf_calibration_init(&cal);

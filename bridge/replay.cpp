@@ -1,0 +1,248 @@
+#include "replay.hpp"
+
+#include <lcm/eventlog.h>
+
+#include <algorithm>
+#include <cinttypes>
+#include <cstdarg>
+#include <cstdio>
+#include <deque>
+#include <memory>
+
+namespace lidarflow::bridge {
+namespace {
+
+std::string fmt(const char *format, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char *format, ...) {
+    char buf[512];
+    va_list ap;
+    va_start(ap, format);
+    std::vsnprintf(buf, sizeof buf, format, ap);
+    va_end(ap);
+    return buf;
+}
+
+struct EventDeleter {
+    void operator()(lcm_eventlog_event_t *e) const { lcm_eventlog_free_event(e); }
+};
+using EventPtr = std::unique_ptr<lcm_eventlog_event_t, EventDeleter>;
+
+// Events in log order, read lazily: the look-ahead for late LiDAR sweeps reads only as far as
+// the wait reaches, so a long log is never held in memory.
+class LogReader {
+public:
+    explicit LogReader(lcm_eventlog_t *log) : log_(log) {}
+    // The i-th pending event (0 = next), reading as needed; nullptr past the end.
+    struct Pending {
+        EventPtr event;
+        bool fed = false;  // handed over early (look-ahead)
+    };
+    Pending *peek(size_t i) {
+        while (pending_.size() <= i && !eof_) {
+            lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(log_);
+            if (!e) {
+                eof_ = true;
+                break;
+            }
+            pending_.push_back({EventPtr(e), false});
+        }
+        return i < pending_.size() ? &pending_[i] : nullptr;
+    }
+    void pop() { pending_.pop_front(); }
+
+private:
+    lcm_eventlog_t *log_;
+    std::deque<Pending> pending_;
+    bool eof_ = false;
+};
+
+struct Output {
+    lcm_eventlog_t *log = nullptr;
+    int64_t now = 0;  // log clock: timestamp of the input event being handled
+    int64_t flows = 0, status = 0, failures = 0;
+    std::string flow_channel;
+};
+
+void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
+    auto *out = static_cast<Output *>(user);
+    lcm_eventlog_event_t e{};
+    e.timestamp = out->now;
+    e.channellen = static_cast<int32_t>(std::char_traits<char>::length(channel));
+    e.datalen = static_cast<int32_t>(rbuf->data_size);
+    e.channel = const_cast<char *>(channel);
+    e.data = rbuf->data;
+    if (lcm_eventlog_write_event(out->log, &e) != 0) {
+        ++out->failures;
+        return;
+    }
+    if (out->flow_channel == channel) ++out->flows;
+    else ++out->status;
+}
+
+const char *drop_reason(const Counters &a, const Counters &b) {
+    if (b.dropped_stale > a.dropped_stale) return "stale";
+    if (b.dropped_out_of_order > a.dropped_out_of_order) return "out of order";
+    if (b.dropped_no_calibration > a.dropped_no_calibration) return "no calibration";
+    if (b.dropped_calibration_mismatch > a.dropped_calibration_mismatch) return "calibration mismatch";
+    if (b.dropped_malformed > a.dropped_malformed) return "malformed";
+    if (b.dropped_estimator_error > a.dropped_estimator_error) return "estimator error";
+    if (b.dropped_shutdown > a.dropped_shutdown) return "shutdown";
+    return "?";
+}
+
+}  // namespace
+
+std::string run_replay(const BridgeConfig &config_in, const std::string &in_path, const std::string &out_path,
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop) {
+    *report = ReplayReport();
+    BridgeConfig config = config_in;
+    const double status_period_s = config.status_period_s;
+    const int64_t lidar_wait_us = static_cast<int64_t>(config.lidar_wait_ms) * 1000;
+    config.status_period_s = 0;  // driven on the log's clock below
+    config.lidar_wait_ms = 0;    // the look-ahead replaces the wait, deterministically
+
+    lcm_eventlog_t *in = lcm_eventlog_create(in_path.c_str(), "r");
+    if (!in) return "cannot read the log " + in_path;
+    Output out;
+    out.flow_channel = config.flow_channel;
+    out.log = lcm_eventlog_create(out_path.c_str(), "w");
+    if (!out.log) {
+        lcm_eventlog_destroy(in);
+        return "cannot write the log " + out_path;
+    }
+    lcm_t *lcm = lcm_create("memq://");
+    if (!lcm) {
+        lcm_eventlog_destroy(in);
+        lcm_eventlog_destroy(out.log);
+        return "cannot create an in-process LCM (memq://)";
+    }
+    std::string error;
+    {
+        std::unique_ptr<Bridge> bridge = Bridge::create(config, lcm, &error);
+        lcm_subscription_t *subs[2] = {nullptr, nullptr};
+        if (bridge) {
+            subs[0] = lcm_subscribe(lcm, config.flow_channel.c_str(), write_output, &out);
+            subs[1] = lcm_subscribe(lcm, config.status_channel.c_str(), write_output, &out);
+            if (!subs[0] || !subs[1]) error = "cannot subscribe to the output channels";
+        }
+        auto handled = [&] {
+            const Counters c = bridge->counters();
+            return c.stereo_received + c.lidar_received + c.calibration_received;
+        };
+        // Until the bridge has taken `target` input messages, its worker is idle and every
+        // output it published is in the log.
+        auto settle = [&](int64_t target) {
+            for (;;) {
+                if (bridge->run_once(10) != 0) return false;
+                const Counters c = bridge->counters();
+                if (handled() >= target && bridge->idle() && out.flows == c.results_published &&
+                    out.status == c.status_published)
+                    return true;
+            }
+        };
+        auto feed = [&](const lcm_eventlog_event_t &e) {
+            const std::string channel(e.channel, static_cast<size_t>(e.channellen));
+            const int64_t target = handled() + 1;
+            if (lcm_publish(lcm, channel.c_str(), e.data, static_cast<unsigned>(e.datalen)) != 0) {
+                error = fmt("handing event %" PRId64 " to the bridge failed", e.eventnum);
+                return false;
+            }
+            if (!settle(target)) {
+                error = "LCM receive failed";
+                return false;
+            }
+            return true;
+        };
+        LogReader reader(in);
+        double next_status = -1;
+        while (error.empty()) {
+            LogReader::Pending *p = reader.peek(0);
+            if (!p) break;
+            if (stop && *stop) {
+                for (size_t i = 0; (p = reader.peek(i)); ++i)
+                    report->stereo_not_replayed +=
+                        !p->fed && config.stereo_channel == std::string(p->event->channel, p->event->channellen);
+                break;
+            }
+            EventPtr event = std::move(p->event);
+            const bool fed_early = p->fed;
+            reader.pop();
+            ++report->events;
+            const std::string channel(event->channel, static_cast<size_t>(event->channellen));
+            out.now = std::max(out.now, event->timestamp);
+            if (channel == config.lidar_channel) {
+                ++report->lidar_events;
+                if (!fed_early) feed(*event);
+            } else if (channel == config.calibration_channel) {
+                ++report->calibration_events;
+                feed(*event);
+            } else if (channel == config.stereo_channel) {
+                ++report->stereo_events;
+                // Sweeps logged shortly after the frame reach the live bridge while the frame
+                // waits for them; hand them over first.
+                for (size_t i = 0; error.empty(); ++i) {
+                    LogReader::Pending *q = reader.peek(i);
+                    if (!q || q->event->timestamp > event->timestamp + lidar_wait_us) break;
+                    if (!q->fed && config.lidar_channel == std::string(q->event->channel, q->event->channellen)) {
+                        feed(*q->event);
+                        q->fed = true;
+                    }
+                }
+                const Counters before = bridge->counters();
+                if (!feed(*event)) break;
+                const Counters after = bridge->counters();
+                StereoMessage m;
+                const bool decodable = decode_stereo(event->data, static_cast<size_t>(event->datalen), m).empty();
+                const std::string which =
+                    decodable ? fmt("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
+                                    ", log event %" PRId64 ")",
+                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->eventnum)
+                              : fmt("stereo log event %" PRId64, event->eventnum);
+                if (after.dropped() > before.dropped()) {
+                    // last_error is this frame's only for the reasons that set it.
+                    const bool own_error = after.dropped_malformed > before.dropped_malformed ||
+                                           after.dropped_estimator_error > before.dropped_estimator_error;
+                    report->lost.push_back(fmt("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
+                                               own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
+                }
+                if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
+                    report->lost.push_back(
+                        fmt("%" PRId64 " frame(s) missing from the log before %s",
+                            after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
+            } else {
+                ++report->other_events;
+            }
+            if (status_period_s > 0 && error.empty()) {
+                if (next_status < 0) next_status = static_cast<double>(out.now) + 1e6 * status_period_s;
+                if (static_cast<double>(out.now) >= next_status) {
+                    bridge->publish_status_now();
+                    while (next_status <= static_cast<double>(out.now)) next_status += 1e6 * status_period_s;
+                    settle(handled());
+                }
+            }
+        }
+        if (bridge) {
+            bridge->stop();  // publishes what is left and the final status
+            // run_once() is done after stop(); deliver the memq queue to the writers directly.
+            for (int i = 0; i < 100; ++i) {
+                const Counters c = bridge->counters();
+                if (out.flows == c.results_published && out.status == c.status_published) break;
+                lcm_handle_timeout(lcm, 10);
+            }
+            report->counters = bridge->counters();
+        }
+        for (lcm_subscription_t *s : subs)
+            if (s) lcm_unsubscribe(lcm, s);
+    }
+    lcm_destroy(lcm);
+    lcm_eventlog_destroy(in);
+    lcm_eventlog_destroy(out.log);
+    report->flows_written = out.flows;
+    report->status_written = out.status;
+    if (error.empty() && out.failures) error = fmt("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());
+    if (error.empty() && out.flows != report->counters.results_published)
+        error = fmt("%" PRId64 " results published, %" PRId64 " written", report->counters.results_published, out.flows);
+    return error;
+}
+
+}  // namespace lidarflow::bridge

@@ -1,0 +1,40 @@
+#pragma once
+// Offline replay: an LCM log in, a result log out, at the estimator's pace.
+//
+// The log's input events are handed one at a time to an ordinary Bridge over an in-process
+// memq:// LCM, and the next one only once the bridge has handled it, the worker is idle and its
+// outputs are written. So no frame can go stale, and every decision (pairing, calibration in
+// force, order checks, drops for bad input) is the live bridge's own code. Outputs (scene_flow_t
+// and status_t) go into a new log with the input log's clock: a result gets the log time of the
+// stereo event that completed its pair, so lcm-logplayer plays results in step with the inputs.
+#include <cstdint>
+#include <csignal>
+#include <string>
+#include <vector>
+
+#include "bridge_core.hpp"
+
+namespace lidarflow::bridge {
+
+struct ReplayReport {
+    int64_t events = 0;         // events read from the input log
+    int64_t stereo_events = 0, lidar_events = 0, calibration_events = 0;
+    int64_t other_events = 0;   // on channels the bridge does not take (left out)
+    int64_t flows_written = 0, status_written = 0;
+    int64_t stereo_not_replayed = 0;  // left when interrupted
+    // One line per stereo frame that did not reach the estimator, or frames missing from the
+    // log (gaps in frame_number); empty when every frame was processed.
+    std::vector<std::string> lost;
+    Counters counters;          // the bridge's final counters
+};
+
+// Replays `in_path` into `out_path` (created or truncated) through a bridge configured by
+// `config` (channels, calibration, estimator options, ...; its lcm URL is irrelevant).
+// status_period_s counts log time here. A LiDAR sweep logged up to config.lidar_wait_ms after
+// a stereo frame is handed over before that frame (as the live bridge would wait for it).
+// `stop` (optional) is polled between events, e.g. set by SIGINT. Returns "" when the replay
+// ran to the end (frames may still be lost: see report->lost), else the reason it could not.
+std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr);
+
+}  // namespace lidarflow::bridge

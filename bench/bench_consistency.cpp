@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stages 2-3 (consistency check, clustering, sparsification) on real KITTI frames: seconds and
 // peak memory per frame, and the est-only KITTI scores after each step (Table I rows
 // "Disp+LiDAR", "disp+LiDAR & backward+LiDAR", "Spars+LiDAR", or the image-only rows).

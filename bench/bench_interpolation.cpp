@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Benchmark of stage 4 (LiDAR-supported robust interpolation) on the real KITTI frames:
 // sparse matches sampled from the ground truth (density --density of the pixels with full
 // scene-flow GT, a share --outliers of them corrupted), ~88 LiDAR points taken from the d0

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Benchmark of stage 1 (scene-flow matching, both directions) on KITTI frames: seconds per
 // frame (median of --runs), peak RSS, and the dense (Filled, 100 % density) outlier rates of
 // the forward result, so speed and accuracy are always quoted together.

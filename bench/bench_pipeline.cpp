@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The complete pipeline's speed and accuracy, beside OpenCV's off-the-shelf baseline measured
 // in the same run (StereoSGBM for d0 and d1 + DISOpticalFlow for u, v):
 //   per-stage and total seconds (median of --runs), peak RSS, KITTI outliers (devkit, filled),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Small helpers shared by the benchmark programs (not part of the library).
 #include <sys/resource.h>

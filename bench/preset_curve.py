@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Speed/accuracy curve of the estimator presets on the shared KITTI frames.
 
 Runs bench_pipeline once per preset (KITTI frames only), then prints a Markdown table and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "bridge_core.hpp"
 
 #include <poll.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The bridge between LCM and the lidarflow estimator, as a library so that tests drive it
 // in-process (memq://) exactly as lidarflow-lcm-bridge does over the network.

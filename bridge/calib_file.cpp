@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "calib_file.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The bridge's --calib file: a KITTI calib_cam_to_cam.txt (P_rect_02 and P_rect_03 lines; the
 // other keys are ignored). The bridge uses only the C ABI, so it reads the file itself.

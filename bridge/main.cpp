@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow-lcm-bridge: runs the lidarflow estimator on stereo (+ LiDAR) frames from LCM and
 // publishes the scene flow and a status heartbeat. Uses only lidarflow's C ABI.
 #include <signal.h>

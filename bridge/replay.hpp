@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Offline replay: an LCM log in, a result log out, at the estimator's pace.
 //

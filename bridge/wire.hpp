@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Checking, decoding and encoding of the lidarflow LCM messages on the bridge's side.
 //

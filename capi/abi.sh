@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The committed ABI description of liblidarflow.so (capi/lidarflow.abi.xml) and its check.
 #
 #   capi/abi.sh check   LIB   dump LIB's ABI and compare it with the committed description:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Checked conversions of the C ABI's caller-owned input views into core types. Each function
 // copies what it keeps, throws lidarflow::Error with a message naming the offending field,

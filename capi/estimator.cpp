@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
 // builds the new frame and result aside and commits them only when everything succeeded, so a
 // failed call leaves the handle exactly as it was.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The exception firewall of the C ABI: every lf_ function body runs inside guarded(), which
 // turns whatever the C++ core throws into a status code plus a message, so no exception ever

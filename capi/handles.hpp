@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // What the opaque C handles are. Private to capi/.
 #include <cstdint>

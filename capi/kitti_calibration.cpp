@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lf_read_kitti_calibration: the KITTI calibration files as an lf_calibration_t, so callers do
 // not compose the Velodyne -> rectified-left transform by hand (io/velo_to_left.hpp says how).
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The key table of lf_options_t: every key, its type, bounds and the EstimatorOptions field
 // it writes. The header's key table documents the same bounds; tests/test_capi_options.c

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lf_options_*: the key/value settings object of the C ABI (keys in option_keys.cpp).
 #include <new>
 

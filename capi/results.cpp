@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Result queries of the C ABI: info, timings, copies into caller planes, borrowed views and
 // the 3-D (metric) form. Every argument is checked before the first byte is written.
 #include <cmath>

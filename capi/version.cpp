@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The status and version part of the C ABI. Nothing here can throw.
 #include "lidarflow/lidarflow.h"
 

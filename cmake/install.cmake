@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Install rules (included by the top-level CMakeLists.txt after every target exists).
 # Everything installed is relocatable: nothing below may bake CMAKE_INSTALL_PREFIX into a file,
 # because `cmake --install build --prefix P` and CPack pick the prefix after configuration.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Debian packages (CPack DEB), one per install component (cmake/install.cmake):
 #   liblidarflow0          runtime   the C ABI library (named for its SONAME, Debian policy 8.1)
 #   liblidarflow-dev       dev       headers, liblidarflow.so, CMake package, pkg-config file

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* lidarflow from C: two stereo frames of a textured wall 5 m ahead that slides 4 px to the
  * right, plus a few LiDAR returns, give a dense scene flow; the example prints its mean.
  * Build against an installed lidarflow:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """lidarflow from Python: two stereo frames of a textured wall 5 m ahead that slides 4 px to
 the right, plus a few LiDAR returns, give a dense scene flow; prints its mean and the 3-D
 motion. Run with the binding on PYTHONPATH (bindings/python) and, unless the library is

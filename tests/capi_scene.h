@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Shared fixtures of the C ABI suites (C99, public header only): a synthetic stereo sequence
  * with exactly known scene flow, and small helpers. A fronto-parallel textured plane at
  * disparity d moves by (tu, tv) pixels between the frames, so every pixel's true scene flow

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Hand-built scene-flow fields for the consistency suites (test_consistency_*.cpp).
 // Include it last, after the OpenCV / project headers.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Exactly piecewise-planar synthetic scene for the interpolation suites: four regions with
 // sharp colour boundaries whose u, v, d0, d1 fields are affine in (x, y), sparse matches

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // KITTI calibration parsers / writer (io/calib) and the Velodyne .bin reader (io/velodyne):
 // the real files of the shared frames, malformed text, and bad binary sizes.
 #include <cmath>

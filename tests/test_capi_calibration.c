@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI: lf_read_kitti_calibration — intrinsics, baseline and the composed Velodyne -> left
  * rectified transform from KITTI calibration text, and its errors. Compiled as C99 against the
  * public header only. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI under concurrency, as the header promises it: distinct handles on distinct threads at
  * the same time, a handle handed from thread to thread between rounds (one thread at a time),
  * and per-thread lf_last_error(NULL) messages. Every result must equal the one a lone handle

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI: lf_create and lf_push_frame with good and bad arguments. Every bad call must return
  * its documented status with a message, and leave the handle usable and unchanged: the suites
  * end each battery of bad calls with good pushes whose result must equal a clean handle's

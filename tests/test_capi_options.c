@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI: lf_options_* — every key's documented default and bounds (both ends), types, NULLs,
  * presets, and that a failed set leaves the object unchanged with a message naming the key.
  * Compiled as C99 against the public header only. */

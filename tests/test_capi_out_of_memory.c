@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI under an address-space limit (setrlimit RLIMIT_AS, what `ulimit -v` sets): running out
  * of memory anywhere in a push — on the calling thread or inside an OpenMP worker — must come
  * back as LF_ERR_OUT_OF_MEMORY, never abort the process, and leave the estimator usable.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI: the result side — info, timings, copies into caller planes with strides, borrowed
  * views, the 3-D form — and that equivalent inputs (LiDAR kinds, RGB/BGR, thread counts) give
  * bit-identical results. Compiled as C99 against the public header only. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* C ABI: status strings and version queries. Compiled as C99 against the public header only. */
 #include <setjmp.h>
 #include <stdarg.h>

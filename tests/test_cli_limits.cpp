@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The CLI's input boundary (issue 13 items 1, 4, 7, 8), end to end: oversized images (65535x2
 // PNGs crashed `lidarflow run` inside SGM), files that are not PNGs, calibrations whose derived
 // baseline overflows (exit 0 before), frame ids that would leave the layout, and output folders

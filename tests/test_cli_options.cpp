@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow options and the "did you mean" of unknown keys and flags: the listing comes from the
 // C ABI's key table (every key, its bounds and the default a fresh lf_options_t holds), --set
 // takes the named presets, and typos get the nearest name.

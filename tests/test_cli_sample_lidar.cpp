@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `lidarflow sample-lidar`: runs the built CLI ($LIDARFLOW_CLI) on the real frames and with bad
 // arguments, and checks exit codes, the files written and their contents.
 #include <sys/wait.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Clustering, 3x3 sparsification and the whole stage 2-3 chain on hand-built fields; the rule
 // "LiDAR pixels survive every filter" on a field where every match is wrong.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 2a (SGM check) and stage 2b (forward-backward check) on hand-built fields, the SGM
 // reference disparity on a shifted random texture, and input validation.
 #include <cmath>

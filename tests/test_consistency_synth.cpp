@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The LiDAR-supported consistency check on the synthetic street scene (src/synth): inliers kept
 // in the hard regions (the textureless box and the dark shadow), LiDAR mode against image-only.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `lidarflow eval` end to end on a small synthetic KITTI folder written here (always runs) and,
 // when LIDARFLOW_KITTI_DIR is set, on the real frames: the ground truth submitted as its own
 // estimate scores 0.00; outliers planted in an estimate are counted; missing files and bad

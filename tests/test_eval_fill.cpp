@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Background interpolation of estimates before scoring (KITTI devkit behaviour) on hand-built
 // rows and columns.
 #include <vector>

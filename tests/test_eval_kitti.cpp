@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The evaluator on the real KITTI frames (skipped without LIDARFLOW_KITTI_DIR): ground truth
 // scored against itself, and a perturbed estimate (holes, offsets, noise) checked against a
 // straightforward re-implementation of the devkit's counting written here.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // KITTI scores on small hand-built cases whose counts are known by construction: the 3 px / 5 %
 // outlier rule for disparity and flow, the SF union over valid ground truth, densities, the two
 // fill modes, the Table II regions, frame aggregation, and input validation.

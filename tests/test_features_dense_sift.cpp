@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Dense SIFT descriptors: layout, normalisation, shift equivariance, low-contrast handling and
 // argument validation.
 #include "test_support.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The accepted input ranges of core/limits.hpp, enforced by the core whatever the entry point:
 // image sides (SGM's speckle filter corrupted its heap on 65535x2 frames), LiDAR disparities
 // (3e38 overflowed the matcher's float -> int conversions), cameras (finite values whose

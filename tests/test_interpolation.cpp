@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4 (src/interpolation): the robust interpolator on an exactly piecewise-planar scene,
 // LiDAR anchoring, very few and very many matches, degenerate input, determinism.
 #include "test_support.hpp"

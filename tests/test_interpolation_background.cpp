@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4 background models: the ego-motion fit (interpolation/ego_motion.hpp) recovers a known
 // camera motion from exact and from outlier-ridden matches; the interpolator with it is not
 // worse than without on the piecewise-planar scene; the geometry hint fills match holes only

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4 with a known camera: the rigid ego-motion fit (fit_rigid_ego_motion) recovers an
 // exact rigid motion from clean and from outlier-ridden matches and refuses without a camera or
 // support; the interpolator uses it when run() gets a valid camera; occlusion reasoning gives

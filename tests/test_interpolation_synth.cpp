@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4 on the synthetic street scene (src/synth, exact ground truth): sparse GT matches
 // with gross outliers + the scene's 88 LiDAR points -> dense scene flow with bounded KITTI
 // outlier rates, and LiDAR never makes it worse.

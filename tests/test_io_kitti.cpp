@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // KITTI disparity / flow PNG codecs (io/kitti_png): devkit encoding rules on synthetic maps,
 // bit-exact read -> write -> read of the real ground truth, and errors for bad files.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Result files other than KITTI PNGs (io/result_formats) and the point cloud (io/point_cloud):
 // every format written and read back equals the field, holes included; the bytes are what the
 // formats specify (PFM bottom-up little-endian, .npy header aligned); broken files are Format

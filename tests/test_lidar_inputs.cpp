@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Sparse LiDAR inputs (src/lidar): projection of points into the left image, the 5x5-window
 // grid sampler, the de-warp of D1 into I_l^1 with occlusion handling, the paper protocol and
 // the Velodyne protocol; hand-built cases plus the real KITTI frames when available.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The matching cost: patch distance (Eq. 2) and the four LiDAR cases (Eqs. 3, 7, 10, 12),
 // checked against terms computed independently here from the paper's pixel positions, and
 // the matcher's reported seed costs checked against the same case formulas.

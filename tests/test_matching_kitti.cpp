@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 1 on the shared KITTI frames with the paper's LiDAR protocol: dense (100 %) matching
 // stays within the paper's matching-stage SF outlier rate (38.46 %), and LiDAR support lowers
 // the D0 outliers on every frame and the SF outliers on average. Skipped without

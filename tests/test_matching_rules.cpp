@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // LiDAR rules of the matcher (a LiDAR pixel's d0 is never replaced; constraint 2 bounds d0 in
 // D_l^0 windows and d1 for targets in D_l^1 windows), the ablation switches, determinism and
 // input validation. Small synthetic scenes keep it fast.

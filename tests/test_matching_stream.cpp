@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Streaming reuse of stage 1 and the estimator presets: descriptors of a frame's t1 pair are
 // reused by the next frame only when its t0 pair is pixel-identical, and reuse never changes
 // a result; presets are named, distinct and validated.

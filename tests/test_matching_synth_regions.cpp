@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // On the synthetic street (exact ground truth), LiDAR-supported matching beats image-only
 // matching where images carry no signal: the textureless box and the dark shadow.
 #include "test_support.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Golden test of the complete estimator on the two shared KITTI 2015 frames (paper LiDAR
 // protocol, default options): the final dense scene flow must stay at the accuracy recorded
 // when stage 4 landed, within a tolerance, and meet issue 5's target on the mean.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Running the estimator below the input resolution (processing_scale): how
 // frames are brought down (images, LiDAR, camera), how fields come back up, and the complete
 // estimator at half resolution on a synthetic scene.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The estimator's results do not depend on the thread count: every stage's fields are the
 // same bit for bit with 1, 2 and 3 threads. Also the matcher's opt-in lazy random search:
 // deterministic, it changes the search, and its result stays close to the full search.

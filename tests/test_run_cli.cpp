@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `lidarflow run` on a rendered frame: raw Velodyne scans at t0 and t1 (--velo0/--velo1 with
 // --calib-velo) land in the images with the expected counts, `kitti --lidar velodyne` takes a
 // t1 scan when the layout has one; every --format reads back as the same result; the --points

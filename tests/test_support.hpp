@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Shared helpers for the C++ cmocka suites. Include this header LAST: cmocka defines macros
 // (fail(), ...) that break standard/OpenCV headers included after it.

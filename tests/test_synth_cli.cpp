@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The synth, viz and demo commands of the lidarflow CLI: files they write, what demo says,
 // and non-zero exits on bad arguments. Runs the built binary ($LIDARFLOW_CLI, set by CTest).
 #include <sys/wait.h>

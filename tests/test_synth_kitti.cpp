@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // write_kitti: the synthetic scene in the KITTI layout reads back (io::read_*) as the
 // in-memory ground truth to PNG precision, with the calibration and the extra LiDAR/mask files.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Synthetic scene renderer: determinism, ground-truth sanity, the textureless and shadowed
 // regions, the sparse LiDAR frames, and argument checking.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Synthetic scene: the ground truth explains the images. Warping the other three views into the
 // left t0 image with the exact GT must reproduce it at non-occluded pixels (up to sensor noise
 // and interpolation); a slightly wrong GT must not.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Visualisation: flow colour wheels, disparity colour map, KITTI error images and overlays.
 #include <cmath>
 #include <cstdio>

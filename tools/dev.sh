@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Developer entry point: installs what is missing (Debian bookworm, apt-get), builds, and runs.
 #   tools/dev.sh demo        build + run the demo on the built-in synthetic scene
 #   tools/dev.sh test        build + run every test suite (what CI runs)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The player writes a file:// LCM log of a synthetic KITTI-layout folder; the log is replayed
 # into an in-process bridge (lock-step, no drops) and every result must equal the C ABI's.
 set -euo pipefail

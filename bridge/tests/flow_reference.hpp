@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Test helper: recomputes a published scene flow with the C ABI from the very input messages
 // the bridge used, and compares the planes exactly. Shared by the in-process suite and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test tool for the LCM bridge, on LCM event logs (as lcm-logger or a file:// URL writes them).
 //   log_check verify LOG [--option K=V]... [--min-results N]
 //       LOG holds the inputs (player) and the bridge's outputs: every scene_flow_t must equal

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # lidarflow-lcm-bridge --replay: a file:// log written by the player becomes a result log.
 #  1. every frame processed (exit 0), every result equal to the C ABI's (log_check verify with
 #     the inputs from the input log), the final status accounting for every stereo frame;

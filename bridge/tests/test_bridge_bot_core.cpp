@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bridge's bot_core decoders (wire.cpp) on messages made by lcm-gen's own generated C
 // encoder for the bot_core types: an encoder independent of the project's writer. Every prefix
 // and every one-byte extension of a good message must be refused without a crash.

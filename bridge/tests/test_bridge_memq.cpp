@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow-lcm-bridge's logic in-process over memq://: wire checks of every input type, results
 // equal to the C ABI's for the same frames (float32, int16, subsampled; LiDAR as disparities,
 // camera-frame and LiDAR-frame points; no LiDAR), malformed and truncated messages, frames

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bridge's message decoders (wire.cpp) on messages that lcm-gen's decoders mishandle:
 // zero-sized arrays (a memcpy from NULL), sizes whose products overflow, strings without a
 // terminating NUL, messages beyond what an int counts. Messages are written byte by byte here,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The real processes over udpm://: lidarflow publish-kitti -> lidarflow-lcm-bridge, recorded by
 # lcm-logger, then checked (log_check verify: every published flow equals the C ABI's result
 # for the frames it names; the bridge's last status accounts for every stereo frame).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /*
  * lidarflow — dense scene flow from a rectified stereo camera and a sparse LiDAR.
  *

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/clustering.hpp"
 
 #include <cmath>

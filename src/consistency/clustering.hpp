@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Clustering after each filtering stage: the remaining matches are segmented into regions of
 // similar scene flow (connected components, neighbours joined when all four components are

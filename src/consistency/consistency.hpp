@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stages 2-3 of LiDAR-Flow in one call, plus the single stages (include this one header).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/forward_backward_check.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stage 2b: forward-backward scene-flow check. The backward field B is matched with I_l^1 as
 // reference (t1 -> t0): at a pixel q of I_l^1, (u_b, v_b) points back into I_l^0, d0_b is the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/ground_truth_fields.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Forward and backward scene-flow fields made from KITTI-style ground truth, in the layout the
 // matcher hands to stages 2-3. For tests and benchmarks of the consistency check (a perfect

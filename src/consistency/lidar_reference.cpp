@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/lidar_reference.hpp"
 
 #include <cmath>

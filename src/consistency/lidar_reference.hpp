@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The D_l^0 measurements as the consistency stages see them: which pixels are LiDAR pixels
 // (never filtered, reference values of the clustering) and which lie in a support window

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Every threshold of stages 2-3 (paper: "LiDAR-Supported Consistency Check" and the
 // sparsification opening "LiDAR-Supported Robust Interpolation"). Defaults were measured on the

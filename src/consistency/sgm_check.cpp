@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/sgm_check.hpp"
 
 #include <climits>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stage 2a: the d0 of every match is compared with an SGM disparity of (I_l^0, I_r^0).
 #include <opencv2/core.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "consistency/sparsify.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stage 3: sparsification before the interpolation (as in SceneFlowFields). In each
 // non-overlapping opt.sparsify_block x opt.sparsify_block block (aligned at (0, 0); the last

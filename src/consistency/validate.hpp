@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Input checks shared by the consistency stages (internal to src/consistency).
 #include <string>

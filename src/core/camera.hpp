@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Rectified stereo camera model shared by every stage.
 namespace lidarflow {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "core/closest_name.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // "did you mean ...?" for unknown option keys and command-line flags.
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The one exception type of the core. The C ABI maps ErrorCode 1:1 onto lf_status_t, so the
 // numeric values here must equal those in include/lidarflow/lidarflow.h.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Sparse LiDAR measurements aligned to one left image: a list of (pixel, disparity).
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "core/limits.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Accepted ranges of the inputs, shared by every entry point (C ABI, CLI readers, the bridge
 // through the C ABI) and checked again by the core, so that no caller reaches a computation

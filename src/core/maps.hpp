@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Dense per-pixel maps in the left image at t0 (the reference frame), as the stages exchange
 // them. Invalid disparities are negative (kInvalidDisparity), as in the KITTI devkit; a valid

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // An exception that leaves an OpenMP structured block calls std::terminate, so a
 // std::bad_alloc (or a lidarflow::Error) thrown by a worker would abort the whole process

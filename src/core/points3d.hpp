@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The 3-D reading of one scene-flow pixel, shared by lf_get_points3d and the CLI's point cloud
 // so the two can never disagree: Z = fx * B / d, X = (x - cx) Z / fx, Y = (y - cy) Z / fy, with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // splitmix64: a tiny generator that is statistically fine and gives the same numbers on every
 // platform (std:: distributions do not), so seeded stages stay reproducible everywhere.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "eval/background_fill.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Hole filling of an estimate before it is scored, with the same result as the official KITTI
 // Scene Flow 2015 devkit ("background interpolation", io_disp.h / io_flow.h):

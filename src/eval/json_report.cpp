@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "eval/json_report.hpp"
 
 #include <cmath>

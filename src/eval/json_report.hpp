@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Results of an evaluation as JSON (hand-written, no dependency). Layout:
 //   { "format": "lidarflow-eval/1", "mode": "filled"|"est-only", "window": 15,

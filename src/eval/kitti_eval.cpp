@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "eval/kitti_eval.hpp"
 
 #include <algorithm>

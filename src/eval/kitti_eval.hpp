@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Scoring of a KITTI-style submission folder (disp_0/, disp_1/, flow/ with NNNNNN_10.png)
 // against the ground truth of a KITTI Scene Flow 2015 training folder.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // KITTI Scene Flow 2015 scores of one estimate against ground truth, counted as the official
 // devkit (evaluate_scene_flow.cpp) counts them, plus the paper's views of the same numbers:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "eval/text_report.hpp"
 
 #include <cmath>

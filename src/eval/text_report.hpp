@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Human-readable tables of an evaluation: per frame and summary rows, occ and noc, outliers [%],
 // EPE [px] and density [%]; and the paper's Table II (SF outliers at LiDAR seeds / in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "features/dense_sift.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Dense SIFT-Flow-style descriptors: one descriptor per pixel, for patch matching.
 //

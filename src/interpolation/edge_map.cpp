@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/edge_map.hpp"
 
 #include <algorithm>

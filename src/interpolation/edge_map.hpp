@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Soft edge map of the reference image I_l^0, the cost layer of the geodesic distance that
 // makes interpolation neighbourhoods stop at image boundaries (paper: Structured Edge

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/ego_motion.hpp"
 
 #include "core/random.hpp"

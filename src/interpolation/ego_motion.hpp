@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The dominant rigid motion of the scene (in driving: the static background seen from the
 // moving camera), fitted robustly to all sparse matches, expressed without calibration.

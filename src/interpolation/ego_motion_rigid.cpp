@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The calibrated background model of ego_motion.hpp: the rigid camera motion P' = R P + t,
 // fitted to the matches' d1 and flow residuals in pixels.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/geodesic.hpp"
 
 #include <algorithm>

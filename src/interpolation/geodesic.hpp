@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Edge-aware (geodesic) neighbourhoods of the sparse matches, EpicFlow-style: one multi-source
 // Dijkstra on the pixel grid gives every pixel its geodesically nearest seed (a geodesic

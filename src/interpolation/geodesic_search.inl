@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Template body of SeedSearch::nearest (included by geodesic.hpp only).
 #include <algorithm>
 #include <functional>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/interpolator.hpp"
 
 #include "core/random.hpp"

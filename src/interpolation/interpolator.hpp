@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stage 4: LiDAR-supported robust interpolation (paper Sec. "LiDAR-Supported Robust
 // Interpolation", Fig. 5), RIC-style (Hu et al., CVPR 2017) extended to all four scene-flow

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/lidar_anchors.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Association of superpixels with LiDAR (paper Fig. 5): each superpixel takes the LiDAR
 // measurement closest to its centre for geometry and the closest LiDAR match (a LiDAR pixel

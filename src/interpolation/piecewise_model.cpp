@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/piecewise_model.hpp"
 
 #include <algorithm>

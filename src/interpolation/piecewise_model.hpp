@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Affine models over image coordinates, the per-superpixel pieces of the interpolation:
 // a plane d = a x + b y + c for a disparity (exact for a planar surface in a rectified

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "interpolation/superpixels.hpp"
 
 #include <algorithm>

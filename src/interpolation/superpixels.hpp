@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // SLIC over-segmentation of the reference image into compact superpixels that follow colour
 // boundaries; the interpolation fits one set of piecewise models per superpixel.

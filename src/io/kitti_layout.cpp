@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/kitti_layout.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // File names of the official KITTI Scene Flow 2015 layout (training/ or a submission folder).
 // Frame ids are 6-digit strings ("000002"); _10 is t0 and _11 is t1. Every path below checks

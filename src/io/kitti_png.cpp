@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/kitti_png.hpp"
 
 #include <algorithm>

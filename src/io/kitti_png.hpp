@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // KITTI disparity and flow PNG codecs, bit-exact with the official devkit (io_disp.h,
 // io_flow.h):

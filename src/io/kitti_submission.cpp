@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/kitti_submission.hpp"
 
 #include "core/error.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Writing a scene-flow result in the KITTI submission layout: OUT/disp_0/ID_10.png,
 // OUT/disp_1/ID_10.png, OUT/flow/ID_10.png (devkit PNG codecs; invalid pixels stay invalid).

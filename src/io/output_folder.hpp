@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The output folder of a command, checked before the work that fills it: an unwritable folder
 // must not be found only after minutes of estimation.

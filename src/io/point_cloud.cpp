@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/point_cloud.hpp"
 
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The estimator's result as a coloured 3-D point cloud with motion, and its PLY file.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/result_formats.hpp"
 
 #include <cctype>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Result files other than KITTI's 16-bit PNGs, for tools that expect float maps:
 //  - .flo (Middlebury): optical flow, written and read by OpenCV's writeOpticalFlow /

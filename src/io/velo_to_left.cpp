@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/velo_to_left.hpp"
 
 #include <cmath>

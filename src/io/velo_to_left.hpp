@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The one transform a user of a KITTI-style rig needs for raw LiDAR points: Velodyne frame ->
 // left (camera 2) rectified camera frame, i.e. the frame of lf_calibration_t.lidar_to_camera,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "io/velodyne.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // KITTI Velodyne scans (velodyne/ID.bin): a flat array of little-endian float32 records
 // (x, y, z, reflectance), x forward, y left, z up [m], in the Velodyne frame.

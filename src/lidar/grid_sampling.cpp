@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "lidar/grid_sampling.hpp"
 
 #include <algorithm>

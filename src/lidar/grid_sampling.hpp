@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Dense-to-sparse sampling of the paper (section "LiDAR-Flow Input Data"): a w x w window
 // (w = 5) is moved in regular steps over the image, and inside each window the measurement

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "lidar/paper_protocol.hpp"
 
 #include <algorithm>

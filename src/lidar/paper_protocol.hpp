@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The sparse LiDAR inputs of the paper (section "LiDAR-Flow Input Data"), built from KITTI
 // ground truth:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "lidar/projection.hpp"
 
 #include <cmath>

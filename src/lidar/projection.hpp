@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Projection of 3-D LiDAR points into the left rectified image (KITTI camera 2) as a
 // SparseLidar, following the KITTI devkit chain:

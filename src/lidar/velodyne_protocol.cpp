@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "lidar/velodyne_protocol.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Sparse LiDAR input from the real Velodyne scan (KITTI has one scan per frame, at t0): the scan
 // projected into I_l^0 (lidar/projection.hpp), optionally thinned

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching/cost_cases.hpp"
 
 #include "core/error.hpp"

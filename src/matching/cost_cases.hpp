@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The four matching-cost cases of the paper (Eqs. 3, 7, 10, 12) over the six constancy terms
 // (Eqs. 4-6, 8-9, 11), as the matcher evaluates them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching/lidar_support.hpp"
 
 #include <algorithm>

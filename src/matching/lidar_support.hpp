@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // LiDAR support windows and the disparity interval of constraint 2 (internal to matching).
 #include <vector>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching/matching_options.hpp"
 
 #include <cmath>

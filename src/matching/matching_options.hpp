@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Knobs of the LiDAR-supported scene-flow matcher (paper Sec. "LiDAR-Supported Matching").
 //

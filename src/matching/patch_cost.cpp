@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching/patch_cost.hpp"
 
 #include <algorithm>

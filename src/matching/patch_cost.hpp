@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Patch matching cost E(I_A, I_B, p_A, p_B) of the paper (Eq. 2): the sum, over a square patch
 // Omega, of the distance between the dense descriptors of the two images at p_A + o and p_B + o.

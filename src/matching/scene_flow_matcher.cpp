@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching/scene_flow_matcher.hpp"
 
 #include <algorithm>

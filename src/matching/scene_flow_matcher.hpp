@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Stage 1 of LiDAR-Flow: coarse-to-fine PatchMatch over the 4-D scene flow (u, v, d0, d1)
 // (CPM-style, extended to scene flow as in SceneFlowFields), with the paper's four LiDAR cost

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pipeline/estimator.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The complete LiDAR-Flow estimator: stage 1 matching (both directions) -> stage 2 consistency
 // -> stage 3 sparsification -> stage 4 interpolation. It owns the options of every stage,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pipeline/kitti_runner.hpp"
 
 #include <cmath>

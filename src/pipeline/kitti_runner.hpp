@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Runs the estimator over KITTI-layout frames and scores every requested variant against the
 // ground truth: the engine of `lidarflow kitti` (the paper's Tables I and II).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pipeline/resolution.hpp"
 
 #include <algorithm>

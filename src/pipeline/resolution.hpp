@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Running the estimator below the input resolution (EstimatorOptions::processing_scale): the
 // frame is brought down before stage 1 and every result field back up after the last stage.

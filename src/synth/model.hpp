@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The synthetic world the renderer ray-casts: geometry, rigid motions and the seeded layout.
 // Internal to src/synth (the public API is synth/scene.hpp).

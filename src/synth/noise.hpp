@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Counter-based randomness for the synthetic renderer. Every value is a pure function of
 // (key, coordinates), so rendering can run in any order on any number of threads and still be

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray-casting renderer of the synthetic street scene and its exact ground truth.
 #include <algorithm>
 #include <cmath>

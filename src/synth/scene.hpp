@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Synthetic rectified stereo pair at t0 and t1 with exact ground truth, for tests and the demo.
 //

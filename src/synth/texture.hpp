@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Procedural, seeded surface appearance of the synthetic scene. Internal to src/synth.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "synth/write_kitti.hpp"
 
 #include <algorithm>

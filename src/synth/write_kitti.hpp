@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Writes a rendered synthetic scene in the official KITTI Scene Flow 2015 training layout, so
 // every tool that reads KITTI (eval, sample-lidar, the estimator CLI) runs on it unchanged.

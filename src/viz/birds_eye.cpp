@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "viz/birds_eye.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Bird's-eye view of a scene-flow point cloud: the ground plane seen from above (x right, z
 // forward, camera at the bottom centre), each point coloured by its speed |motion| (turbo colour

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Colour coding of disparity maps, in the KITTI devkit's style (disp_to_color.m): a piecewise
 // linear map black -> blue -> red -> magenta -> green -> cyan -> yellow -> white over

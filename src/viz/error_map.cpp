@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "viz/error_map.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // KITTI-style error images (the devkit's errorImage), for disparity and optical flow.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "viz/flow_color.hpp"
 
 #include <algorithm>

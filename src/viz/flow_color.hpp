@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Colour coding of optical flow fields.
 #include <opencv2/core.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Legends for the colour-coded pictures: a strip appended below a picture, with a colour bar and
 // its scale (disparity, speed) or a colour wheel (flow), so a picture read on its own says what

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Composition helpers for pictures: LiDAR points and masks drawn over images, image grids.
 #include <vector>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A downstream C99 program that sees only the installed header and library: it runs the full
  * pipeline on one frame pair given as plain files and writes the raw result.
  *   consumer IN OUT

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test harness of the installed-tree consumer check (install_check.sh), built in the main
 // tree with the C++ core: it turns a KITTI-layout frame into the plain files the C consumer
 // reads (the consumer stays free of PNG decoding), and the consumer's raw result back into

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Builds and runs programs against an installed lidarflow tree only, never the build tree:
 #   prefix  `cmake --install BUILD --prefix WORK/prefix`, then the README's "Install" commands
 #           verbatim from a scratch folder (HOME points into WORK)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Built from an installed tree only: the generated C++ type (header-only) and the generated C
 // type (header + source compiled in) of the same message must encode to the same bytes and
 // decode back, so the installed definitions, headers and sources belong together.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The byte format fuzz_capi reads as a sequence of C ABI calls, shared with make_corpus (which
 // writes the seeds). Every field is one byte unless noted; a program that ends early reads 0s.

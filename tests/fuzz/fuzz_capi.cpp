@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The C ABI (liblidarflow, public header only) driven by the fuzz bytes as a program of calls:
 // options with odd keys and values, calibrations, create, pushes of small images with odd
 // sizes, strides and formats and LiDAR of every kind, every result call with odd buffers, out of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The KITTI calibration parsers (src/io/calib.cpp) on text in memory: calib_cam_to_cam and
 // calib_velo_to_cam, both on every input. Each either throws lidarflow::Error or returns what
 // its header promises.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The KITTI PNG readers (src/io/kitti_png.cpp): disparity (16-bit gray), flow (16-bit RGB) and
 // 8-bit images, all three on every input. They take paths, so the input goes through a scratch
 // file. Each either throws lidarflow::Error or returns values its format allows.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The KITTI Velodyne reader (src/io/velodyne.cpp) through a scratch file. It either throws
 // lidarflow::Error or returns finite records that, with the dropped ones, are all of the file.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bot_core.images_t through the bridge's decoder (bridge/wire.cpp, what lidarflow-lcm-bridge
 // runs on every images_t of its stereo channel). A pair that decodes has a format the C ABI
 // takes, dimensions in range, packed rows, and both images lie inside the decoder's own buffer

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bot_core.pointcloud_t through the bridge's decoder (bridge/wire.cpp) with a rigid transform,
 // as lidarflow-lcm-bridge runs it with --lidar-to-camera. A sweep that decodes holds camera
 // points, no more than the message can carry, all finite after the transform.

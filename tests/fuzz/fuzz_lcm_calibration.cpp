@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // calibration_t through the bridge's decoder (bridge/wire.cpp). What decodes has finite values,
 // fx, fy, baseline > 0 and an image size in range, and survives an encode/decode round trip.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidar_t through the bridge's decoder (bridge/wire.cpp, what lidarflow-lcm-bridge runs on every
 // message of its LiDAR channel). A sweep that decodes is of a kind the C ABI takes, has as many
 // entries as the message declares, and every value is finite (also after lidar_to_camera).

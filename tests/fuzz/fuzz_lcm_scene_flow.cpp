@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // scene_flow_t through the receiver's decoder (bridge/wire.cpp decode_scene_flow, what the
 // bridge's tests and consumers use). What decodes has planes of width x height values, with
 // width = ceil(image_width / step), and valid bytes of 0 or 1.

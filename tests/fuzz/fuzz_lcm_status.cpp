@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // status_t through the bridge's decoder (bridge/wire.cpp decode_status, what the log checker
 // and monitoring tools use). What decodes carries a string that ends inside the message.
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // stereo_t through the bridge's decoder (bridge/wire.cpp, what lidarflow-lcm-bridge runs on every
 // message of its stereo channel). A message that decodes must describe two images that lie
 // inside it: every byte of both is read, so ASan sees any overrun.

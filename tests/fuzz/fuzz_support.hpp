@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Shared by the fuzz targets whose code under test reads files: the input goes to one file per
 // process (the readers take paths), in $TMPDIR, else /dev/shm (memory: thousands of writes a

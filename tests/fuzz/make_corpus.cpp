@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Writes the seed corpora of the fuzz targets (tests/fuzz/corpus/<target>/) with the project's
 // own encoders and writers, so that the seeds are what the code under test really receives:
 //     build-fuzz/tests/fuzz/lidarflow_fuzz_corpus tests/fuzz/corpus

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Minimal, strict option parser for the lidarflow sub-commands: --name value and --flag.
 // Unknown options, missing values and malformed numbers are errors (ErrorCode::InvalidArgument).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow demo: renders the built-in synthetic scene, writes it in the KITTI layout with
 // pictures of its ground truth, then runs the complete estimator on it twice — with the sparse
 // LiDAR (LiDAR-Flow) and image-only — and writes both results, their error maps and scores,

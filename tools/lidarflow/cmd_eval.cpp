@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow eval: KITTI Scene Flow 2015 scores of a submission folder, as the official devkit
 // counts them, with the paper's Table II split when the LiDAR seed maps are given.
 #include <cstdio>

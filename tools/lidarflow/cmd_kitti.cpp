@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow kitti: the estimator over KITTI-layout frames with the chosen sparse-LiDAR
 // protocol, scored against the ground truth (the paper's Tables I and II with --ablation).
 #include <unistd.h>

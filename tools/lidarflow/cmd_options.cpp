@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow options: every option key of the C ABI (the `--set` keys) with its type, bounds and
 // default, read from capi/option_keys.cpp's table so the listing cannot drift from what is
 // accepted.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow run: the complete estimator on one frame pair of one's own data (four rectified
 // images, optional sparse LiDAR as KITTI disparity PNGs or raw Velodyne scans), written in the
 // KITTI submission layout or float formats, plus pictures and optionally a point cloud.

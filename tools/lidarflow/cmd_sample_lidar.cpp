@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow sample-lidar: writes the sparse LiDAR inputs of KITTI frames as disparity PNGs,
 // OUT/lidar_0/ID_10.png (in I_l^0) and OUT/lidar_1/ID_10.png (in I_l^1).
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow synth: renders synthetic stereo + LiDAR frames with exact ground truth and writes
 // them in the KITTI Scene Flow 2015 layout (plus lidar_0/1 and masks/).
 #include <chrono>

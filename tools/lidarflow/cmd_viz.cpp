@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow viz: colour-codes a KITTI disparity or flow PNG (with its legend, optionally over
 // the camera image), draws its KITTI error map against ground truth, or draws a bird's-eye view
 // of the point cloud `run --points` writes.

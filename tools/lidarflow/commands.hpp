@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Sub-command registry. Each cmd_*.cpp registers its own command with LIDARFLOW_COMMAND, so
 // adding a command touches no other file. A command gets argv with argv[0] = its own name,

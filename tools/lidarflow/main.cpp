@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow: the command-line program. One binary, one sub-command per job.
 #include <algorithm>
 #include <cstdio>

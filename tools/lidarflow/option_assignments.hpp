@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // `--set KEY=VALUE,KEY=VALUE`: any option of the C ABI's key table (include/lidarflow/lidarflow.h
 // lists them), with the same types and bounds, applied to the CLI's estimator options.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Options shared by the commands that render synthetic scenes (synth, demo).
 #include <string>

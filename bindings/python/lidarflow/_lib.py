@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """ctypes declarations of the lidarflow C ABI (include/lidarflow/lidarflow.h) and the loader.
 
 The shared library is looked for, in this order (no environment variable is needed once

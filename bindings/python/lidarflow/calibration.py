@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """KITTI calibration files as Estimator arguments (lf_read_kitti_calibration in lidarflow.h)."""
 import ctypes
 import os

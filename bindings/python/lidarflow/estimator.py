@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The Estimator class: one lidarflow handle (see include/lidarflow/lidarflow.h)."""
 import ctypes
 import threading

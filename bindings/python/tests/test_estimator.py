@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Tests of the lidarflow Python binding (python3 -m unittest, run by CTest as python_binding).
 
 Synthetic scene with exact truth: a textured fronto-parallel plane at disparity D moves by

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The binding as an installed package: `pip install --no-build-isolation --no-index` works
 offline (Debian's python3-setuptools + python3-wheel), and the installed package finds the
 library of its own installation prefix with no environment variable."""

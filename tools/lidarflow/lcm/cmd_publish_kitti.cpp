@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // lidarflow publish-kitti: plays a KITTI-layout folder onto LCM like a sensor rig would — the
 // calibration, then per frame the LiDAR sweep and the stereo pair — so that
 // lidarflow-lcm-bridge can be tried end to end with no other software. Built only with LCM

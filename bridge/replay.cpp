@@ -13,16 +13,6 @@
 namespace lidarflow::bridge {
 namespace {
 
-std::string fmt(const char *format, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char *format, ...) {
-    char buf[512];
-    va_list ap;
-    va_start(ap, format);
-    std::vsnprintf(buf, sizeof buf, format, ap);
-    va_end(ap);
-    return buf;
-}
-
 struct EventDeleter {
     void operator()(lcm_eventlog_event_t *e) const { lcm_eventlog_free_event(e); }
 };
@@ -145,7 +135,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             const std::string channel(e.channel, static_cast<size_t>(e.channellen));
             const int64_t target = handled() + 1;
             if (lcm_publish(lcm, channel.c_str(), e.data, static_cast<unsigned>(e.datalen)) != 0) {
-                error = fmt("handing event %" PRId64 " to the bridge failed", e.eventnum);
+                error = printf_string("handing event %" PRId64 " to the bridge failed", e.eventnum);
                 return false;
             }
             if (!settle(target)) {
@@ -195,20 +185,20 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 StereoMessage m;
                 const bool decodable = decode_stereo(event->data, static_cast<size_t>(event->datalen), m).empty();
                 const std::string which =
-                    decodable ? fmt("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
+                    decodable ? printf_string("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
                                     ", log event %" PRId64 ")",
                                     m.msg().utime, m.msg().sequence, m.msg().frame_number, event->eventnum)
-                              : fmt("stereo log event %" PRId64, event->eventnum);
+                              : printf_string("stereo log event %" PRId64, event->eventnum);
                 if (after.dropped() > before.dropped()) {
                     // last_error is this frame's only for the reasons that set it.
                     const bool own_error = after.dropped_malformed > before.dropped_malformed ||
                                            after.dropped_estimator_error > before.dropped_estimator_error;
-                    report->lost.push_back(fmt("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
+                    report->lost.push_back(printf_string("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
                                                own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
                 }
                 if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
                     report->lost.push_back(
-                        fmt("%" PRId64 " frame(s) missing from the log before %s",
+                        printf_string("%" PRId64 " frame(s) missing from the log before %s",
                             after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
             } else {
                 ++report->other_events;
@@ -240,9 +230,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     lcm_eventlog_destroy(out.log);
     report->flows_written = out.flows;
     report->status_written = out.status;
-    if (error.empty() && out.failures) error = fmt("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());
+    if (error.empty() && out.failures) error = printf_string("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());
     if (error.empty() && out.flows != report->counters.results_published)
-        error = fmt("%" PRId64 " results published, %" PRId64 " written", report->counters.results_published, out.flows);
+        error = printf_string("%" PRId64 " results published, %" PRId64 " written", report->counters.results_published, out.flows);
     return error;
 }
 

@@ -18,16 +18,6 @@ int64_t read_be(const uint8_t *p, int bytes) {
     return static_cast<int64_t>(v);
 }
 
-std::string fmt(const char *format, ...) __attribute__((format(printf, 1, 2)));
-std::string fmt(const char *format, ...) {
-    char buf[512];
-    va_list ap;
-    va_start(ap, format);
-    std::vsnprintf(buf, sizeof buf, format, ap);
-    va_end(ap);
-    return buf;
-}
-
 // One length field of a message: its byte offset after the fingerprint and the bytes one unit
 // of it adds to the message.
 struct LengthField {
@@ -43,26 +33,26 @@ std::string check_wire(const void *data, size_t size, const char *type, int64_t 
     const auto *p = static_cast<const uint8_t *>(data);
     // lcm-gen's decoders count bytes in int.
     if (size > static_cast<size_t>(std::numeric_limits<int>::max()))
-        return fmt("oversized: %zu bytes, a %s holds at most %d", size, type, std::numeric_limits<int>::max());
-    if (size < 8) return fmt("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
+        return printf_string("oversized: %zu bytes, a %s holds at most %d", size, type, std::numeric_limits<int>::max());
+    if (size < 8) return printf_string("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
     const int64_t got = read_be(p, 8);
     if (got != hash)
-        return fmt("bad fingerprint 0x%016llx (a %s has 0x%016llx): wrong message type on this channel",
+        return printf_string("bad fingerprint 0x%016llx (a %s has 0x%016llx): wrong message type on this channel",
                    (unsigned long long)got, type, (unsigned long long)hash);
     if (static_cast<int64_t>(size) < 8 + fixed)
-        return fmt("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
+        return printf_string("truncated: %zu bytes, a %s needs at least %lld", size, type, (long long)(8 + fixed));
     int64_t expected = 8 + fixed;
     std::string fields;
     for (const LengthField &f : lengths) {
         const int64_t n = read_be(p + 8 + f.offset, 4);
-        if (n < 0) return fmt("bad length field %s = %lld in a %s", f.name, (long long)n, type);
+        if (n < 0) return printf_string("bad length field %s = %lld in a %s", f.name, (long long)n, type);
         expected += n * f.unit_bytes;
-        fields += fmt("%s%s=%lld", fields.empty() ? "" : ", ", f.name, (long long)n);
+        fields += printf_string("%s%s=%lld", fields.empty() ? "" : ", ", f.name, (long long)n);
     }
     if (static_cast<int64_t>(size) < expected)
-        return fmt("truncated: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
+        return printf_string("truncated: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
     if (static_cast<int64_t>(size) > expected)
-        return fmt("wrong size: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
+        return printf_string("wrong size: %zu bytes, the %s declares %lld (%s)", size, type, (long long)expected, fields.c_str());
     return "";
 }
 
@@ -121,6 +111,15 @@ int16_t to_fixed(float value) {
 
 }  // namespace
 
+std::string printf_string(const char *format, ...) {
+    char buf[512];
+    va_list ap;
+    va_start(ap, format);
+    std::vsnprintf(buf, sizeof buf, format, ap);
+    va_end(ap);
+    return buf;
+}
+
 StereoMessage::~StereoMessage() {
     if (decoded_) lidarflow_stereo_t_decode_cleanup(&msg_);
 }
@@ -149,14 +148,14 @@ std::string decode_stereo(const void *data, size_t size, StereoMessage &out) {
     const auto pixel_format = static_cast<int8_t>(p[32]);
     const int64_t image_size = read_be(p + 33, 4);
     const int bpp = bytes_per_pixel(pixel_format);
-    if (bpp == 0) return fmt("unknown pixel_format %d (1 gray8, 2 rgb8, 3 bgr8)", pixel_format);
+    if (bpp == 0) return printf_string("unknown pixel_format %d (1 gray8, 2 rgb8, 3 bgr8)", pixel_format);
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
-        return fmt("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)width, (long long)height);
+        return printf_string("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)width, (long long)height);
     if (row_stride < width * bpp)
-        return fmt("inconsistent dimensions: row_stride %lld < width %lld x %d bytes", (long long)row_stride,
+        return printf_string("inconsistent dimensions: row_stride %lld < width %lld x %d bytes", (long long)row_stride,
                    (long long)width, bpp);
     if (image_size != row_stride * height)
-        return fmt("inconsistent dimensions: size %lld != row_stride %lld x height %lld", (long long)image_size,
+        return printf_string("inconsistent dimensions: size %lld != row_stride %lld x height %lld", (long long)image_size,
                    (long long)row_stride, (long long)height);
     lidarflow_stereo_t m;
     std::memset(&m, 0, sizeof m);
@@ -187,16 +186,16 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     const double *T = m.lidar_to_camera;
     if (m.frame != LIDARFLOW_LIDAR_T_FRAME_CAMERA && m.frame != LIDARFLOW_LIDAR_T_FRAME_LIDAR &&
         m.frame != LIDARFLOW_LIDAR_T_FRAME_DISPARITY) {
-        err = fmt("unknown frame %d (1 camera, 2 lidar, 3 disparity)", m.frame);
+        err = printf_string("unknown frame %d (1 camera, 2 lidar, 3 disparity)", m.frame);
     } else if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
         for (int i = 0; i < 16 && err.empty(); ++i)
-            if (!std::isfinite(T[i])) err = fmt("lidar_to_camera[%d] is not finite", i);
+            if (!std::isfinite(T[i])) err = printf_string("lidar_to_camera[%d] is not finite", i);
         if (err.empty() && (T[12] != 0 || T[13] != 0 || T[14] != 0 || T[15] != 1))
-            err = fmt("lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
+            err = printf_string("lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
     }
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i)
         if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]) || !std::isfinite(m.z[i]))
-            err = fmt("point %d is not finite", i);
+            err = printf_string("point %d is not finite", i);
     std::vector<float> xyz;
     if (err.empty()) xyz.resize(3 * static_cast<size_t>(m.num_points));
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i) {
@@ -208,7 +207,7 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
                 const double c = T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3];
                 // Finite inputs can still leave float's range (or give inf - inf = NaN).
                 if (!(std::fabs(c) <= std::numeric_limits<float>::max()))
-                    err = fmt("point %d is out of float range after lidar_to_camera", i);
+                    err = printf_string("point %d is out of float range after lidar_to_camera", i);
                 o[r] = static_cast<float>(c);
             }
         } else {
@@ -239,9 +238,9 @@ std::string decode_calibration(const void *data, size_t size, lf_calibration_t *
     for (double x : v)
         if (!std::isfinite(x)) return "calibration has a non-finite value";
     if (!(m.fx > 0 && m.fy > 0 && m.baseline > 0))
-        return fmt("calibration needs fx, fy, baseline > 0 (got %g, %g, %g)", m.fx, m.fy, m.baseline);
+        return printf_string("calibration needs fx, fy, baseline > 0 (got %g, %g, %g)", m.fx, m.fy, m.baseline);
     if (m.width < 0 || m.height < 0 || m.width > 16384 || m.height > 16384)
-        return fmt("calibration image size %dx%d out of range", m.width, m.height);
+        return printf_string("calibration image size %dx%d out of range", m.width, m.height);
     lf_calibration_init(out);
     out->fx = m.fx;
     out->fy = m.fy;
@@ -288,7 +287,7 @@ lidarflow_scene_flow_t FlowMessage::message() {
 bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step, FlowMessage &out,
                  std::string *error) {
     if (step < 1 || step > 16) {
-        *error = fmt("step %d out of range 1..16", step);
+        *error = printf_string("step %d out of range 1..16", step);
         return false;
     }
     if (!views.u.data || !views.v.data || !views.d0.data || !views.d1.data || !views.valid.data) {
@@ -351,16 +350,16 @@ std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
     const int value_bytes = encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_FLOAT32 ? 4
                             : encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 ? 2
                                                                                 : 0;
-    if (value_bytes == 0) return fmt("unknown encoding %d (1 float32, 2 int16)", encoding);
+    if (value_bytes == 0) return printf_string("unknown encoding %d (1 float32, 2 int16)", encoding);
     if (image_width < 1 || image_height < 1 || image_width > 16384 || image_height > 16384 || step < 1 || step > 16)
-        return fmt("inconsistent dimensions: image %lldx%lld (each side 1..16384), step %lld (1..16)",
+        return printf_string("inconsistent dimensions: image %lldx%lld (each side 1..16384), step %lld (1..16)",
                    (long long)image_width, (long long)image_height, (long long)step);
     if (width != (image_width + step - 1) / step || height != (image_height + step - 1) / step)
-        return fmt("inconsistent dimensions: planes %lldx%lld, image %lldx%lld subsampled by %lld", (long long)width,
+        return printf_string("inconsistent dimensions: planes %lldx%lld, image %lldx%lld subsampled by %lld", (long long)width,
                    (long long)height, (long long)image_width, (long long)image_height, (long long)step);
     const int64_t n = width * height;
     if (plane_size != n * value_bytes || valid_size != n)
-        return fmt("inconsistent dimensions: %lldx%lld with plane_size %lld, valid_size %lld", (long long)width,
+        return printf_string("inconsistent dimensions: %lldx%lld with plane_size %lld, valid_size %lld", (long long)width,
                    (long long)height, (long long)plane_size, (long long)valid_size);
     lidarflow_scene_flow_t m;
     std::memset(&m, 0, sizeof m);
@@ -369,9 +368,9 @@ std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
         return "decoding failed";
     }
     if (encoding == LIDARFLOW_SCENE_FLOW_T_ENCODING_INT16 && !(std::isfinite(m.scale) && m.scale > 0))
-        err = fmt("int16 encoding with scale %g (finite, > 0)", m.scale);
+        err = printf_string("int16 encoding with scale %g (finite, > 0)", m.scale);
     for (int64_t i = 0; i < n && err.empty(); ++i)
-        if (m.valid[i] > 1) err = fmt("valid[%lld] = %d, not 0 or 1", (long long)i, m.valid[i]);
+        if (m.valid[i] > 1) err = printf_string("valid[%lld] = %d, not 0 or 1", (long long)i, m.valid[i]);
     if (err.empty()) {
         const uint8_t *src[4] = {m.u, m.v, m.d0, m.d1};
         std::vector<float> *dst[4] = {&out.u, &out.v, &out.d0, &out.d1};
@@ -466,21 +465,21 @@ struct BotImage {
 std::string read_bot_image(WireReader &r, int index, BotImage *im) {
     if (!r.i64(&im->utime) || !r.i32(&im->width) || !r.i32(&im->height) || !r.i32(&im->row_stride) ||
         !r.i32(&im->pixelformat) || !r.i32(&im->size))
-        return fmt("truncated: image %d's header ends past the message", index);
+        return printf_string("truncated: image %d's header ends past the message", index);
     if (im->size < 0 || !r.has(static_cast<size_t>(im->size)))
-        return fmt("bad length field: image %d declares %lld data bytes, %zu left in the message", index,
+        return printf_string("bad length field: image %d declares %lld data bytes, %zu left in the message", index,
                    (long long)im->size, r.left());
     im->data = r.here();
     r.skip(static_cast<size_t>(im->size));
     int64_t nmetadata = 0;
-    if (!r.i32(&nmetadata)) return fmt("truncated: image %d has no nmetadata", index);
+    if (!r.i32(&nmetadata)) return printf_string("truncated: image %d has no nmetadata", index);
     // Each entry takes at least 9 bytes (string length + NUL, n): bounds the loop by the message.
     if (nmetadata < 0 || static_cast<uint64_t>(nmetadata) > r.left() / 9)
-        return fmt("bad length field nmetadata = %lld in image %d", (long long)nmetadata, index);
+        return printf_string("bad length field nmetadata = %lld in image %d", (long long)nmetadata, index);
     for (int64_t k = 0; k < nmetadata; ++k) {
         int64_t n = 0;
         if (!r.string(nullptr) || !r.i32(&n) || n < 0 || !r.skip(static_cast<size_t>(n)))
-            return fmt("truncated or bad metadata entry %lld of image %d", (long long)k, index);
+            return printf_string("truncated or bad metadata entry %lld of image %d", (long long)k, index);
     }
     return "";
 }
@@ -496,11 +495,11 @@ int lf_format_of_bot(int64_t pixelformat) {
 
 std::string check_fingerprint(const void *data, size_t size, const char *type, int64_t hash) {
     if (size > static_cast<size_t>(std::numeric_limits<int>::max()))
-        return fmt("oversized: %zu bytes, a %s holds at most %d", size, type, std::numeric_limits<int>::max());
-    if (size < 8) return fmt("truncated: %zu bytes, a %s needs at least 8", size, type);
+        return printf_string("oversized: %zu bytes, a %s holds at most %d", size, type, std::numeric_limits<int>::max());
+    if (size < 8) return printf_string("truncated: %zu bytes, a %s needs at least 8", size, type);
     const int64_t got = read_be(static_cast<const uint8_t *>(data), 8);
     if (got != hash)
-        return fmt("bad fingerprint 0x%016llx (a %s has 0x%016llx): wrong message type on this channel",
+        return printf_string("bad fingerprint 0x%016llx (a %s has 0x%016llx): wrong message type on this channel",
                    (unsigned long long)got, type, (unsigned long long)hash);
     return "";
 }
@@ -517,10 +516,10 @@ std::string decode_bot_images(const void *data, size_t size, StereoMessage &out)
     WireReader r(data, size);
     r.skip(8);
     int64_t utime = 0, n = 0;
-    if (!r.i64(&utime) || !r.i32(&n)) return fmt("truncated: %zu bytes, a bot_core.images_t needs at least 20", size);
+    if (!r.i64(&utime) || !r.i32(&n)) return printf_string("truncated: %zu bytes, a bot_core.images_t needs at least 20", size);
     // An image_t takes at least 32 bytes (and its role 2): bounds n by the message.
     if (n < 0 || static_cast<uint64_t>(n) > r.left() / 32)
-        return fmt("bad length field n_images = %lld for %zu bytes", (long long)n, size);
+        return printf_string("bad length field n_images = %lld for %zu bytes", (long long)n, size);
     std::vector<int64_t> roles(static_cast<size_t>(n));
     for (auto &role : roles) r.i16(&role);
     int left = -1, right = -1;
@@ -531,28 +530,28 @@ std::string decode_bot_images(const void *data, size_t size, StereoMessage &out)
         int *slot = roles[static_cast<size_t>(i)] == BOT_CORE_IMAGES_T_LEFT    ? &left
                     : roles[static_cast<size_t>(i)] == BOT_CORE_IMAGES_T_RIGHT ? &right
                                                                               : nullptr;
-        if (slot && *slot >= 0) return fmt("more than one image tagged %s", slot == &left ? "LEFT" : "RIGHT");
+        if (slot && *slot >= 0) return printf_string("more than one image tagged %s", slot == &left ? "LEFT" : "RIGHT");
         if (slot) *slot = i;
     }
-    if (r.left() != 0) return fmt("wrong size: %zu bytes, the bot_core.images_t declares %zu", size, r.pos());
+    if (r.left() != 0) return printf_string("wrong size: %zu bytes, the bot_core.images_t declares %zu", size, r.pos());
     if (left < 0 || right < 0) return "no image tagged LEFT and one tagged RIGHT";
     const BotImage &L = images[static_cast<size_t>(left)], &R = images[static_cast<size_t>(right)];
     const int format = lf_format_of_bot(L.pixelformat);
     if (format == 0)
-        return fmt("unsupported pixelformat %lld (GRAY %d, RGB %d, BGR %d)", (long long)L.pixelformat,
+        return printf_string("unsupported pixelformat %lld (GRAY %d, RGB %d, BGR %d)", (long long)L.pixelformat,
                    BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY, BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB,
                    BOT_CORE_IMAGE_T_PIXEL_FORMAT_BGR);
     if (R.pixelformat != L.pixelformat || R.width != L.width || R.height != L.height)
-        return fmt("left and right differ: %lldx%lld format %lld vs %lldx%lld format %lld", (long long)L.width,
+        return printf_string("left and right differ: %lldx%lld format %lld vs %lldx%lld format %lld", (long long)L.width,
                    (long long)L.height, (long long)L.pixelformat, (long long)R.width, (long long)R.height,
                    (long long)R.pixelformat);
     const int bpp = bytes_per_pixel(static_cast<int8_t>(format));
     if (L.width < 1 || L.height < 1 || L.width > 16384 || L.height > 16384)
-        return fmt("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)L.width, (long long)L.height);
+        return printf_string("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)L.width, (long long)L.height);
     for (const BotImage *im : {&L, &R}) {
         // The last row needs only width * bpp bytes; a driver may leave out the padding after it.
         if (im->row_stride < L.width * bpp || im->size < im->row_stride * (L.height - 1) + L.width * bpp)
-            return fmt("inconsistent dimensions: row_stride %lld, size %lld for %lldx%lld x %d bytes",
+            return printf_string("inconsistent dimensions: row_stride %lld, size %lld for %lldx%lld x %d bytes",
                        (long long)im->row_stride, (long long)im->size, (long long)L.width, (long long)L.height, bpp);
     }
     const size_t row = static_cast<size_t>(L.width * bpp), rows = static_cast<size_t>(L.height);
@@ -578,9 +577,9 @@ std::string decode_bot_images(const void *data, size_t size, StereoMessage &out)
 
 std::string check_lidar_to_camera(const double *T) {
     for (int i = 0; i < 16; ++i)
-        if (!std::isfinite(T[i])) return fmt("lidar_to_camera[%d] is not finite", i);
+        if (!std::isfinite(T[i])) return printf_string("lidar_to_camera[%d] is not finite", i);
     if (T[12] != 0 || T[13] != 0 || T[14] != 0 || T[15] != 1)
-        return fmt("lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
+        return printf_string("lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
     return "";
 }
 
@@ -591,18 +590,18 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     r.skip(8);
     int64_t utime = 0, seq = 0, n = 0, channels = 0;
     if (!r.i64(&utime) || !r.i32(&seq) || !r.string(nullptr) || !r.i32(&n))
-        return fmt("truncated: %zu bytes end inside the bot_core.pointcloud_t header", size);
+        return printf_string("truncated: %zu bytes end inside the bot_core.pointcloud_t header", size);
     if (n < 0 || static_cast<uint64_t>(n) > r.left() / 12)
-        return fmt("bad length field n_points = %lld for %zu bytes", (long long)n, size);
+        return printf_string("bad length field n_points = %lld for %zu bytes", (long long)n, size);
     const uint8_t *points = r.here();
     r.skip(12 * static_cast<size_t>(n));
     if (!r.i32(&channels) || channels < 0 || static_cast<uint64_t>(channels) > r.left() / 5)
-        return fmt("bad or missing length field n_channels (%lld) for %zu bytes", (long long)channels, size);
+        return printf_string("bad or missing length field n_channels (%lld) for %zu bytes", (long long)channels, size);
     for (int64_t c = 0; c < channels; ++c)
-        if (!r.string(nullptr)) return fmt("truncated or bad channel name %lld", (long long)c);
+        if (!r.string(nullptr)) return printf_string("truncated or bad channel name %lld", (long long)c);
     const uint64_t channel_bytes = 4 * static_cast<uint64_t>(channels) * static_cast<uint64_t>(n);
     if (channel_bytes != r.left())
-        return fmt("wrong size: %zu bytes, the bot_core.pointcloud_t declares %llu", size,
+        return printf_string("wrong size: %zu bytes, the bot_core.pointcloud_t declares %llu", size,
                    (unsigned long long)(r.pos() + channel_bytes));
     if (!T) return "a bot_core.pointcloud_t needs the LiDAR -> camera transform (--lidar-to-camera)";
     err = check_lidar_to_camera(T);
@@ -610,11 +609,11 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     std::vector<float> xyz(3 * static_cast<size_t>(n));
     for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
         const double x = get_be32f(points + 12 * i), y = get_be32f(points + 12 * i + 4), z = get_be32f(points + 12 * i + 8);
-        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return fmt("point %zu is not finite", i);
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return printf_string("point %zu is not finite", i);
         for (int k = 0; k < 3; ++k) {
             const double c = T[4 * k] * x + T[4 * k + 1] * y + T[4 * k + 2] * z + T[4 * k + 3];
             if (!(std::fabs(c) <= std::numeric_limits<float>::max()))
-                return fmt("point %zu is out of float range after lidar_to_camera", i);
+                return printf_string("point %zu is out of float range after lidar_to_camera", i);
             xyz[3 * i + static_cast<size_t>(k)] = static_cast<float>(c);
         }
     }

@@ -24,6 +24,9 @@
 
 namespace lidarflow::bridge {
 
+// printf into a std::string (messages of at most 511 bytes; longer ones are cut).
+std::string printf_string(const char *format, ...) __attribute__((format(printf, 1, 2)));
+
 // A decoded stereo_t that owns its arrays (released with the generated cleanup).
 class StereoMessage {
 public:

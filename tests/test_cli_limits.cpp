@@ -22,28 +22,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-    int code = -1;  // -1: killed by a signal
-    std::string output;
-};
+using Result = test::CliRun;
 
-// Runs `lidarflow ARGS` with stdout + stderr captured in a file of the scratch dir `dir`.
-Result run(const std::string &args, const fs::path &dir) {
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
-    const fs::path log = dir / "cli.log";
-    const std::string cmd = std::string("'") + cli + "' " + args + " > '" + log.string() + "' 2>&1";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.output = ss.str();
-    return r;
-}
+// The scratch dir names where a test's files go; the output comes back through a pipe.
+Result run(const std::string &args, const fs::path &) { return test::run_cli(args); }
 
-std::string q(const fs::path &p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path &p) { return test::quoted(p); }
 
 void expect_failure(const Result &r, int code, const char *needle) {
     if (r.code == code && r.output.find(needle) != std::string::npos) return;

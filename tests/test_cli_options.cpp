@@ -2,8 +2,6 @@
 // lidarflow options and the "did you mean" of unknown keys and flags: the listing comes from the
 // C ABI's key table (every key, its bounds and the default a fresh lf_options_t holds), --set
 // takes the named presets, and typos get the nearest name.
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -20,28 +18,14 @@
 extern "C" {
 #include <cmocka.h>
 }
+#include "test_support.hpp"
 
 using namespace lidarflow;
 
 namespace {
 
-struct Run {
-    int rc;
-    std::string out;  // stdout and stderr
-};
-
-Run run_cli(const std::string &args) {
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
-    FILE *p = popen((std::string("'") + cli + "' " + args + " 2>&1").c_str(), "r");
-    assert_non_null(p);
-    std::string out;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    const int status = pclose(p);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using Run = test::CliRun;
+using test::run_cli;
 
 bool contains(const std::string &s, const std::string &what) { return s.find(what) != std::string::npos; }
 
@@ -60,10 +44,10 @@ void test_closest_name(void **) {
 
 void test_options_lists_every_key_with_its_default(void **) {
     const Run r = run_cli("options");
-    assert_int_equal(r.rc, 0);
+    assert_int_equal(r.code, 0);
     const std::vector<capi::OptionKeyDescription> keys = capi::describe_option_keys();
     assert_true(keys.size() > 50);
-    std::istringstream lines(r.out);
+    std::istringstream lines(r.output);
     std::string line;
     size_t rows = 0;
     while (std::getline(lines, line)) {
@@ -82,32 +66,32 @@ void test_options_lists_every_key_with_its_default(void **) {
         }
     }
     assert_int_equal(rows, keys.size());
-    assert_true(contains(r.out, "threads") && contains(r.out, "[1, 256]"));
-    assert_true(contains(r.out, "default | balanced | fast"));
-    assert_true(contains(r.out, "(0, 10000]"));  // an open bound
+    assert_true(contains(r.output, "threads") && contains(r.output, "[1, 256]"));
+    assert_true(contains(r.output, "default | balanced | fast"));
+    assert_true(contains(r.output, "(0, 10000]"));  // an open bound
 }
 
 void test_unknown_keys_and_flags_get_a_suggestion(void **) {
     Run r = run_cli("demo --set thread=2 --out /nonexistent/dir");
-    assert_int_equal(r.rc, 2);
-    assert_true(contains(r.out, "unknown option key 'thread' (did you mean 'threads'?)"));
+    assert_int_equal(r.code, 2);
+    assert_true(contains(r.output, "unknown option key 'thread' (did you mean 'threads'?)"));
     r = run_cli("run --left0 x --rigth0 x");
-    assert_int_equal(r.rc, 2);
-    assert_true(contains(r.out, "unknown option --rigth0 (did you mean --right0?)"));
+    assert_int_equal(r.code, 2);
+    assert_true(contains(r.output, "unknown option --rigth0 (did you mean --right0?)"));
     r = run_cli("kitti --presett fast");
-    assert_int_equal(r.rc, 2);
-    assert_true(contains(r.out, "did you mean --preset?"));
+    assert_int_equal(r.code, 2);
+    assert_true(contains(r.output, "did you mean --preset?"));
     r = run_cli("run --bananas 3");
-    assert_int_equal(r.rc, 2);
-    assert_true(contains(r.out, "unknown option --bananas (see --help)"));
+    assert_int_equal(r.code, 2);
+    assert_true(contains(r.output, "unknown option --bananas (see --help)"));
 }
 
 void test_set_takes_named_presets(void **) {
     // demo renders a small synthetic pair: --set preset=fast must be accepted and reach the run
     // (an unknown preset fails before any work).
     Run r = run_cli("demo --set preset=turbo --out /nonexistent/dir");
-    assert_int_equal(r.rc, 2);
-    assert_true(contains(r.out, "unknown preset 'turbo'"));
+    assert_int_equal(r.code, 2);
+    assert_true(contains(r.output, "unknown preset 'turbo'"));
     capi::OptionValues v;
     capi::set_option_string(v, *capi::find_option_key("preset"), "fast");
     assert_int_equal(v.estimator.matching.grid_step, 6);

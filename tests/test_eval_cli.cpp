@@ -31,24 +31,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
-    int rc;
-    std::string out;  // stdout and stderr
-};
+using Run = test::CliRun;
 
-Run run_cli(const std::string &args) {
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
-    const std::string cmd = std::string("'") + cli + "' eval " + args + " 2>&1";
-    FILE *p = popen(cmd.c_str(), "r");
-    assert_non_null(p);
-    std::string out;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    const int status = pclose(p);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+Run run_cli(const std::string &args) { return test::run_cli("eval " + args); }
 
 std::string slurp(const fs::path &p) {
     std::ifstream f(p);
@@ -139,13 +124,13 @@ void gt_as_estimate_scores_zero(void **) {
     const Fixture f = make_fixture("eval_cli_zero");
     const std::string json = fs::path(f.est).parent_path().string() + "/out/result.json";
     const Run r = run_cli("--root '" + f.root + "' --est '" + f.est + "' --json '" + json + "'");
-    if (r.rc != 0) fail_msg("rc %d:\n%s", r.rc, r.out.c_str());
-    expect_contains(r.out, "000000");
-    expect_contains(r.out, "000001");
-    expect_contains(r.out, "pooled          occ     0.00    0.00    0.00    0.00");
-    expect_contains(r.out, "mean/frame      occ     0.00    0.00    0.00    0.00");
-    expect_contains(r.out, "                noc     0.00    0.00    0.00    0.00");
-    expect_contains(r.out, "100.00  100.00  100.00  100.00");
+    if (r.code != 0) fail_msg("rc %d:\n%s", r.code, r.output.c_str());
+    expect_contains(r.output, "000000");
+    expect_contains(r.output, "000001");
+    expect_contains(r.output, "pooled          occ     0.00    0.00    0.00    0.00");
+    expect_contains(r.output, "mean/frame      occ     0.00    0.00    0.00    0.00");
+    expect_contains(r.output, "                noc     0.00    0.00    0.00    0.00");
+    expect_contains(r.output, "100.00  100.00  100.00  100.00");
     const std::string j = slurp(json);
     expect_wellformed_json(j);
     expect_contains(j, "\"format\": \"lidarflow-eval/1\"");
@@ -176,8 +161,8 @@ void planted_outliers_are_counted(void **) {
     io::write_disparity_png(e.est_disp0("000001"), d0);
     const std::string json = f.est + "/../planted.json";
     const Run r = run_cli("--root '" + f.root + "' --est '" + f.est + "' --ids 000001 --json '" + json + "'");
-    if (r.rc != 0) fail_msg("rc %d:\n%s", r.rc, r.out.c_str());
-    assert_false(contains(r.out, "000000"));
+    if (r.code != 0) fail_msg("rc %d:\n%s", r.code, r.output.c_str());
+    assert_false(contains(r.output, "000000"));
     const std::string j = slurp(json);
     expect_wellformed_json(j);
     expect_contains(j, "\"n_err\": 5,");  // D0 and SF, occ and noc
@@ -190,10 +175,10 @@ void planted_outliers_are_counted(void **) {
     io::write_disparity_png(io::KittiLayout{lidar}.lidar("000001", 0), seeds);
     const Run t = run_cli("--root '" + f.root + "' --est '" + f.est + "' --ids 000001 --mode est-only --window 3 --lidar '" +
                           lidar + "' --json '" + json + "'");
-    if (t.rc != 0) fail_msg("rc %d:\n%s", t.rc, t.out.c_str());
-    expect_contains(t.out, "mode est-only");
-    expect_contains(t.out, "Table II");
-    expect_contains(t.out, "3x3");
+    if (t.code != 0) fail_msg("rc %d:\n%s", t.code, t.output.c_str());
+    expect_contains(t.output, "mode est-only");
+    expect_contains(t.output, "Table II");
+    expect_contains(t.output, "3x3");
     const std::string j2 = slurp(json);
     expect_wellformed_json(j2);
     expect_contains(j2, "\"mode\": \"est-only\"");
@@ -206,44 +191,44 @@ void missing_file_fails_clearly(void **) {
     const Fixture f = make_fixture("eval_cli_missing");
     fs::remove(io::KittiLayout{f.est}.est_flow("000001"));
     const Run r = run_cli("--root '" + f.root + "' --est '" + f.est + "'");
-    assert_true(r.rc != 0);
-    expect_contains(r.out, "missing estimate file");
-    expect_contains(r.out, "flow/000001_10.png");
+    assert_true(r.code != 0);
+    expect_contains(r.output, "missing estimate file");
+    expect_contains(r.output, "flow/000001_10.png");
 
     const Run ids = run_cli("--root '" + f.root + "' --est '" + f.est + "' --ids 000007");
-    assert_true(ids.rc != 0);
-    expect_contains(ids.out, "000007_10.png");
+    assert_true(ids.code != 0);
+    expect_contains(ids.output, "000007_10.png");
 
     const Run lidar = run_cli("--root '" + f.root + "' --est '" + f.est + "' --ids 000000 --lidar /nonexistent/lidar");
-    assert_true(lidar.rc != 0);
-    expect_contains(lidar.out, "lidar_0/000000_10.png");
+    assert_true(lidar.code != 0);
+    expect_contains(lidar.output, "lidar_0/000000_10.png");
 }
 
 void bad_options_and_sizes_fail(void **) {
     const Fixture f = make_fixture("eval_cli_bad");
     const std::string base = "--root '" + f.root + "' --est '" + f.est + "'";
     Run r = run_cli(base + " --mode dense");
-    assert_int_equal(r.rc, 2);
-    expect_contains(r.out, "--mode");
+    assert_int_equal(r.code, 2);
+    expect_contains(r.output, "--mode");
     r = run_cli(base + " --window 4");
-    assert_int_equal(r.rc, 2);
-    expect_contains(r.out, "--window");
+    assert_int_equal(r.code, 2);
+    expect_contains(r.output, "--window");
     r = run_cli("--est '" + f.est + "'");
-    assert_int_equal(r.rc, 2);
-    expect_contains(r.out, "--root");
+    assert_int_equal(r.code, 2);
+    expect_contains(r.output, "--root");
     r = run_cli("--root '" + f.root + "' --est '" + f.root + "'");  // no disp_0/ there
-    assert_true(r.rc != 0);
-    expect_contains(r.out, "disp_0");
+    assert_true(r.code != 0);
+    expect_contains(r.output, "disp_0");
 
     io::write_disparity_png(io::KittiLayout{f.est}.est_disp1("000000"), DisparityMap(H, W + 1, 1.0f));
     r = run_cli(base);
-    assert_int_equal(r.rc, 1);
-    expect_contains(r.out, "frame 000000");
-    expect_contains(r.out, "estimate d1");
+    assert_int_equal(r.code, 1);
+    expect_contains(r.output, "frame 000000");
+    expect_contains(r.output, "estimate d1");
 
     r = run_cli("--help");
-    assert_int_equal(r.rc, 0);
-    expect_contains(r.out, "--lidar");
+    assert_int_equal(r.code, 0);
+    expect_contains(r.output, "--lidar");
 }
 
 void real_frames_gt_as_estimate(void **) {
@@ -257,10 +242,10 @@ void real_frames_gt_as_estimate(void **) {
     const auto ids = io::KittiLayout{root}.frame_ids();
     for (const std::string &id : ids) submit_gt(root, est, id);
     const Run r = run_cli("--root '" + root + "' --est '" + est + "' --json '" + json + "'");
-    if (r.rc != 0) fail_msg("rc %d:\n%s", r.rc, r.out.c_str());
-    std::printf("%s", r.out.c_str());
-    for (const std::string &id : ids) expect_contains(r.out, id + "          occ     0.00    0.00    0.00    0.00");
-    expect_contains(r.out, "pooled          occ     0.00    0.00    0.00    0.00");
+    if (r.code != 0) fail_msg("rc %d:\n%s", r.code, r.output.c_str());
+    std::printf("%s", r.output.c_str());
+    for (const std::string &id : ids) expect_contains(r.output, id + "          occ     0.00    0.00    0.00    0.00");
+    expect_contains(r.output, "pooled          occ     0.00    0.00    0.00    0.00");
     const std::string j = slurp(json);
     expect_wellformed_json(j);
     expect_contains(j, "\"id\": \"" + ids.front() + "\"");

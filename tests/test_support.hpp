@@ -11,6 +11,8 @@
 #include <string>
 #include <utility>
 
+#include <sys/wait.h>
+
 #include "core/error.hpp"
 
 #include <setjmp.h>
@@ -80,5 +82,30 @@ inline std::filesystem::path scratch_dir(const std::string &name) {
     std::filesystem::create_directories(p);
     return p;
 }
+
+// What `lidarflow ARGS` printed and returned. code -1: killed by a signal.
+struct CliRun {
+    int code = -1;
+    std::string output;  // stdout and stderr together
+};
+
+// Runs the CLI that CTest names in LIDARFLOW_CLI with stdout + stderr piped to the test, as
+// when a user pipes the program: no terminal. ARGS is shell text (quote paths with quoted()).
+inline CliRun run_cli(const std::string &args) {
+    const char *cli = std::getenv("LIDARFLOW_CLI");
+    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
+    FILE *p = popen((std::string("'") + cli + "' " + args + " 2>&1").c_str(), "r");
+    assert_non_null(p);
+    CliRun r;
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
+    const int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+// A path as one single-quoted shell word.
+inline std::string quoted(const std::filesystem::path &p) { return "'" + p.string() + "'"; }
 
 }  // namespace lidarflow::test

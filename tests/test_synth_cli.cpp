@@ -31,28 +31,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string g_cli;
+using Result = test::CliRun;
 
-struct Result {
-    int code = -1;
-    std::string output;
-};
+// The scratch dir names where a test's files go; the output comes back through a pipe.
+Result run(const std::string &args, const fs::path &) { return test::run_cli(args); }
 
-// Runs `lidarflow ARGS` with stdout+stderr captured in a file of the scratch dir `dir`.
-Result run(const std::string &args, const fs::path &dir) {
-    const fs::path log = dir / "cli.log";
-    const std::string cmd = "'" + g_cli + "' " + args + " > '" + log.string() + "' 2>&1";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(log);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.output = ss.str();
-    return r;
-}
-
-std::string q(const fs::path &p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path &p) { return test::quoted(p); }
 
 void expect_kitti_frame(const fs::path &root, const std::string &id) {
     const io::KittiLayout k{root.string()};
@@ -249,7 +233,6 @@ int main() {
         std::printf("synth_cli: skipped: LIDARFLOW_CLI is not set to the built lidarflow binary\n");
         return 77;
     }
-    g_cli = cli;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_demo_writes_layout_and_pictures),
         cmocka_unit_test(test_synth_frames_ids_and_options),

@@ -256,9 +256,8 @@ struct ProgramWriter {
 };
 
 void capi_seeds() {
-    // Small frames (16x12 .. 24x16) are fast and reach every stage but the interpolation, which
-    // refuses them ("no valid match to interpolate": below about 48x36 px the consistency
-    // check keeps no match); the 64x48 seed gives full dense results.
+    // With fuzz_capi's search ranges (flow 16 px, disparity 32 px) frames from 16x12 up reach
+    // full dense results; the larger ones take longer (64x48: ~4x the time of 32x24).
     ProgramWriter a;  // two gray frames with LiDAR disparities, every result call
     a.u8(0).calibration(0, 60, 64, 0).push(16, 12, LF_PIXEL_GRAY8, 2, 5, 4, 12).push(16, 12, LF_PIXEL_GRAY8, 2, 5, 4, 12);
     a.all_results();
@@ -280,6 +279,16 @@ void capi_seeds() {
     d.push(20, 14, LF_PIXEL_GRAY8, 1, 4, 2, 8).push(20, 14, LF_PIXEL_GRAY8, 1, 4, 2, 8).all_results();
     d.u8(kRecreate).push(20, 14, LF_PIXEL_GRAY8, 1, 4, 2, 8).u8(kErrors).u8(3);
     save("fuzz_capi", "out_of_order", d.b);
+
+    ProgramWriter f;  // a mid-size pair: RGB, LiDAR disparities, every result call
+    f.u8(0).calibration(0, 90, 80, 0).push(32, 24, LF_PIXEL_RGB8, 1, 4, 4, 24).push(32, 24, LF_PIXEL_RGB8, 1, 4, 4, 24);
+    f.all_results();
+    save("fuzz_capi", "rgb_32x24_disparity_lidar", f.b);
+
+    ProgramWriter g;  // three frames: two results in a row, the second from the cached t1 features
+    g.u8(0).calibration(3, 70, 90, 0).push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31);
+    g.push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31).all_results().push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31).all_results();
+    save("fuzz_capi", "gray_48x36_three_frames", g.b);
 
     ProgramWriter e;  // the largest frames, camera-frame points
     e.u8(0).calibration(6, 80, 60, 0).push(64, 48, LF_PIXEL_GRAY8, 2, 7, 2, 30).push(64, 48, LF_PIXEL_GRAY8, 2, 7, 2, 30);

@@ -70,6 +70,14 @@ fuzz() {
         -DLIDARFLOW_FUZZ=ON -DLIDARFLOW_BUILD_TESTS=OFF >/dev/null
     cmake --build "$dir" -j "$jobs" --target "${targets[@]}"
     [ "${targets[0]}" != fuzz_targets ] || targets=($(cd "$dir/tests/fuzz" && ls fuzz_* | sort))
+    # The committed seeds must still be what they were made as (a message layout change makes
+    # them stale: wrong fingerprint): each decodes, or is refused where meant to be.
+    if [ -d "$dir/tests/fuzz/CMakeFiles/lidarflow_fuzz_corpus.dir" ]; then  # built with LCM
+        cmake --build "$dir" -j "$jobs" --target lidarflow_fuzz_corpus >/dev/null
+        "$dir/tests/fuzz/lidarflow_fuzz_corpus" --check "$root/tests/fuzz/corpus" >"$dir/seed-check.log" ||
+            { grep -A3 '^BAD' "$dir/seed-check.log"; echo "dev.sh fuzz: stale seeds: rerun" \
+              "$dir/tests/fuzz/lidarflow_fuzz_corpus tests/fuzz/corpus"; return 1; }
+    fi
     mkdir -p "$dir/findings" "$dir/fuzz-logs"
     for t in "${targets[@]}"; do
         local log="$dir/fuzz-logs/$t.log"

@@ -78,8 +78,19 @@ void check_status(int32_t rc, const char *message, const char *call) {
     // FUZZ_CAPI_TRACE=1 prints every call: what a seed or a finding actually does.
     static const bool trace = std::getenv("FUZZ_CAPI_TRACE") != nullptr;
     if (trace) std::fprintf(stderr, "  %s -> %d %s\n", call, rc, message ? message : "(null)");
-    if (rc < LF_OK || rc > LF_ERR_INTERNAL) fail(call, rc, "unknown status code");
-    if (rc == LF_ERR_INTERNAL) fail(call, rc, message);
+    switch (rc) {  // exactly the lf_status_t values of the header, each with its own text
+    case LF_OK:
+    case LF_ERR_INVALID_ARGUMENT:
+    case LF_ERR_SIZE_MISMATCH:
+    case LF_ERR_IO:
+    case LF_ERR_FORMAT:
+    case LF_ERR_BAD_STATE:
+    case LF_ERR_NOT_READY:
+    case LF_ERR_OUT_OF_MEMORY: break;
+    case LF_ERR_INTERNAL: fail(call, rc, message);
+    default: fail(call, rc, "not an lf_status_t value");
+    }
+    if (std::strcmp(lf_status_string(rc), lf_status_string(-1)) == 0) fail(call, rc, "status without a description");
     if (!message) fail(call, rc, "NULL last error");
     if ((rc == LF_OK) != (message[0] == '\0')) fail(call, rc, message);
 }
@@ -119,6 +130,33 @@ Image make_image(uint32_t w, uint32_t h, int32_t format, int stride_mode, uint8_
     return im;
 }
 
+// FUZZ_CAPI_STATS=1: how far the programs get, printed every 1000 programs and at exit.
+// A program counts once, under the furthest stage of any result it produced (a full result:
+// the interpolation's, i.e. two frames through every stage).
+struct Stats {
+    bool on = std::getenv("FUZZ_CAPI_STATS") != nullptr;
+    uint64_t programs = 0, pushes = 0, pushes_ok = 0, results = 0;
+    uint64_t by_stage[5] = {};  // 0: no result; else lf_stage_t
+    void print() const {
+        std::fprintf(stderr,
+                     "fuzz_capi stats: %llu programs, %llu pushes (%llu ok, %llu with a result); programs by furthest "
+                     "result: none %llu, matching %llu, consistency %llu, sparse %llu, full %llu (%.1f %%)\n",
+                     (unsigned long long)programs, (unsigned long long)pushes, (unsigned long long)pushes_ok,
+                     (unsigned long long)results, (unsigned long long)by_stage[0], (unsigned long long)by_stage[1],
+                     (unsigned long long)by_stage[2], (unsigned long long)by_stage[3], (unsigned long long)by_stage[4],
+                     programs ? 100.0 * by_stage[4] / programs : 0.0);
+    }
+};
+
+Stats &stats() {
+    static Stats *s = [] {
+        auto *p = new Stats;
+        if (p->on) std::atexit([] { stats().print(); });
+        return p;
+    }();
+    return *s;
+}
+
 struct Session {
     lf_options_t *options = nullptr;
     lf_calibration_t calibration{};
@@ -128,6 +166,7 @@ struct Session {
     uint32_t width = 0, height = 0;  // of the frames since the last reset (0: none)
     int64_t timestamp = 0;
     int shift = 0;  // total motion of the scene [px]
+    int furthest_stage = 0;  // of any result so far (Stats)
 
     void create() {
         const int32_t rc = lf_create(null_options ? nullptr : options, null_calibration ? nullptr : &calibration, &est);
@@ -268,13 +307,32 @@ void push_op(Program &in, Session &s) {
     static const bool trace = std::getenv("FUZZ_CAPI_TRACE") != nullptr;
     lf_result_info_t info;
     lf_result_info_init(&info);
-    if (trace && rc == LF_OK && lf_get_result_info(s.est, &info) == LF_OK)
+    Stats &st = stats();
+    if (st.on) {
+        ++st.pushes;
+        st.pushes_ok += rc == LF_OK;
+        if (rc == LF_OK && lf_get_result_info(s.est, &info) == LF_OK) {
+            ++st.results;
+            s.furthest_stage = std::max<int>(s.furthest_stage, info.last_stage);
+        }
+    }
+    if (trace && rc == LF_OK && lf_get_result_info(s.est, &info) == LF_OK) {
+        std::vector<uint8_t> valid(static_cast<size_t>(w) * h);
+        lf_result_buffers_t b;
+        lf_result_buffers_init(&b);
+        b.width = w;
+        b.height = h;
+        b.valid = {valid.data(), w};
+        if (lf_get_result(s.est, &b) == LF_OK)
+            std::fprintf(stderr, "    result of stage %d: %d of %u px valid\n", info.last_stage,
+                         static_cast<int>(std::count(valid.begin(), valid.end(), 1)), w * h);
         for (uint32_t i = 0; i < info.timing_count; ++i) {
             const char *name = nullptr;
             double seconds = 0;
             lf_get_timing(s.est, i, &name, &seconds);
             std::fprintf(stderr, "    %s %.1f ms\n", name, 1e3 * seconds);
         }
+    }
     if (rc == LF_OK) {
         if (s.width != 0 && (s.width != w || s.height != h)) fail("lf_push_frame accepted another size", rc, "");
         s.width = w;
@@ -314,7 +372,8 @@ void info_op(Program &in, Session &s) {
         if (info.width != s.width || info.height != s.height) fail("result size differs from the frames'", rc, "");
         if (info.last_stage < LF_STAGE_MATCHING || info.last_stage > LF_STAGE_INTERPOLATION)
             fail("unknown last_stage", info.last_stage, "");
-        if (info.t1_us <= info.t0_us || !(info.total_seconds >= 0)) fail("result times", rc, "");
+        if (info.t1_us <= info.t0_us || !(info.total_seconds >= 0) || !std::isfinite(info.total_seconds))
+            fail("result times", rc, "");
     }
 }
 
@@ -325,7 +384,8 @@ void timing_op(Program &in, Session &s) {
     const int32_t rc = lf_get_timing(s.est, index == 255 ? UINT32_MAX : index, (mask & 1) ? nullptr : &name,
                                      (mask & 2) ? nullptr : &seconds);
     check_status(rc, lf_last_error(s.est), "lf_get_timing");
-    if (rc == LF_OK && (((mask & 1) == 0 && (!name || !name[0])) || ((mask & 2) == 0 && !(seconds >= 0))))
+    if (rc == LF_OK &&
+        (((mask & 1) == 0 && (!name || !name[0])) || ((mask & 2) == 0 && !(seconds >= 0 && std::isfinite(seconds)))))
         fail("lf_get_timing: empty name or negative time", rc, "");
 }
 
@@ -412,14 +472,39 @@ void points_op(Program &in, Session &s) {
     const int32_t rc = lf_get_points3d(s.est, &b);
     check_status(rc, lf_last_error(s.est), "lf_get_points3d");
     if (rc == LF_OK && (mask & 7) == 7 && stride_mode == 0) {
-        for (size_t i = 0; i < static_cast<size_t>(w) * h; ++i) {
+        // The result the points come from: a valid point has a valid result with d0, d1 > 0
+        // and z = fx * baseline / d0.
+        const size_t n = static_cast<size_t>(w) * h;
+        std::vector<float> d0(n);
+        std::vector<uint8_t> valid_result(n);
+        lf_result_buffers_t r;
+        lf_result_buffers_init(&r);
+        r.width = w;
+        r.height = h;
+        r.d0 = {d0.data(), 4 * uint64_t(w)};
+        r.valid = {valid_result.data(), w};
+        const int32_t rc_result = lf_get_result(s.est, &r);
+        check_status(rc_result, lf_last_error(s.est), "lf_get_result (for lf_get_points3d)");
+        if (rc_result != LF_OK) fail("lf_get_points3d succeeded where lf_get_result failed", rc_result, "");
+        for (size_t i = 0; i < n; ++i) {
+            if (bufs[2][i] != 1) continue;
+            if (!valid_result[i] || !(d0[i] > 0)) fail("lf_get_points3d: a valid point where d0 is not", rc, "");
+            float z;
+            std::memcpy(&z, &bufs[0][12 * i + 8], 4);
+            const double expected = s.calibration.fx * s.calibration.baseline / d0[i];
+            if (!(std::fabs(z - expected) <= 1e-4 * expected)) fail("lf_get_points3d: z != fx * baseline / d0", rc, "");
+        }
+        for (size_t i = 0; i < n; ++i) {
             const uint8_t valid = bufs[2][i];
             if (valid > 1) fail("lf_get_points3d: valid is neither 0 nor 1", rc, "");
             float pm[6];
             std::memcpy(pm, &bufs[0][12 * i], 12);
             std::memcpy(pm + 3, &bufs[1][12 * i], 12);
+            // The header: invalid points are NaN; a valid one is finite (non-finite points,
+            // e.g. the depth of a tiny disparity, are marked invalid).
             for (float f : pm)
-                if (valid ? std::isnan(f) : !std::isnan(f)) fail("lf_get_points3d: NaN where valid or not NaN where not", rc, "");
+                if (valid ? !std::isfinite(f) : !std::isnan(f))
+                    fail("lf_get_points3d: non-finite where valid or not NaN where not", rc, "");
         }
     }
 }
@@ -441,6 +526,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     for (const auto &c : cheap)
         if (lf_options_set_int(s.options, c.key, c.value) != LF_OK)
             fail("cheap option refused", -1, lf_options_last_error(s.options));
+    // Search ranges that fit the frames (at most 64x48 px, disparities < 16 px): with the
+    // defaults (flow 400 px, disparity 256 px) the random initialisation puts most matches
+    // outside such small images, the forward-backward check keeps none and frames below
+    // ~64x48 never reach the interpolation.
+    if (lf_options_set_float(s.options, "matching.max_flow", 16) != LF_OK ||
+        lf_options_set_float(s.options, "matching.max_disparity", 32) != LF_OK)
+        fail("cheap option refused", -1, lf_options_last_error(s.options));
     const int n_options = in.u8() % 16;
     for (int i = 0; i < n_options; ++i) options_op(in, s.options);
     // OpenMP teams are slow under ASan and would make runs depend on scheduling.
@@ -486,5 +578,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     lf_destroy(s.est);
     lf_options_destroy(s.options);
+    Stats &st = stats();
+    if (st.on) {
+        ++st.programs;
+        ++st.by_stage[s.furthest_stage >= 1 && s.furthest_stage <= 4 ? s.furthest_stage : 0];
+        if (st.programs % 1000 == 0) st.print();
+    }
     return 0;
 }

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 // The KITTI PNG readers (src/io/kitti_png.cpp): disparity (16-bit gray), flow (16-bit RGB) and
 // 8-bit images, all three on every input. They take paths, so the input goes through a scratch
-// file. Each either throws lidarflow::Error or returns values its format allows.
+// file. Each either throws lidarflow::Error or returns values its format allows; bytes that do
+// not start with the PNG signature (any other format OpenCV knows, too) are refused by all three.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 
 #include "core/error.hpp"
@@ -24,8 +26,11 @@ extern "C" int LLVMFuzzerInitialize(int *, char ***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     const std::string &path = lidarflow::fuzz::write_scratch(data, size, ".png");
+    static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    const bool png = size >= 8 && std::memcmp(data, kSignature, 8) == 0;
     try {
         const lidarflow::DisparityMap d = lidarflow::io::read_disparity_png(path);
+        if (!png) std::abort();
         for (int y = 0; y < d.rows; ++y)
             for (int x = 0; x < d.cols; ++x) {
                 const float v = d(y, x);
@@ -35,6 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     try {
         const lidarflow::FlowField f = lidarflow::io::read_flow_png(path);
+        if (!png) std::abort();
         for (int y = 0; y < f.height(); ++y)
             for (int x = 0; x < f.width(); ++x) {
                 if (f.valid(y, x) > 1) std::abort();
@@ -44,6 +50,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     try {
         const cv::Mat m = lidarflow::io::read_image(path);
+        if (!png) std::abort();
         if (m.empty() || m.depth() != CV_8U || (m.channels() != 1 && m.channels() != 3)) std::abort();
     } catch (const lidarflow::Error &) {
     }

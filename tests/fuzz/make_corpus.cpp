@@ -3,6 +3,7 @@
 // own encoders and writers, so that the seeds are what the code under test really receives:
 //     build-fuzz/tests/fuzz/lidarflow_fuzz_corpus tests/fuzz/corpus
 // Each seed is small (the fuzzers mutate from it) and valid; the fuzzers find the invalid ones.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -11,11 +12,14 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "capi_program.hpp"
 #include "core/error.hpp"
 #include "core/maps.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_png.hpp"
+#include "io/velodyne.hpp"
 #include "wire.hpp"
 
 namespace {
@@ -66,6 +70,7 @@ void lcm_seeds() {
         lidarflow_stereo_t m{};
         m.utime = 1000;
         m.sequence = 2;
+        m.frame_number = 41;
         m.width = s.w;
         m.height = s.h;
         m.row_stride = s.stride;
@@ -182,6 +187,7 @@ void lcm_seeds() {
         s.utime = 4000;
         s.uptime_seconds = 1.5;
         s.stereo_received = 3;
+        s.stereo_lost_in_transport = 1;
         s.stereo_processed = 2;
         s.dropped_malformed = 1;
         s.queue_capacity = 2;
@@ -215,6 +221,13 @@ void kitti_seeds() {
     save("fuzz_kitti_png", "gray_5x4.png", file_bytes(tmp / "g.png"));
     io::write_image((tmp / "c.png").string(), bgr);
     save("fuzz_kitti_png", "bgr_3x2.png", file_bytes(tmp / "c.png"));
+    // Formats OpenCV decodes but the readers must refuse (PNG signature check): the fuzzer
+    // starts next to them.
+    for (const char *ext : {".bmp", ".tiff", ".pgm"}) {
+        std::vector<uint8_t> other;
+        require(cv::imencode(ext, gray, other), ErrorCode::Internal, std::string("cv::imencode ") + ext);
+        save("fuzz_kitti_png", std::string("not_png_gray_5x4") + ext, other);
+    }
 
     StereoCamera cam;
     cam.fx = cam.fy = 721.5377;
@@ -279,9 +292,8 @@ struct ProgramWriter {
 };
 
 void capi_seeds() {
-    // Small frames (16x12 .. 24x16) are fast and reach every stage but the interpolation, which
-    // refuses them ("no valid match to interpolate": below about 48x36 px the consistency
-    // check keeps no match); the 64x48 seed gives full dense results.
+    // With fuzz_capi's search ranges (flow 16 px, disparity 32 px) frames from 16x12 up reach
+    // full dense results; the larger ones take longer (64x48: ~4x the time of 32x24).
     ProgramWriter a;  // two gray frames with LiDAR disparities, every result call
     a.u8(0).calibration(0, 60, 64, 0).push(16, 12, LF_PIXEL_GRAY8, 2, 5, 4, 12).push(16, 12, LF_PIXEL_GRAY8, 2, 5, 4, 12);
     a.all_results();
@@ -304,21 +316,141 @@ void capi_seeds() {
     d.u8(kRecreate).push(20, 14, LF_PIXEL_GRAY8, 1, 4, 2, 8).u8(kErrors).u8(3);
     save("fuzz_capi", "out_of_order", d.b);
 
+    ProgramWriter f;  // a mid-size pair: RGB, LiDAR disparities, every result call
+    f.u8(0).calibration(0, 90, 80, 0).push(32, 24, LF_PIXEL_RGB8, 1, 4, 4, 24).push(32, 24, LF_PIXEL_RGB8, 1, 4, 4, 24);
+    f.all_results();
+    save("fuzz_capi", "rgb_32x24_disparity_lidar", f.b);
+
+    ProgramWriter g;  // three frames: two results in a row, the second from the cached t1 features
+    g.u8(0).calibration(3, 70, 90, 0).push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31);
+    g.push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31).all_results().push(48, 36, LF_PIXEL_GRAY8, -2, 6, 3, 31).all_results();
+    save("fuzz_capi", "gray_48x36_three_frames", g.b);
+
     ProgramWriter e;  // the largest frames, camera-frame points
     e.u8(0).calibration(6, 80, 60, 0).push(64, 48, LF_PIXEL_GRAY8, 2, 7, 2, 30).push(64, 48, LF_PIXEL_GRAY8, 2, 7, 2, 30);
     e.all_results();
     save("fuzz_capi", "gray_64x48_camera_points", e.b);
 }
 
+// --check: every seed of the decoder and reader targets, through the code under test, as the
+// fuzz target sees it. A seed is meant to be accepted by at least one reader of its target,
+// except the not_png_* ones, which every reader must refuse. Prints one line per seed and
+// reader; returns the number of seeds that do not behave as meant. (fuzz_capi seeds: run the
+// target with FUZZ_CAPI_TRACE=1 / FUZZ_CAPI_STATS=1.)
+template <class F>
+std::string outcome(F f) {
+    try {
+        return f();
+    } catch (const std::exception &e) {
+        return std::string("rejected: ") + e.what();
+    }
+}
+
+int check_seeds() {
+    int bad = 0;
+    const char *targets[] = {"fuzz_lcm_stereo",     "fuzz_lcm_lidar",   "fuzz_lcm_calibration", "fuzz_lcm_scene_flow",
+                             "fuzz_lcm_status",     "fuzz_kitti_png",   "fuzz_kitti_calib",     "fuzz_kitti_velodyne"};
+    for (const char *t : targets) {
+        const std::string target = t;
+        std::vector<fs::path> seeds;
+        for (const auto &e : fs::directory_iterator(g_root / target)) seeds.push_back(e.path());
+        std::sort(seeds.begin(), seeds.end());
+        if (seeds.empty()) {
+            std::printf("%s: no seeds\n", t);
+            ++bad;
+        }
+        for (const fs::path &seed : seeds) {
+            const std::vector<uint8_t> b = file_bytes(seed);
+            const std::string text(b.begin(), b.end());
+            // reader name -> "ok ..." or "rejected: ..."
+            std::vector<std::pair<std::string, std::string>> r;
+            auto lcm = [](const std::string &err, const std::string &ok) { return err.empty() ? ok : "rejected: " + err; };
+            if (target == "fuzz_lcm_stereo") {
+                bridge::StereoMessage m;
+                const std::string err = bridge::decode_stereo(b.data(), b.size(), m);
+                r.emplace_back("decode_stereo", lcm(err, err.empty() ? "ok " + std::to_string(m.left().width) + "x" +
+                                                                           std::to_string(m.left().height) +
+                                                                           " frame " + std::to_string(m.msg().frame_number)
+                                                                     : ""));
+            } else if (target == "fuzz_lcm_lidar") {
+                bridge::LidarSweep sw;
+                const std::string err = bridge::decode_lidar(b.data(), b.size(), sw);
+                r.emplace_back("decode_lidar", lcm(err, "ok"));
+            } else if (target == "fuzz_lcm_calibration") {
+                lf_calibration_t c;
+                int32_t w = 0, h = 0;
+                const std::string err = bridge::decode_calibration(b.data(), b.size(), &c, &w, &h);
+                r.emplace_back("decode_calibration", lcm(err, "ok fx " + std::to_string(c.fx)));
+            } else if (target == "fuzz_lcm_scene_flow") {
+                bridge::DecodedFlow f;
+                const std::string err = bridge::decode_scene_flow(b.data(), b.size(), f);
+                r.emplace_back("decode_scene_flow", lcm(err, "ok"));
+            } else if (target == "fuzz_lcm_status") {
+                bridge::StatusMessage s;
+                const std::string err = bridge::decode_status(b.data(), b.size(), s);
+                r.emplace_back("decode_status",
+                               lcm(err, err.empty() ? "ok lost_in_transport " +
+                                                          std::to_string(s.fields.stereo_lost_in_transport) +
+                                                          " last_error '" + s.last_error + "'"
+                                                    : ""));
+            } else if (target == "fuzz_kitti_png") {
+                const std::string p = seed.string();
+                r.emplace_back("read_disparity_png", outcome([&] {
+                                   const DisparityMap d = io::read_disparity_png(p);
+                                   return "ok " + std::to_string(d.cols) + "x" + std::to_string(d.rows);
+                               }));
+                r.emplace_back("read_flow_png", outcome([&] {
+                                   const FlowField f = io::read_flow_png(p);
+                                   return "ok " + std::to_string(f.width()) + "x" + std::to_string(f.height());
+                               }));
+                r.emplace_back("read_image", outcome([&] {
+                                   const cv::Mat m = io::read_image(p);
+                                   return "ok " + std::to_string(m.cols) + "x" + std::to_string(m.rows);
+                               }));
+            } else if (target == "fuzz_kitti_calib") {
+                r.emplace_back("parse_calib_cam_to_cam", outcome([&] {
+                                   const io::CamToCamCalib c = io::parse_calib_cam_to_cam(text, seed.filename().string());
+                                   return "ok fx " + std::to_string(c.camera.fx);
+                               }));
+                r.emplace_back("parse_calib_velo_to_cam", outcome([&] {
+                                   io::parse_calib_velo_to_cam(text, seed.filename().string());
+                                   return std::string("ok");
+                               }));
+            } else {
+                r.emplace_back("read_velodyne_bin", outcome([&] {
+                                   const io::VelodyneScan s = io::read_velodyne_bin(seed.string());
+                                   return "ok " + std::to_string(s.points.size()) + " points, " +
+                                          std::to_string(s.dropped_nonfinite) + " dropped";
+                               }));
+            }
+            const bool refuse = seed.filename().string().rfind("not_", 0) == 0;
+            int accepted = 0;
+            for (const auto &x : r) accepted += x.second.rfind("ok", 0) == 0;
+            const bool as_meant = refuse ? accepted == 0 : accepted > 0;
+            bad += !as_meant;
+            std::printf("%s %s/%s (meant: %s)\n", as_meant ? "ok  " : "BAD ", t, seed.filename().c_str(),
+                        refuse ? "refused by every reader" : "accepted");
+            for (const auto &x : r) std::printf("       %-24s %s\n", x.first.c_str(), x.second.c_str());
+        }
+    }
+    return bad;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: %s CORPUS_DIR (e.g. tests/fuzz/corpus)\n", argv[0]);
+    const bool check = argc == 3 && std::string(argv[1]) == "--check";
+    if (argc != 2 && !check) {
+        std::fprintf(stderr, "usage: %s [--check] CORPUS_DIR (e.g. tests/fuzz/corpus)\n", argv[0]);
         return 2;
     }
-    g_root = argv[1];
+    g_root = argv[argc - 1];
     try {
+        if (check) {
+            const int bad = check_seeds();
+            std::printf("%d seed(s) not as meant\n", bad);
+            return bad == 0 ? 0 : 1;
+        }
         lcm_seeds();
         kitti_seeds();
         capi_seeds();

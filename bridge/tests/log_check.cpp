@@ -8,6 +8,10 @@
 //   log_check verify OUT.log --inputs IN.log [...]
 //       The same for a log of outputs only (lidarflow-lcm-bridge --replay IN.log --out OUT.log):
 //       the inputs come from IN.log.
+//   Input options (verify): --stereo-channel / --lidar-channel NAME (default LIDARFLOW_STEREO /
+//       LIDARFLOW_LIDAR; bot_core.images_t / pointcloud_t are taken too, read with lcm-gen's
+//       decoder), --calib FILE (a fixed KITTI calib_cam_to_cam.txt instead of LIDARFLOW_CALIB),
+//       --lidar-to-camera "16 numbers" (for pointcloud_t, as the bridge's option).
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -25,6 +29,7 @@
 #include <vector>
 
 #include "bridge_core.hpp"
+#include "calib_file.hpp"
 #include "flow_reference.hpp"
 #include "lidarflow_status_t.h"
 
@@ -50,27 +55,42 @@ bool read_log(const std::string &path, std::vector<Event> &events) {
     return true;
 }
 
-// Checks every flow in `flows` against the inputs; calibration: the last valid one in `events`
-// before the flow's t1 frame (the player sends one per sequence).
+struct InputSetup {
+    std::string stereo_channel = "LIDARFLOW_STEREO", lidar_channel = "LIDARFLOW_LIDAR";
+    bool fixed_calibration = false;
+    lf_calibration_t calibration{};
+    bool have_lidar_to_camera = false;
+    double lidar_to_camera[16] = {};
+};
+
+// Checks every flow in `flows` against the inputs; calibration: the fixed one, else the last
+// valid one in `events` before the flow's t1 frame (the player sends one per sequence).
 int check_flows(const std::vector<Event> &events, const std::vector<std::vector<uint8_t>> &flows,
-                const std::vector<std::pair<std::string, std::string>> &options, int min_results) {
+                const std::vector<std::pair<std::string, std::string>> &options, int min_results,
+                const InputSetup &setup) {
     Inputs inputs;
+    inputs.have_lidar_to_camera = setup.have_lidar_to_camera;
+    std::copy(setup.lidar_to_camera, setup.lidar_to_camera + 16, inputs.lidar_to_camera);
     std::map<int64_t, lf_calibration_t> calibration_of;  // stereo utime -> calibration in force
-    lf_calibration_t cal{};
-    bool have_cal = false;
+    lf_calibration_t cal = setup.calibration;
+    bool have_cal = setup.fixed_calibration;
     for (const Event &e : events) {
-        if (e.channel == "LIDARFLOW_CALIB") {
+        int64_t utime = 0;
+        if (e.channel == "LIDARFLOW_CALIB" && !setup.fixed_calibration) {
             int32_t w, h;
             have_cal |= decode_calibration(e.data.data(), e.data.size(), &cal, &w, &h).empty();
-        } else if (e.channel == "LIDARFLOW_STEREO") {
+        } else if (e.channel == setup.stereo_channel) {
             StereoMessage m;
-            if (decode_stereo(e.data.data(), e.data.size(), m).empty() && have_cal) {
-                inputs.stereo[m.msg().utime] = e.data;
-                calibration_of[m.msg().utime] = cal;
+            const bool own = decode_stereo(e.data.data(), e.data.size(), m).empty();
+            if (own) utime = m.msg().utime;
+            if ((own || testing::bot_core_utime(e.data, &utime)) && have_cal) {
+                inputs.stereo[utime] = e.data;
+                calibration_of[utime] = cal;
             }
-        } else if (e.channel == "LIDARFLOW_LIDAR") {
+        } else if (e.channel == setup.lidar_channel) {
             LidarSweep s;
             if (decode_lidar(e.data.data(), e.data.size(), s).empty()) inputs.lidar[s.utime] = e.data;
+            else if (testing::bot_core_utime(e.data, &utime)) inputs.lidar[utime] = e.data;
         }
     }
     int ok = 0, with_lidar = 0;
@@ -137,6 +157,7 @@ int main(int argc, char **argv) {
         return 0;
     }
     std::string inputs_path;
+    InputSetup setup;
     std::vector<std::pair<std::string, std::string>> options;
     int min_results = 1, step = 1;
     FlowEncoding encoding = FlowEncoding::Int16;
@@ -145,6 +166,30 @@ int main(int argc, char **argv) {
         if (a == "--option" && v.find('=') != std::string::npos)
             options.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
         else if (a == "--inputs") inputs_path = v;
+        else if (a == "--stereo-channel") setup.stereo_channel = v;
+        else if (a == "--lidar-channel") setup.lidar_channel = v;
+        else if (a == "--calib") {
+            const std::string err = read_kitti_calibration(v, &setup.calibration);
+            if (!err.empty()) {
+                std::fprintf(stderr, "log_check: %s\n", err.c_str());
+                return 2;
+            }
+            setup.fixed_calibration = true;
+        } else if (a == "--lidar-to-camera") {
+            std::string text = v;
+            std::replace(text.begin(), text.end(), ',', ' ');
+            char *p = &text[0];
+            int n = 0;
+            for (char *end = nullptr; n < 16; ++n, p = end) {
+                setup.lidar_to_camera[n] = std::strtod(p, &end);
+                if (end == p) break;
+            }
+            if (n != 16) {
+                std::fprintf(stderr, "log_check: --lidar-to-camera needs 16 numbers\n");
+                return 2;
+            }
+            setup.have_lidar_to_camera = true;
+        }
         else if (a == "--min-results") min_results = std::atoi(v.c_str());
         else if (a == "--step") step = std::atoi(v.c_str());
         else if (a == "--encoding" && parse_flow_encoding(v, &encoding)) {
@@ -169,7 +214,7 @@ int main(int argc, char **argv) {
         events.insert(events.begin(), inputs.begin(), inputs.end());
     }
     int64_t stereo_in_log = 0;
-    for (const Event &e : events) stereo_in_log += e.channel == "LIDARFLOW_STEREO";
+    for (const Event &e : events) stereo_in_log += e.channel == setup.stereo_channel;
     std::vector<std::vector<uint8_t>> flows;
 
     if (mode == "verify") {
@@ -201,7 +246,7 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result\n");
             return 1;
         }
-        return check_flows(events, flows, options, min_results);
+        return check_flows(events, flows, options, min_results, setup);
     }
     if (mode != "replay") {
         std::fprintf(stderr, "log_check: unknown mode %s\n", mode.c_str());
@@ -257,5 +302,5 @@ int main(int argc, char **argv) {
         lcm_unsubscribe(lcm, sub);
     }
     lcm_destroy(lcm);
-    return rc ? rc : check_flows(events, flows, options, min_results);
+    return rc ? rc : check_flows(events, flows, options, min_results, setup);
 }

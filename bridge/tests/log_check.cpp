@@ -12,6 +12,14 @@
 //       LIDARFLOW_LIDAR; bot_core.images_t / pointcloud_t are taken too, read with lcm-gen's
 //       decoder), --calib FILE (a fixed KITTI calib_cam_to_cam.txt instead of LIDARFLOW_CALIB),
 //       --lidar-to-camera "16 numbers" (for pointcloud_t, as the bridge's option).
+//   Sharded runs (--shard K/N, all shards on one status channel): the last status of every
+//       shard must account for every stereo frame (received = processed + dropped + skipped for
+//       other shards), no two results may name the same pair, and the results together must
+//       match the shards' counts. --expect-pairs P: exactly P results and no frame dropped by
+//       any shard. --check-every M: compare only every M-th result with the C ABI (time).
+//   log_check throughput LOG [--stereo-channel NAME]
+//       Results per second of a recorded live run: from the first stereo frame's to the last
+//       result's arrival at the logger.
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -39,6 +47,7 @@ using testing::Inputs;
 namespace {
 
 struct Event {
+    int64_t timestamp;  // the logger's receive time [us]
     std::string channel;
     std::vector<uint8_t> data;
 };
@@ -48,7 +57,7 @@ bool read_log(const std::string &path, std::vector<Event> &events) {
     if (!log) return false;
     while (lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(log)) {
         const auto *d = static_cast<const uint8_t *>(e->data);
-        events.push_back({std::string(e->channel, e->channellen), std::vector<uint8_t>(d, d + e->datalen)});
+        events.push_back({e->timestamp, std::string(e->channel, e->channellen), std::vector<uint8_t>(d, d + e->datalen)});
         lcm_eventlog_free_event(e);
     }
     lcm_eventlog_destroy(log);
@@ -61,6 +70,7 @@ struct InputSetup {
     lf_calibration_t calibration{};
     bool have_lidar_to_camera = false;
     double lidar_to_camera[16] = {};
+    int check_every = 1;
 };
 
 // Checks every flow in `flows` against the inputs; calibration: the fixed one, else the last
@@ -94,7 +104,8 @@ int check_flows(const std::vector<Event> &events, const std::vector<std::vector<
         }
     }
     int ok = 0, with_lidar = 0;
-    for (const auto &f : flows) {
+    for (size_t i = 0; i < flows.size(); i += static_cast<size_t>(setup.check_every)) {
+        const auto &f = flows[i];
         DecodedFlow d;
         const std::string derr = decode_scene_flow(f.data(), f.size(), d);
         if (!derr.empty() || !calibration_of.count(d.header.utime)) {
@@ -159,7 +170,7 @@ int main(int argc, char **argv) {
     std::string inputs_path;
     InputSetup setup;
     std::vector<std::pair<std::string, std::string>> options;
-    int min_results = 1, step = 1;
+    int min_results = 1, step = 1, expect_pairs = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     for (int i = 3; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
@@ -167,6 +178,8 @@ int main(int argc, char **argv) {
             options.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
         else if (a == "--inputs") inputs_path = v;
         else if (a == "--stereo-channel") setup.stereo_channel = v;
+        else if (a == "--expect-pairs") expect_pairs = std::atoi(v.c_str());
+        else if (a == "--check-every") setup.check_every = std::max(1, std::atoi(v.c_str()));
         else if (a == "--lidar-channel") setup.lidar_channel = v;
         else if (a == "--calib") {
             const std::string err = read_kitti_calibration(v, &setup.calibration);
@@ -217,33 +230,89 @@ int main(int argc, char **argv) {
     for (const Event &e : events) stereo_in_log += e.channel == setup.stereo_channel;
     std::vector<std::vector<uint8_t>> flows;
 
-    if (mode == "verify") {
-        const Event *last_status = nullptr;
+    if (mode == "throughput") {
+        int64_t first = -1, last = -1, results = 0, stereo = 0, last_stereo = -1;
         for (const Event &e : events) {
-            if (e.channel == "LIDARFLOW_FLOW") flows.push_back(e.data);
-            if (e.channel == "LIDARFLOW_STATUS") last_status = &e;
+            if (e.channel == setup.stereo_channel) {
+                if (first < 0) first = e.timestamp;
+                last_stereo = e.timestamp;
+                ++stereo;
+            } else if (e.channel == "LIDARFLOW_FLOW") {
+                last = e.timestamp;
+                ++results;
+            }
         }
-        StatusMessage status;
-        const std::string serr =
-            last_status ? decode_status(last_status->data.data(), last_status->data.size(), status) : "none in the log";
-        if (!serr.empty()) {
-            std::fprintf(stderr, "log_check: no decodable status message in %s: %s\n", path.c_str(), serr.c_str());
+        if (first < 0 || last <= first) {
+            std::fprintf(stderr, "log_check: no stereo frames or no results after them\n");
             return 1;
         }
-        const lidarflow_status_t &s = status.fields;
-        const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
-                                s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
-                                s.dropped_shutdown;
-        std::printf("log_check: status: stereo received %lld (log has %lld), processed %lld, dropped %lld (stale %lld), "
-                    "results %lld, latency mean %.1f ms max %.1f ms, estimator mean %.1f ms, queue %d, busy %d\n",
-                    (long long)s.stereo_received, (long long)stereo_in_log, (long long)s.stereo_processed,
-                    (long long)dropped, (long long)s.dropped_stale, (long long)s.results_published, s.latency_mean_ms,
-                    s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
-        const bool accounted = s.stereo_received == s.stereo_processed + dropped && s.queue_depth == 0 && s.busy == 0 &&
-                               s.stereo_received == stereo_in_log &&
-                               s.results_published == static_cast<int64_t>(flows.size());
+        const double s = 1e-6 * static_cast<double>(last - first),
+                     stream = 1e-6 * static_cast<double>(last_stereo - first);
+        std::printf("log_check: throughput: %lld results in %.2f s = %.2f results/s (stream: %lld frames in %.2f s, "
+                    "%.2f frames/s)\n",
+                    (long long)results, s, static_cast<double>(results) / s, (long long)stereo, stream,
+                    stream > 0 ? static_cast<double>(stereo - 1) / stream : 0.0);
+        return 0;
+    }
+    if (mode == "verify") {
+        std::map<int32_t, StatusMessage> last_status;  // per shard
+        std::map<std::pair<int64_t, int64_t>, int> pairs;  // (utime0, utime) -> results
+        for (const Event &e : events) {
+            if (e.channel == "LIDARFLOW_FLOW") {
+                flows.push_back(e.data);
+                DecodedFlow d;
+                if (decode_scene_flow(e.data.data(), e.data.size(), d).empty())
+                    ++pairs[{d.header.utime0, d.header.utime}];
+            }
+            StatusMessage status;
+            if (e.channel == "LIDARFLOW_STATUS") {
+                const std::string serr = decode_status(e.data.data(), e.data.size(), status);
+                if (!serr.empty()) {
+                    std::fprintf(stderr, "log_check: undecodable status message in %s: %s\n", path.c_str(), serr.c_str());
+                    return 1;
+                }
+                last_status[status.fields.shard_index] = status;
+            }
+        }
+        if (last_status.empty()) {
+            std::fprintf(stderr, "log_check: no status message in %s\n", path.c_str());
+            return 1;
+        }
+        int64_t results = 0, dropped_all = 0;
+        bool accounted = true;
+        for (const auto &[shard, status] : last_status) {
+            const lidarflow_status_t &s = status.fields;
+            const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
+                                    s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
+                                    s.dropped_shutdown;
+            std::printf("log_check: status of shard %d/%d: stereo received %lld (log has %lld), processed %lld, dropped "
+                        "%lld (stale %lld), skipped for other shards %lld, results %lld, latency mean %.1f ms max %.1f "
+                        "ms, estimator mean %.1f ms, queue %d, busy %d\n",
+                        s.shard_index, s.shard_count, (long long)s.stereo_received, (long long)stereo_in_log,
+                        (long long)s.stereo_processed, (long long)dropped, (long long)s.dropped_stale,
+                        (long long)s.skipped_other_shard, (long long)s.results_published, s.latency_mean_ms,
+                        s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
+            accounted &= s.stereo_received == s.stereo_processed + dropped + s.skipped_other_shard &&
+                         s.queue_depth == 0 && s.busy == 0 && s.stereo_received == stereo_in_log &&
+                         s.shard_count == static_cast<int32_t>(last_status.size());
+            results += s.results_published;
+            dropped_all += dropped;
+        }
+        accounted &= results == static_cast<int64_t>(flows.size());
         if (!accounted) {
-            std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result\n");
+            std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result (or a shard "
+                                 "is missing)\n");
+            return 1;
+        }
+        for (const auto &[pair, n] : pairs)
+            if (n != 1) {
+                std::fprintf(stderr, "log_check: the pair %lld -> %lld was published %d times\n", (long long)pair.first,
+                             (long long)pair.second, n);
+                return 1;
+            }
+        if (expect_pairs >= 0 && (static_cast<int64_t>(pairs.size()) != expect_pairs || dropped_all != 0)) {
+            std::fprintf(stderr, "log_check: %zu distinct pairs and %lld frames dropped; expected %d and none\n",
+                         pairs.size(), (long long)dropped_all, expect_pairs);
             return 1;
         }
         return check_flows(events, flows, options, min_results, setup);

@@ -77,6 +77,10 @@ double monotonic_seconds() {
 
 struct Bridge::Frame {
     StereoMessage stereo;
+    // --shard: the frame's index in the stream, and whether it only serves as the t0 of this
+    // shard's next pair (its own pair, with the frame before, belongs to another shard).
+    int64_t index = 0;
+    bool t0_only = false;
     lf_calibration_t calibration{};
     double received_seconds = 0;
 };
@@ -89,8 +93,10 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         return nullptr;
     }
     if (config.queue_capacity < 1 || config.lidar_buffer < 1 || config.lidar_wait_ms < 0 ||
-        config.lidar_tolerance_us < 0 || config.step < 1 || config.step > 16) {
-        *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16";
+        config.lidar_tolerance_us < 0 || config.step < 1 || config.step > 16 || config.shard_count < 1 ||
+        config.shard_index < 0 || config.shard_index >= config.shard_count) {
+        *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16, "
+                 "shard K/N with 0 <= K < N";
         return nullptr;
     }
     if (config.have_lidar_to_camera) {
@@ -198,6 +204,18 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     }
     const lidarflow_stereo_t &m = frame->stereo.msg();
     if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
+    frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
+    if (config_.shard_count > 1) {
+        // Pair (index - 1, index) belongs to shard index % N; a shard needs its t1 frames and
+        // the frame before each as t0. Unsigned modulo: frame numbers may be negative.
+        const auto n = static_cast<uint64_t>(config_.shard_count);
+        const uint64_t r = static_cast<uint64_t>(frame->index) % n, k = static_cast<uint64_t>(config_.shard_index);
+        if (r != k && (r + 1) % n != k) {
+            ++counters_.skipped_other_shard;
+            return;
+        }
+        frame->t0_only = r != k;
+    }
     if (config_.fixed_calibration) {
         frame->calibration = config_.calibration;
     } else if (!have_calibration_) {
@@ -370,7 +388,10 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     }
     const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
     // A new sequence or another image size / format starts over: never pair across a cut.
-    if (estimator_has_frame_ && (m.sequence != prev_sequence_ || left.width != prev_width_ ||
+    // --shard: a pair only of consecutive frames; a frame that is just the next pair's t0
+    // starts over, so that no one else's pair is computed.
+    const bool shard_cut = config_.shard_count > 1 && (frame.t0_only || static_cast<uint64_t>(frame.index) - 1 != static_cast<uint64_t>(prev_index_));
+    if (estimator_has_frame_ && (shard_cut || m.sequence != prev_sequence_ || left.width != prev_width_ ||
                                  left.height != prev_height_ || left.format != prev_format_)) {
         lf_reset(estimator_);
         estimator_has_frame_ = false;
@@ -400,6 +421,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     const int64_t previous_lidar_utime = prev_lidar_utime_;
     estimator_has_frame_ = true;
     prev_sequence_ = m.sequence;
+    prev_index_ = frame.index;
     prev_utime_ = m.utime;
     prev_width_ = left.width;
     prev_height_ = left.height;
@@ -496,6 +518,9 @@ void Bridge::publish_status() {
     s.dropped_malformed = c.dropped_malformed;
     s.dropped_estimator_error = c.dropped_estimator_error;
     s.dropped_shutdown = c.dropped_shutdown;
+    s.skipped_other_shard = c.skipped_other_shard;
+    s.shard_index = config_.shard_index;
+    s.shard_count = config_.shard_count;
     s.lidar_received = c.lidar_received;
     s.lidar_malformed = c.lidar_malformed;
     s.lidar_rejected = c.lidar_rejected;

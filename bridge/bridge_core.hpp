@@ -48,6 +48,10 @@ struct BridgeConfig {
     int lidar_wait_ms = 30;              // how long a frame waits for a late LiDAR sweep
     int lidar_buffer = 8;                // LiDAR sweeps kept for pairing (oldest dropped)
     int queue_capacity = 1;              // frames waiting for the worker (latest wins)
+    // --shard K/N: this process computes only the pairs whose t1 frame has index % N == K
+    // (index: stereo_t.frame_number, or the arrival count for bot_core.images_t), and takes
+    // the frame before as that pair's t0; other frames are counted as skipped_other_shard.
+    int shard_index = 0, shard_count = 1;
     FlowEncoding encoding = FlowEncoding::Int16;
     int step = 1;                        // flow subsampling
     double status_period_s = 1.0;        // <= 0: status only at shutdown
@@ -65,6 +69,7 @@ struct Counters {
     int64_t dropped_stale = 0, dropped_out_of_order = 0, dropped_no_calibration = 0,
             dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
             dropped_shutdown = 0;
+    int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
@@ -145,6 +150,7 @@ private:
     bool have_last_ = false;          // the last accepted frame, for the order check
     bool have_frame_number_ = false;  // the last decodable stereo message, for transport gaps
     int64_t last_frame_number_ = 0;
+    int64_t arrival_index_ = 0;       // decodable frames without a frame_number, for --shard
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
@@ -167,6 +173,7 @@ private:
     uint32_t prev_width_ = 0, prev_height_ = 0;
     int32_t prev_format_ = 0;
     bool prev_had_lidar_ = false;
+    int64_t prev_index_ = 0;          // --shard: index of the frame the estimator holds
 };
 
 // Monotonic clock [s].

@@ -39,6 +39,9 @@ const char *kUsage =
     "  --step N                 publish every N-th pixel in x and y (default 1)\n"
     "  --option KEY=VALUE       estimator option (lidarflow.h keys), repeatable; threads defaults\n"
     "                           to the number of CPUs\n"
+    "  --shard K/N              one of N processes sharing the stream: compute only the pairs whose\n"
+    "                           t1 frame index % N == K (index: stereo_t.frame_number, else arrival\n"
+    "                           order); the queue default becomes 2 (a pair)\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
     "  --replay IN.log --out OUT.log\n"
@@ -93,7 +96,7 @@ int main(int argc, char **argv) {
     using namespace lidarflow::bridge;
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
-    bool threads_given = false;
+    bool threads_given = false, queue_given = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--help" || a == "-h") {
@@ -150,7 +153,19 @@ int main(int argc, char **argv) {
         else if (a == "--lidar-tolerance-ms") config.lidar_tolerance_us = static_cast<int64_t>(1000 * need_number(0, 1e6));
         else if (a == "--lidar-wait-ms") config.lidar_wait_ms = static_cast<int>(need_number(0, 10000));
         else if (a == "--lidar-buffer") config.lidar_buffer = static_cast<int>(need_number(1, 1000));
-        else if (a == "--queue") config.queue_capacity = static_cast<int>(need_number(1, 1000));
+        else if (a == "--queue") {
+            config.queue_capacity = static_cast<int>(need_number(1, 1000));
+            queue_given = true;
+        } else if (a == "--shard") {
+            int k = -1, n = 0, used = 0;
+            if (std::sscanf(v, "%d/%d%n", &k, &n, &used) != 2 || v[used] != '\0' || n < 1 || n > 1000 || k < 0 ||
+                k >= n) {
+                std::fprintf(stderr, "lidarflow-lcm-bridge: --shard %s: expected K/N with 0 <= K < N <= 1000\n", v);
+                return 2;
+            }
+            config.shard_index = k;
+            config.shard_count = n;
+        }
         else if (a == "--step") config.step = static_cast<int>(need_number(1, 16));
         else if (a == "--status-period") config.status_period_s = need_number(0, 3600);
         else if (a == "--encoding") {
@@ -172,6 +187,9 @@ int main(int argc, char **argv) {
             return 2;
         }
     }
+    // A shard's frames come in pairs (t0, t1): room for both, or a t0 would go stale behind
+    // the pair in progress.
+    if (config.shard_count > 1 && !queue_given) config.queue_capacity = 2;
     if (!threads_given) {
         const unsigned n = std::thread::hardware_concurrency();
         config.options.insert(config.options.begin(), {"threads", std::to_string(n ? n : 1)});
@@ -227,12 +245,12 @@ int main(int argc, char **argv) {
         std::fprintf(stderr,
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
-                     "%lld, shutdown %lld); results %lld, latency mean %.1f ms max %.1f ms\n",
+                     "%lld, shutdown %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown,
-                     (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms);
+                     (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms);
     }
     lcm_destroy(lcm);
     return rc;

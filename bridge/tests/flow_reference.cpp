@@ -7,6 +7,93 @@
 #include <memory>
 
 namespace lidarflow::bridge::testing {
+namespace {
+
+// One frame's images as the C ABI takes them, with the bytes they point into.
+struct RefFrame {
+    StereoMessage own;
+    std::vector<uint8_t> left_bytes, right_bytes;
+    lf_image_t left{}, right{};
+};
+
+// lcm-gen's decoder for a bot_core.images_t: the LEFT and RIGHT entries as they are, row stride
+// included (the C ABI takes any stride; the bridge repacks rows, so equal results also check that).
+std::string reference_bot_images(const std::vector<uint8_t> &raw, RefFrame &f) {
+    bot_core_images_t m;
+    if (bot_core_images_t_decode(raw.data(), 0, static_cast<int>(raw.size()), &m) < 0)
+        return "bot_core.images_t does not decode (lcm-gen)";
+    std::string err;
+    for (int i = 0; i < m.n_images; ++i) {
+        const bot_core_image_t &im = m.images[i];
+        const int role = m.image_types[i];
+        if (role != BOT_CORE_IMAGES_T_LEFT && role != BOT_CORE_IMAGES_T_RIGHT) continue;
+        lf_image_t v{};
+        v.width = static_cast<uint32_t>(im.width);
+        v.height = static_cast<uint32_t>(im.height);
+        v.stride_bytes = static_cast<uint64_t>(im.row_stride);
+        v.format = im.pixelformat == BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY  ? LF_PIXEL_GRAY8
+                   : im.pixelformat == BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB ? LF_PIXEL_RGB8
+                   : im.pixelformat == BOT_CORE_IMAGE_T_PIXEL_FORMAT_BGR ? LF_PIXEL_BGR8
+                                                                          : 0;
+        if (!v.format) err = "unsupported pixel format";
+        std::vector<uint8_t> &bytes = role == BOT_CORE_IMAGES_T_LEFT ? f.left_bytes : f.right_bytes;
+        bytes.assign(im.data, im.data + im.size);
+        v.data = bytes.data();
+        (role == BOT_CORE_IMAGES_T_LEFT ? f.left : f.right) = v;
+    }
+    bot_core_images_t_decode_cleanup(&m);
+    if (err.empty() && (!f.left.data || !f.right.data)) err = "no LEFT or RIGHT image";
+    return err;
+}
+
+std::string reference_frame(const std::vector<uint8_t> &raw, RefFrame &f) {
+    if (message_fingerprint(raw.data(), raw.size()) == __bot_core_images_t_get_hash()) return reference_bot_images(raw, f);
+    if (!decode_stereo(raw.data(), raw.size(), f.own).empty()) return "stereo input does not decode";
+    f.left = f.own.left();
+    f.right = f.own.right();
+    return "";
+}
+
+// A bot_core.pointcloud_t's points moved into the camera frame as the bridge documents it:
+// T * (x, y, z, 1) in double, one cast to float.
+std::string reference_bot_pointcloud(const std::vector<uint8_t> &raw, const Inputs &inputs, LidarSweep &out) {
+    if (!inputs.have_lidar_to_camera) return "a pointcloud_t input but no lidar_to_camera given";
+    bot_core_pointcloud_t m;
+    if (bot_core_pointcloud_t_decode(raw.data(), 0, static_cast<int>(raw.size()), &m) < 0)
+        return "bot_core.pointcloud_t does not decode (lcm-gen)";
+    const double *T = inputs.lidar_to_camera;
+    out.utime = m.utime;
+    out.kind = LF_LIDAR_POINTS_CAMERA;
+    out.xyz.clear();
+    for (int i = 0; i < m.n_points; ++i) {
+        const double x = m.points[i][0], y = m.points[i][1], z = m.points[i][2];
+        for (int r = 0; r < 3; ++r)
+            out.xyz.push_back(static_cast<float>(T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3]));
+    }
+    bot_core_pointcloud_t_decode_cleanup(&m);
+    return "";
+}
+
+}  // namespace
+
+bool bot_core_utime(const std::vector<uint8_t> &raw, int64_t *utime) {
+    const int64_t fp = message_fingerprint(raw.data(), raw.size());
+    if (fp == __bot_core_images_t_get_hash()) {
+        bot_core_images_t m;
+        if (bot_core_images_t_decode(raw.data(), 0, static_cast<int>(raw.size()), &m) < 0) return false;
+        *utime = m.utime;
+        bot_core_images_t_decode_cleanup(&m);
+        return true;
+    }
+    if (fp == __bot_core_pointcloud_t_get_hash()) {
+        bot_core_pointcloud_t m;
+        if (bot_core_pointcloud_t_decode(raw.data(), 0, static_cast<int>(raw.size()), &m) < 0) return false;
+        *utime = m.utime;
+        bot_core_pointcloud_t_decode_cleanup(&m);
+        return true;
+    }
+    return false;
+}
 
 std::string check_flow(const std::vector<std::pair<std::string, std::string>> &options, const lf_calibration_t &cal,
                        const Inputs &inputs, const std::vector<uint8_t> &flow_bytes) {
@@ -16,10 +103,10 @@ std::string check_flow(const std::vector<std::pair<std::string, std::string>> &o
     const lidarflow_scene_flow_t &h = got.header;
     const auto s0 = inputs.stereo.find(h.utime0), s1 = inputs.stereo.find(h.utime);
     if (s0 == inputs.stereo.end() || s1 == inputs.stereo.end()) return "flow names stereo frames that were not sent";
-    StereoMessage m0, m1;
-    if (!decode_stereo(s0->second.data(), s0->second.size(), m0).empty() ||
-        !decode_stereo(s1->second.data(), s1->second.size(), m1).empty())
-        return "stereo input does not decode";
+    RefFrame f0, f1;
+    err = reference_frame(s0->second, f0);
+    if (err.empty()) err = reference_frame(s1->second, f1);
+    if (!err.empty()) return err;
     LidarSweep l[2];
     const bool has[2] = {(h.lidar_flags & LIDARFLOW_SCENE_FLOW_T_LIDAR_T0) != 0,
                          (h.lidar_flags & LIDARFLOW_SCENE_FLOW_T_LIDAR_T1) != 0};
@@ -28,7 +115,12 @@ std::string check_flow(const std::vector<std::pair<std::string, std::string>> &o
         if (!has[k]) continue;
         const auto it = inputs.lidar.find(lt[k]);
         if (it == inputs.lidar.end()) return "flow names a LiDAR sweep that was not sent";
-        if (!decode_lidar(it->second.data(), it->second.size(), l[k]).empty()) return "LiDAR input does not decode";
+        if (message_fingerprint(it->second.data(), it->second.size()) == __bot_core_pointcloud_t_get_hash()) {
+            err = reference_bot_pointcloud(it->second, inputs, l[k]);
+            if (!err.empty()) return err;
+        } else if (!decode_lidar(it->second.data(), it->second.size(), l[k]).empty()) {
+            return "LiDAR input does not decode";
+        }
     }
     lf_options_t *opt = nullptr;
     lf_options_create(&opt);
@@ -44,7 +136,7 @@ std::string check_flow(const std::vector<std::pair<std::string, std::string>> &o
     lf_options_destroy(opt);
     if (created != LF_OK) return std::string("lf_create: ") + lf_last_error(nullptr);
     std::unique_ptr<lf_estimator_t, void (*)(lf_estimator_t *)> guard(e, lf_destroy);
-    const lf_image_t a0 = m0.left(), b0 = m0.right(), a1 = m1.left(), b1 = m1.right();
+    const lf_image_t a0 = f0.left, b0 = f0.right, a1 = f1.left, b1 = f1.right;
     const lf_lidar_t v0 = l[0].view(), v1 = l[1].view();
     if (lf_push_frame(e, h.utime0, &a0, &b0, has[0] ? &v0 : nullptr) != LF_OK ||
         lf_push_frame(e, h.utime, &a1, &b1, has[1] ? &v1 : nullptr) != LF_OK)

@@ -8,6 +8,18 @@
 //   log_check verify OUT.log --inputs IN.log [...]
 //       The same for a log of outputs only (lidarflow-lcm-bridge --replay IN.log --out OUT.log):
 //       the inputs come from IN.log.
+//   Input options (verify): --stereo-channel / --lidar-channel NAME (default LIDARFLOW_STEREO /
+//       LIDARFLOW_LIDAR; bot_core.images_t / pointcloud_t are taken too, read with lcm-gen's
+//       decoder), --calib FILE (a fixed KITTI calib_cam_to_cam.txt instead of LIDARFLOW_CALIB),
+//       --lidar-to-camera "16 numbers" (for pointcloud_t, as the bridge's option).
+//   Sharded runs (--shard K/N, all shards on one status channel): the last status of every
+//       shard must account for every stereo frame (received = processed + dropped + skipped for
+//       other shards), no two results may name the same pair, and the results together must
+//       match the shards' counts. --expect-pairs P: exactly P results and no frame dropped by
+//       any shard. --check-every M: compare only every M-th result with the C ABI (time).
+//   log_check throughput LOG [--stereo-channel NAME]
+//       Results per second of a recorded live run: from the first stereo frame's to the last
+//       result's arrival at the logger.
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -25,6 +37,7 @@
 #include <vector>
 
 #include "bridge_core.hpp"
+#include "calib_file.hpp"
 #include "flow_reference.hpp"
 #include "lidarflow_status_t.h"
 
@@ -34,6 +47,7 @@ using testing::Inputs;
 namespace {
 
 struct Event {
+    int64_t timestamp;  // the logger's receive time [us]
     std::string channel;
     std::vector<uint8_t> data;
 };
@@ -43,38 +57,55 @@ bool read_log(const std::string &path, std::vector<Event> &events) {
     if (!log) return false;
     while (lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(log)) {
         const auto *d = static_cast<const uint8_t *>(e->data);
-        events.push_back({std::string(e->channel, e->channellen), std::vector<uint8_t>(d, d + e->datalen)});
+        events.push_back({e->timestamp, std::string(e->channel, e->channellen), std::vector<uint8_t>(d, d + e->datalen)});
         lcm_eventlog_free_event(e);
     }
     lcm_eventlog_destroy(log);
     return true;
 }
 
-// Checks every flow in `flows` against the inputs; calibration: the last valid one in `events`
-// before the flow's t1 frame (the player sends one per sequence).
+struct InputSetup {
+    std::string stereo_channel = "LIDARFLOW_STEREO", lidar_channel = "LIDARFLOW_LIDAR";
+    bool fixed_calibration = false;
+    lf_calibration_t calibration{};
+    bool have_lidar_to_camera = false;
+    double lidar_to_camera[16] = {};
+    int check_every = 1;
+};
+
+// Checks every flow in `flows` against the inputs; calibration: the fixed one, else the last
+// valid one in `events` before the flow's t1 frame (the player sends one per sequence).
 int check_flows(const std::vector<Event> &events, const std::vector<std::vector<uint8_t>> &flows,
-                const std::vector<std::pair<std::string, std::string>> &options, int min_results) {
+                const std::vector<std::pair<std::string, std::string>> &options, int min_results,
+                const InputSetup &setup) {
     Inputs inputs;
+    inputs.have_lidar_to_camera = setup.have_lidar_to_camera;
+    std::copy(setup.lidar_to_camera, setup.lidar_to_camera + 16, inputs.lidar_to_camera);
     std::map<int64_t, lf_calibration_t> calibration_of;  // stereo utime -> calibration in force
-    lf_calibration_t cal{};
-    bool have_cal = false;
+    lf_calibration_t cal = setup.calibration;
+    bool have_cal = setup.fixed_calibration;
     for (const Event &e : events) {
-        if (e.channel == "LIDARFLOW_CALIB") {
+        int64_t utime = 0;
+        if (e.channel == "LIDARFLOW_CALIB" && !setup.fixed_calibration) {
             int32_t w, h;
             have_cal |= decode_calibration(e.data.data(), e.data.size(), &cal, &w, &h).empty();
-        } else if (e.channel == "LIDARFLOW_STEREO") {
+        } else if (e.channel == setup.stereo_channel) {
             StereoMessage m;
-            if (decode_stereo(e.data.data(), e.data.size(), m).empty() && have_cal) {
-                inputs.stereo[m.msg().utime] = e.data;
-                calibration_of[m.msg().utime] = cal;
+            const bool own = decode_stereo(e.data.data(), e.data.size(), m).empty();
+            if (own) utime = m.msg().utime;
+            if ((own || testing::bot_core_utime(e.data, &utime)) && have_cal) {
+                inputs.stereo[utime] = e.data;
+                calibration_of[utime] = cal;
             }
-        } else if (e.channel == "LIDARFLOW_LIDAR") {
+        } else if (e.channel == setup.lidar_channel) {
             LidarSweep s;
             if (decode_lidar(e.data.data(), e.data.size(), s).empty()) inputs.lidar[s.utime] = e.data;
+            else if (testing::bot_core_utime(e.data, &utime)) inputs.lidar[utime] = e.data;
         }
     }
     int ok = 0, with_lidar = 0;
-    for (const auto &f : flows) {
+    for (size_t i = 0; i < flows.size(); i += static_cast<size_t>(setup.check_every)) {
+        const auto &f = flows[i];
         DecodedFlow d;
         const std::string derr = decode_scene_flow(f.data(), f.size(), d);
         if (!derr.empty() || !calibration_of.count(d.header.utime)) {
@@ -137,14 +168,41 @@ int main(int argc, char **argv) {
         return 0;
     }
     std::string inputs_path;
+    InputSetup setup;
     std::vector<std::pair<std::string, std::string>> options;
-    int min_results = 1, step = 1;
+    int min_results = 1, step = 1, expect_pairs = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     for (int i = 3; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--option" && v.find('=') != std::string::npos)
             options.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
         else if (a == "--inputs") inputs_path = v;
+        else if (a == "--stereo-channel") setup.stereo_channel = v;
+        else if (a == "--expect-pairs") expect_pairs = std::atoi(v.c_str());
+        else if (a == "--check-every") setup.check_every = std::max(1, std::atoi(v.c_str()));
+        else if (a == "--lidar-channel") setup.lidar_channel = v;
+        else if (a == "--calib") {
+            const std::string err = read_kitti_calibration(v, &setup.calibration);
+            if (!err.empty()) {
+                std::fprintf(stderr, "log_check: %s\n", err.c_str());
+                return 2;
+            }
+            setup.fixed_calibration = true;
+        } else if (a == "--lidar-to-camera") {
+            std::string text = v;
+            std::replace(text.begin(), text.end(), ',', ' ');
+            char *p = &text[0];
+            int n = 0;
+            for (char *end = nullptr; n < 16; ++n, p = end) {
+                setup.lidar_to_camera[n] = std::strtod(p, &end);
+                if (end == p) break;
+            }
+            if (n != 16) {
+                std::fprintf(stderr, "log_check: --lidar-to-camera needs 16 numbers\n");
+                return 2;
+            }
+            setup.have_lidar_to_camera = true;
+        }
         else if (a == "--min-results") min_results = std::atoi(v.c_str());
         else if (a == "--step") step = std::atoi(v.c_str());
         else if (a == "--encoding" && parse_flow_encoding(v, &encoding)) {
@@ -169,39 +227,95 @@ int main(int argc, char **argv) {
         events.insert(events.begin(), inputs.begin(), inputs.end());
     }
     int64_t stereo_in_log = 0;
-    for (const Event &e : events) stereo_in_log += e.channel == "LIDARFLOW_STEREO";
+    for (const Event &e : events) stereo_in_log += e.channel == setup.stereo_channel;
     std::vector<std::vector<uint8_t>> flows;
 
-    if (mode == "verify") {
-        const Event *last_status = nullptr;
+    if (mode == "throughput") {
+        int64_t first = -1, last = -1, results = 0, stereo = 0, last_stereo = -1;
         for (const Event &e : events) {
-            if (e.channel == "LIDARFLOW_FLOW") flows.push_back(e.data);
-            if (e.channel == "LIDARFLOW_STATUS") last_status = &e;
+            if (e.channel == setup.stereo_channel) {
+                if (first < 0) first = e.timestamp;
+                last_stereo = e.timestamp;
+                ++stereo;
+            } else if (e.channel == "LIDARFLOW_FLOW") {
+                last = e.timestamp;
+                ++results;
+            }
         }
-        StatusMessage status;
-        const std::string serr =
-            last_status ? decode_status(last_status->data.data(), last_status->data.size(), status) : "none in the log";
-        if (!serr.empty()) {
-            std::fprintf(stderr, "log_check: no decodable status message in %s: %s\n", path.c_str(), serr.c_str());
+        if (first < 0 || last <= first) {
+            std::fprintf(stderr, "log_check: no stereo frames or no results after them\n");
             return 1;
         }
-        const lidarflow_status_t &s = status.fields;
-        const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
-                                s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
-                                s.dropped_shutdown;
-        std::printf("log_check: status: stereo received %lld (log has %lld), processed %lld, dropped %lld (stale %lld), "
-                    "results %lld, latency mean %.1f ms max %.1f ms, estimator mean %.1f ms, queue %d, busy %d\n",
-                    (long long)s.stereo_received, (long long)stereo_in_log, (long long)s.stereo_processed,
-                    (long long)dropped, (long long)s.dropped_stale, (long long)s.results_published, s.latency_mean_ms,
-                    s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
-        const bool accounted = s.stereo_received == s.stereo_processed + dropped && s.queue_depth == 0 && s.busy == 0 &&
-                               s.stereo_received == stereo_in_log &&
-                               s.results_published == static_cast<int64_t>(flows.size());
+        const double s = 1e-6 * static_cast<double>(last - first),
+                     stream = 1e-6 * static_cast<double>(last_stereo - first);
+        std::printf("log_check: throughput: %lld results in %.2f s = %.2f results/s (stream: %lld frames in %.2f s, "
+                    "%.2f frames/s)\n",
+                    (long long)results, s, static_cast<double>(results) / s, (long long)stereo, stream,
+                    stream > 0 ? static_cast<double>(stereo - 1) / stream : 0.0);
+        return 0;
+    }
+    if (mode == "verify") {
+        std::map<int32_t, StatusMessage> last_status;  // per shard
+        std::map<std::pair<int64_t, int64_t>, int> pairs;  // (utime0, utime) -> results
+        for (const Event &e : events) {
+            if (e.channel == "LIDARFLOW_FLOW") {
+                flows.push_back(e.data);
+                DecodedFlow d;
+                if (decode_scene_flow(e.data.data(), e.data.size(), d).empty())
+                    ++pairs[{d.header.utime0, d.header.utime}];
+            }
+            StatusMessage status;
+            if (e.channel == "LIDARFLOW_STATUS") {
+                const std::string serr = decode_status(e.data.data(), e.data.size(), status);
+                if (!serr.empty()) {
+                    std::fprintf(stderr, "log_check: undecodable status message in %s: %s\n", path.c_str(), serr.c_str());
+                    return 1;
+                }
+                last_status[status.fields.shard_index] = status;
+            }
+        }
+        if (last_status.empty()) {
+            std::fprintf(stderr, "log_check: no status message in %s\n", path.c_str());
+            return 1;
+        }
+        int64_t results = 0, dropped_all = 0;
+        bool accounted = true;
+        for (const auto &[shard, status] : last_status) {
+            const lidarflow_status_t &s = status.fields;
+            const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
+                                    s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
+                                    s.dropped_shutdown;
+            std::printf("log_check: status of shard %d/%d: stereo received %lld (log has %lld), processed %lld, dropped "
+                        "%lld (stale %lld), skipped for other shards %lld, results %lld, latency mean %.1f ms max %.1f "
+                        "ms, estimator mean %.1f ms, queue %d, busy %d\n",
+                        s.shard_index, s.shard_count, (long long)s.stereo_received, (long long)stereo_in_log,
+                        (long long)s.stereo_processed, (long long)dropped, (long long)s.dropped_stale,
+                        (long long)s.skipped_other_shard, (long long)s.results_published, s.latency_mean_ms,
+                        s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
+            accounted &= s.stereo_received == s.stereo_processed + dropped + s.skipped_other_shard &&
+                         s.queue_depth == 0 && s.busy == 0 && s.stereo_received == stereo_in_log &&
+                         s.shard_count == static_cast<int32_t>(last_status.size());
+            results += s.results_published;
+            dropped_all += dropped;
+        }
+        accounted &= results == static_cast<int64_t>(flows.size());
         if (!accounted) {
-            std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result\n");
+            std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result (or a shard "
+                                 "is missing)\n");
             return 1;
         }
-        return check_flows(events, flows, options, min_results);
+        for (const auto &[pair, n] : pairs)
+            if (n != 1) {
+                std::fprintf(stderr, "log_check: the pair %lld -> %lld was published %d times\n", (long long)pair.first,
+                             (long long)pair.second, n);
+                return 1;
+            }
+        if (expect_pairs >= 0 && (static_cast<int64_t>(pairs.size()) != expect_pairs || dropped_all != 0)) {
+            std::fprintf(stderr, "log_check: %zu distinct pairs and %lld frames dropped; expected %d and none\n",
+                         pairs.size(), (long long)dropped_all, expect_pairs);
+            return 1;
+        }
+        return check_flows(events, flows, options, min_results, setup);
     }
     if (mode != "replay") {
         std::fprintf(stderr, "log_check: unknown mode %s\n", mode.c_str());
@@ -257,5 +371,5 @@ int main(int argc, char **argv) {
         lcm_unsubscribe(lcm, sub);
     }
     lcm_destroy(lcm);
-    return rc ? rc : check_flows(events, flows, options, min_results);
+    return rc ? rc : check_flows(events, flows, options, min_results, setup);
 }

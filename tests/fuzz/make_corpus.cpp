@@ -191,6 +191,9 @@ void lcm_seeds() {
         s.stereo_processed = 2;
         s.dropped_malformed = 1;
         s.queue_capacity = 2;
+        s.shard_index = i;
+        s.shard_count = 2;
+        s.skipped_other_shard = i;
         s.latency_mean_ms = 12.5f;
         s.last_error = const_cast<char *>(errors[i]);
         save("fuzz_lcm_status", i == 0 ? "no_error" : "with_error",

@@ -10,7 +10,9 @@
 #include <cstring>
 #include <string>
 #include <thread>
+#include <vector>
 
+#include "args.hpp"
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
 #include "replay.hpp"
@@ -53,13 +55,6 @@ const char *kUsage =
     "  --help\n"
     "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n";
 
-bool number(const char *s, double *out) {
-    char *end = nullptr;
-    errno = 0;
-    *out = std::strtod(s, &end);
-    return errno == 0 && end != s && *end == '\0';
-}
-
 // --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
 // 1 when the logs cannot be read or written.
 int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out) {
@@ -90,6 +85,93 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
     return r.lost.empty() && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
+// Every option of kUsage; the parser (tools/common, shared with the CLI) suggests the nearest
+// name for a typo. help stays empty: kUsage is the help text.
+std::vector<lidarflow::cli::OptionSpec> bridge_options() {
+    std::vector<lidarflow::cli::OptionSpec> spec;
+    for (const char *name : {"lcm-url", "stereo-channel", "lidar-channel", "calib-channel", "flow-channel",
+                             "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
+                             "lidar-buffer", "queue", "shard", "encoding", "step", "option", "status-period", "replay",
+                             "out"})
+        spec.push_back({name, true, ""});
+    spec.push_back({"verbose", false, ""});
+    spec.push_back({"version", false, ""});
+    return spec;
+}
+
+// The command line into config; false (after a message on stderr) when it is bad.
+bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *config, std::string *url,
+                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *threads_given,
+                        bool *queue_given) {
+    using namespace lidarflow::bridge;
+    const lidarflow::cli::Args args("lidarflow-lcm-bridge", argc, argv, bridge_options());
+    *url = args.str("lcm-url", "");
+    *replay_in = args.str("replay", "");
+    *replay_out = args.str("out", "");
+    *calib_file = args.str("calib", "");
+    config->stereo_channel = args.str("stereo-channel", config->stereo_channel);
+    config->lidar_channel = args.str("lidar-channel", config->lidar_channel);
+    config->calibration_channel = args.str("calib-channel", config->calibration_channel);
+    config->flow_channel = args.str("flow-channel", config->flow_channel);
+    config->status_channel = args.str("status-channel", config->status_channel);
+    config->verbose = args.flag("verbose");
+    if (args.has("lidar-to-camera")) {
+        const std::string v = args.str("lidar-to-camera", "");
+        std::string text = v;
+        std::replace(text.begin(), text.end(), ',', ' ');
+        char *p = &text[0];
+        int n = 0;
+        for (char *end = nullptr; n < 16; ++n, p = end) {
+            errno = 0;
+            config->lidar_to_camera[n] = std::strtod(p, &end);
+            if (end == p || errno != 0) break;
+        }
+        while (*p == ' ') ++p;
+        if (n != 16 || *p != '\0') {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --lidar-to-camera %s: expected 16 numbers\n", v.c_str());
+            return false;
+        }
+        config->have_lidar_to_camera = true;
+    }
+    if (args.has("lidar-tolerance-ms"))
+        config->lidar_tolerance_us = static_cast<int64_t>(1000 * args.number_in("lidar-tolerance-ms", 0, 0, 1e6));
+    config->lidar_wait_ms = static_cast<int>(args.number_in("lidar-wait-ms", config->lidar_wait_ms, 0, 10000));
+    config->lidar_buffer = static_cast<int>(args.number_in("lidar-buffer", config->lidar_buffer, 1, 1000));
+    config->queue_capacity = static_cast<int>(args.number_in("queue", config->queue_capacity, 1, 1000));
+    *queue_given = args.has("queue");
+    if (args.has("shard")) {
+        const std::string v = args.str("shard", "");
+        int k = -1, n = 0, used = 0;
+        if (std::sscanf(v.c_str(), "%d/%d%n", &k, &n, &used) != 2 || v[static_cast<size_t>(used)] != '\0' || n < 1 ||
+            n > 1000 || k < 0 || k >= n) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --shard %s: expected K/N with 0 <= K < N <= 1000\n", v.c_str());
+            return false;
+        }
+        config->shard_index = k;
+        config->shard_count = n;
+    }
+    config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
+    config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);
+    if (args.has("encoding")) {
+        const std::string v = args.str("encoding", "");
+        if (!parse_flow_encoding(v.c_str(), &config->encoding)) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --encoding %s: expected float32 or int16\n", v.c_str());
+            return false;
+        }
+    }
+    for (const std::string &v : args.all("option")) {
+        const size_t eq = v.find('=');
+        if (eq == std::string::npos || eq == 0) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --option %s: expected KEY=VALUE\n", v.c_str());
+            return false;
+        }
+        const std::string key = v.substr(0, eq);
+        *threads_given |= key == "threads";
+        config->options.emplace_back(key, v.substr(eq + 1));
+    }
+    return true;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -97,6 +179,7 @@ int main(int argc, char **argv) {
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
     bool threads_given = false, queue_given = false;
+    // --help and --version answer before anything else is checked, as they always did.
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--help" || a == "-h") {
@@ -107,85 +190,14 @@ int main(int argc, char **argv) {
             std::printf("lidarflow-lcm-bridge %s (ABI %u)\n", lf_version_string(), lf_abi_major());
             return 0;
         }
-        if (a == "--verbose") {
-            config.verbose = true;
-            continue;
-        }
-        if (i + 1 >= argc) {
-            std::fprintf(stderr, "lidarflow-lcm-bridge: %s needs a value (or is unknown)\n%s", a.c_str(), kUsage);
+    }
+    try {
+        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &threads_given,
+                                &queue_given))
             return 2;
-        }
-        const char *v = argv[++i];
-        double x = 0;
-        auto need_number = [&](double lo, double hi) {
-            if (!number(v, &x) || !(x >= lo && x <= hi)) {
-                std::fprintf(stderr, "lidarflow-lcm-bridge: %s %s: expected a number in [%g, %g]\n", a.c_str(), v, lo, hi);
-                std::exit(2);
-            }
-            return x;
-        };
-        if (a == "--lcm-url") url = v;
-        else if (a == "--replay") replay_in = v;
-        else if (a == "--out") replay_out = v;
-        else if (a == "--stereo-channel") config.stereo_channel = v;
-        else if (a == "--lidar-channel") config.lidar_channel = v;
-        else if (a == "--calib-channel") config.calibration_channel = v;
-        else if (a == "--flow-channel") config.flow_channel = v;
-        else if (a == "--status-channel") config.status_channel = v;
-        else if (a == "--calib") calib_file = v;
-        else if (a == "--lidar-to-camera") {
-            std::string text = v;
-            std::replace(text.begin(), text.end(), ',', ' ');
-            char *p = &text[0];
-            int n = 0;
-            for (char *end = nullptr; n < 16; ++n, p = end) {
-                errno = 0;
-                config.lidar_to_camera[n] = std::strtod(p, &end);
-                if (end == p || errno != 0) break;
-            }
-            while (*p == ' ') ++p;
-            if (n != 16 || *p != '\0') {
-                std::fprintf(stderr, "lidarflow-lcm-bridge: --lidar-to-camera %s: expected 16 numbers\n", v);
-                return 2;
-            }
-            config.have_lidar_to_camera = true;
-        }
-        else if (a == "--lidar-tolerance-ms") config.lidar_tolerance_us = static_cast<int64_t>(1000 * need_number(0, 1e6));
-        else if (a == "--lidar-wait-ms") config.lidar_wait_ms = static_cast<int>(need_number(0, 10000));
-        else if (a == "--lidar-buffer") config.lidar_buffer = static_cast<int>(need_number(1, 1000));
-        else if (a == "--queue") {
-            config.queue_capacity = static_cast<int>(need_number(1, 1000));
-            queue_given = true;
-        } else if (a == "--shard") {
-            int k = -1, n = 0, used = 0;
-            if (std::sscanf(v, "%d/%d%n", &k, &n, &used) != 2 || v[used] != '\0' || n < 1 || n > 1000 || k < 0 ||
-                k >= n) {
-                std::fprintf(stderr, "lidarflow-lcm-bridge: --shard %s: expected K/N with 0 <= K < N <= 1000\n", v);
-                return 2;
-            }
-            config.shard_index = k;
-            config.shard_count = n;
-        }
-        else if (a == "--step") config.step = static_cast<int>(need_number(1, 16));
-        else if (a == "--status-period") config.status_period_s = need_number(0, 3600);
-        else if (a == "--encoding") {
-            if (!parse_flow_encoding(v, &config.encoding)) {
-                std::fprintf(stderr, "lidarflow-lcm-bridge: --encoding %s: expected float32 or int16\n", v);
-                return 2;
-            }
-        } else if (a == "--option") {
-            const char *eq = std::strchr(v, '=');
-            if (!eq || eq == v) {
-                std::fprintf(stderr, "lidarflow-lcm-bridge: --option %s: expected KEY=VALUE\n", v);
-                return 2;
-            }
-            const std::string key(v, eq);
-            threads_given |= key == "threads";
-            config.options.emplace_back(key, eq + 1);
-        } else {
-            std::fprintf(stderr, "lidarflow-lcm-bridge: unknown option %s\n%s", a.c_str(), kUsage);
-            return 2;
-        }
+    } catch (const lidarflow::cli::UsageError &e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 2;
     }
     // A shard's frames come in pairs (t0, t1): room for both, or a t0 would go stale behind
     // the pair in progress.

@@ -2,13 +2,15 @@
 // `lidarflow eval` end to end on a small synthetic KITTI folder written here (always runs) and,
 // when LIDARFLOW_KITTI_DIR is set, on the real frames: the ground truth submitted as its own
 // estimate scores 0.00; outliers planted in an estimate are counted; missing files and bad
-// options fail with a clear message; --json writes well-formed JSON.
+// options fail with a clear message; --json writes well-formed JSON (read back with nlohmann-json;
+// tests/test_eval_json.cpp checks the report's values).
 #include <sys/wait.h>
 
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -50,26 +52,17 @@ void expect_contains(const std::string &s, const std::string &what) {
     fail_msg("expected \"%s\" in the output above", what.c_str());
 }
 
-// Structural JSON check: balanced braces/brackets outside strings, no NaN/inf tokens.
+// Well-formed JSON (nlohmann-json rejects NaN/inf tokens too) with the report's format tag.
 void expect_wellformed_json(const std::string &j) {
-    int depth = 0;
-    bool in_str = false, esc = false;
-    for (char c : j) {
-        if (in_str) {
-            if (esc) esc = false;
-            else if (c == '\\') esc = true;
-            else if (c == '"') in_str = false;
-            continue;
-        }
-        if (c == '"') in_str = true;
-        else if (c == '{' || c == '[') ++depth;
-        else if (c == '}' || c == ']') --depth;
-        assert_true(depth >= 0);
+    nlohmann::json doc;
+    try {
+        doc = nlohmann::json::parse(j);
+    } catch (const nlohmann::json::parse_error &e) {
+        std::printf("%s", j.c_str());
+        fail_msg("not JSON: %s", e.what());
     }
-    assert_int_equal(depth, 0);
-    assert_false(in_str);
-    assert_false(contains(j, "nan") || contains(j, "inf"));
-    assert_true(j.front() == '{');
+    assert_true(doc.is_object());
+    assert_true(doc["format"] == "lidarflow-eval/1");
 }
 
 constexpr int W = 24, H = 16;
@@ -138,8 +131,8 @@ void gt_as_estimate_scores_zero(void **) {
     expect_contains(j, "\"pooled\": {");
     expect_contains(j, "\"mean_over_frames\": {");
     expect_contains(j, "\"noc\": {");
-    expect_contains(j, "\"outlier_pct\": 0,");
-    expect_contains(j, "\"density_pct\": 100,");
+    expect_contains(j, "\"outlier_pct\": 0.0,");
+    expect_contains(j, "\"density_pct\": 100.0,");
     assert_false(contains(j, "\"lidar\""));
     for (const char *bad : {"\"n_err\": 1", "\"n_err\": 2", "\"n_err\": 3", "\"n_err\": 4", "\"n_err\": 5",
                             "\"n_err\": 6", "\"n_err\": 7", "\"n_err\": 8", "\"n_err\": 9"})

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// Results of an evaluation as JSON (hand-written, no dependency). Layout:
+// Results of an evaluation as JSON (nlohmann-json, keys in the order below). Layout:
 //   { "format": "lidarflow-eval/1", "mode": "filled"|"est-only", "window": 15,
 //     "frames": [FRAME...], "pooled": FRAME, "mean_over_frames": MEANS }
 //   FRAME = { "id", "dense": REGION, "lidar": { "n_seeds", "seeds": REGION, "window": REGION,

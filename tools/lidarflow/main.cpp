@@ -5,6 +5,7 @@
 #include <cstring>
 #include <exception>
 
+#include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "lidarflow/lidarflow.h"
@@ -45,6 +46,9 @@ int main(int argc, char **argv) {
         if (std::strcmp(argv[1], c.name) != 0) continue;
         try {
             return c.run(argc - 1, argv + 1);
+        } catch (const lidarflow::cli::UsageError &e) {
+            std::fprintf(stderr, "lidarflow %s: error: %s\n", c.name, e.what());
+            return 2;
         } catch (const lidarflow::Error &e) {
             std::fprintf(stderr, "lidarflow %s: error: %s\n", c.name, e.what());
             return e.code() == lidarflow::ErrorCode::InvalidArgument ? 2 : 1;

@@ -3,13 +3,20 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <sstream>
 
 #include "core/closest_name.hpp"
-#include "core/error.hpp"
 
 namespace lidarflow::cli {
+namespace {
+
+void require(bool cond, const std::string &message) {
+    if (!cond) throw UsageError(message);
+}
+
+}  // namespace
 
 Args::Args(std::string command, int argc, char **argv, std::vector<OptionSpec> spec)
     : command_(std::move(command)), spec_(std::move(spec)) {
@@ -19,8 +26,7 @@ Args::Args(std::string command, int argc, char **argv, std::vector<OptionSpec> s
             help_ = true;
             continue;
         }
-        require(a.rfind("--", 0) == 0 && a.size() > 2, ErrorCode::InvalidArgument,
-                command_ + ": unexpected argument '" + a + "' (see --help)");
+        require(a.rfind("--", 0) == 0 && a.size() > 2, command_ + ": unexpected argument '" + a + "' (see --help)");
         std::string name = a.substr(2), value;
         const auto eq = name.find('=');
         bool inline_value = eq != std::string::npos;
@@ -29,20 +35,18 @@ Args::Args(std::string command, int argc, char **argv, std::vector<OptionSpec> s
             name = name.substr(0, eq);
         }
         const OptionSpec *s = find(name);
-        require(s != nullptr, ErrorCode::InvalidArgument, [&] {
+        if (s == nullptr) {
             std::vector<std::string> names;
             for (const OptionSpec &o : spec_) names.push_back(o.name);
             const std::string near = closest_name(name, names);
-            return command_ + ": unknown option --" + name +
-                   (near.empty() ? std::string() : " (did you mean --" + near + "?)") + " (see --help)";
-        });
+            throw UsageError(command_ + ": unknown option --" + name +
+                             (near.empty() ? std::string() : " (did you mean --" + near + "?)") + " (see --help)");
+        }
         if (s->takes_value && !inline_value) {
-            require(i + 1 < argc, ErrorCode::InvalidArgument,
-                    command_ + ": option --" + name + " needs a value");
+            require(i + 1 < argc, command_ + ": option --" + name + " needs a value");
             value = argv[++i];
         }
-        require(s->takes_value || !inline_value, ErrorCode::InvalidArgument,
-                command_ + ": option --" + name + " takes no value");
+        require(s->takes_value || !inline_value, command_ + ": option --" + name + " takes no value");
         values_.emplace_back(name, value);
     }
 }
@@ -78,8 +82,7 @@ std::string Args::str(const std::string &name, const std::string &def) const {
 }
 
 std::string Args::required(const std::string &name) const {
-    require(has(name), ErrorCode::InvalidArgument,
-            command_ + ": missing required option --" + name);
+    require(has(name), command_ + ": missing required option --" + name);
     return str(name, "");
 }
 
@@ -90,7 +93,7 @@ int Args::integer(const std::string &name, int def) const {
     char *end = nullptr;
     const long v = std::strtol(s.c_str(), &end, 10);
     require(!s.empty() && *end == '\0' && errno == 0 && v >= INT32_MIN && v <= INT32_MAX,
-            ErrorCode::InvalidArgument, command_ + ": --" + name + " expects an integer, got '" + s + "'");
+            command_ + ": --" + name + " expects an integer, got '" + s + "'");
     return static_cast<int>(v);
 }
 
@@ -100,9 +103,27 @@ double Args::number(const std::string &name, double def) const {
     errno = 0;
     char *end = nullptr;
     const double v = std::strtod(s.c_str(), &end);
-    require(!s.empty() && *end == '\0' && errno == 0 && std::isfinite(v), ErrorCode::InvalidArgument,
+    require(!s.empty() && *end == '\0' && errno == 0 && std::isfinite(v),
             command_ + ": --" + name + " expects a finite number, got '" + s + "'");
     return v;
+}
+
+double Args::number_in(const std::string &name, double def, double lo, double hi) const {
+    const double v = number(name, def);
+    if (!(v >= lo && v <= hi)) {
+        std::ostringstream os;
+        os << command_ << ": --" << name << " expects a number in [" << lo << ", " << hi << "], got '"
+           << str(name, "") << "'";
+        throw UsageError(os.str());
+    }
+    return v;
+}
+
+std::vector<std::string> Args::all(const std::string &name) const {
+    std::vector<std::string> out;
+    for (const auto &kv : values_)
+        if (kv.first == name) out.push_back(kv.second);
+    return out;
 }
 
 std::vector<std::string> Args::list(const std::string &name) const {

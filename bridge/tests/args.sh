@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# lidarflow-lcm-bridge's command line (the parser shared with the CLI): bad arguments exit 2
+# with a message, a typo gets "did you mean", and every option of --help is known to the parser.
+# No case reaches LCM: each fails on its arguments, or prints and exits.
+set -euo pipefail
+: "${LIDARFLOW_BRIDGE:?}"
+failures=0
+
+# expect RC PATTERN ARGS...: the bridge exits RC and its output matches PATTERN (grep -E).
+expect() {
+    local want_rc="$1" pattern="$2" out rc
+    shift 2
+    rc=0
+    out="$("$LIDARFLOW_BRIDGE" "$@" 2>&1)" || rc=$?
+    if [ "$rc" -ne "$want_rc" ] || ! grep -qE -- "$pattern" <<<"$out"; then
+        echo "FAIL: lidarflow-lcm-bridge $* -> rc $rc (want $want_rc), output:"
+        echo "$out"
+        echo "(wanted /$pattern/)"
+        failures=$((failures + 1))
+    fi
+}
+
+expect 2 'unknown option --queu \(did you mean --queue\?\)' --queu 2
+expect 2 'unknown option --stereo-chanel \(did you mean --stereo-channel\?\)' --stereo-chanel X
+expect 2 'unknown option --banana \(see --help\)' --banana
+expect 2 "unexpected argument 'stray'" stray
+expect 2 'option --lcm-url needs a value' --lcm-url
+expect 2 'option --verbose takes no value' --verbose=1
+expect 2 '--queue expects a number in \[1, 1000\], got .0.' --queue 0
+expect 2 '--step expects a number in \[1, 16\], got .17.' --step 17
+expect 2 '--status-period expects a finite number, got .x.' --status-period x
+expect 2 '--lidar-tolerance-ms expects a number in \[0, 1e\+06\]' --lidar-tolerance-ms -1
+expect 2 '--option threads: expected KEY=VALUE' --option threads=2 --option threads
+expect 2 '--option =2: expected KEY=VALUE' --option=threads=2 --option =2
+expect 2 '--encoding png: expected float32 or int16' --encoding png
+expect 2 '--lidar-to-camera 1,2,3: expected 16 numbers' --lidar-to-camera 1,2,3
+expect 2 '--replay and --out go together' --replay in.log
+expect 2 '--replay and --out go together' --replay in.log --out out.log --lcm-url udpm://
+expect 0 '^usage: lidarflow-lcm-bridge' --help
+expect 0 '^lidarflow-lcm-bridge [0-9]' --queue 0 --version
+
+# Every option the help names is one the parser knows (the help text and the option table are
+# written apart): given without its value it is "needs a value", never "unknown option".
+names="$("$LIDARFLOW_BRIDGE" --help | grep -oE -- '--[a-z][a-z0-9-]*' | sort -u)"
+[ "$(wc -l <<<"$names")" -ge 20 ] || { echo "FAIL: too few options in --help: $names"; failures=$((failures + 1)); }
+for name in $names; do
+    case "$name" in
+        --help | --version) ;;
+        --verbose) expect 2 '--queue expects a number' --verbose --queue 0 ;;
+        *) expect 2 "option $name needs a value" "$name" ;;
+    esac
+done
+
+[ "$failures" -eq 0 ] || { echo "$failures case(s) failed"; exit 1; }
+echo "bridge_args: all cases passed"

@@ -19,18 +19,8 @@ fi
 for tool in unshare ip lcm-logger; do
     command -v "$tool" >/dev/null || skip "$tool not installed (util-linux, iproute2, liblcm-bin)"
 done
-if [ -z "${LIDARFLOW_IN_PRIVATE_NETNS:-}" ]; then
-    unshare -n true 2>/dev/null || skip "not permitted to create a network namespace (unshare -n)"
-    LIDARFLOW_IN_PRIVATE_NETNS=1 exec unshare -n bash "$0" "$@"
-    exit 1  # not reached: exec failed, and there is no fallback to the real network
-fi
-
-# Inside the namespace: only a loopback may exist, or we stop.
-if [ "$(ip -o link show | grep -vc ': lo:')" != 0 ]; then echo "not a private namespace"; exit 1; fi
-ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo || exit 1
-# Room for multi-MB messages (per namespace on recent kernels; not fatal if refused).
-sysctl -qw net.core.rmem_max=16777216 2>/dev/null || true
-url='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=16777216'
+. "$(dirname "${BASH_SOURCE[0]}")/private_netns.sh"
+private_netns "$0" "$@"
 
 tmp="$LIDARFLOW_TEST_TMP/bridge_udpm_$mode"
 rm -rf "$tmp" && mkdir -p "$tmp"

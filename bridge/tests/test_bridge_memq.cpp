@@ -751,9 +751,13 @@ void test_soak(void **) {
     assert_int_equal(c.results_published, results);
     assert_true(c.results_published > total / 200);  // the estimator did work throughout
     // Flat memory: after the first quarter, growth stays below what 1 % of the messages would
-    // leak even at the size of one small image each.
+    // leak even at the size of one small image each. Not under AddressSanitizer: its quarantine
+    // keeps freed blocks resident (measured 409 -> 423 MiB there); LeakSanitizer checks leaks
+    // in that build instead.
     assert_true(rss_warm > 0 && rss_end > 0);
+#ifndef __SANITIZE_ADDRESS__
     assert_true(rss_end - rss_warm < 8L * 1024 * 1024);
+#endif
 }
 
 // --option KEY=VALUE: refusals carry the C ABI's real reason for the key's type.

@@ -726,7 +726,7 @@ void test_soak(void **) {
             results += static_cast<int64_t>(rig.flows.size());
             rig.flows.clear();
             rig.flows.shrink_to_fit();
-            if (i + 1 == total / 4) rss_warm = resident_bytes();
+            if (rss_warm == 0 && i + 1 >= total / 4) rss_warm = resident_bytes();
         }
     }
     for (int k = 0; k < 3000 && !rig.bridge->idle(); ++k) rig.bridge->run_once(10);

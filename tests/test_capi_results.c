@@ -200,12 +200,8 @@ static void test_views_borrow_the_result(void **state) {
     EXPECT_FAIL(e, lf_get_result_views(e, &v), LF_ERR_INVALID_ARGUMENT, "struct_size");
 }
 
-static void test_points3d(void **state) {
-    fixture_t *f = (fixture_t *)*state;
-    lf_estimator_t *e = f->est;
-    const lf_calibration_t c = scene_calibration(&f->scene);
-    static float pts[W * H * 3], mot[W * H * 3];
-    static uint8_t valid[W * H];
+/* Packed W x H planes for lf_get_points3d (12 bytes per pixel for points and motion). */
+static lf_points3d_buffers_t packed_points3d(float *pts, float *mot, uint8_t *valid) {
     lf_points3d_buffers_t b;
     lf_points3d_buffers_init(&b);
     b.width = W;
@@ -216,6 +212,16 @@ static void test_points3d(void **state) {
     b.motion.stride_bytes = W * 12;
     b.valid.data = valid;
     b.valid.stride_bytes = W;
+    return b;
+}
+
+static void test_points3d(void **state) {
+    fixture_t *f = (fixture_t *)*state;
+    lf_estimator_t *e = f->est;
+    const lf_calibration_t c = scene_calibration(&f->scene);
+    static float pts[W * H * 3], mot[W * H * 3];
+    static uint8_t valid[W * H];
+    lf_points3d_buffers_t b = packed_points3d(pts, mot, valid);
     lf_points3d_buffers_t bad = b;
     bad.points.stride_bytes = W * 4; /* a float plane's stride: rows hold 12 bytes per pixel */
     EXPECT_FAIL(e, lf_get_points3d(e, &bad), LF_ERR_SIZE_MISMATCH, "points.stride_bytes 640");
@@ -277,16 +283,7 @@ static void test_points3d_beyond_float_range(void **state) {
     assert_int_equal(scene_result_fetch(e, &r), LF_OK);
     static float pts[W * H * 3], mot[W * H * 3];
     static uint8_t valid[W * H];
-    lf_points3d_buffers_t b;
-    lf_points3d_buffers_init(&b);
-    b.width = W;
-    b.height = H;
-    b.points.data = pts;
-    b.points.stride_bytes = W * 12;
-    b.motion.data = mot;
-    b.motion.stride_bytes = W * 12;
-    b.valid.data = valid;
-    b.valid.stride_bytes = W;
+    lf_points3d_buffers_t b = packed_points3d(pts, mot, valid);
     assert_int_equal(lf_get_points3d(e, &b), LF_OK);
     int tiny = 0;
     for (int i = 0; i < W * H; ++i) {

@@ -146,6 +146,11 @@ struct Rig {
         assert_true(handled() >= target && bridge->idle());
         for (int i = 0; i < 3; ++i) bridge->run_once(0);  // deliver what the bridge published
     }
+    // Waits until the worker is idle, then delivers what the bridge published.
+    void settle() {
+        for (int i = 0; i < 3000 && !bridge->idle(); ++i) bridge->run_once(10);
+        for (int i = 0; i < 3; ++i) bridge->run_once(0);
+    }
     // Publishes without waiting for the estimator (only the LCM handler runs).
     void send_nowait(const char *channel, const std::vector<uint8_t> &bytes) {
         const int64_t target = handled() + 1;
@@ -510,8 +515,7 @@ void test_burst_and_shutdown(void **) {
         rig.send_nowait("LIDARFLOW_STEREO", f);
         assert_true(rig.bridge->counters().queue_depth <= 2);
     }
-    for (int i = 0; i < 3000 && !rig.bridge->idle(); ++i) rig.bridge->run_once(10);
-    for (int i = 0; i < 3; ++i) rig.bridge->run_once(0);
+    rig.settle();
     Counters c = rig.bridge->counters();
     assert_accounted(c);
     assert_int_equal(c.stereo_received, n);
@@ -721,16 +725,14 @@ void test_soak(void **) {
             rig.send_nowait(channels[c], b);
         }
         if (i % 100 == 99) {  // let the estimator finish what it has, then forget the results
-            for (int k = 0; k < 3000 && !rig.bridge->idle(); ++k) rig.bridge->run_once(10);
-            for (int k = 0; k < 3; ++k) rig.bridge->run_once(0);
+            rig.settle();
             results += static_cast<int64_t>(rig.flows.size());
             rig.flows.clear();
             rig.flows.shrink_to_fit();
             if (rss_warm == 0 && i + 1 >= total / 4) rss_warm = resident_bytes();
         }
     }
-    for (int k = 0; k < 3000 && !rig.bridge->idle(); ++k) rig.bridge->run_once(10);
-    for (int k = 0; k < 3; ++k) rig.bridge->run_once(0);
+    rig.settle();
     results += static_cast<int64_t>(rig.flows.size());
     const long rss_end = resident_bytes();
     const Counters c = rig.bridge->counters();

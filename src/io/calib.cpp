@@ -13,18 +13,10 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "io/read_file.hpp"
 
 namespace lidarflow::io {
 namespace {
-
-std::string read_text(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    require(in.good(), ErrorCode::Io, "cannot open " + path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    require(!in.bad(), ErrorCode::Io, "cannot read " + path);
-    return ss.str();
-}
 
 std::string trim(const std::string &s) {
     const auto b = s.find_first_not_of(" \t\r");
@@ -131,7 +123,7 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
 }
 
 CamToCamCalib read_calib_cam_to_cam(const std::string &path) {
-    return parse_calib_cam_to_cam(read_text(path), path);
+    return parse_calib_cam_to_cam(read_file(path), path);
 }
 
 cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &source) {
@@ -149,7 +141,7 @@ cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &
 }
 
 cv::Matx44d read_calib_velo_to_cam(const std::string &path) {
-    return parse_calib_velo_to_cam(read_text(path), path);
+    return parse_calib_velo_to_cam(read_file(path), path);
 }
 
 void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib) {

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/points3d.hpp"
+#include "io/read_file.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -87,11 +88,7 @@ void write_ply(const std::string &path, const std::vector<CloudPoint> &points) {
 }
 
 std::vector<CloudPoint> read_ply(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    require(in.good(), ErrorCode::Io, "cannot open " + path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    const std::string data = ss.str();
+    const std::string data = read_file(path);
     const std::string end_marker = "end_header\n";
     const size_t end = data.find(end_marker);
     require(data.rfind("ply\n", 0) == 0 && end != std::string::npos, ErrorCode::Format, path + ": not a PLY file");

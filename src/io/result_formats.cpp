@@ -16,6 +16,7 @@
 #include "core/error.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_submission.hpp"
+#include "io/read_file.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -43,15 +44,6 @@ std::ofstream open_for_writing(const std::string &path) {
 void finish(std::ofstream &out, const std::string &path) {
     out.flush();
     require(out.good(), ErrorCode::Io, "cannot write " + path);
-}
-
-std::string slurp(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    require(in.good(), ErrorCode::Io, "cannot open " + path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    require(!in.bad(), ErrorCode::Io, "cannot read " + path);
-    return ss.str();
 }
 
 // Byte order made explicit so the files are the same on any host.
@@ -164,7 +156,7 @@ void write_pfm(const std::string &path, const cv::Mat &map) {
 }
 
 cv::Mat read_pfm(const std::string &path) {
-    const std::string data = slurp(path);
+    const std::string data = read_file(path);
     // Header: three whitespace-separated tokens after the magic, then exactly one whitespace byte.
     size_t pos = 0;
     auto token = [&]() {
@@ -216,7 +208,7 @@ void write_npy(const std::string &path, const cv::Mat &map) {
 }
 
 cv::Mat read_npy(const std::string &path) {
-    const std::string data = slurp(path);
+    const std::string data = read_file(path);
     require(data.size() >= 10 && data.compare(0, 6, "\x93NUMPY") == 0, ErrorCode::Format,
             path + ": not a .npy file");
     require(data[6] == 1 && data[7] == 0, ErrorCode::Format, path + ": only .npy version 1.0 is read");

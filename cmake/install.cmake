@@ -55,8 +55,10 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/lidarflow.pc
 # package carries them as /usr/share/doc/PACKAGE/copyright instead (cmake/packaging.cmake).
 install(FILES LICENSE THIRD_PARTY_NOTICES.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT doc)
 
-# The Python binding is pure Python (ctypes + numpy): its files are installed as they are.
+# The Python packages are pure Python (the binding: ctypes + numpy; lidarflow_lcm, the LCM
+# messages and logs: numpy): their files are installed as they are. lidarflow_lcm needs no LCM
+# at all, so it is installed in every build, with the binding.
 set(LIDARFLOW_INSTALL_PYTHONDIR "lib/python3/dist-packages" CACHE STRING
-    "Where the Python package lidarflow is installed, relative to the prefix")
-install(DIRECTORY bindings/python/lidarflow DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
+    "Where the Python packages lidarflow and lidarflow_lcm are installed, relative to the prefix")
+install(DIRECTORY bindings/python/lidarflow bindings/python/lidarflow_lcm DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
         COMPONENT python FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)

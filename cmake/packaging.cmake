@@ -4,7 +4,7 @@
 #   liblidarflow-dev       dev       headers, liblidarflow.so, CMake package, pkg-config file
 #   lidarflow-tools        tools     lidarflow, lidarflow-lcm-bridge
 #   lidarflow-lcm-types    lcm       .lcm definitions, generated C and C++ types
-#   python3-lidarflow      python    the pure-Python binding in /usr/lib/python3/dist-packages
+#   python3-lidarflow      python    the pure-Python binding and lidarflow_lcm in /usr/lib/python3/dist-packages
 # `tools/dev.sh package` (or `cpack -G DEB` in the build tree) writes them to build/packages/.
 # Run-time dependencies on system libraries come from dpkg-shlibdeps; the ones it cannot see
 # (between our own packages, Python, LCM headers) are declared below.
@@ -110,7 +110,7 @@ _lf_deb_component(dev liblidarflow-dev libdevel any "dense scene flow from stere
 _lf_deb_component(tools lidarflow-tools science any "dense scene flow from stereo and sparse LiDAR - tools"
   "This package holds the command-line program lidarflow and the LCM bridge\nlidarflow-lcm-bridge.")
 _lf_deb_component(python python3-lidarflow python all "dense scene flow from stereo and sparse LiDAR - Python 3"
-  "This package holds the Python 3 binding (ctypes and NumPy).")
+  "This package holds the Python 3 binding (ctypes and NumPy) and lidarflow_lcm,\nthe LCM messages and log reader/writer in pure Python.")
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS "liblidarflow0 (= ${_lf_deb_version})")
 set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "python3, python3-numpy, liblidarflow0 (= ${_lf_deb_version})")
 # The tools are built from the same tree as the library: the exact version, not just >=.

@@ -97,6 +97,24 @@ elif [ -e "$build/lcm_types" ]; then
     echo "LCM build has no installed LCM types"; exit 1
 fi
 
+# lidarflow_lcm, imported from the installed tree (never the checkout), decodes the log the
+# installed `lidarflow publish-kitti` writes (liblcm's writer, lcm-gen's C encoders).
+pydir="$prefix/lib/python3/dist-packages"
+[ -f "$pydir/lidarflow_lcm/__init__.py" ] || { echo "lidarflow_lcm not installed in $pydir"; exit 1; }
+if [ -d "$prefix/share/lidarflow/lcm" ]; then
+    "$prefix/bin/lidarflow" publish-kitti --root "$scene" --lidar paper --rate 0 \
+        --lcm-url "file://$work/scene.log?mode=w" >/dev/null
+    (cd "$work" && PYTHONPATH="$pydir" PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 - "$pydir" "$work/scene.log" <<'PY'
+import os, sys
+import lidarflow_lcm as ll
+assert os.path.dirname(os.path.dirname(os.path.abspath(ll.__file__))) == os.path.abspath(sys.argv[1]), ll.__file__
+kinds = [type(m).__name__ for _, m in ll.read_messages(sys.argv[2], strict=True)]
+assert sorted(set(kinds)) == ["calibration_t", "lidar_t", "stereo_t"] and kinds.count("stereo_t") == 2, kinds
+print("installed lidarflow_lcm decodes the installed publisher's log:", len(kinds), "messages")
+PY
+    ) || { echo "installed lidarflow_lcm failed"; exit 1; }
+fi
+
 # Licence and notices are installed.
 if [ "$mode" = prefix ]; then
     for f in LICENSE THIRD_PARTY_NOTICES.md; do

@@ -12,6 +12,7 @@ and the binding's library, which CTest sets):
 """
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 
@@ -159,6 +160,20 @@ class AgainstTheBridge(unittest.TestCase):
         for a, b in zip(self.flows(out), self.flows(self.out_f32)):
             for k in ("utime", "utime0", "lidar_flags", "u", "v", "d0", "d1", "valid"):
                 self.assertEqual(getattr(a, k), getattr(b, k), k)
+
+    def test_readme_example_reads_the_result_log(self):
+        # examples/lcm_read_flow.py, as README's "Running on LCM" runs it.
+        here = os.path.dirname(os.path.abspath(__file__))
+        script = os.path.join(here, "..", "..", "..", "examples", "lcm_read_flow.py")
+        p = subprocess.run([sys.executable, script, self.out_f32, self.inlog], capture_output=True, text=True,
+                           timeout=120)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        lines = p.stdout.splitlines()
+        self.assertEqual(lines[-1], "2 scene flow result(s)")
+        for flow, line in zip(self.flows(self.out_f32), lines):
+            self.assertIn("t0 %d -> t1 %d us: 320x96 (step 1)" % (flow.utime0, flow.utime), line)
+            self.assertIn("median u %.2f px" % np.nanmedian(ll.flow_arrays(flow)["u"]), line)
+            self.assertIn("median depth", line)
 
 
 if __name__ == "__main__":

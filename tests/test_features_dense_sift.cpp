@@ -83,6 +83,46 @@ void thread_count_does_not_change_output(void **) {
     assert_true(a.data == b.data);
 }
 
+// Descriptors are computed in bands of rows with their own halo: a row must not depend on where
+// the band seams fall. A crop puts the seams at other rows of the same content; away from the
+// crop's borders both must agree byte for byte (also across thread counts and cell sizes).
+void rows_do_not_depend_on_band_seams(void **) {
+    const cv::Mat1f img = texture(70, 300, 5);
+    const int top = 37, bottom = 237;
+    for (int cell : {2, 3})
+        for (int dim : {128, 64}) {
+            DenseSiftOptions o;
+            o.cell_size = cell;
+            o.dim = dim;
+            const DescriptorImage full = compute_dense_sift(img, o, 1);
+            const DescriptorImage full3 = compute_dense_sift(img, o, 3);
+            assert_true(full.data == full3.data);
+            const DescriptorImage crop = compute_dense_sift(img.rowRange(top, bottom).clone(), o, 2);
+            const int margin = 2 * cell + 4;  // cell offsets + vertical blur + gradient rows
+            for (int y = top + margin; y < bottom - margin; ++y)
+                assert_memory_equal(full.at(0, y), crop.at(0, y - top), static_cast<size_t>(70) * dim);
+            // The crop's own border rows do differ (the comparison can fail).
+            assert_memory_not_equal(full.at(0, top), crop.at(0, 0), static_cast<size_t>(70) * dim);
+        }
+}
+
+// Writing into an existing image reuses its storage when it is large enough and gives exactly
+// the fresh result; a smaller image grows.
+void reuses_output_storage(void **) {
+    DescriptorImage out = compute_dense_sift(texture(80, 90, 6), DenseSiftOptions{});
+    const uint8_t *storage = out.data.data();
+    const cv::Mat1f small = texture(50, 40, 7);
+    compute_dense_sift(small, DenseSiftOptions{}, 2, out);
+    assert_ptr_equal(out.data.data(), storage);
+    assert_int_equal(out.width, 50);
+    assert_int_equal(out.height, 40);
+    assert_true(out.data == compute_dense_sift(small, DenseSiftOptions{}).data);
+    const cv::Mat1f big = texture(100, 120, 8);
+    compute_dense_sift(big, DenseSiftOptions{}, 2, out);
+    assert_int_equal(out.data.size(), 100u * 120u * 128u);
+    assert_true(out.data == compute_dense_sift(big, DenseSiftOptions{}).data);
+}
+
 void gray_conversion(void **) {
     cv::Mat bgr(4, 5, CV_8UC3, cv::Scalar(255, 255, 255));
     const cv::Mat1f g = to_gray_float(bgr);
@@ -132,6 +172,8 @@ int main() {
         cmocka_unit_test(low_contrast_is_not_amplified),
         cmocka_unit_test(shift_equivariance),
         cmocka_unit_test(thread_count_does_not_change_output),
+        cmocka_unit_test(rows_do_not_depend_on_band_seams),
+        cmocka_unit_test(reuses_output_storage),
         cmocka_unit_test(gray_conversion),
         cmocka_unit_test(invalid_arguments),
     };

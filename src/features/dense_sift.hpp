@@ -46,6 +46,12 @@ struct DescriptorImage {
 // threads: OpenMP threads used (>= 1).
 DescriptorImage compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options,
                                    int threads = 1);
+// Same, written into `out`, whose storage is reused when it is large enough: a stream that
+// recycles the images of a pair it no longer needs writes into pages it already has, instead of
+// fresh ones the kernel must fault in and clear (~60 MB per full-resolution KITTI image). On an
+// exception `out` is left empty or with undefined content.
+void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
+                        DescriptorImage &out);
 
 // 8-bit gray or BGR(A) image -> CV_32F gray in [0, 1]. Throws InvalidArgument otherwise.
 cv::Mat1f to_gray_float(const cv::Mat &image);

@@ -70,6 +70,29 @@ void matcher_reuses_t1_of_previous_frame(void **) {
     assert_false(SceneFlowMatcher(rev, fewer, first.features_t1()).reused_t0());
 }
 
+// A matcher hands its t0 pair back for reuse only when nothing else holds it; the next matcher
+// writes its t1 descriptors into those buffers, with results equal to a fresh matcher's.
+void matcher_recycles_released_storage(void **) {
+    const auto &s = scene();
+    const MatchInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    const MatchInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0};
+    SceneFlowMatcher first(fwd, small());
+    std::shared_ptr<const StereoFeatures> t1 = first.features_t1();
+    std::shared_ptr<StereoFeatures> spare = first.release_t0();
+    assert_non_null(spare.get());
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { first.run(Direction::Forward); }));
+    const uint8_t *buffer = spare->desc[0][0].data.data();
+
+    SceneFlowMatcher second(rev, small(), t1, std::move(spare));
+    assert_true(second.reused_t0());
+    assert_ptr_equal(second.features_t1()->desc[0][0].data.data(), buffer);
+    const SceneFlowMatcher fresh(rev, small());
+    for (Direction d : {Direction::Forward, Direction::Backward})
+        assert_true(same_field(second.run(d).dense, fresh.run(d).dense));
+    // t0 of `second` is `t1`, still held here: not handed out for writing.
+    assert_null(second.release_t0().get());
+}
+
 void estimator_stream_cache_keeps_results(void **) {
     const auto &s = scene();
     pipeline::EstimatorOptions o;
@@ -88,6 +111,12 @@ void estimator_stream_cache_keeps_results(void **) {
     assert_true(same_field(streamed.forward, alone.forward));
     assert_true(same_field(streamed.backward, alone.backward));
     assert_true(same_field(streamed.after_fb, alone.after_fb));
+    // Frames 3 and 4 write into the buffers frames 1 and 2 released: still the lone results.
+    const pipeline::EstimatorResult third = est.run(fwd, &cache);
+    assert_true(cache.last_reused());
+    assert_true(same_field(third.after_fb, est.run(fwd).after_fb));
+    const pipeline::EstimatorResult fourth = est.run(rev, &cache);
+    assert_true(same_field(fourth.after_fb, alone.after_fb));
     cache.clear();
     est.run(rev, &cache);
     assert_false(cache.last_reused());
@@ -116,6 +145,7 @@ void presets(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(matcher_reuses_t1_of_previous_frame),
+        cmocka_unit_test(matcher_recycles_released_storage),
         cmocka_unit_test(estimator_stream_cache_keeps_results),
         cmocka_unit_test(presets),
     };

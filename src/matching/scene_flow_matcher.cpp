@@ -665,7 +665,7 @@ MatchResult Engine::run() {
         o.in_window = info_[i].window >= 0;
     }
     const int W = m_.width, H = m_.height, step = opt_.grid_step;
-    r.dense = SceneFlowField::zeros(W, H);
+    r.dense = SceneFlowField::uninitialized(W, H);  // put() below writes every pixel
     const int xoff = info_[0].x, yoff = info_[0].y;
     auto put = [&](int x, int y, int i) {
         const SeedMatch &o = r.seeds[i];
@@ -695,6 +695,7 @@ struct SceneFlowMatcher::Impl : MatcherData {
 };
 
 MatchResult SceneFlowMatcher::Impl::run(Direction dir) const {
+    require(!levels.empty(), ErrorCode::InvalidArgument, "SceneFlowMatcher::run after release_t0()");
     const auto t0 = Clock::now();
     Engine engine(*this, dir);
     MatchResult r = engine.run();
@@ -717,7 +718,8 @@ bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingO
 }
 
 SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
-                                   std::shared_ptr<const StereoFeatures> reuse_t0)
+                                   std::shared_ptr<const StereoFeatures> reuse_t0,
+                                   std::shared_ptr<StereoFeatures> storage)
     : impl_(std::make_unique<Impl>()) {
     options.validate();
     const auto t0 = Clock::now();
@@ -750,7 +752,8 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
     // The t0 pair's descriptors come from the previous frame when it is the same stereo pair
     // (streaming: that frame's t1); everything else is computed here.
     const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options, nlev);
-    auto fresh0 = std::make_shared<StereoFeatures>(), fresh1 = std::make_shared<StereoFeatures>();
+    auto fresh0 = std::make_shared<StereoFeatures>();
+    auto fresh1 = storage ? std::move(storage) : std::make_shared<StereoFeatures>();
     StereoFeatures *pending[2] = {reuse0 ? nullptr : fresh0.get(), fresh1.get()};
     const cv::Mat *src[2][2] = {{&in.left0, &in.right0}, {&in.left1, &in.right1}};
     for (int t = 0; t < 2; ++t)
@@ -782,7 +785,7 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
         for (int l = 0; l < nlev; ++l)
             errors.run([&] {
                 auto &job = jobs[static_cast<size_t>(i) * nlev + l];
-                *job.first = features::compute_dense_sift(job.second, options.sift, inner);
+                features::compute_dense_sift(job.second, options.sift, inner, *job.first);
             });
     errors.rethrow_if_any();
     m.pair[0] = reuse0 ? reuse_t0 : std::shared_ptr<const StereoFeatures>(fresh0);
@@ -805,6 +808,15 @@ double SceneFlowMatcher::seconds_features() const { return impl_->seconds_featur
 std::shared_ptr<const StereoFeatures> SceneFlowMatcher::features_t1() const { return impl_->pair[1]; }
 
 bool SceneFlowMatcher::reused_t0() const { return impl_->reused_t0; }
+
+std::shared_ptr<StereoFeatures> SceneFlowMatcher::release_t0() {
+    std::shared_ptr<const StereoFeatures> t0 = std::move(impl_->pair[0]);
+    impl_->levels.clear();
+    if (!t0 || t0.use_count() != 1) return nullptr;
+    // Every pair is created non-const (make_shared above); the const of pair[] only says that
+    // matching reads it. The sole owner may therefore hand it on for writing.
+    return std::const_pointer_cast<StereoFeatures>(t0);
+}
 
 MatchResult match_scene_flow(const MatchInput &input, const MatchingOptions &options, Direction direction) {
     SceneFlowMatcher matcher(input, options);

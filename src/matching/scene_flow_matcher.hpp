@@ -81,8 +81,11 @@ public:
     // Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),
     // InvalidArgument (empty or non-8-bit images, LiDAR points outside the image, not finite
     // or negative disparities, bad options).
+    // storage (may be null): a pair nobody else holds any more (release_t0() of an earlier
+    // matcher); the new (left1, right1) descriptors are written into its buffers.
     SceneFlowMatcher(const MatchInput &input, const MatchingOptions &options,
-                     std::shared_ptr<const StereoFeatures> reuse_t0 = nullptr);
+                     std::shared_ptr<const StereoFeatures> reuse_t0 = nullptr,
+                     std::shared_ptr<StereoFeatures> storage = nullptr);
     ~SceneFlowMatcher();
     SceneFlowMatcher(const SceneFlowMatcher &) = delete;
     SceneFlowMatcher &operator=(const SceneFlowMatcher &) = delete;
@@ -95,6 +98,11 @@ public:
     std::shared_ptr<const StereoFeatures> features_t1() const;
     // Whether the constructor took (left0, right0)'s descriptors from reuse_t0.
     bool reused_t0() const;
+    // Ends this matcher's use (run() then throws InvalidArgument) and hands back the (left0,
+    // right0) pair as `storage` for a later matcher when nothing else holds it (else null).
+    // Why: a stream's descriptor images are ~160 MB per KITTI pair; fresh ones cost the kernel
+    // a page fault and a page clear per 4 KiB (or 2 MiB) on every frame.
+    std::shared_ptr<StereoFeatures> release_t0();
 
 private:
     struct Impl;

@@ -165,13 +165,24 @@ const bool kUseAvx2 = __builtin_cpu_supports("avx2");
 
 }  // namespace
 
+namespace {
+float patch_cost_sse2(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax, int ay,
+                      int bx, int by, const PatchShape &shape, DescriptorNorm norm, float penalty, float bound) {
+    return patch_cost_impl<l2sq, l1>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+}
+}  // namespace
+
+PatchCostFn patch_cost_kernel() {
+#ifdef LIDARFLOW_HAVE_AVX2_PATH
+    if (kUseAvx2) return patch_cost_avx2;
+#endif
+    return patch_cost_sse2;
+}
+
 float patch_cost(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax,
                  int ay, int bx, int by, const PatchShape &shape, DescriptorNorm norm,
                  float penalty, float bound) {
-#ifdef LIDARFLOW_HAVE_AVX2_PATH
-    if (kUseAvx2) return patch_cost_avx2(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
-#endif
-    return patch_cost_impl<l2sq, l1>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    return patch_cost_kernel()(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 
 }  // namespace lidarflow::matching

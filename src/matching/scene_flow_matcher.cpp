@@ -172,6 +172,7 @@ private:
     cv::Mat1i tgt_labels_;         // D1 hits on the level
     std::vector<cv::Point> tgt_centre_;
     PatchShape shape_;
+    const PatchCostFn cost_fn_ = patch_cost_kernel();
     float penalty_ = 0, dmax_ = 0, max_r_ = 0;
 
     std::vector<Scored> best_;
@@ -463,8 +464,8 @@ bool Engine::evaluate(int i, Scored &out, const Scored *reuse, float bound) cons
         if (!(pending >> t & 1)) continue;
         if (sum > budget) return false;
         const Slot a = kTermA[t], b = kTermB[t];
-        const float e = patch_cost(*desc_[a], *desc_[b], sx[a], sy[a], sx[b], sy[b], shape_, opt_.norm,
-                                   penalty_, (budget - sum) / w[t]);
+        const float e = cost_fn_(*desc_[a], *desc_[b], sx[a], sy[a], sx[b], sy[b], shape_, opt_.norm,
+                                 penalty_, (budget - sum) / w[t]);
         sum += w[t] * e;
         if (sum > budget) return false;  // e may be partial: the candidate is rejected anyway
         out.term[t] = e;

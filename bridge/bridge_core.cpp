@@ -22,6 +22,10 @@ bool same_calibration(const lf_calibration_t &a, const lf_calibration_t &b) {
     return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.baseline == b.baseline;
 }
 
+bool carries_transform(const lf_calibration_t &cal, const double *T) {
+    return cal.has_lidar_to_camera == 1 && std::equal(T, T + 16, cal.lidar_to_camera);
+}
+
 bool parse_int(const std::string &s, int64_t *out) {
     if (s.empty()) return false;
     char *end = nullptr;
@@ -376,15 +380,29 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         counters_.last_error = why;
         log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
     };
-    if (!estimator_ || !same_calibration(estimator_calibration_, frame.calibration)) {
+    // The estimator's calibration carries the transform of LiDAR-frame sweeps, so that it moves
+    // their points itself (LidarSweep). It takes a new transform only while it holds no frame:
+    // replacing it then costs nothing, while a pair in progress would be lost.
+    const double *sweep_T = sweep && sweep->in_lidar_frame ? sweep->lidar_to_camera : nullptr;
+    const bool new_camera = !estimator_ || !same_calibration(estimator_calibration_, frame.calibration);
+    if (new_camera || (sweep_T && !estimator_has_frame_ && !carries_transform(estimator_calibration_, sweep_T))) {
+        lf_calibration_t cal = frame.calibration;
+        const double *T = sweep_T ? sweep_T
+                          : estimator_ && estimator_calibration_.has_lidar_to_camera ? estimator_calibration_.lidar_to_camera
+                          : config_.have_lidar_to_camera ? config_.lidar_to_camera
+                                                         : nullptr;
+        if (T) {
+            std::copy(T, T + 16, cal.lidar_to_camera);
+            cal.has_lidar_to_camera = 1;
+        }
         lf_destroy(estimator_);
         estimator_ = nullptr;
         estimator_has_frame_ = false;
-        if (lf_create(options_, &frame.calibration, &estimator_) != LF_OK) {
+        if (lf_create(options_, &cal, &estimator_) != LF_OK) {
             drop(std::string("estimator creation failed: ") + lf_last_error(nullptr));
             return;
         }
-        estimator_calibration_ = frame.calibration;
+        estimator_calibration_ = cal;
     }
     const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
     // A new sequence or another image size / format starts over: never pair across a cut.
@@ -397,7 +415,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         estimator_has_frame_ = false;
     }
     lf_lidar_t lidar{};
-    if (sweep) lidar = sweep->view();
+    if (sweep) lidar = sweep_T && carries_transform(estimator_calibration_, sweep_T) ? sweep->lidar_frame_view() : sweep->view();
     bool with_lidar = static_cast<bool>(sweep);
     int32_t st = lf_push_frame(estimator_, m.utime, &left, &right, with_lidar ? &lidar : nullptr);
     if (st != LF_OK && with_lidar) {

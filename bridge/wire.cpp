@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "wire.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -173,6 +174,12 @@ lf_lidar_t LidarSweep::view() const {
     return l;
 }
 
+lf_lidar_t LidarSweep::lidar_frame_view() const {
+    lf_lidar_t l{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(lidar_xyz.size() / 3),
+                 lidar_xyz.empty() ? nullptr : lidar_xyz.data(), 12};
+    return l;
+}
+
 std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     std::string err = check_wire(data, size, "lidarflow.lidar_t", __lidarflow_lidar_t_get_hash(), kLidarFixed,
                                  {{"num_points", 137, 12}});
@@ -196,11 +203,16 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i)
         if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]) || !std::isfinite(m.z[i]))
             err = printf_string("point %d is not finite", i);
-    std::vector<float> xyz;
+    std::vector<float> xyz, lidar_xyz;
     if (err.empty()) xyz.resize(3 * static_cast<size_t>(m.num_points));
+    if (err.empty() && m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) lidar_xyz.resize(xyz.size());
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i) {
         float *o = &xyz[3 * static_cast<size_t>(i)];
         if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
+            float *raw = &lidar_xyz[3 * static_cast<size_t>(i)];
+            raw[0] = m.x[i];
+            raw[1] = m.y[i];
+            raw[2] = m.z[i];
             // In double: the bridge's transform must not add more rounding than one float cast.
             const double x = m.x[i], y = m.y[i], z = m.z[i];
             for (int r = 0; r < 3; ++r) {
@@ -220,6 +232,9 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
         out.utime = m.utime;
         out.kind = m.frame == LIDARFLOW_LIDAR_T_FRAME_DISPARITY ? LF_LIDAR_DISPARITY : LF_LIDAR_POINTS_CAMERA;
         out.xyz = std::move(xyz);
+        out.in_lidar_frame = m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR;
+        out.lidar_xyz = std::move(lidar_xyz);
+        std::copy(T, T + 16, out.lidar_to_camera);
     }
     lidarflow_lidar_t_decode_cleanup(&m);
     return err;
@@ -606,10 +621,13 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     if (!T) return "a bot_core.pointcloud_t needs the LiDAR -> camera transform (--lidar-to-camera)";
     err = check_lidar_to_camera(T);
     if (!err.empty()) return err;
-    std::vector<float> xyz(3 * static_cast<size_t>(n));
+    std::vector<float> xyz(3 * static_cast<size_t>(n)), lidar_xyz(xyz.size());
     for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
         const double x = get_be32f(points + 12 * i), y = get_be32f(points + 12 * i + 4), z = get_be32f(points + 12 * i + 8);
         if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return printf_string("point %zu is not finite", i);
+        lidar_xyz[3 * i] = static_cast<float>(x);
+        lidar_xyz[3 * i + 1] = static_cast<float>(y);
+        lidar_xyz[3 * i + 2] = static_cast<float>(z);
         for (int k = 0; k < 3; ++k) {
             const double c = T[4 * k] * x + T[4 * k + 1] * y + T[4 * k + 2] * z + T[4 * k + 3];
             if (!(std::fabs(c) <= std::numeric_limits<float>::max()))
@@ -620,6 +638,9 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     out.utime = utime;
     out.kind = LF_LIDAR_POINTS_CAMERA;
     out.xyz = std::move(xyz);
+    out.in_lidar_frame = true;
+    out.lidar_xyz = std::move(lidar_xyz);
+    std::copy(T, T + 16, out.lidar_to_camera);
     return "";
 }
 

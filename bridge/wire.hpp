@@ -84,6 +84,15 @@ struct LidarSweep {
     int32_t kind = LF_LIDAR_NONE;
     std::vector<float> xyz;
     lf_lidar_t view() const;  // borrows xyz
+    // Sweeps in the LiDAR frame (lidar_t FRAME_LIDAR, bot_core.pointcloud_t) also keep the points
+    // as sent and their transform: an estimator whose calibration carries this transform takes
+    // them as LF_LIDAR_POINTS_LIDAR and moves them in double without a float cast in between,
+    // which gives exactly what projecting the scan gives (xyz alone differs by float rounding,
+    // and the estimator's discrete decisions can turn that into visible differences).
+    bool in_lidar_frame = false;
+    std::vector<float> lidar_xyz;
+    double lidar_to_camera[16] = {};
+    lf_lidar_t lidar_frame_view() const;  // borrows lidar_xyz; LF_LIDAR_POINTS_LIDAR
 };
 
 // Decodes, checks (frame, finite values, rigid transform with last row 0 0 0 1, transformed

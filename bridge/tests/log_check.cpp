@@ -20,6 +20,10 @@
 //   log_check throughput LOG [--stereo-channel NAME]
 //       Results per second of a recorded live run: from the first stereo frame's to the last
 //       result's arrival at the logger.
+//   log_check compare A.log B.log
+//       The results of two runs of the same frames (times may differ: paired by order) must be
+//       equal value by value: same pair length t1 - t0, LiDAR flags, planes and valid pixels.
+//       E.g. one scan sent as LiDAR-frame points and once as projected disparities.
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -29,6 +33,7 @@
 #include <lcm/lcm.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -129,6 +134,64 @@ int check_flows(const std::vector<Event> &events, const std::vector<std::vector<
     return 0;
 }
 
+// log_check compare: see the top of the file.
+int compare_results(const std::string &path_a, const std::string &path_b) {
+    std::vector<DecodedFlow> runs[2];
+    for (int k = 0; k < 2; ++k) {
+        std::vector<Event> events;
+        if (!read_log(k ? path_b : path_a, events)) {
+            std::fprintf(stderr, "log_check: cannot read %s\n", (k ? path_b : path_a).c_str());
+            return 1;
+        }
+        for (const Event &e : events) {
+            if (e.channel != "LIDARFLOW_FLOW") continue;
+            DecodedFlow d;
+            const std::string err = decode_scene_flow(e.data.data(), e.data.size(), d);
+            if (!err.empty()) {
+                std::fprintf(stderr, "log_check: bad flow message: %s\n", err.c_str());
+                return 1;
+            }
+            runs[k].push_back(std::move(d));
+        }
+    }
+    if (runs[0].size() != runs[1].size() || runs[0].empty()) {
+        std::fprintf(stderr, "log_check: compare: %zu and %zu results\n", runs[0].size(), runs[1].size());
+        return 1;
+    }
+    int rc = 0;
+    for (size_t i = 0; i < runs[0].size(); ++i) {
+        const DecodedFlow &a = runs[0][i], &b = runs[1][i];
+        const lidarflow_scene_flow_t &ha = a.header, &hb = b.header;
+        if (ha.utime - ha.utime0 != hb.utime - hb.utime0 || ha.lidar_flags != hb.lidar_flags ||
+            ha.width != hb.width || ha.height != hb.height || ha.last_stage != hb.last_stage) {
+            std::fprintf(stderr, "log_check: compare: result %zu: different pairs (t1 - t0 %lld / %lld us, LiDAR flags "
+                                 "%d / %d, planes %dx%d / %dx%d)\n",
+                         i, (long long)(ha.utime - ha.utime0), (long long)(hb.utime - hb.utime0), ha.lidar_flags,
+                         hb.lidar_flags, ha.width, ha.height, hb.width, hb.height);
+            return 1;
+        }
+        const std::vector<float> *pa[4] = {&a.u, &a.v, &a.d0, &a.d1}, *pb[4] = {&b.u, &b.v, &b.d0, &b.d1};
+        size_t valid = 0, differ = 0;
+        double max_diff = 0;
+        for (size_t j = 0; j < a.valid.size(); ++j) {
+            if (!a.valid[j] && !b.valid[j]) continue;
+            ++valid;
+            double d = a.valid[j] != b.valid[j] ? HUGE_VAL : 0;
+            for (int k = 0; k < 4 && a.valid[j] && b.valid[j]; ++k)
+                d = std::max(d, static_cast<double>(std::fabs((*pa[k])[j] - (*pb[k])[j])));
+            if (d != HUGE_VAL) max_diff = std::max(max_diff, d);
+            differ += d != 0;
+        }
+        const double fraction = valid ? static_cast<double>(differ) / static_cast<double>(valid) : 0;
+        std::printf("log_check: compare: result %zu (LiDAR flags %d): %zu pixels valid in either, %zu differ (%.5f %%), "
+                    "largest difference where both are valid %.4g px\n",
+                    i, ha.lidar_flags, valid, differ, 100 * fraction, max_diff);
+        if (differ != 0) rc = 1;
+    }
+    if (rc) std::fprintf(stderr, "log_check: compare: the results differ\n");
+    return rc;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -137,6 +200,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
+    if (mode == "compare") return argc != 4 ? 2 : compare_results(path, argv[3]);
     if (mode == "edit") {
         if (argc < 4) return 2;
         std::map<std::string, std::vector<int>> drop;  // channel -> event indices

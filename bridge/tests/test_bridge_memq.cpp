@@ -357,6 +357,73 @@ void test_points_in_lidar_frame(void **) {
     assert_accounted(rig.bridge->counters());
 }
 
+// LiDAR-frame sweeps whose transform changes within a pair: the estimator, created with the t0
+// sweep's transform, takes the t0 points in the LiDAR frame; the t1 sweep's other transform
+// cannot replace it without losing the pair, so the bridge moves those points itself (double,
+// one cast to float).
+void test_lidar_transform_change_within_pair(void **) {
+    const lf_calibration_t cal = scene_calibration(&g_scene);
+    const std::vector<float> xyd = scene_disparities();
+    const double a = 0.3, c0 = std::cos(a), s0 = std::sin(a);
+    // Camera -> LiDAR as a rotation about the camera's y axis and a shift; T = its inverse.
+    const double T0[16] = {c0, 0, -s0, 0.1, 0, 1, 0, 0.05, s0, 0, c0, -0.2, 0, 0, 0, 1};
+    double T1[16];
+    std::copy(T0, T0 + 16, T1);
+    T1[3] += 0.01;
+    std::vector<float> lid0, lid1, cam1;
+    for (size_t i = 0; i < xyd.size(); i += 3) {
+        const double z = cal.fx * cal.baseline / xyd[i + 2];
+        const double x = (xyd[i] - cal.cx) * z / cal.fx, y = (xyd[i + 1] - cal.cy) * z / cal.fy;
+        for (int t = 0; t < 2; ++t) {
+            // p = R^T (c - t) for T = [R t]: the LiDAR-frame point that T maps onto c.
+            const double *T = t ? T1 : T0;
+            const double d[3] = {x - T[3], y - T[7], z - T[11]};
+            std::vector<float> &out = t ? lid1 : lid0;
+            for (int k = 0; k < 3; ++k) out.push_back(static_cast<float>(T[k] * d[0] + T[4 + k] * d[1] + T[8 + k] * d[2]));
+        }
+    }
+    for (size_t i = 0; i < lid1.size(); i += 3)
+        for (int r = 0; r < 3; ++r)
+            cam1.push_back(static_cast<float>(T1[4 * r] * lid1[i] + T1[4 * r + 1] * lid1[i + 1] +
+                                              T1[4 * r + 2] * lid1[i + 2] + T1[4 * r + 3]));
+    BridgeConfig config;
+    config.encoding = FlowEncoding::Float32;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid0, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 0, T0));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 100000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow f;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
+    assert_int_equal(f.header.lidar_flags, 3);
+
+    lf_calibration_t with_t0 = cal;
+    with_t0.has_lidar_to_camera = 1;
+    std::copy(T0, T0 + 16, with_t0.lidar_to_camera);
+    lf_options_t *o = scene_options(2);
+    lf_estimator_t *e = nullptr;
+    assert_int_equal(lf_create(o, &with_t0, &e), LF_OK);
+    lf_options_destroy(o);
+    const lf_lidar_t l0 = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid0.size() / 3), lid0.data(), 0};
+    const lf_lidar_t l1 = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam1.size() / 3), cam1.data(), 0};
+    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
+    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
+    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, &l0), LF_OK);
+    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, &l1), LF_OK);
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
+    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
+    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
+    assert_memory_equal(f.valid.data(), r.valid, W * H);
+    scene_result_free(&r);
+    lf_destroy(e);
+    assert_accounted(rig.bridge->counters());
+}
+
 // No LiDAR stream at all: image-only results, flagged, equal to the C ABI without LiDAR.
 void test_missing_lidar_stream(void **) {
     BridgeConfig config;
@@ -795,6 +862,7 @@ int main(void) {
         cmocka_unit_test(test_float32_equals_capi),
         cmocka_unit_test(test_int16_subsampled_equals_capi),
         cmocka_unit_test(test_points_in_lidar_frame),
+        cmocka_unit_test(test_lidar_transform_change_within_pair),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),
         cmocka_unit_test(test_calibration_and_order),

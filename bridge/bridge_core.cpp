@@ -103,6 +103,10 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
                  "shard K/N with 0 <= K < N";
         return nullptr;
     }
+    if (config.shard_timeout_s > 0 && (config.shard_count < 2 || config.status_period_s <= 0)) {
+        *error = "a shard timeout needs --shard K/N with N > 1 and a status period > 0 (the shards' heartbeats)";
+        return nullptr;
+    }
     if (config.have_lidar_to_camera) {
         const std::string why = check_lidar_to_camera(config.lidar_to_camera);
         if (!why.empty()) {
@@ -140,7 +144,14 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         {&config.stereo_channel, &Bridge::on_stereo},
         {&config.lidar_channel, &Bridge::on_lidar},
         {&config.calibration_channel, &Bridge::on_calibration}};
-    for (const auto &[channel, handler] : subs) {
+    std::vector<std::pair<const std::string *, lcm_msg_handler_t>> channels(std::begin(subs), std::end(subs));
+    if (config.shard_count > 1 && config.status_period_s > 0 && config.shard_timeout_s != 0) {
+        // The other shards' heartbeats, and the results, which settle their pairs.
+        b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
+        channels.push_back({&config.status_channel, &Bridge::on_status});
+        channels.push_back({&config.flow_channel, &Bridge::on_flow});
+    }
+    for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
         if (!s) {
             *error = "cannot subscribe to " + *channel;
@@ -150,6 +161,8 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     }
     b->counters_.queue_capacity = config.queue_capacity;
     b->start_seconds_ = monotonic_seconds();
+    // A shard that never sends a status is dead from shard_timeout_ after this one's start.
+    if (b->shard_timeout_ > 0) b->shards_.assign(static_cast<size_t>(config.shard_count), {b->start_seconds_, false, {}});
     b->next_status_ = b->start_seconds_ + config.status_period_s;
     b->worker_ = std::thread(&Bridge::worker_loop, b.get());
     return b;
@@ -190,6 +203,96 @@ void Bridge::on_calibration(const lcm_recv_buf_t *rbuf, const char *, void *self
     static_cast<Bridge *>(self)->handle_calibration(rbuf);
 }
 
+void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    auto *b = static_cast<Bridge *>(self);
+    StatusMessage status;
+    if (!decode_status(rbuf->data, rbuf->data_size, status).empty()) return;  // not ours to judge
+    const lidarflow_status_t &f = status.fields;
+    std::lock_guard<std::mutex> lock(b->mutex_);
+    if (f.shard_count != b->config_.shard_count || f.shard_index < 0 || f.shard_index >= f.shard_count) {
+        if (!b->warned_foreign_split_)
+            b->log("a status from shard %d/%d on %s is not of this split (N = %d): ignored", f.shard_index,
+                   f.shard_count, b->config_.status_channel.c_str(), b->config_.shard_count);
+        b->warned_foreign_split_ = true;
+        return;
+    }
+    if (f.shard_index == b->config_.shard_index) return;  // our own, looped back
+    ShardWatch &w = b->shards_[static_cast<size_t>(f.shard_index)];
+    w.last_heartbeat = monotonic_seconds();
+    if (w.dead) {
+        // A restarted shard starts from nothing: what it had is already counted.
+        w.dead = false;
+        w.pending.clear();
+        --b->counters_.shards_dead;
+        b->log("shard %d/%d is back (status received)", f.shard_index, f.shard_count);
+    }
+}
+
+void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    auto *b = static_cast<Bridge *>(self);
+    int64_t utime = 0;
+    if (!scene_flow_utime(rbuf->data, rbuf->data_size, &utime)) return;
+    std::lock_guard<std::mutex> lock(b->mutex_);
+    for (ShardWatch &w : b->shards_) {
+        const auto it = std::find(w.pending.begin(), w.pending.end(), utime);
+        if (it != w.pending.end()) w.pending.erase(it);
+    }
+}
+
+// Whether this shard counts the pairs of dead shard `shard`: it is the first live one after it.
+bool Bridge::counts_for_locked(int shard) const {
+    const int n = config_.shard_count;
+    for (int k = (shard + 1) % n; k != shard; k = (k + 1) % n) {
+        if (k == config_.shard_index) return true;
+        if (!shards_[static_cast<size_t>(k)].dead) return false;
+    }
+    return false;
+}
+
+// Called with mutex_ held for every decodable stereo frame while watching: the pair ending at
+// it, if there is one (consecutive index, same sequence), belongs to shard index % N.
+void Bridge::note_pair_locked(int64_t index, int32_t sequence, int64_t utime) {
+    const bool pair = watch_have_prev_ && static_cast<uint64_t>(index) - 1 == static_cast<uint64_t>(watch_prev_index_) &&
+                      sequence == watch_prev_sequence_;
+    watch_have_prev_ = true;
+    watch_prev_index_ = index;
+    watch_prev_sequence_ = sequence;
+    const auto owner = static_cast<int>(static_cast<uint64_t>(index) % static_cast<uint64_t>(config_.shard_count));
+    if (!pair || owner == config_.shard_index) return;
+    ShardWatch &w = shards_[static_cast<size_t>(owner)];
+    if (w.dead) {
+        if (counts_for_locked(owner)) {
+            ++counters_.pairs_lost_dead_shard;
+            if (config_.verbose) log("pair ending at %" PRId64 " lost: its shard %d is dead", utime, owner);
+        }
+        return;
+    }
+    w.pending.push_back(utime);
+    if (w.pending.size() > 4096) w.pending.pop_front();
+}
+
+void Bridge::check_shards() {
+    const double now = monotonic_seconds();
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (size_t k = 0; k < shards_.size(); ++k) {
+        ShardWatch &w = shards_[k];
+        if (static_cast<int>(k) == config_.shard_index || w.dead || now - w.last_heartbeat <= shard_timeout_) continue;
+        w.dead = true;
+        ++counters_.shards_dead;
+        const bool mine = counts_for_locked(static_cast<int>(k));
+        if (mine) counters_.pairs_lost_dead_shard += static_cast<int64_t>(w.pending.size());
+        if (mine)
+            log("shard %zu/%d: no status for %.1f s, taken for dead; counted here as lost: %zu pair(s) without a "
+                "result so far, and its further ones",
+                k, config_.shard_count, now - w.last_heartbeat, w.pending.size());
+        else
+            log("shard %zu/%d: no status for %.1f s, taken for dead; %zu pair(s) without a result so far, counted by "
+                "another shard",
+                k, config_.shard_count, now - w.last_heartbeat, w.pending.size());
+        w.pending.clear();
+    }
+}
+
 void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     auto frame = std::make_unique<Frame>();
     // Per message by fingerprint: a channel may carry either type (and a driver may be swapped).
@@ -209,6 +312,7 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     const lidarflow_stereo_t &m = frame->stereo.msg();
     if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
     frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
+    if (shard_timeout_ > 0) note_pair_locked(frame->index, m.sequence, m.utime);
     if (config_.shard_count > 1) {
         // Pair (index - 1, index) belongs to shard index % N; a shard needs its t1 frames and
         // the frame before each as t0. Unsigned modulo: frame numbers may be negative.
@@ -539,6 +643,8 @@ void Bridge::publish_status() {
     s.skipped_other_shard = c.skipped_other_shard;
     s.shard_index = config_.shard_index;
     s.shard_count = config_.shard_count;
+    s.shards_dead = c.shards_dead;
+    s.pairs_lost_dead_shard = c.pairs_lost_dead_shard;
     s.lidar_received = c.lidar_received;
     s.lidar_malformed = c.lidar_malformed;
     s.lidar_rejected = c.lidar_rejected;
@@ -586,6 +692,7 @@ int Bridge::run_once(int timeout_ms) {
         }
     }
     flush_outbox();
+    if (shard_timeout_ > 0) check_shards();
     if (config_.status_period_s > 0 && monotonic_seconds() >= next_status_) {
         publish_status();
         while (next_status_ <= monotonic_seconds()) next_status_ += config_.status_period_s;

@@ -52,6 +52,10 @@ struct BridgeConfig {
     // (index: stereo_t.frame_number, or the arrival count for bot_core.images_t), and takes
     // the frame before as that pair's t0; other frames are counted as skipped_other_shard.
     int shard_index = 0, shard_count = 1;
+    // --shard: a shard with no status on the status channel for this long is taken for dead
+    // and its pairs counted as lost (see status_t.lcm); < 0: 3 status periods; 0: no watch.
+    // Needs status_period_s > 0 (the shards' heartbeats).
+    double shard_timeout_s = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     int step = 1;                        // flow subsampling
     double status_period_s = 1.0;        // <= 0: status only at shutdown
@@ -70,6 +74,8 @@ struct Counters {
             dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
             dropped_shutdown = 0;
     int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
+    int32_t shards_dead = 0;               // --shard: other shards without a recent status
+    int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
@@ -119,6 +125,11 @@ private:
     static void on_stereo(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_lidar(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_calibration(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_flow(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void note_pair_locked(int64_t index, int32_t sequence, int64_t utime);
+    bool counts_for_locked(int shard) const;
+    void check_shards();
     void handle_stereo(const lcm_recv_buf_t *rbuf);
     void count_transport_gap(int64_t frame_number);
     void handle_lidar(const lcm_recv_buf_t *rbuf);
@@ -154,6 +165,19 @@ private:
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
+    // --shard watch (shard_timeout_ > 0): every other shard's last heartbeat and the t1 times of
+    // its pairs for which no result was seen yet (bounded; the newest kept).
+    struct ShardWatch {
+        double last_heartbeat = 0;
+        bool dead = false;
+        std::deque<int64_t> pending;
+    };
+    double shard_timeout_ = 0;
+    std::vector<ShardWatch> shards_;
+    bool watch_have_prev_ = false;    // the previous decodable frame, to know which pairs exist
+    int64_t watch_prev_index_ = 0;
+    int32_t watch_prev_sequence_ = 0;
+    bool warned_foreign_split_ = false;
     struct Outgoing {
         std::vector<uint8_t> bytes;
         double received_seconds;

@@ -44,6 +44,8 @@ const char *kUsage =
     "  --shard K/N              one of N processes sharing the stream: compute only the pairs whose\n"
     "                           t1 frame index % N == K (index: stereo_t.frame_number, else arrival\n"
     "                           order); the queue default becomes 2 (a pair)\n"
+    "  --shard-timeout S        with --shard: a shard with no status for S seconds is taken for dead\n"
+    "                           and its pairs counted as lost (default 3 status periods; 0 = off)\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
     "  --replay IN.log --out OUT.log\n"
@@ -91,7 +93,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     std::vector<lidarflow::cli::OptionSpec> spec;
     for (const char *name : {"lcm-url", "stereo-channel", "lidar-channel", "calib-channel", "flow-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
-                             "lidar-buffer", "queue", "shard", "encoding", "step", "option", "status-period", "replay",
+                             "lidar-buffer", "queue", "shard", "shard-timeout", "encoding", "step", "option", "status-period", "replay",
                              "out"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
@@ -150,8 +152,14 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
         config->shard_index = k;
         config->shard_count = n;
     }
+    if (args.has("shard-timeout")) config->shard_timeout_s = args.number_in("shard-timeout", 0, 0, 3600);
     config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
     config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);
+    if (config->shard_timeout_s > 0 && (config->shard_count < 2 || config->status_period_s <= 0)) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --shard-timeout needs --shard K/N with N > 1 and a "
+                             "--status-period > 0 (the shards' heartbeats)\n");
+        return false;
+    }
     if (args.has("encoding")) {
         const std::string v = args.str("encoding", "");
         if (!parse_flow_encoding(v.c_str(), &config->encoding)) {
@@ -257,12 +265,14 @@ int main(int argc, char **argv) {
         std::fprintf(stderr,
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
-                     "%lld, shutdown %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms\n",
+                     "%lld, shutdown %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
+                     "shards dead %d, their pairs lost %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown,
-                     (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms);
+                     (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
+                     c.shards_dead, (long long)c.pairs_lost_dead_shard);
     }
     lcm_destroy(lcm);
     return rc;

@@ -66,8 +66,9 @@ constexpr int kLidarFixed = 141;
 // calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
 constexpr int kCalibrationFixed = 56;
 // status_t: utime 8, uptime 8, 18 int64 counters 144, queue_depth 4, queue_capacity 4, busy 1,
-// shard_index 4, shard_count 4, 5 floats 20, length of last_error 4 = 201.
-constexpr int kStatusFixed = 201;
+// shard_index 4, shard_count 4, shards_dead 4, pairs_lost_dead_shard 8, 5 floats 20, length of
+// last_error 4 = 213.
+constexpr int kStatusFixed = 213;
 // scene_flow_t: utime 8, utime0 8, sequence 4, lidar_flags 1, lidar_utime0 8, lidar_utime1 8,
 // last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
 // compute_seconds 4, plane_size 4, valid_size 4 = 72.
@@ -348,6 +349,13 @@ std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg) {
     const int n = lidarflow_scene_flow_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
     buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
     return buf;
+}
+
+bool scene_flow_utime(const void *data, size_t size, int64_t *utime) {
+    const auto *p = static_cast<const uint8_t *>(data);
+    if (size < 8 + 8 || read_be(p, 8) != __lidarflow_scene_flow_t_get_hash()) return false;
+    *utime = read_be(p + 8, 8);
+    return true;
 }
 
 std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {

@@ -136,6 +136,10 @@ bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step
 // Encoded bytes of a message (lcm-gen's encoder).
 std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg);
 
+// The t1 time (utime) of a raw scene_flow_t, read without decoding the planes; false when the
+// message is not a scene_flow_t or too short.
+bool scene_flow_utime(const void *data, size_t size, int64_t *utime);
+
 // A decoded scene_flow_t as float planes (the receiver's view): values in px, valid 0/1.
 struct DecodedFlow {
     lidarflow_scene_flow_t header{};  // scalars only (array pointers cleared)

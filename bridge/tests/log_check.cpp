@@ -17,6 +17,10 @@
 //       other shards), no two results may name the same pair, and the results together must
 //       match the shards' counts. --expect-pairs P: exactly P results and no frame dropped by
 //       any shard. --check-every M: compare only every M-th result with the C ABI (time).
+//       --dead-shard K: shard K was killed mid-stream; its last status is not final and is left
+//       out of the accounting; every live shard must have taken it for dead, and the pairs
+//       published (by anyone, K included) plus the pairs the live shards counted as lost
+//       (pairs_lost_dead_shard) must be exactly --expect-pairs.
 //   log_check throughput LOG [--stereo-channel NAME]
 //       Results per second of a recorded live run: from the first stereo frame's to the last
 //       result's arrival at the logger.
@@ -234,7 +238,7 @@ int main(int argc, char **argv) {
     std::string inputs_path;
     InputSetup setup;
     std::vector<std::pair<std::string, std::string>> options;
-    int min_results = 1, step = 1, expect_pairs = -1;
+    int min_results = 1, step = 1, expect_pairs = -1, dead_shard = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     for (int i = 3; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
@@ -243,6 +247,7 @@ int main(int argc, char **argv) {
         else if (a == "--inputs") inputs_path = v;
         else if (a == "--stereo-channel") setup.stereo_channel = v;
         else if (a == "--expect-pairs") expect_pairs = std::atoi(v.c_str());
+        else if (a == "--dead-shard") dead_shard = std::atoi(v.c_str());
         else if (a == "--check-every") setup.check_every = std::max(1, std::atoi(v.c_str()));
         else if (a == "--lidar-channel") setup.lidar_channel = v;
         else if (a == "--calib") {
@@ -342,10 +347,11 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "log_check: no status message in %s\n", path.c_str());
             return 1;
         }
-        int64_t results = 0, dropped_all = 0;
+        int64_t results = 0, dropped_all = 0, lost_dead = 0;
         bool accounted = true;
         for (const auto &[shard, status] : last_status) {
             const lidarflow_status_t &s = status.fields;
+            if (shard == dead_shard) continue;
             const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
                                     s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
                                     s.dropped_shutdown;
@@ -356,13 +362,22 @@ int main(int argc, char **argv) {
                         (long long)s.stereo_processed, (long long)dropped, (long long)s.dropped_stale,
                         (long long)s.skipped_other_shard, (long long)s.results_published, s.latency_mean_ms,
                         s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
+            if (dead_shard >= 0) {
+                std::printf("log_check: shard %d takes %d shard(s) for dead and counted %lld of their pairs as lost\n",
+                            s.shard_index, s.shards_dead, (long long)s.pairs_lost_dead_shard);
+                accounted &= s.shards_dead == 1;
+                lost_dead += s.pairs_lost_dead_shard;
+            }
             accounted &= s.stereo_received == s.stereo_processed + dropped + s.skipped_other_shard &&
                          s.queue_depth == 0 && s.busy == 0 && s.stereo_received == stereo_in_log &&
-                         s.shard_count == static_cast<int32_t>(last_status.size());
+                         s.shard_count == static_cast<int32_t>(last_status.size() + (dead_shard >= 0 &&
+                                                                                    !last_status.count(dead_shard)));
             results += s.results_published;
             dropped_all += dropped;
         }
-        accounted &= results == static_cast<int64_t>(flows.size());
+        // A dead shard's results are in the log but not in a final status of its own.
+        accounted &= dead_shard >= 0 ? results <= static_cast<int64_t>(flows.size())
+                                     : results == static_cast<int64_t>(flows.size());
         if (!accounted) {
             std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result (or a shard "
                                  "is missing)\n");
@@ -374,11 +389,16 @@ int main(int argc, char **argv) {
                              (long long)pair.second, n);
                 return 1;
             }
-        if (expect_pairs >= 0 && (static_cast<int64_t>(pairs.size()) != expect_pairs || dropped_all != 0)) {
-            std::fprintf(stderr, "log_check: %zu distinct pairs and %lld frames dropped; expected %d and none\n",
-                         pairs.size(), (long long)dropped_all, expect_pairs);
+        if (expect_pairs >= 0 &&
+            (static_cast<int64_t>(pairs.size()) + lost_dead != expect_pairs || dropped_all != 0)) {
+            std::fprintf(stderr, "log_check: %zu distinct pairs published, %lld counted as lost with a dead shard, %lld "
+                                 "frames dropped; expected %d pairs in all and no drop\n",
+                         pairs.size(), (long long)lost_dead, (long long)dropped_all, expect_pairs);
             return 1;
         }
+        if (dead_shard >= 0)
+            std::printf("log_check: %zu pairs published + %lld lost with dead shard %d = %d\n", pairs.size(),
+                        (long long)lost_dead, dead_shard, expect_pairs);
         return check_flows(events, flows, options, min_results, setup);
     }
     if (mode != "replay") {

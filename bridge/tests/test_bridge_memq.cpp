@@ -424,6 +424,88 @@ void test_lidar_transform_change_within_pair(void **) {
     assert_accounted(rig.bridge->counters());
 }
 
+// A heartbeat of shard k/n on the status channel.
+void send_shard_status(Rig &rig, int32_t k, int32_t n) {
+    lidarflow_status_t st;
+    std::memset(&st, 0, sizeof st);
+    st.shard_index = k;
+    st.shard_count = n;
+    char empty[] = "";
+    st.last_error = empty;
+    assert_int_equal(lidarflow_status_t_publish(rig.lcm, "LIDARFLOW_STATUS", &st), 0);
+}
+
+// Runs the bridge for `seconds`, shard 1 of 3 sending heartbeats if asked.
+void run_for(Rig &rig, double seconds, bool shard1_alive) {
+    const double end = monotonic_seconds() + seconds;
+    while (monotonic_seconds() < end) {
+        if (shard1_alive) send_shard_status(rig, 1, 3);
+        for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    }
+}
+
+// --shard 0/3 watching the others: shard 2 stops sending its status, shard 1 later. Each
+// dead shard's pairs without a result count once, here (0 is the first live shard after 2,
+// and after 1 once 2 is dead too); a result seen for a pair settles it; a status of another
+// split is ignored; a shard that sends a status again is alive again.
+void test_dead_shards(void **) {
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 0.3;
+    Rig rig(config);  // no calibration: the frames are dropped, the pairs still watched
+    // Heartbeats go with every frame while a shard lives: a slow machine must not make it look
+    // dead early.
+    bool shard1_alive = true, shard2_alive = true;
+    auto frame = [&](int64_t n) {
+        if (shard1_alive) send_shard_status(rig, 1, 3);
+        if (shard2_alive) send_shard_status(rig, 2, 3);
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    };
+    for (int64_t n = 0; n <= 5; ++n) frame(n);  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
+    lidarflow_scene_flow_t flow;  // shard 2's result of pair 4 -> 5 (only utime is read)
+    std::memset(&flow, 0, sizeof flow);
+    flow.utime = 5000;
+    flow.step = 1;
+    assert_int_equal(lidarflow_scene_flow_t_publish(rig.lcm, "LIDARFLOW_FLOW", &flow), 0);
+    send_shard_status(rig, 1, 2);  // another split: ignored
+    shard2_alive = false;
+    run_for(rig, 0.5, true);
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);            // shard 2
+    assert_int_equal(c.pairs_lost_dead_shard, 1);  // 1 -> 2; 4 -> 5 has its result
+    for (int64_t n = 6; n <= 8; ++n) frame(n);     // 7 (shard 1, alive), 8 (shard 2, dead)
+    assert_int_equal(rig.bridge->counters().pairs_lost_dead_shard, 2);
+    shard1_alive = false;
+    run_for(rig, 0.5, false);                      // shard 1 dies: 0 -> 1, 3 -> 4, 6 -> 7 lost
+    c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 2);
+    assert_int_equal(c.pairs_lost_dead_shard, 5);
+    send_shard_status(rig, 2, 3);
+    for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    assert_int_equal(rig.bridge->counters().shards_dead, 1);
+    frame(9);   // 8 -> 9: shard 0's own
+    frame(11);  // no pair (10 lost in transport): nobody's
+    assert_int_equal(rig.bridge->counters().pairs_lost_dead_shard, 5);
+    rig.bridge->stop();
+    while (lcm_handle_timeout(rig.lcm, 50) > 0) {
+    }
+    // The bridge's final status (the channel also carries the heartbeats sent above).
+    StatusMessage last;
+    for (const auto &b : rig.statuses)
+        if (decode_status(b.data(), b.size(), last).empty() && last.fields.shard_index == 0 &&
+            last.fields.shard_count == 3 && last.fields.stereo_received == 11)
+            break;
+    assert_int_equal(last.fields.stereo_received, 11);
+    assert_int_equal(last.fields.shards_dead, 1);
+    assert_int_equal(last.fields.pairs_lost_dead_shard, 5);
+    // Pairs, not messages: the frames' own identity is unchanged.
+    c = rig.bridge->counters();
+    assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped() + c.skipped_other_shard);
+}
+
 // No LiDAR stream at all: image-only results, flagged, equal to the C ABI without LiDAR.
 void test_missing_lidar_stream(void **) {
     BridgeConfig config;
@@ -863,6 +945,7 @@ int main(void) {
         cmocka_unit_test(test_int16_subsampled_equals_capi),
         cmocka_unit_test(test_points_in_lidar_frame),
         cmocka_unit_test(test_lidar_transform_change_within_pair),
+        cmocka_unit_test(test_dead_shards),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),
         cmocka_unit_test(test_calibration_and_order),

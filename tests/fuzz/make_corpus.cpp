@@ -194,6 +194,8 @@ void lcm_seeds() {
         s.shard_index = i;
         s.shard_count = 2;
         s.skipped_other_shard = i;
+        s.shards_dead = i;
+        s.pairs_lost_dead_shard = 3 * i;
         s.latency_mean_ms = 12.5f;
         s.last_error = const_cast<char *>(errors[i]);
         save("fuzz_lcm_status", i == 0 ? "no_error" : "with_error",

@@ -98,9 +98,10 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     }
     if (config.queue_capacity < 1 || config.lidar_buffer < 1 || config.lidar_wait_ms < 0 ||
         config.lidar_tolerance_us < 0 || config.step < 1 || config.step > 16 || config.shard_count < 1 ||
-        config.shard_index < 0 || config.shard_index >= config.shard_count) {
+        config.shard_index < 0 || config.shard_index >= config.shard_count || config.pair_wait_ms < 0 ||
+        config.pair_buffer < 1 || config.left_channel.empty() != config.right_channel.empty()) {
         *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16, "
-                 "shard K/N with 0 <= K < N";
+                 "shard K/N with 0 <= K < N, pair wait >= 0 and buffer >= 1, left and right channel both or none";
         return nullptr;
     }
     if (config.shard_timeout_s > 0 && (config.shard_count < 2 || config.status_period_s <= 0)) {
@@ -145,6 +146,11 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         {&config.lidar_channel, &Bridge::on_lidar},
         {&config.calibration_channel, &Bridge::on_calibration}};
     std::vector<std::pair<const std::string *, lcm_msg_handler_t>> channels(std::begin(subs), std::end(subs));
+    if (!config.left_channel.empty()) {
+        // A camera per channel replaces the stereo channel.
+        channels.front() = {&config.left_channel, &Bridge::on_left};
+        channels.push_back({&config.right_channel, &Bridge::on_right});
+    }
     if (config.shard_count > 1 && config.status_period_s > 0 && config.shard_timeout_s != 0) {
         // The other shards' heartbeats, and the results, which settle their pairs.
         b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
@@ -309,6 +315,90 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
             err.c_str());
         return;
     }
+    accept_locked(std::move(frame));
+}
+
+void Bridge::on_left(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_image(0, rbuf);
+}
+void Bridge::on_right(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_image(1, rbuf);
+}
+
+// One camera's image: paired with the other camera's image of equal utime, or left waiting.
+void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
+    const char *channel = (side == 0 ? config_.left_channel : config_.right_channel).c_str();
+    int64_t utime = 0;
+    const std::string err = check_bot_image(rbuf->data, rbuf->data_size, &utime);
+    const double now = monotonic_seconds();
+    const auto *d = static_cast<const uint8_t *>(rbuf->data);
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!err.empty()) {
+        ++counters_.stereo_received;
+        ++counters_.dropped_malformed;
+        counters_.last_error = "image: " + err;
+        log("malformed message on %s (%u bytes), dropped: %s", channel, rbuf->data_size, err.c_str());
+        return;
+    }
+    std::deque<WaitingImage> &mine = waiting_[side], &other = waiting_[1 - side];
+    const auto partner = std::find_if(other.begin(), other.end(), [&](const WaitingImage &w) { return w.utime == utime; });
+    if (partner == other.end()) {
+        const auto twin = std::find_if(mine.begin(), mine.end(), [&](const WaitingImage &w) { return w.utime == utime; });
+        if (twin != mine.end()) {
+            // Two images of one camera at one time: the later one cannot be told apart, so it
+            // has no partner of its own.
+            ++counters_.stereo_received;
+            ++counters_.dropped_unpaired;
+            log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
+            return;
+        }
+        mine.push_back({utime, now, std::vector<uint8_t>(d, d + rbuf->data_size)});
+        while (static_cast<int>(mine.size()) > config_.pair_buffer)
+            drop_unpaired_locked(side, "more images waiting than --pair-buffer");
+        return;
+    }
+    const std::vector<uint8_t> other_bytes = std::move(partner->bytes);
+    other.erase(partner);
+    lock.unlock();
+    auto frame = std::make_unique<Frame>();
+    const std::string pair_err =
+        side == 0 ? decode_bot_image_pair(d, rbuf->data_size, other_bytes.data(), other_bytes.size(), frame->stereo)
+                  : decode_bot_image_pair(other_bytes.data(), other_bytes.size(), d, rbuf->data_size, frame->stereo);
+    frame->received_seconds = now;
+    lock.lock();
+    ++counters_.stereo_received;
+    if (!pair_err.empty()) {
+        ++counters_.dropped_malformed;
+        counters_.last_error = "stereo: " + pair_err;
+        log("images %" PRId64 " on %s and %s do not make a stereo frame, dropped: %s", utime,
+            config_.left_channel.c_str(), config_.right_channel.c_str(), pair_err.c_str());
+        return;
+    }
+    accept_locked(std::move(frame));
+}
+
+// Called with mutex_ held: the oldest image waiting on `side` leaves without a partner.
+void Bridge::drop_unpaired_locked(int side, const char *why) {
+    const WaitingImage &w = waiting_[side].front();
+    ++counters_.stereo_received;
+    ++counters_.dropped_unpaired;
+    log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", w.utime,
+        (side == 0 ? config_.left_channel : config_.right_channel).c_str(),
+        (side == 0 ? config_.right_channel : config_.left_channel).c_str(), why);
+    waiting_[side].pop_front();
+}
+
+void Bridge::expire_unpaired() {
+    const double deadline = monotonic_seconds() - config_.pair_wait_ms / 1000.0;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int side = 0; side < 2; ++side)
+        while (!waiting_[side].empty() && waiting_[side].front().arrival < deadline)
+            drop_unpaired_locked(side, "waited --pair-wait-ms");
+}
+
+// Called with mutex_ held for every decodable stereo frame: shard filter, calibration, order,
+// then the latest-wins queue.
+void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     const lidarflow_stereo_t &m = frame->stereo.msg();
     if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
     frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
@@ -640,6 +730,7 @@ void Bridge::publish_status() {
     s.dropped_malformed = c.dropped_malformed;
     s.dropped_estimator_error = c.dropped_estimator_error;
     s.dropped_shutdown = c.dropped_shutdown;
+    s.dropped_unpaired = c.dropped_unpaired;
     s.skipped_other_shard = c.skipped_other_shard;
     s.shard_index = config_.shard_index;
     s.shard_count = config_.shard_count;
@@ -692,6 +783,7 @@ int Bridge::run_once(int timeout_ms) {
         }
     }
     flush_outbox();
+    if (!config_.left_channel.empty()) expire_unpaired();
     if (shard_timeout_ > 0) check_shards();
     if (config_.status_period_s > 0 && monotonic_seconds() >= next_status_) {
         publish_status();
@@ -714,6 +806,8 @@ void Bridge::stop() {
         std::lock_guard<std::mutex> lock(mutex_);
         counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
         queue_.clear();
+        for (int side = 0; side < 2; ++side)
+            while (!waiting_[side].empty()) drop_unpaired_locked(side, "the bridge stopped");
         counters_.queue_depth = 0;
         counters_.busy = false;
     }

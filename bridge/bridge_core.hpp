@@ -33,6 +33,14 @@ namespace lidarflow::bridge {
 
 struct BridgeConfig {
     std::string stereo_channel = "LIDARFLOW_STEREO";
+    // A camera per channel (bot_core.image_t each) instead of the stereo channel, when both are
+    // set: images of equal utime are paired into a stereo frame. An image waits for its partner
+    // up to pair_wait_ms after its arrival, and at most `pair_buffer` images wait per side (the
+    // oldest goes first); an image that leaves without a partner is counted as a frame received
+    // and dropped_unpaired.
+    std::string left_channel, right_channel;
+    int pair_wait_ms = 100;
+    int pair_buffer = 8;
     std::string lidar_channel = "LIDARFLOW_LIDAR";
     std::string calibration_channel = "LIDARFLOW_CALIB";
     std::string flow_channel = "LIDARFLOW_FLOW";
@@ -72,7 +80,7 @@ struct Counters {
     int64_t stereo_lost_in_transport = 0;  // gaps in stereo_t.frame_number
     int64_t dropped_stale = 0, dropped_out_of_order = 0, dropped_no_calibration = 0,
             dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
-            dropped_shutdown = 0;
+            dropped_shutdown = 0, dropped_unpaired = 0;
     int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
     int32_t shards_dead = 0;               // --shard: other shards without a recent status
     int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
@@ -88,7 +96,7 @@ struct Counters {
 
     int64_t dropped() const {
         return dropped_stale + dropped_out_of_order + dropped_no_calibration + dropped_calibration_mismatch +
-               dropped_malformed + dropped_estimator_error + dropped_shutdown;
+               dropped_malformed + dropped_estimator_error + dropped_shutdown + dropped_unpaired;
     }
 };
 
@@ -131,6 +139,12 @@ private:
     bool counts_for_locked(int shard) const;
     void check_shards();
     void handle_stereo(const lcm_recv_buf_t *rbuf);
+    static void on_left(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_right(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void handle_image(int side, const lcm_recv_buf_t *rbuf);
+    void drop_unpaired_locked(int side, const char *why);
+    void expire_unpaired();
+    void accept_locked(std::unique_ptr<Frame> frame);
     void count_transport_gap(int64_t frame_number);
     void handle_lidar(const lcm_recv_buf_t *rbuf);
     void handle_calibration(const lcm_recv_buf_t *rbuf);
@@ -165,6 +179,13 @@ private:
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
+    // Images of the left (0) and right (1) channel waiting for their partner, oldest first.
+    struct WaitingImage {
+        int64_t utime;
+        double arrival;
+        std::vector<uint8_t> bytes;
+    };
+    std::deque<WaitingImage> waiting_[2];
     // --shard watch (shard_timeout_ > 0): every other shard's last heartbeat and the t1 times of
     // its pairs for which no result was seen yet (bounded; the newest kept).
     struct ShardWatch {

@@ -19,6 +19,7 @@
 #include "lidarflow_scene_flow_t.h"
 #include "lidarflow_status_t.h"
 #include "lidarflow_stereo_t.h"
+#include "bot_core_image_t.h"
 #include "bot_core_images_t.h"
 #include "bot_core_pointcloud_t.h"
 
@@ -41,10 +42,12 @@ public:
 
     // False for sources without a publisher counter (bot_core.images_t): no transport-gap count.
     bool has_frame_number() const { return has_frame_number_; }
+    // A frame from bot_core images (no frame number): `header`'s scalars, the left image then the
+    // right one packed in `pixels` (header.size bytes each).
+    void assign_packed(const lidarflow_stereo_t &header, std::vector<uint8_t> pixels);
 
 private:
     friend std::string decode_stereo(const void *, size_t, StereoMessage &);
-    friend std::string decode_bot_images(const void *, size_t, StereoMessage &);
     lidarflow_stereo_t msg_{};
     bool decoded_ = false;             // msg_ arrays from lcm-gen's decoder
     std::vector<uint8_t> owned_;       // else msg_.left/right point here
@@ -62,6 +65,16 @@ int64_t message_fingerprint(const void *data, size_t size);
 // read. The pair becomes a stereo frame of sequence 0 at images_t.utime, packed rows, without a
 // frame number. Returns "" or the problem; `out` (fresh) then holds nothing.
 std::string decode_bot_images(const void *data, size_t size, StereoMessage &out);
+
+// Walks a raw bot_core.image_t sent on its own channel (a camera per channel) as above, and
+// checks its pixel format is GRAY, RGB or BGR; *utime gets its time. "" or the problem.
+std::string check_bot_image(const void *data, size_t size, int64_t *utime);
+
+// Two raw bot_core.image_t of equal utime, left and right, as one stereo frame (the checks of
+// decode_bot_images: same size and format, rows repacked, no frame number). "" or the problem;
+// `out` (fresh) then holds nothing.
+std::string decode_bot_image_pair(const void *left, size_t left_size, const void *right, size_t right_size,
+                                  StereoMessage &out);
 
 // Checks a row-major 4x4 LiDAR -> camera transform: finite, last row 0 0 0 1. "" or the problem.
 std::string check_lidar_to_camera(const double *T);

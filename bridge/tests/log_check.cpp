@@ -354,7 +354,7 @@ int main(int argc, char **argv) {
             if (shard == dead_shard) continue;
             const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
                                     s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
-                                    s.dropped_shutdown;
+                                    s.dropped_shutdown + s.dropped_unpaired;
             std::printf("log_check: status of shard %d/%d: stereo received %lld (log has %lld), processed %lld, dropped "
                         "%lld (stale %lld), skipped for other shards %lld, results %lld, latency mean %.1f ms max %.1f "
                         "ms, estimator mean %.1f ms, queue %d, busy %d\n",

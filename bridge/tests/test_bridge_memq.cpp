@@ -506,6 +506,89 @@ void test_dead_shards(void **) {
     assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped() + c.skipped_other_shard);
 }
 
+// A gray bot_core.image_t of the scene (a camera per channel).
+std::vector<uint8_t> image_bytes(const uint8_t *pixels, int64_t utime) {
+    bot_core_image_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.width = W;
+    m.height = H;
+    m.row_stride = W;
+    m.pixelformat = BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY;
+    m.size = W * H;
+    m.data = const_cast<uint8_t *>(pixels);
+    std::vector<uint8_t> b(static_cast<size_t>(bot_core_image_t_encoded_size(&m)));
+    assert_int_equal(bot_core_image_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+    return b;
+}
+
+// Publishes without waiting for a frame (an image alone makes none), then lets the bridge
+// handle it and finish what it has.
+void publish_image(Rig &rig, const char *channel, const std::vector<uint8_t> &bytes) {
+    assert_int_equal(lcm_publish(rig.lcm, channel, bytes.data(), (unsigned)bytes.size()), 0);
+    for (int i = 0; i < 3; ++i) rig.bridge->run_once(10);
+    rig.settle();
+}
+
+// --left-channel/--right-channel: images of equal utime from the two channels make one frame
+// (in either order); the result equals the one of the same images as stereo_t. Images without
+// a partner are dropped as unpaired after --pair-wait-ms, when more than --pair-buffer wait, or
+// at stop; each counts as one frame received, so the accounting identity holds.
+void test_left_right_channels(void **) {
+    BridgeConfig config;
+    config.left_channel = "CAM_LEFT";
+    config.right_channel = "CAM_RIGHT";
+    config.pair_wait_ms = 200;
+    config.pair_buffer = 2;
+    config.encoding = FlowEncoding::Float32;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 0));
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 0));
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right1, 100000));  // right first this time
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.stereo_received, 2);
+    assert_int_equal(c.stereo_processed, 2);
+
+    BridgeConfig own;
+    own.encoding = FlowEncoding::Float32;
+    own.status_period_s = 0;
+    Rig reference(own);
+    reference.send("LIDARFLOW_CALIB", calibration_bytes());
+    reference.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    reference.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(reference.flows.size(), 1);
+    DecodedFlow got, want;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), got).c_str(), "");
+    assert_string_equal(decode_scene_flow(reference.flows[0].data(), reference.flows[0].size(), want).c_str(), "");
+    assert_true(got.u == want.u && got.v == want.v && got.d0 == want.d0 && got.d1 == want.d1 && got.valid == want.valid);
+
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 200000));     // no partner: waits, then goes
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 300000));
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 300001));     // 1 us off: no pair
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 0);
+    const double end = monotonic_seconds() + 0.4;
+    while (monotonic_seconds() < end) rig.bridge->run_once(10);
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 3);
+    for (int64_t t : {400000, 500000, 600000}) publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, t));
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 4);  // the buffer holds 2: 400000 goes
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 500000));
+    std::vector<uint8_t> bad = image_bytes(g_scene.right0, 700000);
+    bad.pop_back();
+    publish_image(rig, "CAM_RIGHT", bad);
+    c = rig.bridge->counters();
+    assert_int_equal(c.dropped_malformed, 1);
+    assert_int_equal(c.stereo_processed, 3);                      // 500000 paired
+    rig.bridge->stop();                                            // 600000 still waits
+    c = rig.bridge->counters();
+    assert_int_equal(c.dropped_unpaired, 5);
+    assert_int_equal(c.stereo_received, 3 + 5 + 1);
+    assert_accounted(c);
+}
+
 // No LiDAR stream at all: image-only results, flagged, equal to the C ABI without LiDAR.
 void test_missing_lidar_stream(void **) {
     BridgeConfig config;
@@ -946,6 +1029,7 @@ int main(void) {
         cmocka_unit_test(test_points_in_lidar_frame),
         cmocka_unit_test(test_lidar_transform_change_within_pair),
         cmocka_unit_test(test_dead_shards),
+        cmocka_unit_test(test_left_right_channels),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),
         cmocka_unit_test(test_calibration_and_order),

@@ -80,7 +80,7 @@ std::vector<uint8_t> flow(const FlowFields &f) {
 std::vector<uint8_t> status(int32_t string_length, const std::string &text) {
     Wire w;
     w.i64(__lidarflow_status_t_get_hash()).i64(11).f64(2.5);
-    for (int i = 0; i < 18; ++i) w.i64(100 + i);
+    for (int i = 0; i < 19; ++i) w.i64(100 + i);
     w.i32(3).i32(4).i8(1).i32(2).i32(3).i32(1).i64(7);
     for (int i = 0; i < 5; ++i) w.f32(1.5f * i);
     w.i32(string_length);
@@ -215,8 +215,9 @@ void test_status_string(void **) {
     assert_int_equal(s.fields.stereo_received, 100);
     assert_int_equal(s.fields.stereo_lost_in_transport, 101);
     assert_int_equal(s.fields.dropped_shutdown, 111);
-    assert_int_equal(s.fields.skipped_other_shard, 112);
-    assert_int_equal(s.fields.calibration_malformed, 117);
+    assert_int_equal(s.fields.dropped_unpaired, 112);
+    assert_int_equal(s.fields.skipped_other_shard, 113);
+    assert_int_equal(s.fields.calibration_malformed, 118);
     assert_int_equal(s.fields.queue_capacity, 4);
     assert_int_equal(s.fields.shard_index, 2);
     assert_int_equal(s.fields.shard_count, 3);

@@ -190,6 +190,7 @@ void lcm_seeds() {
         s.stereo_lost_in_transport = 1;
         s.stereo_processed = 2;
         s.dropped_malformed = 1;
+        s.dropped_unpaired = i;
         s.queue_capacity = 2;
         s.shard_index = i;
         s.shard_count = 2;

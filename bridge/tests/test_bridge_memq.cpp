@@ -309,6 +309,28 @@ void check_encoding(FlowEncoding encoding, int step) {
 void test_float32_equals_capi(void **) { check_encoding(FlowEncoding::Float32, 1); }
 void test_int16_subsampled_equals_capi(void **) { check_encoding(FlowEncoding::Int16, 3); }
 
+// The float32 flow `f` of the scene's pair equals the C ABI's for this calibration and sweeps.
+void assert_scene_pair_equals_capi(const DecodedFlow &f, const lf_calibration_t &cal, const lf_lidar_t *l0,
+                                   const lf_lidar_t *l1) {
+    lf_options_t *o = scene_options(2);
+    lf_estimator_t *e = nullptr;
+    assert_int_equal(lf_create(o, &cal, &e), LF_OK);
+    lf_options_destroy(o);
+    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
+    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
+    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, l0), LF_OK);
+    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, l1), LF_OK);
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
+    assert_memory_equal(f.v.data(), r.v, W * H * sizeof(float));
+    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
+    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
+    assert_memory_equal(f.valid.data(), r.valid, W * H);
+    scene_result_free(&r);
+    lf_destroy(e);
+}
+
 // LiDAR as 3-D points in the LiDAR frame (x forward, y left, z up) with the transform to the
 // camera: the same flow as the C ABI given the camera-frame points.
 void test_points_in_lidar_frame(void **) {
@@ -336,24 +358,8 @@ void test_points_in_lidar_frame(void **) {
     assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
     assert_int_equal(f.header.lidar_flags, 3);
 
-    lf_options_t *o = scene_options(2);
-    lf_estimator_t *e = nullptr;
-    assert_int_equal(lf_create(o, &cal, &e), LF_OK);
-    lf_options_destroy(o);
     const lf_lidar_t lc = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam.size() / 3), cam.data(), 0};
-    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
-    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
-    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, &lc), LF_OK);
-    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, &lc), LF_OK);
-    scene_result_t r;
-    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
-    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
-    assert_memory_equal(f.v.data(), r.v, W * H * sizeof(float));
-    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
-    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
-    assert_memory_equal(f.valid.data(), r.valid, W * H);
-    scene_result_free(&r);
-    lf_destroy(e);
+    assert_scene_pair_equals_capi(f, cal, &lc, &lc);
     assert_accounted(rig.bridge->counters());
 }
 
@@ -403,24 +409,9 @@ void test_lidar_transform_change_within_pair(void **) {
     lf_calibration_t with_t0 = cal;
     with_t0.has_lidar_to_camera = 1;
     std::copy(T0, T0 + 16, with_t0.lidar_to_camera);
-    lf_options_t *o = scene_options(2);
-    lf_estimator_t *e = nullptr;
-    assert_int_equal(lf_create(o, &with_t0, &e), LF_OK);
-    lf_options_destroy(o);
     const lf_lidar_t l0 = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid0.size() / 3), lid0.data(), 0};
     const lf_lidar_t l1 = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam1.size() / 3), cam1.data(), 0};
-    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
-    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
-    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, &l0), LF_OK);
-    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, &l1), LF_OK);
-    scene_result_t r;
-    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
-    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
-    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
-    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
-    assert_memory_equal(f.valid.data(), r.valid, W * H);
-    scene_result_free(&r);
-    lf_destroy(e);
+    assert_scene_pair_equals_capi(f, with_t0, &l0, &l1);
     assert_accounted(rig.bridge->counters());
 }
 

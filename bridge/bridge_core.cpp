@@ -574,6 +574,17 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         counters_.last_error = why;
         log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
     };
+    const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
+    // A new sequence or another image size / format starts over: never pair across a cut.
+    // --shard: a pair only of consecutive frames; a frame that is just the next pair's t0
+    // starts over, so that no one else's pair is computed. (Before the estimator is chosen: a
+    // reset estimator holds no frame and may take a new transform for free.)
+    const bool shard_cut = config_.shard_count > 1 && (frame.t0_only || static_cast<uint64_t>(frame.index) - 1 != static_cast<uint64_t>(prev_index_));
+    if (estimator_has_frame_ && (shard_cut || m.sequence != prev_sequence_ || left.width != prev_width_ ||
+                                 left.height != prev_height_ || left.format != prev_format_)) {
+        lf_reset(estimator_);
+        estimator_has_frame_ = false;
+    }
     // The estimator's calibration carries the transform of LiDAR-frame sweeps, so that it moves
     // their points itself (LidarSweep). It takes a new transform only while it holds no frame:
     // replacing it then costs nothing, while a pair in progress would be lost.
@@ -598,18 +609,15 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         }
         estimator_calibration_ = cal;
     }
-    const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
-    // A new sequence or another image size / format starts over: never pair across a cut.
-    // --shard: a pair only of consecutive frames; a frame that is just the next pair's t0
-    // starts over, so that no one else's pair is computed.
-    const bool shard_cut = config_.shard_count > 1 && (frame.t0_only || static_cast<uint64_t>(frame.index) - 1 != static_cast<uint64_t>(prev_index_));
-    if (estimator_has_frame_ && (shard_cut || m.sequence != prev_sequence_ || left.width != prev_width_ ||
-                                 left.height != prev_height_ || left.format != prev_format_)) {
-        lf_reset(estimator_);
-        estimator_has_frame_ = false;
-    }
     lf_lidar_t lidar{};
     if (sweep) lidar = sweep_T && carries_transform(estimator_calibration_, sweep_T) ? sweep->lidar_frame_view() : sweep->view();
+    if (sweep_T && lidar.kind != LF_LIDAR_POINTS_LIDAR) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (counters_.lidar_moved_by_bridge++ == 0)
+            log("LiDAR sweep %" PRId64 ": its transform changed within a pair; the bridge moves such points itself "
+                "(one float cast) until the next sequence (logged once)",
+                sweep->utime);
+    }
     bool with_lidar = static_cast<bool>(sweep);
     int32_t st = lf_push_frame(estimator_, m.utime, &left, &right, with_lidar ? &lidar : nullptr);
     if (st != LF_OK && with_lidar) {

@@ -85,6 +85,9 @@ struct Counters {
     int32_t shards_dead = 0;               // --shard: other shards without a recent status
     int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
+    // LiDAR-frame sweeps whose transform the estimator did not carry (it changed within a
+    // pair): moved by the bridge, one float cast (wire.hpp, LidarSweep). Not in status_t.
+    int64_t lidar_moved_by_bridge = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
     int32_t lidar_buffered = 0;

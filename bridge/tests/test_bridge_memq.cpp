@@ -366,7 +366,7 @@ void test_points_in_lidar_frame(void **) {
 // LiDAR-frame sweeps whose transform changes within a pair: the estimator, created with the t0
 // sweep's transform, takes the t0 points in the LiDAR frame; the t1 sweep's other transform
 // cannot replace it without losing the pair, so the bridge moves those points itself (double,
-// one cast to float).
+// one cast to float). The next sequence takes T1.
 void test_lidar_transform_change_within_pair(void **) {
     const lf_calibration_t cal = scene_calibration(&g_scene);
     const std::vector<float> xyd = scene_disparities();
@@ -412,6 +412,21 @@ void test_lidar_transform_change_within_pair(void **) {
     const lf_lidar_t l0 = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid0.size() / 3), lid0.data(), 0};
     const lf_lidar_t l1 = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam1.size() / 3), cam1.data(), 0};
     assert_scene_pair_equals_capi(f, with_t0, &l0, &l1);
+    assert_int_equal(rig.bridge->counters().lidar_moved_by_bridge, 1);
+
+    // A new sequence starts over: the estimator then holds no frame and takes T1 for free, so
+    // both of its frames' points go in the LiDAR frame.
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 200000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 200000, 1));
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 300000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 300000, 1));
+    assert_int_equal(rig.flows.size(), 2);
+    assert_string_equal(decode_scene_flow(rig.flows[1].data(), rig.flows[1].size(), f).c_str(), "");
+    lf_calibration_t with_t1 = with_t0;
+    std::copy(T1, T1 + 16, with_t1.lidar_to_camera);
+    const lf_lidar_t l1_lidar = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid1.size() / 3), lid1.data(), 0};
+    assert_scene_pair_equals_capi(f, with_t1, &l1_lidar, &l1_lidar);
+    assert_int_equal(rig.bridge->counters().lidar_moved_by_bridge, 1);
     assert_accounted(rig.bridge->counters());
 }
 

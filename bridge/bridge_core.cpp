@@ -22,6 +22,10 @@ bool same_calibration(const lf_calibration_t &a, const lf_calibration_t &b) {
     return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.baseline == b.baseline;
 }
 
+bool carries_transform(const lf_calibration_t &cal, const double *T) {
+    return cal.has_lidar_to_camera == 1 && std::equal(T, T + 16, cal.lidar_to_camera);
+}
+
 bool parse_int(const std::string &s, int64_t *out) {
     if (s.empty()) return false;
     char *end = nullptr;
@@ -94,9 +98,14 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     }
     if (config.queue_capacity < 1 || config.lidar_buffer < 1 || config.lidar_wait_ms < 0 ||
         config.lidar_tolerance_us < 0 || config.step < 1 || config.step > 16 || config.shard_count < 1 ||
-        config.shard_index < 0 || config.shard_index >= config.shard_count) {
+        config.shard_index < 0 || config.shard_index >= config.shard_count || config.pair_wait_ms < 0 ||
+        config.pair_buffer < 1 || config.left_channel.empty() != config.right_channel.empty()) {
         *error = "queue capacity and LiDAR buffer must be >= 1, LiDAR wait and tolerance >= 0, step 1..16, "
-                 "shard K/N with 0 <= K < N";
+                 "shard K/N with 0 <= K < N, pair wait >= 0 and buffer >= 1, left and right channel both or none";
+        return nullptr;
+    }
+    if (config.shard_timeout_s > 0 && (config.shard_count < 2 || config.status_period_s <= 0)) {
+        *error = "a shard timeout needs --shard K/N with N > 1 and a status period > 0 (the shards' heartbeats)";
         return nullptr;
     }
     if (config.have_lidar_to_camera) {
@@ -136,7 +145,19 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         {&config.stereo_channel, &Bridge::on_stereo},
         {&config.lidar_channel, &Bridge::on_lidar},
         {&config.calibration_channel, &Bridge::on_calibration}};
-    for (const auto &[channel, handler] : subs) {
+    std::vector<std::pair<const std::string *, lcm_msg_handler_t>> channels(std::begin(subs), std::end(subs));
+    if (!config.left_channel.empty()) {
+        // A camera per channel replaces the stereo channel.
+        channels.front() = {&config.left_channel, &Bridge::on_left};
+        channels.push_back({&config.right_channel, &Bridge::on_right});
+    }
+    if (config.shard_count > 1 && config.status_period_s > 0 && config.shard_timeout_s != 0) {
+        // The other shards' heartbeats, and the results, which settle their pairs.
+        b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
+        channels.push_back({&config.status_channel, &Bridge::on_status});
+        channels.push_back({&config.flow_channel, &Bridge::on_flow});
+    }
+    for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
         if (!s) {
             *error = "cannot subscribe to " + *channel;
@@ -146,6 +167,8 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     }
     b->counters_.queue_capacity = config.queue_capacity;
     b->start_seconds_ = monotonic_seconds();
+    // A shard that never sends a status is dead from shard_timeout_ after this one's start.
+    if (b->shard_timeout_ > 0) b->shards_.assign(static_cast<size_t>(config.shard_count), {b->start_seconds_, false, {}});
     b->next_status_ = b->start_seconds_ + config.status_period_s;
     b->worker_ = std::thread(&Bridge::worker_loop, b.get());
     return b;
@@ -186,6 +209,96 @@ void Bridge::on_calibration(const lcm_recv_buf_t *rbuf, const char *, void *self
     static_cast<Bridge *>(self)->handle_calibration(rbuf);
 }
 
+void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    auto *b = static_cast<Bridge *>(self);
+    StatusMessage status;
+    if (!decode_status(rbuf->data, rbuf->data_size, status).empty()) return;  // not ours to judge
+    const lidarflow_status_t &f = status.fields;
+    std::lock_guard<std::mutex> lock(b->mutex_);
+    if (f.shard_count != b->config_.shard_count || f.shard_index < 0 || f.shard_index >= f.shard_count) {
+        if (!b->warned_foreign_split_)
+            b->log("a status from shard %d/%d on %s is not of this split (N = %d): ignored", f.shard_index,
+                   f.shard_count, b->config_.status_channel.c_str(), b->config_.shard_count);
+        b->warned_foreign_split_ = true;
+        return;
+    }
+    if (f.shard_index == b->config_.shard_index) return;  // our own, looped back
+    ShardWatch &w = b->shards_[static_cast<size_t>(f.shard_index)];
+    w.last_heartbeat = monotonic_seconds();
+    if (w.dead) {
+        // A restarted shard starts from nothing: what it had is already counted.
+        w.dead = false;
+        w.pending.clear();
+        --b->counters_.shards_dead;
+        b->log("shard %d/%d is back (status received)", f.shard_index, f.shard_count);
+    }
+}
+
+void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    auto *b = static_cast<Bridge *>(self);
+    int64_t utime = 0;
+    if (!scene_flow_utime(rbuf->data, rbuf->data_size, &utime)) return;
+    std::lock_guard<std::mutex> lock(b->mutex_);
+    for (ShardWatch &w : b->shards_) {
+        const auto it = std::find(w.pending.begin(), w.pending.end(), utime);
+        if (it != w.pending.end()) w.pending.erase(it);
+    }
+}
+
+// Whether this shard counts the pairs of dead shard `shard`: it is the first live one after it.
+bool Bridge::counts_for_locked(int shard) const {
+    const int n = config_.shard_count;
+    for (int k = (shard + 1) % n; k != shard; k = (k + 1) % n) {
+        if (k == config_.shard_index) return true;
+        if (!shards_[static_cast<size_t>(k)].dead) return false;
+    }
+    return false;
+}
+
+// Called with mutex_ held for every decodable stereo frame while watching: the pair ending at
+// it, if there is one (consecutive index, same sequence), belongs to shard index % N.
+void Bridge::note_pair_locked(int64_t index, int32_t sequence, int64_t utime) {
+    const bool pair = watch_have_prev_ && static_cast<uint64_t>(index) - 1 == static_cast<uint64_t>(watch_prev_index_) &&
+                      sequence == watch_prev_sequence_;
+    watch_have_prev_ = true;
+    watch_prev_index_ = index;
+    watch_prev_sequence_ = sequence;
+    const auto owner = static_cast<int>(static_cast<uint64_t>(index) % static_cast<uint64_t>(config_.shard_count));
+    if (!pair || owner == config_.shard_index) return;
+    ShardWatch &w = shards_[static_cast<size_t>(owner)];
+    if (w.dead) {
+        if (counts_for_locked(owner)) {
+            ++counters_.pairs_lost_dead_shard;
+            if (config_.verbose) log("pair ending at %" PRId64 " lost: its shard %d is dead", utime, owner);
+        }
+        return;
+    }
+    w.pending.push_back(utime);
+    if (w.pending.size() > 4096) w.pending.pop_front();
+}
+
+void Bridge::check_shards() {
+    const double now = monotonic_seconds();
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (size_t k = 0; k < shards_.size(); ++k) {
+        ShardWatch &w = shards_[k];
+        if (static_cast<int>(k) == config_.shard_index || w.dead || now - w.last_heartbeat <= shard_timeout_) continue;
+        w.dead = true;
+        ++counters_.shards_dead;
+        const bool mine = counts_for_locked(static_cast<int>(k));
+        if (mine) counters_.pairs_lost_dead_shard += static_cast<int64_t>(w.pending.size());
+        if (mine)
+            log("shard %zu/%d: no status for %.1f s, taken for dead; counted here as lost: %zu pair(s) without a "
+                "result so far, and its further ones",
+                k, config_.shard_count, now - w.last_heartbeat, w.pending.size());
+        else
+            log("shard %zu/%d: no status for %.1f s, taken for dead; %zu pair(s) without a result so far, counted by "
+                "another shard",
+                k, config_.shard_count, now - w.last_heartbeat, w.pending.size());
+        w.pending.clear();
+    }
+}
+
 void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     auto frame = std::make_unique<Frame>();
     // Per message by fingerprint: a channel may carry either type (and a driver may be swapped).
@@ -202,9 +315,94 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
             err.c_str());
         return;
     }
+    accept_locked(std::move(frame));
+}
+
+void Bridge::on_left(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_image(0, rbuf);
+}
+void Bridge::on_right(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    static_cast<Bridge *>(self)->handle_image(1, rbuf);
+}
+
+// One camera's image: paired with the other camera's image of equal utime, or left waiting.
+void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
+    const char *channel = (side == 0 ? config_.left_channel : config_.right_channel).c_str();
+    int64_t utime = 0;
+    const std::string err = check_bot_image(rbuf->data, rbuf->data_size, &utime);
+    const double now = monotonic_seconds();
+    const auto *d = static_cast<const uint8_t *>(rbuf->data);
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!err.empty()) {
+        ++counters_.stereo_received;
+        ++counters_.dropped_malformed;
+        counters_.last_error = "image: " + err;
+        log("malformed message on %s (%u bytes), dropped: %s", channel, rbuf->data_size, err.c_str());
+        return;
+    }
+    std::deque<WaitingImage> &mine = waiting_[side], &other = waiting_[1 - side];
+    const auto partner = std::find_if(other.begin(), other.end(), [&](const WaitingImage &w) { return w.utime == utime; });
+    if (partner == other.end()) {
+        const auto twin = std::find_if(mine.begin(), mine.end(), [&](const WaitingImage &w) { return w.utime == utime; });
+        if (twin != mine.end()) {
+            // Two images of one camera at one time: the later one cannot be told apart, so it
+            // has no partner of its own.
+            ++counters_.stereo_received;
+            ++counters_.dropped_unpaired;
+            log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
+            return;
+        }
+        mine.push_back({utime, now, std::vector<uint8_t>(d, d + rbuf->data_size)});
+        while (static_cast<int>(mine.size()) > config_.pair_buffer)
+            drop_unpaired_locked(side, "more images waiting than --pair-buffer");
+        return;
+    }
+    const std::vector<uint8_t> other_bytes = std::move(partner->bytes);
+    other.erase(partner);
+    lock.unlock();
+    auto frame = std::make_unique<Frame>();
+    const std::string pair_err =
+        side == 0 ? decode_bot_image_pair(d, rbuf->data_size, other_bytes.data(), other_bytes.size(), frame->stereo)
+                  : decode_bot_image_pair(other_bytes.data(), other_bytes.size(), d, rbuf->data_size, frame->stereo);
+    frame->received_seconds = now;
+    lock.lock();
+    ++counters_.stereo_received;
+    if (!pair_err.empty()) {
+        ++counters_.dropped_malformed;
+        counters_.last_error = "stereo: " + pair_err;
+        log("images %" PRId64 " on %s and %s do not make a stereo frame, dropped: %s", utime,
+            config_.left_channel.c_str(), config_.right_channel.c_str(), pair_err.c_str());
+        return;
+    }
+    accept_locked(std::move(frame));
+}
+
+// Called with mutex_ held: the oldest image waiting on `side` leaves without a partner.
+void Bridge::drop_unpaired_locked(int side, const char *why) {
+    const WaitingImage &w = waiting_[side].front();
+    ++counters_.stereo_received;
+    ++counters_.dropped_unpaired;
+    log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", w.utime,
+        (side == 0 ? config_.left_channel : config_.right_channel).c_str(),
+        (side == 0 ? config_.right_channel : config_.left_channel).c_str(), why);
+    waiting_[side].pop_front();
+}
+
+void Bridge::expire_unpaired() {
+    const double deadline = monotonic_seconds() - config_.pair_wait_ms / 1000.0;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int side = 0; side < 2; ++side)
+        while (!waiting_[side].empty() && waiting_[side].front().arrival < deadline)
+            drop_unpaired_locked(side, "waited --pair-wait-ms");
+}
+
+// Called with mutex_ held for every decodable stereo frame: shard filter, calibration, order,
+// then the latest-wins queue.
+void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     const lidarflow_stereo_t &m = frame->stereo.msg();
     if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
     frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
+    if (shard_timeout_ > 0) note_pair_locked(frame->index, m.sequence, m.utime);
     if (config_.shard_count > 1) {
         // Pair (index - 1, index) belongs to shard index % N; a shard needs its t1 frames and
         // the frame before each as t0. Unsigned modulo: frame numbers may be negative.
@@ -376,28 +574,50 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         counters_.last_error = why;
         log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
     };
-    if (!estimator_ || !same_calibration(estimator_calibration_, frame.calibration)) {
-        lf_destroy(estimator_);
-        estimator_ = nullptr;
-        estimator_has_frame_ = false;
-        if (lf_create(options_, &frame.calibration, &estimator_) != LF_OK) {
-            drop(std::string("estimator creation failed: ") + lf_last_error(nullptr));
-            return;
-        }
-        estimator_calibration_ = frame.calibration;
-    }
     const lf_image_t left = frame.stereo.left(), right = frame.stereo.right();
     // A new sequence or another image size / format starts over: never pair across a cut.
     // --shard: a pair only of consecutive frames; a frame that is just the next pair's t0
-    // starts over, so that no one else's pair is computed.
+    // starts over, so that no one else's pair is computed. (Before the estimator is chosen: a
+    // reset estimator holds no frame and may take a new transform for free.)
     const bool shard_cut = config_.shard_count > 1 && (frame.t0_only || static_cast<uint64_t>(frame.index) - 1 != static_cast<uint64_t>(prev_index_));
     if (estimator_has_frame_ && (shard_cut || m.sequence != prev_sequence_ || left.width != prev_width_ ||
                                  left.height != prev_height_ || left.format != prev_format_)) {
         lf_reset(estimator_);
         estimator_has_frame_ = false;
     }
+    // The estimator's calibration carries the transform of LiDAR-frame sweeps, so that it moves
+    // their points itself (LidarSweep). It takes a new transform only while it holds no frame:
+    // replacing it then costs nothing, while a pair in progress would be lost.
+    const double *sweep_T = sweep && sweep->in_lidar_frame ? sweep->lidar_to_camera : nullptr;
+    const bool new_camera = !estimator_ || !same_calibration(estimator_calibration_, frame.calibration);
+    if (new_camera || (sweep_T && !estimator_has_frame_ && !carries_transform(estimator_calibration_, sweep_T))) {
+        lf_calibration_t cal = frame.calibration;
+        const double *T = sweep_T ? sweep_T
+                          : estimator_ && estimator_calibration_.has_lidar_to_camera ? estimator_calibration_.lidar_to_camera
+                          : config_.have_lidar_to_camera ? config_.lidar_to_camera
+                                                         : nullptr;
+        if (T) {
+            std::copy(T, T + 16, cal.lidar_to_camera);
+            cal.has_lidar_to_camera = 1;
+        }
+        lf_destroy(estimator_);
+        estimator_ = nullptr;
+        estimator_has_frame_ = false;
+        if (lf_create(options_, &cal, &estimator_) != LF_OK) {
+            drop(std::string("estimator creation failed: ") + lf_last_error(nullptr));
+            return;
+        }
+        estimator_calibration_ = cal;
+    }
     lf_lidar_t lidar{};
-    if (sweep) lidar = sweep->view();
+    if (sweep) lidar = sweep_T && carries_transform(estimator_calibration_, sweep_T) ? sweep->lidar_frame_view() : sweep->view();
+    if (sweep_T && lidar.kind != LF_LIDAR_POINTS_LIDAR) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (counters_.lidar_moved_by_bridge++ == 0)
+            log("LiDAR sweep %" PRId64 ": its transform changed within a pair; the bridge moves such points itself "
+                "(one float cast) until the next sequence (logged once)",
+                sweep->utime);
+    }
     bool with_lidar = static_cast<bool>(sweep);
     int32_t st = lf_push_frame(estimator_, m.utime, &left, &right, with_lidar ? &lidar : nullptr);
     if (st != LF_OK && with_lidar) {
@@ -518,9 +738,12 @@ void Bridge::publish_status() {
     s.dropped_malformed = c.dropped_malformed;
     s.dropped_estimator_error = c.dropped_estimator_error;
     s.dropped_shutdown = c.dropped_shutdown;
+    s.dropped_unpaired = c.dropped_unpaired;
     s.skipped_other_shard = c.skipped_other_shard;
     s.shard_index = config_.shard_index;
     s.shard_count = config_.shard_count;
+    s.shards_dead = c.shards_dead;
+    s.pairs_lost_dead_shard = c.pairs_lost_dead_shard;
     s.lidar_received = c.lidar_received;
     s.lidar_malformed = c.lidar_malformed;
     s.lidar_rejected = c.lidar_rejected;
@@ -568,6 +791,8 @@ int Bridge::run_once(int timeout_ms) {
         }
     }
     flush_outbox();
+    if (!config_.left_channel.empty()) expire_unpaired();
+    if (shard_timeout_ > 0) check_shards();
     if (config_.status_period_s > 0 && monotonic_seconds() >= next_status_) {
         publish_status();
         while (next_status_ <= monotonic_seconds()) next_status_ += config_.status_period_s;
@@ -589,6 +814,8 @@ void Bridge::stop() {
         std::lock_guard<std::mutex> lock(mutex_);
         counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
         queue_.clear();
+        for (int side = 0; side < 2; ++side)
+            while (!waiting_[side].empty()) drop_unpaired_locked(side, "the bridge stopped");
         counters_.queue_depth = 0;
         counters_.busy = false;
     }

@@ -33,6 +33,14 @@ namespace lidarflow::bridge {
 
 struct BridgeConfig {
     std::string stereo_channel = "LIDARFLOW_STEREO";
+    // A camera per channel (bot_core.image_t each) instead of the stereo channel, when both are
+    // set: images of equal utime are paired into a stereo frame. An image waits for its partner
+    // up to pair_wait_ms after its arrival, and at most `pair_buffer` images wait per side (the
+    // oldest goes first); an image that leaves without a partner is counted as a frame received
+    // and dropped_unpaired.
+    std::string left_channel, right_channel;
+    int pair_wait_ms = 100;
+    int pair_buffer = 8;
     std::string lidar_channel = "LIDARFLOW_LIDAR";
     std::string calibration_channel = "LIDARFLOW_CALIB";
     std::string flow_channel = "LIDARFLOW_FLOW";
@@ -52,6 +60,10 @@ struct BridgeConfig {
     // (index: stereo_t.frame_number, or the arrival count for bot_core.images_t), and takes
     // the frame before as that pair's t0; other frames are counted as skipped_other_shard.
     int shard_index = 0, shard_count = 1;
+    // --shard: a shard with no status on the status channel for this long is taken for dead
+    // and its pairs counted as lost (see status_t.lcm); < 0: 3 status periods; 0: no watch.
+    // Needs status_period_s > 0 (the shards' heartbeats).
+    double shard_timeout_s = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     int step = 1;                        // flow subsampling
     double status_period_s = 1.0;        // <= 0: status only at shutdown
@@ -68,9 +80,14 @@ struct Counters {
     int64_t stereo_lost_in_transport = 0;  // gaps in stereo_t.frame_number
     int64_t dropped_stale = 0, dropped_out_of_order = 0, dropped_no_calibration = 0,
             dropped_calibration_mismatch = 0, dropped_malformed = 0, dropped_estimator_error = 0,
-            dropped_shutdown = 0;
+            dropped_shutdown = 0, dropped_unpaired = 0;
     int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
+    int32_t shards_dead = 0;               // --shard: other shards without a recent status
+    int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
+    // LiDAR-frame sweeps whose transform the estimator did not carry (it changed within a
+    // pair): moved by the bridge, one float cast (wire.hpp, LidarSweep). Not in status_t.
+    int64_t lidar_moved_by_bridge = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
     int32_t lidar_buffered = 0;
@@ -82,7 +99,7 @@ struct Counters {
 
     int64_t dropped() const {
         return dropped_stale + dropped_out_of_order + dropped_no_calibration + dropped_calibration_mismatch +
-               dropped_malformed + dropped_estimator_error + dropped_shutdown;
+               dropped_malformed + dropped_estimator_error + dropped_shutdown + dropped_unpaired;
     }
 };
 
@@ -119,7 +136,18 @@ private:
     static void on_stereo(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_lidar(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_calibration(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_flow(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void note_pair_locked(int64_t index, int32_t sequence, int64_t utime);
+    bool counts_for_locked(int shard) const;
+    void check_shards();
     void handle_stereo(const lcm_recv_buf_t *rbuf);
+    static void on_left(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    static void on_right(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void handle_image(int side, const lcm_recv_buf_t *rbuf);
+    void drop_unpaired_locked(int side, const char *why);
+    void expire_unpaired();
+    void accept_locked(std::unique_ptr<Frame> frame);
     void count_transport_gap(int64_t frame_number);
     void handle_lidar(const lcm_recv_buf_t *rbuf);
     void handle_calibration(const lcm_recv_buf_t *rbuf);
@@ -154,6 +182,26 @@ private:
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
+    // Images of the left (0) and right (1) channel waiting for their partner, oldest first.
+    struct WaitingImage {
+        int64_t utime;
+        double arrival;
+        std::vector<uint8_t> bytes;
+    };
+    std::deque<WaitingImage> waiting_[2];
+    // --shard watch (shard_timeout_ > 0): every other shard's last heartbeat and the t1 times of
+    // its pairs for which no result was seen yet (bounded; the newest kept).
+    struct ShardWatch {
+        double last_heartbeat = 0;
+        bool dead = false;
+        std::deque<int64_t> pending;
+    };
+    double shard_timeout_ = 0;
+    std::vector<ShardWatch> shards_;
+    bool watch_have_prev_ = false;    // the previous decodable frame, to know which pairs exist
+    int64_t watch_prev_index_ = 0;
+    int32_t watch_prev_sequence_ = 0;
+    bool warned_foreign_split_ = false;
     struct Outgoing {
         std::vector<uint8_t> bytes;
         double received_seconds;

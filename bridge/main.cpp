@@ -26,6 +26,11 @@ const char *kUsage =
     "usage: lidarflow-lcm-bridge [options]\n"
     "  --lcm-url URL            LCM provider (default: $LCM_DEFAULT_URL or LCM's default)\n"
     "  --stereo-channel NAME    stereo_t or bot_core.images_t input (default LIDARFLOW_STEREO)\n"
+    "  --left-channel NAME --right-channel NAME\n"
+    "                           a camera per channel (bot_core.image_t each) instead of the stereo\n"
+    "                           channel: images of equal utime make a stereo frame\n"
+    "  --pair-wait-ms T         an image waits up to T ms for its partner (default 100)\n"
+    "  --pair-buffer N          images waiting per camera, oldest dropped first (default 8)\n"
     "  --lidar-channel NAME     lidar_t or bot_core.pointcloud_t input (default LIDARFLOW_LIDAR)\n"
     "  --calib-channel NAME     calibration_t input (default LIDARFLOW_CALIB)\n"
     "  --flow-channel NAME      scene_flow_t output (default LIDARFLOW_FLOW)\n"
@@ -44,6 +49,8 @@ const char *kUsage =
     "  --shard K/N              one of N processes sharing the stream: compute only the pairs whose\n"
     "                           t1 frame index % N == K (index: stereo_t.frame_number, else arrival\n"
     "                           order); the queue default becomes 2 (a pair)\n"
+    "  --shard-timeout S        with --shard: a shard with no status for S seconds is taken for dead\n"
+    "                           and its pairs counted as lost (default 3 status periods; 0 = off)\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
     "  --replay IN.log --out OUT.log\n"
@@ -89,9 +96,10 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
 // name for a typo. help stays empty: kUsage is the help text.
 std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     std::vector<lidarflow::cli::OptionSpec> spec;
-    for (const char *name : {"lcm-url", "stereo-channel", "lidar-channel", "calib-channel", "flow-channel",
+    for (const char *name : {"lcm-url", "stereo-channel", "left-channel", "right-channel", "pair-wait-ms",
+                             "pair-buffer", "lidar-channel", "calib-channel", "flow-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
-                             "lidar-buffer", "queue", "shard", "encoding", "step", "option", "status-period", "replay",
+                             "lidar-buffer", "queue", "shard", "shard-timeout", "encoding", "step", "option", "status-period", "replay",
                              "out"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
@@ -110,6 +118,16 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
     *replay_out = args.str("out", "");
     *calib_file = args.str("calib", "");
     config->stereo_channel = args.str("stereo-channel", config->stereo_channel);
+    config->left_channel = args.str("left-channel", "");
+    config->right_channel = args.str("right-channel", "");
+    if (config->left_channel.empty() != config->right_channel.empty() ||
+        (!config->left_channel.empty() && config->left_channel == config->right_channel)) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --left-channel and --right-channel go together, on two "
+                             "different channels\n");
+        return false;
+    }
+    config->pair_wait_ms = static_cast<int>(args.number_in("pair-wait-ms", config->pair_wait_ms, 0, 10000));
+    config->pair_buffer = static_cast<int>(args.number_in("pair-buffer", config->pair_buffer, 1, 1000));
     config->lidar_channel = args.str("lidar-channel", config->lidar_channel);
     config->calibration_channel = args.str("calib-channel", config->calibration_channel);
     config->flow_channel = args.str("flow-channel", config->flow_channel);
@@ -150,8 +168,14 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
         config->shard_index = k;
         config->shard_count = n;
     }
+    if (args.has("shard-timeout")) config->shard_timeout_s = args.number_in("shard-timeout", 0, 0, 3600);
     config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
     config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);
+    if (config->shard_timeout_s > 0 && (config->shard_count < 2 || config->status_period_s <= 0)) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --shard-timeout needs --shard K/N with N > 1 and a "
+                             "--status-period > 0 (the shards' heartbeats)\n");
+        return false;
+    }
     if (args.has("encoding")) {
         const std::string v = args.str("encoding", "");
         if (!parse_flow_encoding(v.c_str(), &config->encoding)) {
@@ -219,6 +243,11 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: --replay and --out go together, and without --lcm-url\n");
         return 2;
     }
+    if (!replay_in.empty() && !config.left_channel.empty()) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --replay takes stereo frames from the stereo channel only "
+                             "(--left-channel/--right-channel are not implemented for it)\n");
+        return 2;
+    }
     struct sigaction sa;
     std::memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal;
@@ -242,7 +271,10 @@ int main(int argc, char **argv) {
             return 1;
         }
         std::fprintf(stderr, "lidarflow-lcm-bridge: lidarflow %s, listening on %s / %s / %s%s, publishing %s / %s\n",
-                     lf_version_string(), config.stereo_channel.c_str(), config.lidar_channel.c_str(),
+                     lf_version_string(),
+                     config.left_channel.empty() ? config.stereo_channel.c_str()
+                                                 : (config.left_channel + " + " + config.right_channel).c_str(),
+                     config.lidar_channel.c_str(),
                      config.calibration_channel.c_str(), config.fixed_calibration ? " (calibration from --calib)" : "",
                      config.flow_channel.c_str(), config.status_channel.c_str());
         while (!g_stop) {
@@ -257,12 +289,14 @@ int main(int argc, char **argv) {
         std::fprintf(stderr,
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
-                     "%lld, shutdown %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms\n",
+                     "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
+                     "shards dead %d, their pairs lost %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
-                     (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown,
-                     (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms);
+                     (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown, (long long)c.dropped_unpaired,
+                     (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
+                     c.shards_dead, (long long)c.pairs_lost_dead_shard);
     }
     lcm_destroy(lcm);
     return rc;

@@ -78,6 +78,7 @@ const char *drop_reason(const Counters &a, const Counters &b) {
     if (b.dropped_malformed > a.dropped_malformed) return "malformed";
     if (b.dropped_estimator_error > a.dropped_estimator_error) return "estimator error";
     if (b.dropped_shutdown > a.dropped_shutdown) return "shutdown";
+    if (b.dropped_unpaired > a.dropped_unpaired) return "unpaired";
     return "?";
 }
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "wire.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -64,9 +65,10 @@ constexpr int kStereoFixed = 37;
 constexpr int kLidarFixed = 141;
 // calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
 constexpr int kCalibrationFixed = 56;
-// status_t: utime 8, uptime 8, 18 int64 counters 144, queue_depth 4, queue_capacity 4, busy 1,
-// shard_index 4, shard_count 4, 5 floats 20, length of last_error 4 = 201.
-constexpr int kStatusFixed = 201;
+// status_t: utime 8, uptime 8, 19 int64 counters 152, queue_depth 4, queue_capacity 4, busy 1,
+// shard_index 4, shard_count 4, shards_dead 4, pairs_lost_dead_shard 8, 5 floats 20, length of
+// last_error 4 = 221.
+constexpr int kStatusFixed = 221;
 // scene_flow_t: utime 8, utime0 8, sequence 4, lidar_flags 1, lidar_utime0 8, lidar_utime1 8,
 // last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
 // compute_seconds 4, plane_size 4, valid_size 4 = 72.
@@ -124,6 +126,14 @@ StereoMessage::~StereoMessage() {
     if (decoded_) lidarflow_stereo_t_decode_cleanup(&msg_);
 }
 
+void StereoMessage::assign_packed(const lidarflow_stereo_t &header, std::vector<uint8_t> pixels) {
+    owned_ = std::move(pixels);
+    msg_ = header;
+    msg_.left = owned_.data();
+    msg_.right = owned_.data() + owned_.size() / 2;
+    has_frame_number_ = false;
+}
+
 lf_image_t StereoMessage::left() const {
     lf_image_t im{msg_.left, static_cast<uint32_t>(msg_.width), static_cast<uint32_t>(msg_.height),
                   static_cast<uint64_t>(msg_.row_stride), msg_.pixel_format};
@@ -173,6 +183,12 @@ lf_lidar_t LidarSweep::view() const {
     return l;
 }
 
+lf_lidar_t LidarSweep::lidar_frame_view() const {
+    lf_lidar_t l{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(lidar_xyz.size() / 3),
+                 lidar_xyz.empty() ? nullptr : lidar_xyz.data(), 12};
+    return l;
+}
+
 std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     std::string err = check_wire(data, size, "lidarflow.lidar_t", __lidarflow_lidar_t_get_hash(), kLidarFixed,
                                  {{"num_points", 137, 12}});
@@ -196,11 +212,16 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i)
         if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]) || !std::isfinite(m.z[i]))
             err = printf_string("point %d is not finite", i);
-    std::vector<float> xyz;
+    std::vector<float> xyz, lidar_xyz;
     if (err.empty()) xyz.resize(3 * static_cast<size_t>(m.num_points));
+    if (err.empty() && m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) lidar_xyz.resize(xyz.size());
     for (int32_t i = 0; i < m.num_points && err.empty(); ++i) {
         float *o = &xyz[3 * static_cast<size_t>(i)];
         if (m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR) {
+            float *raw = &lidar_xyz[3 * static_cast<size_t>(i)];
+            raw[0] = m.x[i];
+            raw[1] = m.y[i];
+            raw[2] = m.z[i];
             // In double: the bridge's transform must not add more rounding than one float cast.
             const double x = m.x[i], y = m.y[i], z = m.z[i];
             for (int r = 0; r < 3; ++r) {
@@ -220,6 +241,9 @@ std::string decode_lidar(const void *data, size_t size, LidarSweep &out) {
         out.utime = m.utime;
         out.kind = m.frame == LIDARFLOW_LIDAR_T_FRAME_DISPARITY ? LF_LIDAR_DISPARITY : LF_LIDAR_POINTS_CAMERA;
         out.xyz = std::move(xyz);
+        out.in_lidar_frame = m.frame == LIDARFLOW_LIDAR_T_FRAME_LIDAR;
+        out.lidar_xyz = std::move(lidar_xyz);
+        std::copy(T, T + 16, out.lidar_to_camera);
     }
     lidarflow_lidar_t_decode_cleanup(&m);
     return err;
@@ -333,6 +357,13 @@ std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg) {
     const int n = lidarflow_scene_flow_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
     buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
     return buf;
+}
+
+bool scene_flow_utime(const void *data, size_t size, int64_t *utime) {
+    const auto *p = static_cast<const uint8_t *>(data);
+    if (size < 8 + 8 || read_be(p, 8) != __lidarflow_scene_flow_t_get_hash()) return false;
+    *utime = read_be(p + 8, 8);
+    return true;
 }
 
 std::string decode_scene_flow(const void *data, size_t size, DecodedFlow &out) {
@@ -504,6 +535,61 @@ std::string check_fingerprint(const void *data, size_t size, const char *type, i
     return "";
 }
 
+// The LEFT and RIGHT images (walked already) as one stereo frame at utime: same size and
+// format, rows repacked. "" or the problem; `out` then holds nothing.
+std::string stereo_from_bot_images(int64_t utime, const BotImage &L, const BotImage &R, StereoMessage &out) {
+    const int format = lf_format_of_bot(L.pixelformat);
+    if (format == 0)
+        return printf_string("unsupported pixelformat %lld (GRAY %d, RGB %d, BGR %d)", (long long)L.pixelformat,
+                   BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY, BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB,
+                   BOT_CORE_IMAGE_T_PIXEL_FORMAT_BGR);
+    if (R.pixelformat != L.pixelformat || R.width != L.width || R.height != L.height)
+        return printf_string("left and right differ: %lldx%lld format %lld vs %lldx%lld format %lld", (long long)L.width,
+                   (long long)L.height, (long long)L.pixelformat, (long long)R.width, (long long)R.height,
+                   (long long)R.pixelformat);
+    const int bpp = bytes_per_pixel(static_cast<int8_t>(format));
+    if (L.width < 1 || L.height < 1 || L.width > 16384 || L.height > 16384)
+        return printf_string("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)L.width, (long long)L.height);
+    for (const BotImage *im : {&L, &R}) {
+        // The last row needs only width * bpp bytes; a driver may leave out the padding after it.
+        if (im->row_stride < L.width * bpp || im->size < im->row_stride * (L.height - 1) + L.width * bpp)
+            return printf_string("inconsistent dimensions: row_stride %lld, size %lld for %lldx%lld x %d bytes",
+                       (long long)im->row_stride, (long long)im->size, (long long)L.width, (long long)L.height, bpp);
+    }
+    const size_t row = static_cast<size_t>(L.width * bpp), rows = static_cast<size_t>(L.height);
+    std::vector<uint8_t> pixels(2 * row * rows);
+    for (int k = 0; k < 2; ++k) {
+        const BotImage &im = k == 0 ? L : R;
+        for (size_t y = 0; y < rows; ++y)
+            std::memcpy(&pixels[(k * rows + y) * row], im.data + y * static_cast<size_t>(im.row_stride), row);
+    }
+    lidarflow_stereo_t m{};
+    m.utime = utime;
+    m.width = static_cast<int32_t>(L.width);
+    m.height = static_cast<int32_t>(L.height);
+    m.row_stride = static_cast<int32_t>(row);
+    m.pixel_format = static_cast<int8_t>(format);
+    m.size = static_cast<int32_t>(row * rows);
+    out.assign_packed(m, std::move(pixels));
+    return "";
+}
+
+// A bot_core.image_t sent on its own (a camera per channel): fingerprint, then the same walk.
+std::string read_standalone_bot_image(const void *data, size_t size, BotImage *im) {
+    std::string err = check_fingerprint(data, size, "bot_core.image_t", __bot_core_image_t_get_hash());
+    if (!err.empty()) return err;
+    WireReader r(data, size);
+    r.skip(8);
+    err = read_bot_image(r, 0, im);
+    if (!err.empty()) return err;
+    if (r.left() != 0) return printf_string("wrong size: %zu bytes, the bot_core.image_t declares %zu", size, r.pos());
+    if (lf_format_of_bot(im->pixelformat) == 0)
+        return printf_string("unsupported pixelformat %lld (GRAY %d, RGB %d, BGR %d)", (long long)im->pixelformat,
+                             BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY, BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB,
+                             BOT_CORE_IMAGE_T_PIXEL_FORMAT_BGR);
+    return "";
+}
+
 }  // namespace
 
 int64_t message_fingerprint(const void *data, size_t size) {
@@ -535,44 +621,25 @@ std::string decode_bot_images(const void *data, size_t size, StereoMessage &out)
     }
     if (r.left() != 0) return printf_string("wrong size: %zu bytes, the bot_core.images_t declares %zu", size, r.pos());
     if (left < 0 || right < 0) return "no image tagged LEFT and one tagged RIGHT";
-    const BotImage &L = images[static_cast<size_t>(left)], &R = images[static_cast<size_t>(right)];
-    const int format = lf_format_of_bot(L.pixelformat);
-    if (format == 0)
-        return printf_string("unsupported pixelformat %lld (GRAY %d, RGB %d, BGR %d)", (long long)L.pixelformat,
-                   BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY, BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB,
-                   BOT_CORE_IMAGE_T_PIXEL_FORMAT_BGR);
-    if (R.pixelformat != L.pixelformat || R.width != L.width || R.height != L.height)
-        return printf_string("left and right differ: %lldx%lld format %lld vs %lldx%lld format %lld", (long long)L.width,
-                   (long long)L.height, (long long)L.pixelformat, (long long)R.width, (long long)R.height,
-                   (long long)R.pixelformat);
-    const int bpp = bytes_per_pixel(static_cast<int8_t>(format));
-    if (L.width < 1 || L.height < 1 || L.width > 16384 || L.height > 16384)
-        return printf_string("inconsistent dimensions: %lldx%lld (each side 1..16384)", (long long)L.width, (long long)L.height);
-    for (const BotImage *im : {&L, &R}) {
-        // The last row needs only width * bpp bytes; a driver may leave out the padding after it.
-        if (im->row_stride < L.width * bpp || im->size < im->row_stride * (L.height - 1) + L.width * bpp)
-            return printf_string("inconsistent dimensions: row_stride %lld, size %lld for %lldx%lld x %d bytes",
-                       (long long)im->row_stride, (long long)im->size, (long long)L.width, (long long)L.height, bpp);
-    }
-    const size_t row = static_cast<size_t>(L.width * bpp), rows = static_cast<size_t>(L.height);
-    out.owned_.resize(2 * row * rows);
-    for (int k = 0; k < 2; ++k) {
-        const BotImage &im = k == 0 ? L : R;
-        for (size_t y = 0; y < rows; ++y)
-            std::memcpy(&out.owned_[(k * rows + y) * row], im.data + y * static_cast<size_t>(im.row_stride), row);
-    }
-    lidarflow_stereo_t &m = out.msg_;
-    m = lidarflow_stereo_t{};
-    m.utime = utime;
-    m.width = static_cast<int32_t>(L.width);
-    m.height = static_cast<int32_t>(L.height);
-    m.row_stride = static_cast<int32_t>(row);
-    m.pixel_format = static_cast<int8_t>(format);
-    m.size = static_cast<int32_t>(row * rows);
-    m.left = out.owned_.data();
-    m.right = out.owned_.data() + row * rows;
-    out.has_frame_number_ = false;
-    return "";
+    return stereo_from_bot_images(utime, images[static_cast<size_t>(left)], images[static_cast<size_t>(right)], out);
+}
+
+std::string check_bot_image(const void *data, size_t size, int64_t *utime) {
+    BotImage im;
+    const std::string err = read_standalone_bot_image(data, size, &im);
+    if (err.empty()) *utime = im.utime;
+    return err;
+}
+
+std::string decode_bot_image_pair(const void *left, size_t left_size, const void *right, size_t right_size,
+                                  StereoMessage &out) {
+    BotImage L, R;
+    std::string err = read_standalone_bot_image(left, left_size, &L);
+    if (err.empty()) err = read_standalone_bot_image(right, right_size, &R);
+    if (!err.empty()) return err;
+    if (L.utime != R.utime)
+        return printf_string("left and right images differ in utime (%lld, %lld)", (long long)L.utime, (long long)R.utime);
+    return stereo_from_bot_images(L.utime, L, R, out);
 }
 
 std::string check_lidar_to_camera(const double *T) {
@@ -606,10 +673,13 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     if (!T) return "a bot_core.pointcloud_t needs the LiDAR -> camera transform (--lidar-to-camera)";
     err = check_lidar_to_camera(T);
     if (!err.empty()) return err;
-    std::vector<float> xyz(3 * static_cast<size_t>(n));
+    std::vector<float> xyz(3 * static_cast<size_t>(n)), lidar_xyz(xyz.size());
     for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
         const double x = get_be32f(points + 12 * i), y = get_be32f(points + 12 * i + 4), z = get_be32f(points + 12 * i + 8);
         if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return printf_string("point %zu is not finite", i);
+        lidar_xyz[3 * i] = static_cast<float>(x);
+        lidar_xyz[3 * i + 1] = static_cast<float>(y);
+        lidar_xyz[3 * i + 2] = static_cast<float>(z);
         for (int k = 0; k < 3; ++k) {
             const double c = T[4 * k] * x + T[4 * k + 1] * y + T[4 * k + 2] * z + T[4 * k + 3];
             if (!(std::fabs(c) <= std::numeric_limits<float>::max()))
@@ -620,6 +690,9 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     out.utime = utime;
     out.kind = LF_LIDAR_POINTS_CAMERA;
     out.xyz = std::move(xyz);
+    out.in_lidar_frame = true;
+    out.lidar_xyz = std::move(lidar_xyz);
+    std::copy(T, T + 16, out.lidar_to_camera);
     return "";
 }
 

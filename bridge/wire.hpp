@@ -19,6 +19,7 @@
 #include "lidarflow_scene_flow_t.h"
 #include "lidarflow_status_t.h"
 #include "lidarflow_stereo_t.h"
+#include "bot_core_image_t.h"
 #include "bot_core_images_t.h"
 #include "bot_core_pointcloud_t.h"
 
@@ -41,10 +42,12 @@ public:
 
     // False for sources without a publisher counter (bot_core.images_t): no transport-gap count.
     bool has_frame_number() const { return has_frame_number_; }
+    // A frame from bot_core images (no frame number): `header`'s scalars, the left image then the
+    // right one packed in `pixels` (header.size bytes each).
+    void assign_packed(const lidarflow_stereo_t &header, std::vector<uint8_t> pixels);
 
 private:
     friend std::string decode_stereo(const void *, size_t, StereoMessage &);
-    friend std::string decode_bot_images(const void *, size_t, StereoMessage &);
     lidarflow_stereo_t msg_{};
     bool decoded_ = false;             // msg_ arrays from lcm-gen's decoder
     std::vector<uint8_t> owned_;       // else msg_.left/right point here
@@ -62,6 +65,16 @@ int64_t message_fingerprint(const void *data, size_t size);
 // read. The pair becomes a stereo frame of sequence 0 at images_t.utime, packed rows, without a
 // frame number. Returns "" or the problem; `out` (fresh) then holds nothing.
 std::string decode_bot_images(const void *data, size_t size, StereoMessage &out);
+
+// Walks a raw bot_core.image_t sent on its own channel (a camera per channel) as above, and
+// checks its pixel format is GRAY, RGB or BGR; *utime gets its time. "" or the problem.
+std::string check_bot_image(const void *data, size_t size, int64_t *utime);
+
+// Two raw bot_core.image_t of equal utime, left and right, as one stereo frame (the checks of
+// decode_bot_images: same size and format, rows repacked, no frame number). "" or the problem;
+// `out` (fresh) then holds nothing.
+std::string decode_bot_image_pair(const void *left, size_t left_size, const void *right, size_t right_size,
+                                  StereoMessage &out);
 
 // Checks a row-major 4x4 LiDAR -> camera transform: finite, last row 0 0 0 1. "" or the problem.
 std::string check_lidar_to_camera(const double *T);
@@ -84,6 +97,15 @@ struct LidarSweep {
     int32_t kind = LF_LIDAR_NONE;
     std::vector<float> xyz;
     lf_lidar_t view() const;  // borrows xyz
+    // Sweeps in the LiDAR frame (lidar_t FRAME_LIDAR, bot_core.pointcloud_t) also keep the points
+    // as sent and their transform: an estimator whose calibration carries this transform takes
+    // them as LF_LIDAR_POINTS_LIDAR and moves them in double without a float cast in between,
+    // which gives exactly what projecting the scan gives (xyz alone differs by float rounding,
+    // and the estimator's discrete decisions can turn that into visible differences).
+    bool in_lidar_frame = false;
+    std::vector<float> lidar_xyz;
+    double lidar_to_camera[16] = {};
+    lf_lidar_t lidar_frame_view() const;  // borrows lidar_xyz; LF_LIDAR_POINTS_LIDAR
 };
 
 // Decodes, checks (frame, finite values, rigid transform with last row 0 0 0 1, transformed
@@ -126,6 +148,10 @@ bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step
 
 // Encoded bytes of a message (lcm-gen's encoder).
 std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg);
+
+// The t1 time (utime) of a raw scene_flow_t, read without decoding the planes; false when the
+// message is not a scene_flow_t or too short.
+bool scene_flow_utime(const void *data, size_t size, int64_t *utime);
 
 // A decoded scene_flow_t as float planes (the receiver's view): values in px, valid 0/1.
 struct DecodedFlow {

@@ -36,6 +36,13 @@ expect 2 '--option =2: expected KEY=VALUE' --option=threads=2 --option =2
 expect 2 '--encoding png: expected float32 or int16' --encoding png
 expect 2 '--lidar-to-camera 1,2,3: expected 16 numbers' --lidar-to-camera 1,2,3
 expect 2 '--replay and --out go together' --replay in.log
+expect 2 '--left-channel and --right-channel go together' --left-channel CAM_LEFT
+expect 2 '--left-channel and --right-channel go together, on two different channels' --left-channel A --right-channel A
+expect 2 '--replay takes stereo frames from the stereo channel only' --replay in.log --out out.log --left-channel L --right-channel R
+expect 2 '--pair-wait-ms expects a number in \[0, 10000\]' --pair-wait-ms -5
+expect 2 '--shard-timeout needs --shard K/N with N > 1' --shard-timeout 2
+expect 2 '--shard-timeout needs --shard K/N with N > 1 and a --status-period > 0' --shard 0/2 --shard-timeout 2 --status-period 0
+expect 2 '--shard-timeout expects a number in \[0, 3600\]' --shard 0/2 --shard-timeout -1
 expect 2 '--replay and --out go together' --replay in.log --out out.log --lcm-url udpm://
 expect 0 '^usage: lidarflow-lcm-bridge' --help
 expect 0 '^lidarflow-lcm-bridge [0-9]' --queue 0 --version

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "flow_reference.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -54,8 +55,9 @@ std::string reference_frame(const std::vector<uint8_t> &raw, RefFrame &f) {
     return "";
 }
 
-// A bot_core.pointcloud_t's points moved into the camera frame as the bridge documents it:
-// T * (x, y, z, 1) in double, one cast to float.
+// A bot_core.pointcloud_t's points as sent, with the --lidar-to-camera transform (the C ABI
+// moves them, as the bridge has it do), and moved here as the bridge's fallback does: T * (x, y,
+// z, 1) in double, one cast to float.
 std::string reference_bot_pointcloud(const std::vector<uint8_t> &raw, const Inputs &inputs, LidarSweep &out) {
     if (!inputs.have_lidar_to_camera) return "a pointcloud_t input but no lidar_to_camera given";
     bot_core_pointcloud_t m;
@@ -64,9 +66,13 @@ std::string reference_bot_pointcloud(const std::vector<uint8_t> &raw, const Inpu
     const double *T = inputs.lidar_to_camera;
     out.utime = m.utime;
     out.kind = LF_LIDAR_POINTS_CAMERA;
+    out.in_lidar_frame = true;
+    std::copy(T, T + 16, out.lidar_to_camera);
     out.xyz.clear();
+    out.lidar_xyz.clear();
     for (int i = 0; i < m.n_points; ++i) {
         const double x = m.points[i][0], y = m.points[i][1], z = m.points[i][2];
+        out.lidar_xyz.insert(out.lidar_xyz.end(), {m.points[i][0], m.points[i][1], m.points[i][2]});
         for (int r = 0; r < 3; ++r)
             out.xyz.push_back(static_cast<float>(T[4 * r] * x + T[4 * r + 1] * y + T[4 * r + 2] * z + T[4 * r + 3]));
     }
@@ -131,15 +137,28 @@ std::string check_flow(const std::vector<std::pair<std::string, std::string>> &o
         if (st != LF_OK) st = lf_options_set_float(opt, key.c_str(), std::strtod(value.c_str(), nullptr));
         if (st != LF_OK) lf_options_set_string(opt, key.c_str(), value.c_str());
     }
+    // As the bridge in a steady stream: the estimator carries the transform of the LiDAR-frame
+    // sweeps (the t0 one's first) and is given those points in the LiDAR frame.
+    lf_calibration_t with_transform = cal;
+    for (int k = 1; k >= 0; --k)
+        if (has[k] && l[k].in_lidar_frame) {
+            std::copy(l[k].lidar_to_camera, l[k].lidar_to_camera + 16, with_transform.lidar_to_camera);
+            with_transform.has_lidar_to_camera = 1;
+        }
+    lf_lidar_t v[2];
+    for (int k = 0; k < 2; ++k)
+        v[k] = l[k].in_lidar_frame && with_transform.has_lidar_to_camera &&
+                       std::equal(l[k].lidar_to_camera, l[k].lidar_to_camera + 16, with_transform.lidar_to_camera)
+                   ? l[k].lidar_frame_view()
+                   : l[k].view();
     lf_estimator_t *e = nullptr;
-    const int32_t created = lf_create(opt, &cal, &e);
+    const int32_t created = lf_create(opt, &with_transform, &e);
     lf_options_destroy(opt);
     if (created != LF_OK) return std::string("lf_create: ") + lf_last_error(nullptr);
     std::unique_ptr<lf_estimator_t, void (*)(lf_estimator_t *)> guard(e, lf_destroy);
     const lf_image_t a0 = f0.left, b0 = f0.right, a1 = f1.left, b1 = f1.right;
-    const lf_lidar_t v0 = l[0].view(), v1 = l[1].view();
-    if (lf_push_frame(e, h.utime0, &a0, &b0, has[0] ? &v0 : nullptr) != LF_OK ||
-        lf_push_frame(e, h.utime, &a1, &b1, has[1] ? &v1 : nullptr) != LF_OK)
+    if (lf_push_frame(e, h.utime0, &a0, &b0, has[0] ? &v[0] : nullptr) != LF_OK ||
+        lf_push_frame(e, h.utime, &a1, &b1, has[1] ? &v[1] : nullptr) != LF_OK)
         return std::string("lf_push_frame: ") + lf_last_error(e);
     lf_result_views_t views;
     lf_result_views_init(&views);

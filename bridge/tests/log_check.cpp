@@ -17,9 +17,17 @@
 //       other shards), no two results may name the same pair, and the results together must
 //       match the shards' counts. --expect-pairs P: exactly P results and no frame dropped by
 //       any shard. --check-every M: compare only every M-th result with the C ABI (time).
+//       --dead-shard K: shard K was killed mid-stream; its last status is not final and is left
+//       out of the accounting; every live shard must have taken it for dead, and the pairs
+//       published (by anyone, K included) plus the pairs the live shards counted as lost
+//       (pairs_lost_dead_shard) must be exactly --expect-pairs.
 //   log_check throughput LOG [--stereo-channel NAME]
 //       Results per second of a recorded live run: from the first stereo frame's to the last
 //       result's arrival at the logger.
+//   log_check compare A.log B.log
+//       The results of two runs of the same frames (times may differ: paired by order) must be
+//       equal value by value: same pair length t1 - t0, LiDAR flags, planes and valid pixels.
+//       E.g. one scan sent as LiDAR-frame points and once as projected disparities.
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -29,6 +37,7 @@
 #include <lcm/lcm.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -129,6 +138,64 @@ int check_flows(const std::vector<Event> &events, const std::vector<std::vector<
     return 0;
 }
 
+// log_check compare: see the top of the file.
+int compare_results(const std::string &path_a, const std::string &path_b) {
+    std::vector<DecodedFlow> runs[2];
+    for (int k = 0; k < 2; ++k) {
+        std::vector<Event> events;
+        if (!read_log(k ? path_b : path_a, events)) {
+            std::fprintf(stderr, "log_check: cannot read %s\n", (k ? path_b : path_a).c_str());
+            return 1;
+        }
+        for (const Event &e : events) {
+            if (e.channel != "LIDARFLOW_FLOW") continue;
+            DecodedFlow d;
+            const std::string err = decode_scene_flow(e.data.data(), e.data.size(), d);
+            if (!err.empty()) {
+                std::fprintf(stderr, "log_check: bad flow message: %s\n", err.c_str());
+                return 1;
+            }
+            runs[k].push_back(std::move(d));
+        }
+    }
+    if (runs[0].size() != runs[1].size() || runs[0].empty()) {
+        std::fprintf(stderr, "log_check: compare: %zu and %zu results\n", runs[0].size(), runs[1].size());
+        return 1;
+    }
+    int rc = 0;
+    for (size_t i = 0; i < runs[0].size(); ++i) {
+        const DecodedFlow &a = runs[0][i], &b = runs[1][i];
+        const lidarflow_scene_flow_t &ha = a.header, &hb = b.header;
+        if (ha.utime - ha.utime0 != hb.utime - hb.utime0 || ha.lidar_flags != hb.lidar_flags ||
+            ha.width != hb.width || ha.height != hb.height || ha.last_stage != hb.last_stage) {
+            std::fprintf(stderr, "log_check: compare: result %zu: different pairs (t1 - t0 %lld / %lld us, LiDAR flags "
+                                 "%d / %d, planes %dx%d / %dx%d)\n",
+                         i, (long long)(ha.utime - ha.utime0), (long long)(hb.utime - hb.utime0), ha.lidar_flags,
+                         hb.lidar_flags, ha.width, ha.height, hb.width, hb.height);
+            return 1;
+        }
+        const std::vector<float> *pa[4] = {&a.u, &a.v, &a.d0, &a.d1}, *pb[4] = {&b.u, &b.v, &b.d0, &b.d1};
+        size_t valid = 0, differ = 0;
+        double max_diff = 0;
+        for (size_t j = 0; j < a.valid.size(); ++j) {
+            if (!a.valid[j] && !b.valid[j]) continue;
+            ++valid;
+            double d = a.valid[j] != b.valid[j] ? HUGE_VAL : 0;
+            for (int k = 0; k < 4 && a.valid[j] && b.valid[j]; ++k)
+                d = std::max(d, static_cast<double>(std::fabs((*pa[k])[j] - (*pb[k])[j])));
+            if (d != HUGE_VAL) max_diff = std::max(max_diff, d);
+            differ += d != 0;
+        }
+        const double fraction = valid ? static_cast<double>(differ) / static_cast<double>(valid) : 0;
+        std::printf("log_check: compare: result %zu (LiDAR flags %d): %zu pixels valid in either, %zu differ (%.5f %%), "
+                    "largest difference where both are valid %.4g px\n",
+                    i, ha.lidar_flags, valid, differ, 100 * fraction, max_diff);
+        if (differ != 0) rc = 1;
+    }
+    if (rc) std::fprintf(stderr, "log_check: compare: the results differ\n");
+    return rc;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -137,6 +204,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
+    if (mode == "compare") return argc != 4 ? 2 : compare_results(path, argv[3]);
     if (mode == "edit") {
         if (argc < 4) return 2;
         std::map<std::string, std::vector<int>> drop;  // channel -> event indices
@@ -170,7 +238,7 @@ int main(int argc, char **argv) {
     std::string inputs_path;
     InputSetup setup;
     std::vector<std::pair<std::string, std::string>> options;
-    int min_results = 1, step = 1, expect_pairs = -1;
+    int min_results = 1, step = 1, expect_pairs = -1, dead_shard = -1;
     FlowEncoding encoding = FlowEncoding::Int16;
     for (int i = 3; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
@@ -179,6 +247,7 @@ int main(int argc, char **argv) {
         else if (a == "--inputs") inputs_path = v;
         else if (a == "--stereo-channel") setup.stereo_channel = v;
         else if (a == "--expect-pairs") expect_pairs = std::atoi(v.c_str());
+        else if (a == "--dead-shard") dead_shard = std::atoi(v.c_str());
         else if (a == "--check-every") setup.check_every = std::max(1, std::atoi(v.c_str()));
         else if (a == "--lidar-channel") setup.lidar_channel = v;
         else if (a == "--calib") {
@@ -278,13 +347,14 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "log_check: no status message in %s\n", path.c_str());
             return 1;
         }
-        int64_t results = 0, dropped_all = 0;
+        int64_t results = 0, dropped_all = 0, lost_dead = 0;
         bool accounted = true;
         for (const auto &[shard, status] : last_status) {
             const lidarflow_status_t &s = status.fields;
+            if (shard == dead_shard) continue;
             const int64_t dropped = s.dropped_stale + s.dropped_out_of_order + s.dropped_no_calibration +
                                     s.dropped_calibration_mismatch + s.dropped_malformed + s.dropped_estimator_error +
-                                    s.dropped_shutdown;
+                                    s.dropped_shutdown + s.dropped_unpaired;
             std::printf("log_check: status of shard %d/%d: stereo received %lld (log has %lld), processed %lld, dropped "
                         "%lld (stale %lld), skipped for other shards %lld, results %lld, latency mean %.1f ms max %.1f "
                         "ms, estimator mean %.1f ms, queue %d, busy %d\n",
@@ -292,13 +362,22 @@ int main(int argc, char **argv) {
                         (long long)s.stereo_processed, (long long)dropped, (long long)s.dropped_stale,
                         (long long)s.skipped_other_shard, (long long)s.results_published, s.latency_mean_ms,
                         s.latency_max_ms, s.compute_mean_ms, s.queue_depth, s.busy);
+            if (dead_shard >= 0) {
+                std::printf("log_check: shard %d takes %d shard(s) for dead and counted %lld of their pairs as lost\n",
+                            s.shard_index, s.shards_dead, (long long)s.pairs_lost_dead_shard);
+                accounted &= s.shards_dead == 1;
+                lost_dead += s.pairs_lost_dead_shard;
+            }
             accounted &= s.stereo_received == s.stereo_processed + dropped + s.skipped_other_shard &&
                          s.queue_depth == 0 && s.busy == 0 && s.stereo_received == stereo_in_log &&
-                         s.shard_count == static_cast<int32_t>(last_status.size());
+                         s.shard_count == static_cast<int32_t>(last_status.size() + (dead_shard >= 0 &&
+                                                                                    !last_status.count(dead_shard)));
             results += s.results_published;
             dropped_all += dropped;
         }
-        accounted &= results == static_cast<int64_t>(flows.size());
+        // A dead shard's results are in the log but not in a final status of its own.
+        accounted &= dead_shard >= 0 ? results <= static_cast<int64_t>(flows.size())
+                                     : results == static_cast<int64_t>(flows.size());
         if (!accounted) {
             std::fprintf(stderr, "log_check: the status does not account for every stereo frame / result (or a shard "
                                  "is missing)\n");
@@ -310,11 +389,16 @@ int main(int argc, char **argv) {
                              (long long)pair.second, n);
                 return 1;
             }
-        if (expect_pairs >= 0 && (static_cast<int64_t>(pairs.size()) != expect_pairs || dropped_all != 0)) {
-            std::fprintf(stderr, "log_check: %zu distinct pairs and %lld frames dropped; expected %d and none\n",
-                         pairs.size(), (long long)dropped_all, expect_pairs);
+        if (expect_pairs >= 0 &&
+            (static_cast<int64_t>(pairs.size()) + lost_dead != expect_pairs || dropped_all != 0)) {
+            std::fprintf(stderr, "log_check: %zu distinct pairs published, %lld counted as lost with a dead shard, %lld "
+                                 "frames dropped; expected %d pairs in all and no drop\n",
+                         pairs.size(), (long long)lost_dead, (long long)dropped_all, expect_pairs);
             return 1;
         }
+        if (dead_shard >= 0)
+            std::printf("log_check: %zu pairs published + %lld lost with dead shard %d = %d\n", pairs.size(),
+                        (long long)lost_dead, dead_shard, expect_pairs);
         return check_flows(events, flows, options, min_results, setup);
     }
     if (mode != "replay") {

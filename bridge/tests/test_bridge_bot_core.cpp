@@ -63,6 +63,27 @@ std::vector<uint8_t> encode_images(const std::vector<int16_t> &roles, std::vecto
     return buf;
 }
 
+// One bot_core.image_t on its own (a camera per channel), by lcm-gen's encoder.
+std::vector<uint8_t> encode_image(Image &image, int32_t format, int64_t utime, bool with_metadata) {
+    char key[] = "exposure_us";
+    uint8_t value[] = {1, 2, 3};
+    bot_core_image_metadata_t meta{key, 3, value};
+    bot_core_image_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.width = image.width;
+    m.height = image.height;
+    m.row_stride = image.stride;
+    m.pixelformat = format;
+    m.size = static_cast<int32_t>(image.data.size());
+    m.data = image.data.data();
+    m.nmetadata = with_metadata ? 1 : 0;
+    m.metadata = &meta;
+    std::vector<uint8_t> buf(static_cast<size_t>(bot_core_image_t_encoded_size(&m)));
+    assert_int_equal(bot_core_image_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &m), buf.size());
+    return buf;
+}
+
 void expect_pixels(const StereoMessage &m, const Image &left, const Image &right) {
     const int row = left.width * left.channels;
     assert_int_equal(m.msg().row_stride, row);
@@ -206,10 +227,51 @@ void test_pointcloud(void **) {
 
 }  // namespace
 
+// Two image_t of one time from two channels: one stereo frame, as an images_t would give;
+// every refusal of images_t applies, plus differing times, and every prefix and extension of
+// either message is refused.
+void test_image_pair(void **) {
+    Image left(6, 3, 6 * 3 + 2, 3, 0), right(6, 3, 6 * 3, 3, 1);
+    const int32_t rgb = BOT_CORE_IMAGE_T_PIXEL_FORMAT_RGB;
+    const std::vector<uint8_t> l = encode_image(left, rgb, 777, true), r = encode_image(right, rgb, 777, false);
+    int64_t utime = 0;
+    assert_string_equal(check_bot_image(l.data(), l.size(), &utime).c_str(), "");
+    assert_int_equal(utime, 777);
+    StereoMessage m;
+    assert_string_equal(decode_bot_image_pair(l.data(), l.size(), r.data(), r.size(), m).c_str(), "");
+    assert_int_equal(m.msg().utime, 777);
+    assert_int_equal(m.msg().pixel_format, LF_PIXEL_RGB8);
+    assert_false(m.has_frame_number());
+    expect_pixels(m, left, right);
+
+    const std::vector<uint8_t> later = encode_image(right, rgb, 778, false);
+    StereoMessage m2;
+    assert_true(decode_bot_image_pair(l.data(), l.size(), later.data(), later.size(), m2).find("differ in utime") !=
+                std::string::npos);
+    Image small(5, 3, 15, 3, 1);
+    const std::vector<uint8_t> s5 = encode_image(small, rgb, 777, false);
+    StereoMessage m3;
+    assert_true(decode_bot_image_pair(l.data(), l.size(), s5.data(), s5.size(), m3).find("left and right differ") !=
+                std::string::npos);
+    const std::vector<uint8_t> yuv = encode_image(right, 0x56595559, 777, false);
+    assert_true(check_bot_image(yuv.data(), yuv.size(), &utime).find("unsupported pixelformat") != std::string::npos);
+    // An images_t is not an image_t.
+    std::vector<Image> both = {left, right};
+    const std::vector<uint8_t> images = encode_images({BOT_CORE_IMAGES_T_LEFT, BOT_CORE_IMAGES_T_RIGHT}, both, rgb, 1);
+    assert_true(check_bot_image(images.data(), images.size(), &utime).find("bad fingerprint") != std::string::npos);
+    for (const std::vector<uint8_t> *good : {&l, &r}) {
+        for (size_t n = 0; n < good->size(); ++n) assert_false(check_bot_image(good->data(), n, &utime).empty());
+        std::vector<uint8_t> longer = *good;
+        longer.push_back(0);
+        assert_true(check_bot_image(longer.data(), longer.size(), &utime).find("wrong size") != std::string::npos);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_images_formats),
         cmocka_unit_test(test_images_refused),
+        cmocka_unit_test(test_image_pair),
         cmocka_unit_test(test_pointcloud),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

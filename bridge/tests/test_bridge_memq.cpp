@@ -309,6 +309,28 @@ void check_encoding(FlowEncoding encoding, int step) {
 void test_float32_equals_capi(void **) { check_encoding(FlowEncoding::Float32, 1); }
 void test_int16_subsampled_equals_capi(void **) { check_encoding(FlowEncoding::Int16, 3); }
 
+// The float32 flow `f` of the scene's pair equals the C ABI's for this calibration and sweeps.
+void assert_scene_pair_equals_capi(const DecodedFlow &f, const lf_calibration_t &cal, const lf_lidar_t *l0,
+                                   const lf_lidar_t *l1) {
+    lf_options_t *o = scene_options(2);
+    lf_estimator_t *e = nullptr;
+    assert_int_equal(lf_create(o, &cal, &e), LF_OK);
+    lf_options_destroy(o);
+    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
+    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
+    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, l0), LF_OK);
+    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, l1), LF_OK);
+    scene_result_t r;
+    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
+    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
+    assert_memory_equal(f.v.data(), r.v, W * H * sizeof(float));
+    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
+    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
+    assert_memory_equal(f.valid.data(), r.valid, W * H);
+    scene_result_free(&r);
+    lf_destroy(e);
+}
+
 // LiDAR as 3-D points in the LiDAR frame (x forward, y left, z up) with the transform to the
 // camera: the same flow as the C ABI given the camera-frame points.
 void test_points_in_lidar_frame(void **) {
@@ -336,25 +358,241 @@ void test_points_in_lidar_frame(void **) {
     assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
     assert_int_equal(f.header.lidar_flags, 3);
 
-    lf_options_t *o = scene_options(2);
-    lf_estimator_t *e = nullptr;
-    assert_int_equal(lf_create(o, &cal, &e), LF_OK);
-    lf_options_destroy(o);
     const lf_lidar_t lc = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam.size() / 3), cam.data(), 0};
-    const lf_image_t a0 = scene_image(g_scene.left0, W, H), b0 = scene_image(g_scene.right0, W, H);
-    const lf_image_t a1 = scene_image(g_scene.left1, W, H), b1 = scene_image(g_scene.right1, W, H);
-    assert_int_equal(lf_push_frame(e, 0, &a0, &b0, &lc), LF_OK);
-    assert_int_equal(lf_push_frame(e, 100000, &a1, &b1, &lc), LF_OK);
-    scene_result_t r;
-    assert_int_equal(scene_result_fetch(e, &r), LF_OK);
-    assert_memory_equal(f.u.data(), r.u, W * H * sizeof(float));
-    assert_memory_equal(f.v.data(), r.v, W * H * sizeof(float));
-    assert_memory_equal(f.d0.data(), r.d0, W * H * sizeof(float));
-    assert_memory_equal(f.d1.data(), r.d1, W * H * sizeof(float));
-    assert_memory_equal(f.valid.data(), r.valid, W * H);
-    scene_result_free(&r);
-    lf_destroy(e);
+    assert_scene_pair_equals_capi(f, cal, &lc, &lc);
     assert_accounted(rig.bridge->counters());
+}
+
+// LiDAR-frame sweeps whose transform changes within a pair: the estimator, created with the t0
+// sweep's transform, takes the t0 points in the LiDAR frame; the t1 sweep's other transform
+// cannot replace it without losing the pair, so the bridge moves those points itself (double,
+// one cast to float). The next sequence takes T1.
+void test_lidar_transform_change_within_pair(void **) {
+    const lf_calibration_t cal = scene_calibration(&g_scene);
+    const std::vector<float> xyd = scene_disparities();
+    const double a = 0.3, c0 = std::cos(a), s0 = std::sin(a);
+    // Camera -> LiDAR as a rotation about the camera's y axis and a shift; T = its inverse.
+    const double T0[16] = {c0, 0, -s0, 0.1, 0, 1, 0, 0.05, s0, 0, c0, -0.2, 0, 0, 0, 1};
+    double T1[16];
+    std::copy(T0, T0 + 16, T1);
+    T1[3] += 0.01;
+    std::vector<float> lid0, lid1, cam1;
+    for (size_t i = 0; i < xyd.size(); i += 3) {
+        const double z = cal.fx * cal.baseline / xyd[i + 2];
+        const double x = (xyd[i] - cal.cx) * z / cal.fx, y = (xyd[i + 1] - cal.cy) * z / cal.fy;
+        for (int t = 0; t < 2; ++t) {
+            // p = R^T (c - t) for T = [R t]: the LiDAR-frame point that T maps onto c.
+            const double *T = t ? T1 : T0;
+            const double d[3] = {x - T[3], y - T[7], z - T[11]};
+            std::vector<float> &out = t ? lid1 : lid0;
+            for (int k = 0; k < 3; ++k) out.push_back(static_cast<float>(T[k] * d[0] + T[4 + k] * d[1] + T[8 + k] * d[2]));
+        }
+    }
+    for (size_t i = 0; i < lid1.size(); i += 3)
+        for (int r = 0; r < 3; ++r)
+            cam1.push_back(static_cast<float>(T1[4 * r] * lid1[i] + T1[4 * r + 1] * lid1[i + 1] +
+                                              T1[4 * r + 2] * lid1[i + 2] + T1[4 * r + 3]));
+    BridgeConfig config;
+    config.encoding = FlowEncoding::Float32;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid0, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 0, T0));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 100000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow f;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), f).c_str(), "");
+    assert_int_equal(f.header.lidar_flags, 3);
+
+    lf_calibration_t with_t0 = cal;
+    with_t0.has_lidar_to_camera = 1;
+    std::copy(T0, T0 + 16, with_t0.lidar_to_camera);
+    const lf_lidar_t l0 = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid0.size() / 3), lid0.data(), 0};
+    const lf_lidar_t l1 = {LF_LIDAR_POINTS_CAMERA, (uint32_t)(cam1.size() / 3), cam1.data(), 0};
+    assert_scene_pair_equals_capi(f, with_t0, &l0, &l1);
+    assert_int_equal(rig.bridge->counters().lidar_moved_by_bridge, 1);
+
+    // A new sequence starts over: the estimator then holds no frame and takes T1 for free, so
+    // both of its frames' points go in the LiDAR frame.
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 200000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 200000, 1));
+    rig.send("LIDARFLOW_LIDAR", lidar_bytes(lid1, LIDARFLOW_LIDAR_T_FRAME_LIDAR, 300000, T1));
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 300000, 1));
+    assert_int_equal(rig.flows.size(), 2);
+    assert_string_equal(decode_scene_flow(rig.flows[1].data(), rig.flows[1].size(), f).c_str(), "");
+    lf_calibration_t with_t1 = with_t0;
+    std::copy(T1, T1 + 16, with_t1.lidar_to_camera);
+    const lf_lidar_t l1_lidar = {LF_LIDAR_POINTS_LIDAR, (uint32_t)(lid1.size() / 3), lid1.data(), 0};
+    assert_scene_pair_equals_capi(f, with_t1, &l1_lidar, &l1_lidar);
+    assert_int_equal(rig.bridge->counters().lidar_moved_by_bridge, 1);
+    assert_accounted(rig.bridge->counters());
+}
+
+// A heartbeat of shard k/n on the status channel.
+void send_shard_status(Rig &rig, int32_t k, int32_t n) {
+    lidarflow_status_t st;
+    std::memset(&st, 0, sizeof st);
+    st.shard_index = k;
+    st.shard_count = n;
+    char empty[] = "";
+    st.last_error = empty;
+    assert_int_equal(lidarflow_status_t_publish(rig.lcm, "LIDARFLOW_STATUS", &st), 0);
+}
+
+// Runs the bridge for `seconds`, shard 1 of 3 sending heartbeats if asked.
+void run_for(Rig &rig, double seconds, bool shard1_alive) {
+    const double end = monotonic_seconds() + seconds;
+    while (monotonic_seconds() < end) {
+        if (shard1_alive) send_shard_status(rig, 1, 3);
+        for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    }
+}
+
+// --shard 0/3 watching the others: shard 2 stops sending its status, shard 1 later. Each
+// dead shard's pairs without a result count once, here (0 is the first live shard after 2,
+// and after 1 once 2 is dead too); a result seen for a pair settles it; a status of another
+// split is ignored; a shard that sends a status again is alive again.
+void test_dead_shards(void **) {
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 0.3;
+    Rig rig(config);  // no calibration: the frames are dropped, the pairs still watched
+    // Heartbeats go with every frame while a shard lives: a slow machine must not make it look
+    // dead early.
+    bool shard1_alive = true, shard2_alive = true;
+    auto frame = [&](int64_t n) {
+        if (shard1_alive) send_shard_status(rig, 1, 3);
+        if (shard2_alive) send_shard_status(rig, 2, 3);
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    };
+    for (int64_t n = 0; n <= 5; ++n) frame(n);  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
+    lidarflow_scene_flow_t flow;  // shard 2's result of pair 4 -> 5 (only utime is read)
+    std::memset(&flow, 0, sizeof flow);
+    flow.utime = 5000;
+    flow.step = 1;
+    assert_int_equal(lidarflow_scene_flow_t_publish(rig.lcm, "LIDARFLOW_FLOW", &flow), 0);
+    send_shard_status(rig, 1, 2);  // another split: ignored
+    shard2_alive = false;
+    run_for(rig, 0.5, true);
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);            // shard 2
+    assert_int_equal(c.pairs_lost_dead_shard, 1);  // 1 -> 2; 4 -> 5 has its result
+    for (int64_t n = 6; n <= 8; ++n) frame(n);     // 7 (shard 1, alive), 8 (shard 2, dead)
+    assert_int_equal(rig.bridge->counters().pairs_lost_dead_shard, 2);
+    shard1_alive = false;
+    run_for(rig, 0.5, false);                      // shard 1 dies: 0 -> 1, 3 -> 4, 6 -> 7 lost
+    c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 2);
+    assert_int_equal(c.pairs_lost_dead_shard, 5);
+    send_shard_status(rig, 2, 3);
+    for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    assert_int_equal(rig.bridge->counters().shards_dead, 1);
+    frame(9);   // 8 -> 9: shard 0's own
+    frame(11);  // no pair (10 lost in transport): nobody's
+    assert_int_equal(rig.bridge->counters().pairs_lost_dead_shard, 5);
+    rig.bridge->stop();
+    while (lcm_handle_timeout(rig.lcm, 50) > 0) {
+    }
+    // The bridge's final status (the channel also carries the heartbeats sent above).
+    StatusMessage last;
+    for (const auto &b : rig.statuses)
+        if (decode_status(b.data(), b.size(), last).empty() && last.fields.shard_index == 0 &&
+            last.fields.shard_count == 3 && last.fields.stereo_received == 11)
+            break;
+    assert_int_equal(last.fields.stereo_received, 11);
+    assert_int_equal(last.fields.shards_dead, 1);
+    assert_int_equal(last.fields.pairs_lost_dead_shard, 5);
+    // Pairs, not messages: the frames' own identity is unchanged.
+    c = rig.bridge->counters();
+    assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped() + c.skipped_other_shard);
+}
+
+// A gray bot_core.image_t of the scene (a camera per channel).
+std::vector<uint8_t> image_bytes(const uint8_t *pixels, int64_t utime) {
+    bot_core_image_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.width = W;
+    m.height = H;
+    m.row_stride = W;
+    m.pixelformat = BOT_CORE_IMAGE_T_PIXEL_FORMAT_GRAY;
+    m.size = W * H;
+    m.data = const_cast<uint8_t *>(pixels);
+    std::vector<uint8_t> b(static_cast<size_t>(bot_core_image_t_encoded_size(&m)));
+    assert_int_equal(bot_core_image_t_encode(b.data(), 0, (int)b.size(), &m), (int)b.size());
+    return b;
+}
+
+// Publishes without waiting for a frame (an image alone makes none), then lets the bridge
+// handle it and finish what it has.
+void publish_image(Rig &rig, const char *channel, const std::vector<uint8_t> &bytes) {
+    assert_int_equal(lcm_publish(rig.lcm, channel, bytes.data(), (unsigned)bytes.size()), 0);
+    for (int i = 0; i < 3; ++i) rig.bridge->run_once(10);
+    rig.settle();
+}
+
+// --left-channel/--right-channel: images of equal utime from the two channels make one frame
+// (in either order); the result equals the one of the same images as stereo_t. Images without
+// a partner are dropped as unpaired after --pair-wait-ms, when more than --pair-buffer wait, or
+// at stop; each counts as one frame received, so the accounting identity holds.
+void test_left_right_channels(void **) {
+    BridgeConfig config;
+    config.left_channel = "CAM_LEFT";
+    config.right_channel = "CAM_RIGHT";
+    config.pair_wait_ms = 200;
+    config.pair_buffer = 2;
+    config.encoding = FlowEncoding::Float32;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 0));
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 0));
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right1, 100000));  // right first this time
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left1, 100000));
+    assert_int_equal(rig.flows.size(), 1);
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.stereo_received, 2);
+    assert_int_equal(c.stereo_processed, 2);
+
+    BridgeConfig own;
+    own.encoding = FlowEncoding::Float32;
+    own.status_period_s = 0;
+    Rig reference(own);
+    reference.send("LIDARFLOW_CALIB", calibration_bytes());
+    reference.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));
+    reference.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left1, g_scene.right1, 100000));
+    assert_int_equal(reference.flows.size(), 1);
+    DecodedFlow got, want;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), got).c_str(), "");
+    assert_string_equal(decode_scene_flow(reference.flows[0].data(), reference.flows[0].size(), want).c_str(), "");
+    assert_true(got.u == want.u && got.v == want.v && got.d0 == want.d0 && got.d1 == want.d1 && got.valid == want.valid);
+
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 200000));     // no partner: waits, then goes
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 300000));
+    publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, 300001));     // 1 us off: no pair
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 0);
+    const double end = monotonic_seconds() + 0.4;
+    while (monotonic_seconds() < end) rig.bridge->run_once(10);
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 3);
+    for (int64_t t : {400000, 500000, 600000}) publish_image(rig, "CAM_LEFT", image_bytes(g_scene.left0, t));
+    assert_int_equal(rig.bridge->counters().dropped_unpaired, 4);  // the buffer holds 2: 400000 goes
+    publish_image(rig, "CAM_RIGHT", image_bytes(g_scene.right0, 500000));
+    std::vector<uint8_t> bad = image_bytes(g_scene.right0, 700000);
+    bad.pop_back();
+    publish_image(rig, "CAM_RIGHT", bad);
+    c = rig.bridge->counters();
+    assert_int_equal(c.dropped_malformed, 1);
+    assert_int_equal(c.stereo_processed, 3);                      // 500000 paired
+    rig.bridge->stop();                                            // 600000 still waits
+    c = rig.bridge->counters();
+    assert_int_equal(c.dropped_unpaired, 5);
+    assert_int_equal(c.stereo_received, 3 + 5 + 1);
+    assert_accounted(c);
 }
 
 // No LiDAR stream at all: image-only results, flagged, equal to the C ABI without LiDAR.
@@ -795,6 +1033,9 @@ int main(void) {
         cmocka_unit_test(test_float32_equals_capi),
         cmocka_unit_test(test_int16_subsampled_equals_capi),
         cmocka_unit_test(test_points_in_lidar_frame),
+        cmocka_unit_test(test_lidar_transform_change_within_pair),
+        cmocka_unit_test(test_dead_shards),
+        cmocka_unit_test(test_left_right_channels),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),
         cmocka_unit_test(test_calibration_and_order),

@@ -80,8 +80,8 @@ std::vector<uint8_t> flow(const FlowFields &f) {
 std::vector<uint8_t> status(int32_t string_length, const std::string &text) {
     Wire w;
     w.i64(__lidarflow_status_t_get_hash()).i64(11).f64(2.5);
-    for (int i = 0; i < 18; ++i) w.i64(100 + i);
-    w.i32(3).i32(4).i8(1).i32(2).i32(3);
+    for (int i = 0; i < 19; ++i) w.i64(100 + i);
+    w.i32(3).i32(4).i8(1).i32(2).i32(3).i32(1).i64(7);
     for (int i = 0; i < 5; ++i) w.f32(1.5f * i);
     w.i32(string_length);
     w.b.insert(w.b.end(), text.begin(), text.end());
@@ -215,11 +215,14 @@ void test_status_string(void **) {
     assert_int_equal(s.fields.stereo_received, 100);
     assert_int_equal(s.fields.stereo_lost_in_transport, 101);
     assert_int_equal(s.fields.dropped_shutdown, 111);
-    assert_int_equal(s.fields.skipped_other_shard, 112);
-    assert_int_equal(s.fields.calibration_malformed, 117);
+    assert_int_equal(s.fields.dropped_unpaired, 112);
+    assert_int_equal(s.fields.skipped_other_shard, 113);
+    assert_int_equal(s.fields.calibration_malformed, 118);
     assert_int_equal(s.fields.queue_capacity, 4);
     assert_int_equal(s.fields.shard_index, 2);
     assert_int_equal(s.fields.shard_count, 3);
+    assert_int_equal(s.fields.shards_dead, 1);
+    assert_int_equal(s.fields.pairs_lost_dead_shard, 7);
     assert_true(s.fields.compute_mean_ms == 6.0f);
     assert_null(s.fields.last_error);
 
@@ -236,6 +239,8 @@ void test_status_string(void **) {
     lidarflow_status_t m;
     std::memset(&m, 0, sizeof m);
     m.results_published = 42;
+    m.shards_dead = 2;
+    m.pairs_lost_dead_shard = 5;
     m.latency_max_ms = 3.25f;
     char text[] = "last words";
     m.last_error = text;
@@ -244,6 +249,8 @@ void test_status_string(void **) {
     StatusMessage d;
     assert_string_equal(decode_status(enc.data(), enc.size(), d).c_str(), "");
     assert_int_equal(d.fields.results_published, 42);
+    assert_int_equal(d.fields.shards_dead, 2);
+    assert_int_equal(d.fields.pairs_lost_dead_shard, 5);
     assert_true(d.fields.latency_max_ms == 3.25f);
     assert_string_equal(d.last_error.c_str(), "last words");
 }

@@ -7,13 +7,16 @@
 # pairs is published exactly once overall, no shard dropped a frame (nothing stale), every
 # shard's last status accounts for all 30 frames (processed + skipped for other shards), and
 # sampled results equal the C ABI's.
-#   udpm_shards.sh [N [SPEED [QUEUE]]]  N shards (default 3); lcm-logplayer speed (default 0.3:
+# With "kill", shard 1 is killed (SIGKILL) a third into the stream: the others must take it for
+# dead (no status for 3 s) and the first live shard after it (2) count its pairs without a result
+# as lost: pairs published + pairs_lost_dead_shard = 29 exactly.
+#   udpm_shards.sh [N [SPEED [QUEUE [kill]]]]  N shards (default 3); lcm-logplayer speed (default 0.3:
 #                  the 10 Hz log at 3 Hz, about twice what one process sustains here, see
 #                  docs/LCM.md); queue per shard (default 32: this test checks the sharding,
 #                  not the CPU of a shared machine). Prints the throughput: pairs per second
 #                  from the first frame's to the last result's arrival at the logger.
 set -uo pipefail
-shards="${1:-3}" speed="${2:-0.3}" queue="${3:-32}"
+shards="${1:-3}" speed="${2:-0.3}" queue="${3:-32}" kill="${4:-}"
 frames=30
 skip() { echo "skipped: $*"; exit 77; }
 : "${LIDARFLOW_BRIDGE:?}" "${LIDARFLOW_LOG_CHECK:?}" "${LIDARFLOW_MAKE_BOT_CORE_LOG:?}" "${LIDARFLOW_TEST_TMP:?}"
@@ -23,7 +26,7 @@ done
 . "$(dirname "${BASH_SOURCE[0]}")/private_netns.sh"
 private_netns "$0" "$@"
 
-tmp="$LIDARFLOW_TEST_TMP/bridge_udpm_shards_$shards"
+tmp="$LIDARFLOW_TEST_TMP/bridge_udpm_shards_$shards$kill"
 rm -rf "$tmp" && mkdir -p "$tmp"
 l2c=$("$LIDARFLOW_MAKE_BOT_CORE_LOG" "$tmp/in.log" "$tmp" "$frames") || exit 1
 inputs=(--stereo-channel STEREO_CAMERA --lidar-channel VELODYNE_POINTS --calib "$tmp/calib_cam_to_cam.txt"
@@ -48,21 +51,39 @@ for ((i = 0; i < 300; ++i)); do
     sleep 0.1
 done
 sleep 0.3
-lcm-logplayer --lcm-url="$url" -s "$speed" "$tmp/in.log" >"$tmp/player.out" 2>&1 || { cat "$tmp/player.out"; exit 1; }
-# Wait for the pairs still in the shards' queues (each logs a line per published result).
+lcm-logplayer --lcm-url="$url" -s "$speed" "$tmp/in.log" >"$tmp/player.out" 2>&1 &
+player=$!
+if [ -n "$kill" ]; then
+    sleep "$(awk -v s="$speed" -v n="$frames" 'BEGIN { print n / 10 / s / 3 }')"
+    kill -KILL "${bridges[1]}"; wait "${bridges[1]}" 2>/dev/null
+    echo "killed shard 1"
+fi
+wait "$player" || { cat "$tmp/player.out"; exit 1; }
+# Wait for the pairs still in the shards' queues (each logs a line per published result) and,
+# with a dead shard, for its pairs to be counted as lost (a line per declaration with the pairs
+# pending then, and with --verbose one per later pair).
 pairs=$((frames - 1))
+accounted() {
+    local published lost
+    published=$(cat "$tmp"/bridge*.err | grep -c "published scene flow")
+    lost=$(cat "$tmp"/bridge*.err | sed -n 's/.*counted here as lost: \([0-9]*\) pair.*/\1/p; s/.*lost: its shard .* is dead/1/p' |
+           awk '{ n += $1 } END { print n + 0 }')
+    [ $((published + lost)) -ge "$pairs" ]
+}
 for ((i = 0; i < 450; ++i)); do
-    [ "$(cat "$tmp"/bridge*.err | grep -c "published scene flow")" -ge "$pairs" ] && break
+    accounted && break
     sleep 0.1
 done
 rc=0
-for b in "${bridges[@]}"; do
-    kill -INT "$b"; wait "$b" || rc=1
+for ((k = 0; k < shards; ++k)); do
+    [ -n "$kill" ] && [ "$k" = 1 ] && continue
+    kill -INT "${bridges[k]}"; wait "${bridges[k]}" || rc=1
 done
 sleep 0.3
 kill -INT "$logger"; wait "$logger"
 grep -hv "receive buffer\|multicast_setup\|^\s*$\|is smaller than\|published scene flow" "$tmp"/bridge*.err
 [ "$rc" = 0 ] || { echo "a bridge exited non-zero"; exit 1; }
 "$LIDARFLOW_LOG_CHECK" throughput "$tmp/run.log" --stereo-channel STEREO_CAMERA
+dead=(); [ -n "$kill" ] && dead=(--dead-shard 1)
 "$LIDARFLOW_LOG_CHECK" verify "$tmp/run.log" "${inputs[@]}" "${opts[@]}" --expect-pairs "$pairs" --check-every 7 \
-    --min-results 1
+    --min-results 1 "${dead[@]}"

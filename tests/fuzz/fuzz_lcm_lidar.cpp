@@ -17,5 +17,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (!std::isfinite(x)) std::abort();
     const lf_lidar_t v = s.view();
     if (v.count != s.xyz.size() / 3 || (v.count > 0 && !v.data)) std::abort();
+    // The LiDAR-frame form (as sent, for LF_LIDAR_POINTS_LIDAR) has the same points, all finite.
+    if (s.in_lidar_frame ? s.lidar_xyz.size() != s.xyz.size() : !s.lidar_xyz.empty()) std::abort();
+    for (float x : s.lidar_xyz)
+        if (!std::isfinite(x)) std::abort();
+    const lf_lidar_t w = s.lidar_frame_view();
+    if (w.kind != LF_LIDAR_POINTS_LIDAR || w.count != s.lidar_xyz.size() / 3) std::abort();
     return 0;
 }

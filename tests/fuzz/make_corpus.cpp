@@ -123,6 +123,9 @@ void lcm_seeds() {
         int16_t roles[2] = {BOT_CORE_IMAGES_T_LEFT, BOT_CORE_IMAGES_T_RIGHT};
         bot_core_images_t m{1000, 2, roles, ims};
         save("fuzz_lcm_bot_images", "gray_4x3_padded", encode(m, bot_core_images_t_encoded_size, bot_core_images_t_encode));
+        // The left one alone: a camera per channel (--left-channel).
+        save("fuzz_lcm_bot_image", "gray_4x3_padded_metadata",
+             encode(ims[0], bot_core_image_t_encoded_size, bot_core_image_t_encode));
         float p[3][3] = {{10, 1, -1}, {20, -2, 0.5f}, {5, 0, 0}};
         float *rows[3] = {p[0], p[1], p[2]};
         float intensity[3] = {0.1f, 0.2f, 0.3f};
@@ -190,10 +193,13 @@ void lcm_seeds() {
         s.stereo_lost_in_transport = 1;
         s.stereo_processed = 2;
         s.dropped_malformed = 1;
+        s.dropped_unpaired = i;
         s.queue_capacity = 2;
         s.shard_index = i;
         s.shard_count = 2;
         s.skipped_other_shard = i;
+        s.shards_dead = i;
+        s.pairs_lost_dead_shard = 3 * i;
         s.latency_mean_ms = 12.5f;
         s.last_error = const_cast<char *>(errors[i]);
         save("fuzz_lcm_status", i == 0 ? "no_error" : "with_error",
@@ -352,7 +358,8 @@ std::string outcome(F f) {
 int check_seeds() {
     int bad = 0;
     const char *targets[] = {"fuzz_lcm_stereo",     "fuzz_lcm_lidar",   "fuzz_lcm_calibration", "fuzz_lcm_scene_flow",
-                             "fuzz_lcm_status",     "fuzz_kitti_png",   "fuzz_kitti_calib",     "fuzz_kitti_velodyne"};
+                             "fuzz_lcm_status",     "fuzz_lcm_bot_image", "fuzz_kitti_png",     "fuzz_kitti_calib",
+                             "fuzz_kitti_velodyne"};
     for (const char *t : targets) {
         const std::string target = t;
         std::vector<fs::path> seeds;
@@ -396,6 +403,10 @@ int check_seeds() {
                                                           std::to_string(s.fields.stereo_lost_in_transport) +
                                                           " last_error '" + s.last_error + "'"
                                                     : ""));
+            } else if (target == "fuzz_lcm_bot_image") {
+                int64_t utime = 0;
+                const std::string err = bridge::check_bot_image(b.data(), b.size(), &utime);
+                r.emplace_back("check_bot_image", lcm(err, "ok utime " + std::to_string(utime)));
             } else if (target == "fuzz_kitti_png") {
                 const std::string p = seed.string();
                 r.emplace_back("read_disparity_png", outcome([&] {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -17,6 +18,10 @@
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
+#include "io/velo_to_left.hpp"
+#include "io/velodyne.hpp"
+#include "bot_core_pointcloud_t.h"
+#include "lidar/velodyne_protocol.hpp"
 #include "lidarflow_calibration_t.h"
 #include "lidarflow_lidar_t.h"
 #include "lidarflow_stereo_t.h"
@@ -29,12 +34,44 @@ struct Channels {
     std::string stereo, lidar, calibration;
 };
 
+// How a sweep goes on the wire: what a projection of the scan gives (sparse disparities), or the
+// raw sweep in the LiDAR frame as a Velodyne driver sends it (lidar_t with the transform, or
+// bot_core.pointcloud_t without one).
+enum class SweepWire { Disparity, LidarT, PointcloudT };
+
 // One KITTI id, loaded once and replayed as often as asked.
 struct Clip {
     std::string id;
     StereoCamera camera;
     pipeline::KittiFrame frame;
+    // Raw sweeps (SweepWire::LidarT / PointcloudT): Velodyne frame, t0 and t1 (empty when the
+    // folder has no scan at t1, as KITTI 2015), and Velodyne -> left rectified camera.
+    std::vector<io::VelodynePoint> raw[2];
+    cv::Matx44d lidar_to_camera = cv::Matx44d::eye();
 };
+
+// The transform lidar_t.lcm defines (Velodyne -> *left rectified* camera, camera 2's offset
+// included), the one the C ABI's lf_read_kitti_calibration gives.
+cv::Matx44d kitti_lidar_to_camera(const io::KittiLayout &layout, const std::string &id) {
+    return io::velo_to_left_rect(io::read_calib_cam_to_cam(layout.calib_cam_to_cam(id)),
+                                 io::read_calib_velo_to_cam(layout.calib_velo_to_cam(id)));
+}
+
+// Row-major, shortest text that reads back to the same doubles: the bridge's --lidar-to-camera.
+std::string matrix_text(const cv::Matx44d &T) {
+    std::string s;
+    char buf[32];
+    for (int i = 0; i < 16; ++i) {
+        std::snprintf(buf, sizeof buf, "%s%.17g", i ? " " : "", T.val[i]);
+        s += buf;
+    }
+    return s;
+}
+
+std::vector<io::VelodynePoint> read_raw_sweep(const std::string &path, int beams) {
+    io::VelodyneScan scan = io::read_velodyne_bin(path);
+    return beams > 0 ? lidar::keep_beams(scan.points, beams) : std::move(scan.points);
+}
 
 void publish_calibration(lcm_t *lcm, const Channels &ch, const StereoCamera &cam, int64_t utime, const cv::Size &size) {
     lidarflow_calibration_t m;
@@ -72,6 +109,51 @@ void publish_lidar(lcm_t *lcm, const Channels &ch, const SparseLidar &lidar, int
             "publish-kitti: publishing a LiDAR sweep failed");
 }
 
+// The sweep as a driver publishes it: points in the LiDAR frame, as read from the scan.
+void publish_raw_lidar(lcm_t *lcm, const Channels &ch, SweepWire wire, const std::vector<io::VelodynePoint> &points,
+                       const cv::Matx44d &lidar_to_camera, int64_t utime, int32_t seq) {
+    const size_t n = points.size();
+    require(n <= 50000000, ErrorCode::InvalidArgument, "publish-kitti: a sweep of more than 5e7 points");
+    int rc;
+    if (wire == SweepWire::LidarT) {
+        std::vector<float> x(n), y(n), z(n);
+        for (size_t i = 0; i < n; ++i) {
+            x[i] = points[i].x;
+            y[i] = points[i].y;
+            z[i] = points[i].z;
+        }
+        lidarflow_lidar_t m;
+        std::memset(&m, 0, sizeof m);
+        m.utime = utime;
+        m.frame = LIDARFLOW_LIDAR_T_FRAME_LIDAR;
+        std::memcpy(m.lidar_to_camera, lidar_to_camera.val, sizeof m.lidar_to_camera);
+        m.num_points = static_cast<int32_t>(n);
+        m.x = x.data();
+        m.y = y.data();
+        m.z = z.data();
+        rc = lidarflow_lidar_t_publish(lcm, ch.lidar.c_str(), &m);
+    } else {
+        std::vector<float> xyz(3 * n);
+        std::vector<float *> rows(n);
+        for (size_t i = 0; i < n; ++i) {
+            xyz[3 * i] = points[i].x;
+            xyz[3 * i + 1] = points[i].y;
+            xyz[3 * i + 2] = points[i].z;
+            rows[i] = &xyz[3 * i];
+        }
+        char frame_id[] = "velodyne";
+        bot_core_pointcloud_t m;
+        std::memset(&m, 0, sizeof m);
+        m.utime = utime;
+        m.seq = seq;
+        m.frame_id = frame_id;
+        m.n_points = static_cast<int32_t>(n);
+        m.points = rows.data();
+        rc = bot_core_pointcloud_t_publish(lcm, ch.lidar.c_str(), &m);
+    }
+    require(rc == 0, ErrorCode::Io, "publish-kitti: publishing a LiDAR sweep failed");
+}
+
 void publish_stereo(lcm_t *lcm, const Channels &ch, const cv::Mat &left, const cv::Mat &right, int64_t utime,
                     int32_t sequence, int64_t frame_number) {
     require(left.isContinuous() && right.isContinuous() && left.type() == right.type() &&
@@ -100,6 +182,9 @@ int run(int argc, char **argv) {
                {"lidar", true, "P    LiDAR protocol: paper (default) | velodyne | none"},
                {"points", true, "N    LiDAR points per map (paper: default 88; velodyne: thin to N, 0 = all)"},
                {"beams", true, "K    velodyne: keep K beams (default 0 = all)"},
+               {"lidar-frame", true, "F    disparity (default: the projected scan) | lidar (velodyne: the raw sweep)"},
+               {"lidar-type", true, "T    lidar-frame lidar as: lidar_t (default, with the transform) | pointcloud_t"},
+               {"print-lidar-to-camera", false, "print the bridge's --lidar-to-camera for the ids and exit"},
                {"lcm-url", true, "URL  LCM provider (default: $LCM_DEFAULT_URL or LCM's default)"},
                {"rate", true, "HZ   stereo frames per second (default 10; 0 = as fast as possible)"},
                {"loop", true, "N    play the ids N times (default 1)"},
@@ -112,15 +197,51 @@ int run(int argc, char **argv) {
         std::printf("Each id is one sequence of two frames (ID_10, ID_11), 1/rate apart; the sequence number\n"
                     "changes from id to id so that receivers never pair frames across a scene cut. Per frame\n"
                     "it publishes the LiDAR sweep (if the protocol gives one) before the stereo pair; the\n"
-                    "calibration goes out at the start of every sequence.\n");
+                    "calibration goes out at the start of every sequence.\n"
+                    "--lidar velodyne --lidar-frame lidar sends velodyne/ID.bin (and ID_11.bin where present)\n"
+                    "as a driver would: every point, in the Velodyne frame. As pointcloud_t the bridge needs\n"
+                    "  --lidar-to-camera \"$(lidarflow publish-kitti --root DIR --ids ID --print-lidar-to-camera)\"\n");
         return 0;
     }
     const std::string root = args.required("root");
+    const io::KittiLayout layout{root};
+    std::vector<std::string> ids = args.list("ids");
+    if (ids.empty()) ids = layout.frame_ids();
+    require(!ids.empty(), ErrorCode::InvalidArgument, "publish-kitti: no frames in " + root);
+    if (args.flag("print-lidar-to-camera")) {
+        // One bridge takes one --lidar-to-camera: ids from different drives need their own runs.
+        const cv::Matx44d T = kitti_lidar_to_camera(layout, ids[0]);
+        for (const std::string &id : ids)
+            require(kitti_lidar_to_camera(layout, id) == T, ErrorCode::InvalidArgument,
+                    "publish-kitti: ids " + ids[0] + " and " + id +
+                        " have different LiDAR -> camera transforms; print them one id at a time");
+        std::printf("%s\n", matrix_text(T).c_str());
+        return 0;
+    }
     pipeline::LidarInputOptions lidar_opt;
     lidar_opt.protocol = pipeline::parse_protocol(args.str("lidar", "paper"));
     const bool velodyne = lidar_opt.protocol == pipeline::LidarProtocol::Velodyne;
     lidar_opt.points = args.integer("points", velodyne ? 0 : 88);
     lidar_opt.beams = args.integer("beams", 0);
+    const std::string frame_name = args.str("lidar-frame", "disparity"), type_name = args.str("lidar-type", "lidar_t");
+    require(frame_name == "disparity" || frame_name == "lidar", ErrorCode::InvalidArgument,
+            "publish-kitti: --lidar-frame " + frame_name + ": expected disparity or lidar");
+    require(type_name == "lidar_t" || type_name == "pointcloud_t", ErrorCode::InvalidArgument,
+            "publish-kitti: --lidar-type " + type_name + ": expected lidar_t or pointcloud_t");
+    const SweepWire wire = frame_name == "disparity" ? SweepWire::Disparity
+                           : type_name == "lidar_t"  ? SweepWire::LidarT
+                                                     : SweepWire::PointcloudT;
+    require(wire != SweepWire::Disparity || type_name == "lidar_t", ErrorCode::InvalidArgument,
+            "publish-kitti: --lidar-type pointcloud_t carries points, not disparities: add --lidar-frame lidar");
+    if (wire != SweepWire::Disparity) {
+        require(velodyne, ErrorCode::InvalidArgument,
+                "publish-kitti: --lidar-frame lidar sends the raw Velodyne scans: it needs --lidar velodyne");
+        // A driver sends the whole sweep; thinning to N points is a property of the projection.
+        require(lidar_opt.points == 0, ErrorCode::InvalidArgument,
+                "publish-kitti: --points thins the projected scan; with --lidar-frame lidar the whole sweep goes "
+                "out (--beams K thins it by lasers)");
+        require(lidar_opt.beams >= 0, ErrorCode::InvalidArgument, "publish-kitti: --beams must be >= 0");
+    }
     const double rate = args.number("rate", 10.0);
     require(rate >= 0 && rate <= 1000, ErrorCode::InvalidArgument, "publish-kitti: --rate must be in [0, 1000]");
     const int loops = args.integer("loop", 1);
@@ -131,14 +252,28 @@ int run(int argc, char **argv) {
     const Channels ch{args.str("stereo-channel", "LIDARFLOW_STEREO"), args.str("lidar-channel", "LIDARFLOW_LIDAR"),
                       args.str("calib-channel", "LIDARFLOW_CALIB")};
 
-    const io::KittiLayout layout{root};
-    std::vector<std::string> ids = args.list("ids");
-    if (ids.empty()) ids = layout.frame_ids();
-    require(!ids.empty(), ErrorCode::InvalidArgument, "publish-kitti: no frames in " + root);
     std::vector<Clip> clips;
-    for (const std::string &id : ids)
-        clips.push_back({id, io::read_calib_cam_to_cam(layout.calib_cam_to_cam(id)).camera,
-                         pipeline::load_kitti_frame(root, id, lidar_opt)});
+    for (const std::string &id : ids) {
+        Clip c;
+        c.id = id;
+        c.camera = io::read_calib_cam_to_cam(layout.calib_cam_to_cam(id)).camera;
+        pipeline::LidarInputOptions images_only = lidar_opt;
+        if (wire != SweepWire::Disparity) images_only.protocol = pipeline::LidarProtocol::None;
+        c.frame = pipeline::load_kitti_frame(root, id, images_only);
+        if (wire != SweepWire::Disparity) {
+            c.lidar_to_camera = kitti_lidar_to_camera(layout, id);
+            // As the velodyne protocol: the scan at t1 only where the folder has one.
+            c.raw[0] = read_raw_sweep(layout.velodyne(id), lidar_opt.beams);
+            if (std::filesystem::exists(layout.velodyne_t1(id)))
+                c.raw[1] = read_raw_sweep(layout.velodyne_t1(id), lidar_opt.beams);
+        }
+        if (wire == SweepWire::PointcloudT && !clips.empty())
+            require(c.lidar_to_camera == clips[0].lidar_to_camera, ErrorCode::InvalidArgument,
+                    "publish-kitti: ids " + clips[0].id + " and " + id +
+                        " have different LiDAR -> camera transforms, and a pointcloud_t carries none (the bridge "
+                        "takes one --lidar-to-camera): publish them separately, or use --lidar-type lidar_t");
+        clips.push_back(std::move(c));
+    }
 
     const std::string url = args.str("lcm-url", "");
     lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
@@ -165,7 +300,13 @@ int run(int argc, char **argv) {
                 if (rate > 0) std::this_thread::sleep_until(wall_start + std::chrono::microseconds(frames * period_us));
                 if (t == 0) publish_calibration(lcm, ch, c.camera, utime, in.left0.size());
                 const SparseLidar &lidar = t == 0 ? in.lidar0 : in.lidar1;
-                if (lidar_opt.protocol != pipeline::LidarProtocol::None && !lidar.points.empty()) {
+                if (wire != SweepWire::Disparity) {
+                    if (!c.raw[t].empty()) {
+                        publish_raw_lidar(lcm, ch, wire, c.raw[t], c.lidar_to_camera, utime,
+                                          static_cast<int32_t>(sweeps));
+                        ++sweeps;
+                    }
+                } else if (lidar_opt.protocol != pipeline::LidarProtocol::None && !lidar.points.empty()) {
                     publish_lidar(lcm, ch, lidar, utime);
                     ++sweeps;
                 }

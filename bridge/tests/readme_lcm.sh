@@ -6,7 +6,7 @@
 # on the tree ctest was built from; rebuilding under a running ctest would relink the programs
 # in use). Inside a private network namespace (the blocks use udpm). Passes when every command
 # succeeds and each live bridge reports every frame processed at the walkthrough's rate
-# (nothing stale), with its results. About 5 minutes (the walkthrough's real-time rate).
+# (nothing stale), with its results. About 2 minutes (the walkthrough's real-time rate).
 #   readme_lcm.sh REPO_ROOT
 set -uo pipefail
 skip() { echo "skipped: $*"; exit 77; }
@@ -29,7 +29,8 @@ sed -i "s|^K=/path/to/kitti/training\$|K='$LIDARFLOW_KITTI_DIR'|" "$tmp/walkthro
 grep -q '^tools/dev.sh build$' "$tmp/walkthrough.sh" || fail "the walkthrough no longer starts with tools/dev.sh build"
 sed -i '/^tools\/dev.sh build$/d' "$tmp/walkthrough.sh"
 # Fail on the first command that fails, as a careful user would stop there.
-(cd "$repo" && bash -e "$tmp/walkthrough.sh") >"$tmp/out.txt" 2>&1 || { cat "$tmp/out.txt"; fail "a command failed"; }
+# Debian's python3 (with python3-numpy) first, as on the fresh bookworm machine the README is for.
+(cd "$repo" && PATH="/usr/bin:/bin:$PATH" bash -e "$tmp/walkthrough.sh") >"$tmp/out.txt" 2>&1 || { cat "$tmp/out.txt"; fail "a command failed"; }
 grep -v "receive buffer\|multicast_setup\|^\s*$\|is smaller than\|WARNING\|^Summary: " "$tmp/out.txt"
 # The live runs at the walkthrough's rate: each bridge (and shard) received the 4 frames and dropped none.
 stops=$(grep -c "stopped. stereo received 4, processed 4, dropped 0" "$tmp/out.txt")

@@ -330,10 +330,11 @@ class status_t(_Message):
                         "stereo_received", "stereo_lost_in_transport", "stereo_processed", "results_published",
                         "frames_with_lidar", "dropped_stale", "dropped_out_of_order", "dropped_no_calibration",
                         "dropped_calibration_mismatch", "dropped_malformed", "dropped_estimator_error",
-                        "dropped_shutdown", "skipped_other_shard", "lidar_received", "lidar_malformed",
+                        "dropped_shutdown", "dropped_unpaired", "skipped_other_shard", "lidar_received", "lidar_malformed",
                         "lidar_rejected", "calibration_received", "calibration_malformed")]
                     + [("queue_depth", "int32_t", None), ("queue_capacity", "int32_t", None), ("busy", "int8_t", None),
-                       ("shard_index", "int32_t", None), ("shard_count", "int32_t", None)]
+                       ("shard_index", "int32_t", None), ("shard_count", "int32_t", None),
+                       ("shards_dead", "int32_t", None), ("pairs_lost_dead_shard", "int64_t", None)]
                     + [(name, "float", None) for name in (
                         "latency_last_ms", "latency_mean_ms", "latency_max_ms", "compute_last_ms", "compute_mean_ms")]
                     + [("last_error", "string", None)])

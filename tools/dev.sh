@@ -2,7 +2,9 @@
 # SPDX-License-Identifier: MIT
 # Developer entry point: installs what is missing (Debian bookworm, apt-get), builds, and runs.
 #   tools/dev.sh demo        build + run the demo on the built-in synthetic scene
-#   tools/dev.sh test        build + run every test suite (what CI runs)
+#   tools/dev.sh test        build + run every test suite (what CI runs) but the "long" ones
+#   tools/dev.sh test-long   build + run the suites labelled "long" (real time: the README's LCM
+#                            walkthrough run verbatim, ~2.5 min)
 #   tools/dev.sh test-asan   the same under AddressSanitizer + UBSan (build-asan/)
 #   tools/dev.sh deps        only install the Debian packages
 #   tools/dev.sh build       only configure + build (build/)
@@ -105,7 +107,8 @@ case "${1:-}" in
     deps) deps ;;
     build) deps; build build ;;
     demo) deps; build build; shift; "$root/build/tools/lidarflow/lidarflow" demo --out "$root/demo-out" "$@" ;;
-    test) deps; build build; run_tests build ;;
+    test) deps; build build; run_tests build -LE '^long$' ;;
+    test-long) deps; build build; run_tests build -L '^long$' ;;
     test-asan)
         deps
         build build-asan -DLIDARFLOW_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARFLOW_BUILD_BENCH=OFF

@@ -475,6 +475,10 @@ void test_dead_shards(void **) {
     std::memset(&flow, 0, sizeof flow);
     flow.utime = 5000;
     flow.step = 1;
+    // Empty planes still need valid pointers: lcm-gen's encoder memcpy()s 0 bytes from them, and
+    // memcpy from NULL is undefined (UBSan stops there).
+    uint8_t no_bytes[1] = {0};
+    flow.u = flow.v = flow.d0 = flow.d1 = flow.valid = no_bytes;
     assert_int_equal(lidarflow_scene_flow_t_publish(rig.lcm, "LIDARFLOW_FLOW", &flow), 0);
     send_shard_status(rig, 1, 2);  // another split: ignored
     shard2_alive = false;

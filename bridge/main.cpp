@@ -245,7 +245,8 @@ int main(int argc, char **argv) {
     }
     if (!replay_in.empty() && !config.left_channel.empty()) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: --replay takes stereo frames from the stereo channel only "
-                             "(--left-channel/--right-channel are not implemented for it)\n");
+                             "(a log replays in lock-step per stereo message; pairing two camera channels waits on\n"
+                             "arrival times, which a log does not replay: use --left-channel/--right-channel live)\n");
         return 2;
     }
     struct sigaction sa;

@@ -2,6 +2,9 @@
 #pragma once
 // Small helpers shared by the benchmark programs (not part of the library).
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cstdlib>
@@ -10,6 +13,14 @@
 #include <vector>
 
 namespace lidarflow::bench {
+
+// Gives the heap's free pages back to the system (glibc keeps them after free()), so that the
+// next case's peak RSS does not include what the previous case left in the allocator.
+inline void release_free_heap() {
+#if defined(__GLIBC__)
+    malloc_trim(0);
+#endif
+}
 
 // Resets the kernel's peak-RSS counter (VmHWM) of this process; false where not permitted,
 // in which case peak_rss_mib() reports the process-lifetime peak.

@@ -125,4 +125,16 @@ void write_json(const std::string &path, const KittiEvaluation &ev) {
     require(!f.fail(), ErrorCode::Io, "cannot write " + path);
 }
 
+std::string to_json(const OutlierBreakdown &b) {
+    Json a = Json::array();
+    for (const OutlierRegion &r : b.regions) {
+        Json j;
+        j["family"] = r.family;
+        j["region"] = r.name;
+        j["occ"] = components(r.scores);
+        a.push_back(std::move(j));
+    }
+    return a.dump();
+}
+
 }  // namespace lidarflow::eval

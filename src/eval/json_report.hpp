@@ -13,6 +13,7 @@
 #include <string>
 
 #include "eval/kitti_eval.hpp"
+#include "eval/outlier_regions.hpp"
 
 namespace lidarflow::eval {
 
@@ -21,6 +22,10 @@ std::string to_json(const KittiEvaluation &ev);
 // Writes to_json(ev) to path (creating parent folders). Io on failure.
 void write_json(const std::string &path, const KittiEvaluation &ev);
 
-const char *mode_name(FillMode mode);  // "filled" / "est-only"
+const char *mode_name(FillMode mode);
+
+// An outlier breakdown as a JSON array: [{ "family", "region", "occ": COMPONENTS }, ...]
+// (Filled-mode counts over the region's pixels).
+std::string to_json(const OutlierBreakdown &b);  // "filled" / "est-only"
 
 }  // namespace lidarflow::eval

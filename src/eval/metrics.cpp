@@ -276,6 +276,24 @@ FrameScore evaluate_frame(const FrameGroundTruth &gt, const Estimate &est, const
     return f;
 }
 
+std::vector<ComponentScores> evaluate_masks(const GroundTruth &gt, const Estimate &est, FillMode mode,
+                                            const std::vector<cv::Mat1b> &masks) {
+    require(!gt.d0.empty(), ErrorCode::InvalidArgument, "ground truth d0 is empty");
+    const cv::Size size = gt.d0.size();
+    check_ground_truth(gt, size, "occ");
+    check_disparity(est.d0, size, "estimate d0");
+    check_disparity(est.d1, size, "estimate d1");
+    check_flow(est.flow, size, "estimate flow");
+    for (const cv::Mat1b &m : masks)
+        require(m.size() == size, ErrorCode::SizeMismatch, "region mask must be " + std::to_string(size.width) + "x" +
+                                                                std::to_string(size.height));
+    const Prepared e = prepare(est, mode);  // filled once for every mask
+    std::vector<ComponentScores> out;
+    out.reserve(masks.size());
+    for (const cv::Mat1b &m : masks) out.push_back(score(gt, e, mode, &m));
+    return out;
+}
+
 FrameScore evaluate_frame(const FrameGroundTruth &gt, const SceneFlowField &est, const EvalOptions &opt,
                           const DisparityMap *lidar_seeds, const std::string &id) {
     return evaluate_frame(gt, estimate_from_scene_flow(est), opt, lidar_seeds, id);

@@ -104,6 +104,12 @@ FrameScore evaluate_frame(const FrameGroundTruth &gt, const Estimate &est, const
 FrameScore evaluate_frame(const FrameGroundTruth &gt, const SceneFlowField &est, const EvalOptions &opt,
                           const DisparityMap *lidar_seeds = nullptr, const std::string &id = "");
 
+// Scores of one estimate on each of several pixel sets (masks: nonzero = in the set, each the
+// size of gt.d0), against one ground truth; the estimate is filled once (Filled mode). Inputs
+// are only read. Throws as evaluate_frame, and SizeMismatch for a mask of another size.
+std::vector<ComponentScores> evaluate_masks(const GroundTruth &gt, const Estimate &est, FillMode mode,
+                                            const std::vector<cv::Mat1b> &masks);
+
 // Mean over frames of a per-frame percentage / EPE; frames where it is undefined are skipped.
 struct MeanStat {
     double outlier_pct = 0, epe = 0;  // over frames with scored pixels (NaN when none)

@@ -23,6 +23,8 @@ struct KittiLayout {
     std::string gt_flow(const std::string &id, bool occ = true) const {
         return file(occ ? "flow_occ" : "flow_noc", id, 0);
     }
+    // Foreground objects of the t0 frame (0 = background), used by the devkit's bg/fg split.
+    std::string obj_map(const std::string &id) const { return file("obj_map", id, 0); }
     std::string calib_cam_to_cam(const std::string &id) const {
         return root + "/calib_cam_to_cam/" + checked(id) + ".txt";
     }

@@ -155,6 +155,21 @@ KittiFrame load_kitti_frame(const std::string &root, const std::string &id, cons
     return f;
 }
 
+namespace {
+
+// KITTI's obj_map of a frame when the layout has one (the shared frames do not; the full
+// training set does), else empty.
+cv::Mat1b load_objects(const io::KittiLayout &k, const std::string &id, const cv::Size &size) {
+    const std::string path = k.obj_map(id);
+    if (!std::filesystem::exists(path)) return {};
+    const cv::Mat m = io::read_image(path);
+    require(m.type() == CV_8UC1 && m.size() == size, ErrorCode::Format,
+            path + ": an object map must be an 8-bit gray PNG of the image's size");
+    return m;
+}
+
+}  // namespace
+
 KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     const io::KittiLayout k{o.root};
     const std::vector<std::string> ids = o.ids.empty() ? k.frame_ids() : o.ids;
@@ -244,6 +259,15 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         table.add("Interpolation", main_opt.use_lidar ? "LiDAR-Flow (Spars+LiDAR & Interp+LiDAR)" : "image-only",
                   eval::FillMode::Filled, gt, r.dense, seeds, id);
         if (image_rows) table.add("Interpolation", "image-only", eval::FillMode::Filled, gt, img.dense, seeds, id);
+
+        const cv::Mat1b objects = load_objects(k, id, frame.input.left0.size());
+        const bool any_seed = cv::countNonZero(seeds >= 0) > 0;
+        rep.outlier_regions += eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(r.dense),
+                                                       any_seed ? &seeds : nullptr, objects.empty() ? nullptr : &objects);
+        if (image_rows)
+            rep.outlier_regions_image_only +=
+                eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(img.dense), any_seed ? &seeds : nullptr,
+                                        objects.empty() ? nullptr : &objects);
     }
     for (ResultRow &row : rep.rows) row.evaluation.summary = eval::summarize(row.evaluation.frames);
     for (size_t i = 0; i < rep.rows.size(); ++i)
@@ -301,6 +325,13 @@ std::string format_report(const KittiRunReport &rep) {
           << pad(fmt(double(sm.pooled.seeds.occ.sf.n_total) / row.evaluation.frames.size(), 0), 9)
           << pad(fmt(double(sm.pooled.window.occ.sf.n_total) / row.evaluation.frames.size(), 0), 9) << "\n";
     }
+    if (!rep.outlier_regions.regions.empty())
+        s << "\n"
+          << eval::format_outlier_breakdown(rep.outlier_regions,
+                                            rep.outlier_regions_image_only.regions.empty()
+                                                ? nullptr
+                                                : &rep.outlier_regions_image_only,
+                                            "image-only");
     return s.str();
 }
 
@@ -323,7 +354,11 @@ std::string report_json(const KittiRunOptions &o, const KittiRunReport &rep) {
     for (size_t i = 0; i < rep.rows.size(); ++i)
         s << (i ? "," : "") << "\n    {\"group\": \"" << rep.rows[i].group << "\", \"name\": \"" << rep.rows[i].name
           << "\", \"evaluation\": " << eval::to_json(rep.rows[i].evaluation) << "}";
-    s << "\n  ]\n}\n";
+    s << "\n  ]";
+    if (!rep.outlier_regions.regions.empty()) s << ",\n  \"outlier_regions\": " << eval::to_json(rep.outlier_regions);
+    if (!rep.outlier_regions_image_only.regions.empty())
+        s << ",\n  \"outlier_regions_image_only\": " << eval::to_json(rep.outlier_regions_image_only);
+    s << "\n}\n";
     return s.str();
 }
 

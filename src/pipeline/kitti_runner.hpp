@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "eval/kitti_eval.hpp"
+#include "eval/outlier_regions.hpp"
 #include "pipeline/estimator.hpp"
 
 namespace lidarflow::pipeline {
@@ -62,6 +63,9 @@ struct KittiRunReport {
     std::vector<ResultRow> rows;  // the main result is rows.front() unless ablation
     std::vector<FrameTimings> timings;
     size_t main_row = 0;          // index of the row that was written to out
+    // Ablation runs to the final stage: where the final result's SF outliers are, pooled over
+    // frames, and the same for the image-only pipeline when the main one uses LiDAR.
+    eval::OutlierBreakdown outlier_regions, outlier_regions_image_only;
 };
 
 // Progress callback: (frame index, frame count, what is running now).

@@ -67,6 +67,7 @@ const OptionKey kKeys[] = {
     {"matching.min_coarsest_height", KeyType::Int, 8, 4096, false, Extra::None,
      LF_INT_FIELD(matching.min_coarsest_height)},
     {"matching.lazy_random_search", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.lazy_random_search)},
+    {"matching.settle_ratio", KeyType::Float, 0, 100, false, Extra::None, LF_FLOAT_FIELD(matching.settle_ratio)},
     {"matching.patch_radius", KeyType::Int, 0, 16, false, Extra::None, LF_INT_FIELD(matching.patch_radius)},
     {"matching.stop_ratio", KeyType::Float, 0, 1, false, Extra::None, LF_FLOAT_FIELD(matching.stop_ratio)},
     {"matching.max_flow", KeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_flow)},

@@ -42,6 +42,7 @@ static const key_t_ kKeys[] = {
     {"matching.max_levels", INT, 1, 10, 0, NONE, NAN},
     {"matching.min_coarsest_height", INT, 8, 4096, 0, NONE, NAN},
     {"matching.lazy_random_search", BOOL, 0, 1, 0, NONE, NAN},
+    {"matching.settle_ratio", FLOAT, 0, 100, 0, NONE, 1},
     {"matching.patch_radius", INT, 0, 16, 0, NONE, NAN},
     {"matching.stop_ratio", FLOAT, 0, 1, 0, NONE, NAN},
     {"matching.max_flow", FLOAT, 1, 10000, 0, NONE, NAN},

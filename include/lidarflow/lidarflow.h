@@ -132,6 +132,9 @@ typedef struct lf_options lf_options_t;
  *   "matching.stop_ratio"       float [0, 1]
  *   "matching.lazy_random_search" 0/1  after a level's first iteration, random search only
  *                                      for seeds whose match changed in the last visit
+ *   "matching.settle_ratio"     float [0, 100]    the same for the flow and d0 searches only,
+ *                                                 and only for seeds whose cost is at most this
+ *                                                 x their neighbours' mean (0 = off; default 1)
  *   "matching.max_flow"         float [1, 10000]
  *   "matching.max_disparity"    float [1, 10000]
  *   "matching.const2_abs"       float [0, 10000]

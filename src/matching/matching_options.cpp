@@ -42,6 +42,8 @@ void MatchingOptions::validate() const {
     check(iterations >= 1 && iterations <= 100, "iterations must be in [1, 100]");
     check(std::isfinite(stop_ratio) && stop_ratio >= 0.0f && stop_ratio <= 1.0f,
           "stop_ratio must be in [0, 1]");
+    check(std::isfinite(settle_ratio) && settle_ratio >= 0.0f && settle_ratio <= 100.0f,
+          "settle_ratio must be in [0, 100]");
     check(std::isfinite(max_flow) && max_flow >= 1.0f, "max_flow must be >= 1");
     check(std::isfinite(max_disparity) && max_disparity >= 1.0f, "max_disparity must be >= 1");
     check(sift.dim == 128 || sift.dim == 64, "sift.dim must be 128 or 64");

@@ -518,15 +518,26 @@ bool Engine::process_seed(int i, int iteration, bool consider_all_in_strip) {
         visited_[i] = iteration;
         return false;
     }
+    // Settled: no change since the last (failed) random search and no costlier than the
+    // neighbours: skip the flow and d0 searches, keep d1's (matching_options.hpp, settle_ratio).
+    bool settled = false;
+    if (opt_.settle_ratio > 0 && !improved && !explore_[i]) {
+        float sum = 0;
+        int cnt = 0;
+        for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k, ++cnt) sum += best_[g.nb[k]].cost;
+        settled = cnt > 0 && best.cost * static_cast<float>(cnt) <= opt_.settle_ratio * sum;
+    }
     Rng rng(opt_.random_seed, level_, iteration, i);
-    for (int mag = iround(radius_[i]); mag >= 1; mag /= 2) {
-        State c = best.s;
-        c.u += static_cast<float>(rng.sym(mag));
-        c.v += static_cast<float>(rng.sym(mag));
-        improved |= try_candidate(i, c, best, d1case);
+    if (!settled) {
+        for (int mag = iround(radius_[i]); mag >= 1; mag /= 2) {
+            State c = best.s;
+            c.u += static_cast<float>(rng.sym(mag));
+            c.v += static_cast<float>(rng.sym(mag));
+            improved |= try_candidate(i, c, best, d1case);
+        }
     }
     const bool d0_fixed = opt_.use_lidar && si.lidar >= 0;
-    if (!d0_fixed) {
+    if (!d0_fixed && !settled) {
         for (int mag = iround(radius_d0_[i]); mag >= 1; mag /= 2) {
             State c = best.s;
             c.d0 += static_cast<float>(rng.sym(mag));

@@ -20,12 +20,13 @@ struct Golden {
     const char *id;
     double sf, d0;  // recorded SF and D0 outliers [%] (occ), lidarflow kitti --lidar paper
 };
-// Recorded 2026-11-25 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1).
-// Single seeds spread by about +-0.5 points per frame: over seeds 1-8 the mean SF is 11.47 %
-// (10.22 / 12.72), so the tolerance and the bound on the mean below allow for that.
-constexpr Golden kGolden[] = {{"000002", 10.53, 6.59}, {"000003", 12.96, 8.35}};
+// Recorded 2026-11-30 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1),
+// after pixels leaving the image started to follow the rigid background (11.47 -> 10.99 % over
+// seeds 1-8). Single seeds spread by about +-0.5 points per frame: over seeds 1-8 the mean SF is
+// 10.99 % (10.06 / 11.92), so the tolerance and the bound on the mean below allow for that.
+constexpr Golden kGolden[] = {{"000002", 10.45, 6.56}, {"000003", 12.00, 8.43}};
 constexpr double kTolerance = 1.0;  // points; covers float differences across CPUs/compilers
-constexpr double kMeanBound = 12.0;  // the paper's 11.52 % plus the seed spread
+constexpr double kMeanBound = 11.5;  // the seed mean plus the seed spread (the paper: 11.52 %)
 
 std::string g_root;
 

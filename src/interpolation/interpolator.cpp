@@ -662,6 +662,12 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             chosen[static_cast<size_t>(pi) * kNumChannels + c] = pick;
         }
     }
+    // Only the rigid model (camera known): it predicts where a background point goes from its
+    // depth; the calibration-free one also explained independently moving regions that leave
+    // the image (the planar test scene: flow EPE 0.24 -> 0.31 px with it).
+    const bool exits_follow_background =
+        o.exits_follow_background && subtract_d0 && res.ego.valid && res.ego.calibrated;
+    const auto inside = [w, h](float tx, float ty) { return tx >= 0 && ty >= 0 && tx <= w - 1 && ty <= h - 1; };
 #pragma omp parallel for num_threads(o.num_threads) schedule(static)
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -676,6 +682,14 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             res.dense.d1(y, x) = std::max(0.0f, d1e + m1.p[0].at(fx, fy));
             res.dense.u(y, x) = ue + mf.p[0].at(fx, fy);
             res.dense.v(y, x) = ve + mf.p[1].at(fx, fy);
+            // Leaving the image: no match can exist there, so the superpixel's model is an
+            // extrapolation; when the background agrees that the point leaves, it decides.
+            if (exits_follow_background && !inside(fx + ue, fy + ve) &&
+                !inside(fx + res.dense.u(y, x), fy + res.dense.v(y, x))) {
+                res.dense.d1(y, x) = std::max(0.0f, d1e);
+                res.dense.u(y, x) = ue;
+                res.dense.v(y, x) = ve;
+            }
             const size_t base = static_cast<size_t>(sp.labels(y, x)) * kNumChannels;
             res.dense.confidence(y, x) = (share[base] + share[base + 1] + share[base + 2]) / 3.0f;
         }

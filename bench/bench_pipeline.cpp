@@ -152,7 +152,7 @@ void print_scores(const char *label, const eval::FrameScore &s, double seconds) 
 
 }  // namespace
 
-int main(int argc, char **argv) {
+int run_bench(int argc, char **argv) {
     const Args a = parse(argc, argv);
     const std::vector<Case> cases = load_cases(a);
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
@@ -217,4 +217,15 @@ int main(int argc, char **argv) {
         std::printf("  time ratio lidarflow / baseline: %.1fx\n", bench::median(total) / bench::median(base));
     }
     return 0;
+}
+
+// A bad argument or a missing or corrupt frame is an error message and exit status 1, not an
+// abort.
+int main(int argc, char **argv) {
+    try {
+        return run_bench(argc, argv);
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "bench_pipeline: %s\n", e.what());
+        return 1;
+    }
 }

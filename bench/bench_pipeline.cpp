@@ -158,6 +158,7 @@ int run_bench(int argc, char **argv) {
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(a.preset);
     opt.threads = a.threads;
+    opt.keep_stage_fields = false;  // as the C ABI: only the dense result is read
     const pipeline::Estimator estimator(opt);
     std::printf("bench_pipeline: preset %s, %d thread(s), median of %d run(s), %u hardware threads\n",
                 a.preset.c_str(), a.threads, a.runs, std::thread::hardware_concurrency());

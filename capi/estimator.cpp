@@ -59,7 +59,9 @@ LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *ca
         const Calibration cal = convert_calibration(*calibration);
         const OptionValues defaults;
         const OptionValues &values = options ? options->values : defaults;
-        *out = new lf_estimator(values.estimator, cal);
+        lidarflow::pipeline::EstimatorOptions estimator_options = values.estimator;
+        estimator_options.keep_stage_fields = false;  // a result holds the output field only
+        *out = new lf_estimator(estimator_options, cal);
         return static_cast<int32_t>(LF_OK);
     });
 }

@@ -3,6 +3,7 @@
 // frames are brought down (images, LiDAR, camera), how fields come back up, and the complete
 // estimator at half resolution on a synthetic scene.
 #include <cmath>
+#include <utility>
 
 #include "eval/metrics.hpp"
 #include "pipeline/estimator.hpp"
@@ -135,6 +136,17 @@ void half_resolution_estimator(void **) {
     const double sf = 100.0 * bad / n;
     std::printf("half resolution: SF outliers %.2f %% on %ld pixels\n", sf, n);
     assert_true(sf < 25.0);
+    // Only the output kept (the C ABI's setting): the same output, the other fields empty.
+    o.keep_stage_fields = false;
+    const EstimatorResult lean = Estimator(o).run(in);
+    for (const auto &[a, b] : {std::pair{&lean.dense.d0, &r.dense.d0}, {&lean.dense.d1, &r.dense.d1},
+                               {&lean.dense.u, &r.dense.u}, {&lean.dense.v, &r.dense.v}})
+        assert_int_equal(cv::norm(*a, *b, cv::NORM_INF), 0);
+    assert_true(lean.forward.u.empty() && lean.after_fb.u.empty() && lean.sparse.u.empty());
+    o.last_stage = Stage::Sparse;
+    const EstimatorResult sparse_only = Estimator(o).run(in);
+    assert_int_equal(sparse_only.output().width(), 320);
+    assert_true(sparse_only.forward.u.empty() && sparse_only.dense.u.empty());
     EstimatorOptions bad_scale;
     bad_scale.processing_scale = 0.1;
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { Estimator e(bad_scale); }));

@@ -160,7 +160,12 @@ EstimatorResult Estimator::run(const FrameInput &frame, StreamCache *cache) cons
     EstimatorResult r = run_native(small, cache);
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
+    const SceneFlowField *const out = &r.output();
     for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
+        if (!options_.keep_stage_fields && f != out) {
+            *f = SceneFlowField();
+            continue;
+        }
         *f = upscale_field(*f, W, H);
         if (options_.use_lidar && f != &r.backward) restore_lidar_d0(*f, frame.lidar0);
     }

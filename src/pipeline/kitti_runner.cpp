@@ -181,6 +181,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     EstimatorOptions main_opt = o.estimator;
     main_opt.use_lidar = o.lidar.protocol != LidarProtocol::None && o.estimator.use_lidar;
     const Stage last = main_opt.last_stage;
+    main_opt.keep_stage_fields = o.ablation;  // the Table I rows read every stage's field
     const Estimator estimator(main_opt);
     // The image-only pipeline (the SceneFlowFields-style comparison rows).
     EstimatorOptions image_opt = main_opt;

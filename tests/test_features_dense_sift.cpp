@@ -209,6 +209,8 @@ void huge_page_allocator_blocks(void **) {
     uint8_t *small = a.allocate(100);
     small[99] = 1;
     a.deallocate(small, 100);
+#if !LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC
+    // (Under the sanitizers their allocator aborts on such a size unless told otherwise.)
     bool threw = false;
     try {
         a.deallocate(a.allocate(std::size_t(1) << 62), std::size_t(1) << 62);
@@ -216,6 +218,7 @@ void huge_page_allocator_blocks(void **) {
         threw = true;
     }
     assert_true(threw);
+#endif
 }
 
 }  // namespace

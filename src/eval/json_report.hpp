@@ -22,10 +22,10 @@ std::string to_json(const KittiEvaluation &ev);
 // Writes to_json(ev) to path (creating parent folders). Io on failure.
 void write_json(const std::string &path, const KittiEvaluation &ev);
 
-const char *mode_name(FillMode mode);
+const char *mode_name(FillMode mode);  // "filled" / "est-only"
 
 // An outlier breakdown as a JSON array: [{ "family", "region", "occ": COMPONENTS }, ...]
 // (Filled-mode counts over the region's pixels).
-std::string to_json(const OutlierBreakdown &b);  // "filled" / "est-only"
+std::string to_json(const OutlierBreakdown &b);
 
 }  // namespace lidarflow::eval

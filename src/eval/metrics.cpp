@@ -51,6 +51,12 @@ void check_ground_truth(const GroundTruth &gt, const cv::Size &size, const std::
     check_flow(gt.flow, size, "ground truth flow (" + tag + ")");
 }
 
+void check_estimate(const Estimate &est, const cv::Size &size) {
+    check_disparity(est.d0, size, "estimate d0");
+    check_disparity(est.d1, size, "estimate d1");
+    check_flow(est.flow, size, "estimate flow");
+}
+
 // The estimate as the devkit holds it: unfilled maps (for validity / density) and the maps the
 // errors are taken from (filled in Filled mode; in EstimateOnly mode only valid pixels are
 // scored, so the unfilled maps serve).
@@ -143,12 +149,8 @@ RegionScores score_region(const FrameGroundTruth &gt, const Prepared &e, FillMod
 }
 
 void add_region(RegionScores &acc, const RegionScores &r) {
-    for (auto [a, b] : {std::pair{&acc.occ, &r.occ}, std::pair{&acc.noc, &r.noc}}) {
-        a->d0 += b->d0;
-        a->d1 += b->d1;
-        a->fl += b->fl;
-        a->sf += b->sf;
-    }
+    acc.occ += r.occ;
+    acc.noc += r.noc;
 }
 
 void add_mean(MeanStat &m, const Counts &c) {
@@ -220,6 +222,14 @@ Counts &Counts::operator+=(const Counts &o) {
     return *this;
 }
 
+ComponentScores &ComponentScores::operator+=(const ComponentScores &o) {
+    d0 += o.d0;
+    d1 += o.d1;
+    fl += o.fl;
+    sf += o.sf;
+    return *this;
+}
+
 Estimate estimate_from_scene_flow(const SceneFlowField &sf) {
     require(!sf.u.empty(), ErrorCode::InvalidArgument, "scene flow estimate is empty");
     const cv::Size size = sf.u.size();
@@ -249,9 +259,7 @@ FrameScore evaluate_frame(const FrameGroundTruth &gt, const Estimate &est, const
     const cv::Size size = gt.occ.d0.size();
     check_ground_truth(gt.occ, size, "occ");
     if (gt.has_noc) check_ground_truth(gt.noc, size, "noc");
-    check_disparity(est.d0, size, "estimate d0");
-    check_disparity(est.d1, size, "estimate d1");
-    check_flow(est.flow, size, "estimate flow");
+    check_estimate(est, size);
     if (lidar_seeds) {
         check_disparity(*lidar_seeds, size, "LiDAR seed map");
         require(opt.window >= 1 && opt.window % 2 == 1, ErrorCode::InvalidArgument,
@@ -281,9 +289,7 @@ std::vector<ComponentScores> evaluate_masks(const GroundTruth &gt, const Estimat
     require(!gt.d0.empty(), ErrorCode::InvalidArgument, "ground truth d0 is empty");
     const cv::Size size = gt.d0.size();
     check_ground_truth(gt, size, "occ");
-    check_disparity(est.d0, size, "estimate d0");
-    check_disparity(est.d1, size, "estimate d1");
-    check_flow(est.flow, size, "estimate flow");
+    check_estimate(est, size);
     for (const cv::Mat1b &m : masks)
         require(m.size() == size, ErrorCode::SizeMismatch, "region mask must be " + std::to_string(size.width) + "x" +
                                                                 std::to_string(size.height));

@@ -70,6 +70,8 @@ struct Counts {
 
 struct ComponentScores {
     Counts d0, d1, fl, sf;
+
+    ComponentScores &operator+=(const ComponentScores &o);
 };
 
 // One image region, scored against the occ and (when given) the noc ground truth.

@@ -12,13 +12,6 @@
 namespace lidarflow::eval {
 namespace {
 
-void add_scores(ComponentScores &a, const ComponentScores &b) {
-    a.d0 += b.d0;
-    a.d1 += b.d1;
-    a.fl += b.fl;
-    a.sf += b.sf;
-}
-
 std::string pct(double num, double den) {
     if (!(den > 0)) return "-";
     char buf[32];
@@ -35,7 +28,7 @@ OutlierBreakdown &OutlierBreakdown::operator+=(const OutlierBreakdown &o) {
         bool found = false;
         for (OutlierRegion &mine : regions)
             if (mine.family == r.family && mine.name == r.name) {
-                add_scores(mine.scores, r.scores);
+                mine.scores += r.scores;
                 found = true;
                 break;
             }

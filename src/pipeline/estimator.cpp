@@ -147,26 +147,29 @@ Estimator::Estimator(const EstimatorOptions &options)
 
 EstimatorResult Estimator::run(const FrameInput &frame) const { return run(frame, nullptr); }
 
+EstimatorResult Estimator::drop_stage_fields(EstimatorResult r) const {
+    if (options_.keep_stage_fields) return r;
+    const SceneFlowField *const out = &r.output();
+    for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense})
+        if (f != out) *f = SceneFlowField();
+    return r;
+}
+
 EstimatorResult Estimator::run(const FrameInput &frame, StreamCache *cache) const {
     check_frame(frame);
-    if (options_.processing_scale >= 1.0) return run_native(frame, cache);
+    if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
-    if (size.width >= W && size.height >= H) return run_native(frame, cache);
+    if (size.width >= W && size.height >= H) return drop_stage_fields(run_native(frame, cache));
     auto t = Clock::now();
     const FrameInput small = downscale_frame(frame, size);
     const double t_down = seconds_since(t);
-    EstimatorResult r = run_native(small, cache);
+    EstimatorResult r = drop_stage_fields(run_native(small, cache));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
-    const SceneFlowField *const out = &r.output();
     for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
-        if (!options_.keep_stage_fields && f != out) {
-            *f = SceneFlowField();
-            continue;
-        }
-        *f = upscale_field(*f, W, H);
+        *f = upscale_field(*f, W, H);  // empty fields stay empty
         if (options_.use_lidar && f != &r.backward) restore_lidar_d0(*f, frame.lidar0);
     }
     r.timings.push_back({"upscale", seconds_since(t)});

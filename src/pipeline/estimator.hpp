@@ -39,9 +39,8 @@ struct EstimatorOptions {
     // are taken at full resolution and scaled with it; the other pixel options are not.
     double processing_scale = 1.0;
     // Whether EstimatorResult holds every stage's field, or only output()'s (the others stay
-    // empty). At processing_scale < 1 each kept field is brought back to full resolution:
-    // 0.12-0.14 s of the `fast` preset's ~0.8 s per KITTI pair went into the five fields
-    // nobody reads. The C ABI handle (and so the bridge and Python) reads only the output and
+    // empty, and are not brought back to full resolution at processing_scale < 1: that took
+    // 0.12-0.14 s of the `fast` preset's ~0.8 s per KITTI pair for five fields nobody read). The C ABI handle (and so the bridge and Python) reads only the output and
     // sets this to false.
     bool keep_stage_fields = true;
 
@@ -134,6 +133,8 @@ public:
 
 private:
     EstimatorResult run_native(const FrameInput &frame, StreamCache *cache) const;
+    // Empties every field but output() unless options_.keep_stage_fields.
+    EstimatorResult drop_stage_fields(EstimatorResult r) const;
 
     EstimatorOptions options_;
     EstimatorOptions stage_options_;  // options_ with search ranges at processing_scale

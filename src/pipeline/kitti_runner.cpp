@@ -262,13 +262,13 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         if (image_rows) table.add("Interpolation", "image-only", eval::FillMode::Filled, gt, img.dense, seeds, id);
 
         const cv::Mat1b objects = load_objects(k, id, frame.input.left0.size());
-        const bool any_seed = cv::countNonZero(seeds >= 0) > 0;
-        rep.outlier_regions += eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(r.dense),
-                                                       any_seed ? &seeds : nullptr, objects.empty() ? nullptr : &objects);
-        if (image_rows)
-            rep.outlier_regions_image_only +=
-                eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(img.dense), any_seed ? &seeds : nullptr,
-                                        objects.empty() ? nullptr : &objects);
+        const auto breakdown = [&](const SceneFlowField &dense) {
+            return eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(dense),
+                                           cv::countNonZero(seeds >= 0) > 0 ? &seeds : nullptr,
+                                           objects.empty() ? nullptr : &objects);
+        };
+        rep.outlier_regions += breakdown(r.dense);
+        if (image_rows) rep.outlier_regions_image_only += breakdown(img.dense);
     }
     for (ResultRow &row : rep.rows) row.evaluation.summary = eval::summarize(row.evaluation.frames);
     for (size_t i = 0; i < rep.rows.size(); ++i)

@@ -61,6 +61,7 @@ const OptionKey kKeys[] = {
      [](O &o, int64_t v) { o.matching.d1_terms = v ? matching::D1Terms::ReferenceAnchored : matching::D1Terms::Paper; },
      nullptr, nullptr},
     {"matching.grid_step", KeyType::Int, 1, 32, false, Extra::None, LF_INT_FIELD(matching.grid_step)},
+    {"matching.backward_grid_step", KeyType::Int, 0, 32, false, Extra::None, LF_INT_FIELD(matching.backward_grid_step)},
     {"matching.iterations", KeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.iterations)},
     {"matching.thin_from_level", KeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.thin_from_level)},
     {"matching.max_levels", KeyType::Int, 1, 10, false, Extra::None, LF_INT_FIELD(matching.max_levels)},

@@ -37,6 +37,7 @@ static const key_t_ kKeys[] = {
     {"matching.keep_disparity_change", BOOL, 0, 1, 0, NONE, 1},
     {"matching.d1_terms_anchored", BOOL, 0, 1, 0, NONE, 0},
     {"matching.grid_step", INT, 1, 32, 0, NONE, NAN},
+    {"matching.backward_grid_step", INT, 0, 32, 0, NONE, 0},
     {"matching.iterations", INT, 1, 100, 0, NONE, NAN},
     {"matching.thin_from_level", INT, 1, 100, 0, NONE, NAN},
     {"matching.max_levels", INT, 1, 10, 0, NONE, NAN},

@@ -217,6 +217,34 @@ void expect_error(ErrorCode code, const std::function<void()> &fn) {
     }
 }
 
+// The backward direction may use a coarser seed grid (it only serves the round-trip check):
+// the forward direction is untouched, the backward one has the coarser grid, keeps the t1
+// LiDAR rules and the thread independence, and its own step equal to grid_step changes nothing.
+void backward_grid_step(void **) {
+    MatchingOptions base = small(MatchVariant::Full);
+    MatchingOptions coarse = base;
+    coarse.backward_grid_step = 6;
+    assert_true(same_field(match_scene_flow(input(), base, Direction::Forward).dense,
+                           match_scene_flow(input(), coarse, Direction::Forward).dense));
+    const MatchResult fine = match_scene_flow(input(), base, Direction::Backward);
+    coarse.threads = 1;
+    const MatchResult a = match_scene_flow(input(), coarse, Direction::Backward);
+    coarse.threads = 3;
+    assert_true(same_field(a.dense, match_scene_flow(input(), coarse, Direction::Backward).dense));
+    assert_int_equal(fine.grid_width, scene().left0.cols / base.grid_step);
+    assert_int_equal(a.grid_width, scene().left0.cols / 6);
+    assert_int_equal(a.grid_height, scene().left0.rows / 6);
+    for (const LidarPoint &p : scene().lidar1.points) assert_true(a.dense.d0(p.y, p.x) == p.disparity);
+    MatchingOptions same = base;
+    same.backward_grid_step = base.grid_step;
+    assert_true(same_field(fine.dense, match_scene_flow(input(), same, Direction::Backward).dense));
+    MatchingOptions bad = base;
+    bad.backward_grid_step = -1;
+    expect_error(ErrorCode::InvalidArgument, [&] { bad.validate(); });
+    bad.backward_grid_step = 33;
+    expect_error(ErrorCode::InvalidArgument, [&] { bad.validate(); });
+}
+
 void validates_input(void **) {
     const MatchingOptions o = small(MatchVariant::Full);
     expect_error(ErrorCode::SizeMismatch, [&] {
@@ -292,6 +320,7 @@ int main() {
         cmocka_unit_test(deterministic),
         cmocka_unit_test(thinned_coarse_levels),
         cmocka_unit_test(lidar_d0_rule_keeps_disparity_change),
+        cmocka_unit_test(backward_grid_step),
         cmocka_unit_test(validates_input),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

@@ -123,6 +123,9 @@ typedef struct lf_options lf_options_t;
  *   "matching.d1_terms_anchored" 0/1  D_l^1 cases use E(l0,r1) instead of the paper's E(l1,r1)
  *                                   (default 0)
  *   "matching.grid_step"        int   [1, 32]     seed grid step
+ *   "matching.backward_grid_step" int [0, 32]     seed grid step of the backward direction,
+ *                                                 which only serves the round-trip check
+ *                                                 (0 = grid_step; preset "balanced": 6)
  *   "matching.iterations"       int   [1, 100]    PatchMatch iterations per level
  *   "matching.thin_from_level"  int   [1, 100]    from this pyramid level on, each coarser
  *                                                 level keeps every 2nd seed per axis

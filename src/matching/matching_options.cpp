@@ -37,6 +37,7 @@ void MatchingOptions::validate() const {
     check(min_coarsest_height >= 8, "min_coarsest_height must be >= 8");
     check(max_levels >= 1 && max_levels <= 10, "max_levels must be in [1, 10]");
     check(grid_step >= 1 && grid_step <= 32, "grid_step must be in [1, 32]");
+    check(backward_grid_step >= 0 && backward_grid_step <= 32, "backward_grid_step must be in [0, 32]");
     check(thin_from_level >= 1 && thin_from_level <= 100, "thin_from_level must be in [1, 100]");
     check(min_level_seeds >= 1, "min_level_seeds must be >= 1");
     check(iterations >= 1 && iterations <= 100, "iterations must be in [1, 100]");

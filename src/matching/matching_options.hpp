@@ -68,6 +68,15 @@ struct MatchingOptions {
     // Seeds on a regular grid of this step [px] at full resolution; the same seeds, scaled, are
     // used on every level (CPM).
     int grid_step = 3;
+    // Seed grid of the backward direction (0 = grid_step): the backward field only serves the
+    // round-trip check of stage 2b, where a coarser grid is paired with a wider search for the
+    // best round trip (consistency fb_search_radius 2 for a 6 px grid). Measured, final SF means,
+    // step 6 + radius 2 against the default (3 + 1): paper protocol seeds 1-8 11.11 vs 10.99 %,
+    // Velodyne seeds 1-4 7.67 vs 7.84 %, image-only seeds 1-4 16.01 vs 15.53 %, synthetic frames
+    // 0-3 x seeds 1-4 9.64 vs 9.49 %; radius 2 alone 11.10 % (seeds 1-4); -14 % user CPU of
+    // `kitti --stage consistency`. A trade, so only `balanced` takes it (11.13 -> 11.29 %).
+    // Step 9 + radius 3: 11.84 % (seeds 1-4); in `fast` (6 px grid) 9 or 12 cost 0.8 / 2.5 points.
+    int backward_grid_step = 0;
     // Coarse levels need fewer seeds: from this pyramid level on (0 = full resolution; >= 1),
     // each coarser level keeps every second grid node per axis (stride 2, 4, ...). A large value
     // keeps every seed on every level, as CPM does. Measured (final SF, KITTI 000002/3, mean of

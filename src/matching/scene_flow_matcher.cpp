@@ -152,7 +152,7 @@ private:
     void update_radii(int l);
 
     const MatcherData &m_;
-    const MatchingOptions &opt_;
+    MatchingOptions opt_;  // a copy: the backward direction may use its own seed grid
     int slot_img_[4];  // slot -> physical image index
     const std::vector<LidarPoint> &ref_lidar_;
     const std::vector<LidarPoint> &tgt_lidar_;
@@ -193,6 +193,7 @@ Engine::Engine(const MatcherData &m, Direction dir)
       tgt_lidar_(dir == Direction::Forward ? m.lidar[1] : m.lidar[0]),
       shape_(m.opt.patch_radius, m.opt.patch_step) {
     const bool fwd = dir == Direction::Forward;
+    if (!fwd && opt_.backward_grid_step > 0) opt_.grid_step = opt_.backward_grid_step;
     slot_img_[kL0] = fwd ? 0 : 2;
     slot_img_[kR0] = fwd ? 1 : 3;
     slot_img_[kL1] = fwd ? 2 : 0;

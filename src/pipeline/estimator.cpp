@@ -115,6 +115,9 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
     if (name == "default") return o;
     if (name == "balanced") {
         o.matching.thin_from_level = 1;  // every level below full resolution thinned
+        // A coarser backward grid with a wider round-trip search (matching_options.hpp).
+        o.matching.backward_grid_step = 6;
+        o.consistency.fb_search_radius = 2;
         return o;
     }
     if (name == "fast") {

@@ -5,7 +5,9 @@
 //   for the shared KITTI frames (paper LiDAR protocol) and the built-in synthetic scene.
 //
 //   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--preset NAME] [--no-synth]
-//                  [--no-kitti]
+//                  [--no-kitti] [--heap keep|glibc]
+// --heap: the heap policy of the project's programs (keep, as the CLI and the bridge) or glibc's
+// defaults (as an application that embeds the library without configuring malloc).
 // Also measured: a stream (Estimator::run with a StreamCache) alternating each frame pair with its
 // time-reversed pair, so every run after the first starts from the previous run's t1 images.
 // DIR defaults to $LIDARFLOW_KITTI_DIR; without it only the synthetic scene is measured.
@@ -24,6 +26,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "bench_util.hpp"
+#include "heap_policy.hpp"
 #include "eval/kitti_eval.hpp"
 #include "eval/metrics.hpp"
 #include "io/kitti_layout.hpp"
@@ -48,11 +51,13 @@ struct Args {
     int runs = 3, threads = 2;
     std::string preset = "default";
     bool synth = true, kitti = true;
+    bool keep_heap = true;
 };
 
 [[noreturn]] void usage(const char *msg) {
     std::fprintf(stderr, "bench_pipeline: %s\nusage: bench_pipeline [--root DIR] [--ids A,B] [--runs N] "
-                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti]\n", msg);
+                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti] [--heap keep|glibc]\n",
+                 msg);
     std::exit(2);
 }
 
@@ -74,6 +79,11 @@ Args parse(int argc, char **argv) {
         else if (k == "--preset") a.preset = value();
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
+        else if (k == "--heap") {
+            const std::string v = value();
+            if (v != "keep" && v != "glibc") usage("--heap must be keep or glibc");
+            a.keep_heap = v == "keep";
+        }
         else usage(("unknown option " + k).c_str());
     }
     if (a.runs < 1 || a.threads < 1) usage("--runs and --threads must be >= 1");
@@ -154,14 +164,15 @@ void print_scores(const char *label, const eval::FrameScore &s, double seconds) 
 
 int run_bench(int argc, char **argv) {
     const Args a = parse(argc, argv);
+    const tools::HeapPolicy heap = a.keep_heap ? tools::apply_heap_policy() : tools::HeapPolicy{};
     const std::vector<Case> cases = load_cases(a);
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(a.preset);
     opt.threads = a.threads;
     opt.keep_stage_fields = false;  // as the C ABI: only the dense result is read
     const pipeline::Estimator estimator(opt);
-    std::printf("bench_pipeline: preset %s, %d thread(s), median of %d run(s), %u hardware threads\n",
-                a.preset.c_str(), a.threads, a.runs, std::thread::hardware_concurrency());
+    std::printf("bench_pipeline: preset %s, %d thread(s), median of %d run(s), %u hardware threads, heap: %s\n",
+                a.preset.c_str(), a.threads, a.runs, std::thread::hardware_concurrency(), heap.describe());
     for (const Case &c : cases) {
         std::printf("\n%s (%dx%d, LiDAR %zu + %zu points)\n", c.name.c_str(), c.input.left0.cols, c.input.left0.rows,
                     c.input.lidar0.points.size(), c.input.lidar1.points.size());

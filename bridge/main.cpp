@@ -15,6 +15,7 @@
 #include "args.hpp"
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
+#include "heap_policy.hpp"
 #include "replay.hpp"
 
 namespace {
@@ -200,6 +201,7 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
 
 int main(int argc, char **argv) {
     using namespace lidarflow::bridge;
+    lidarflow::tools::apply_heap_policy();
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
     bool threads_given = false, queue_given = false;

@@ -7,6 +7,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "heap_policy.hpp"
 #include "core/error.hpp"
 #include "lidarflow/lidarflow.h"
 
@@ -33,6 +34,7 @@ void print_usage(FILE *f) {
 }  // namespace
 
 int main(int argc, char **argv) {
+    lidarflow::tools::apply_heap_policy();
     if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
         !std::strcmp(argv[1], "help")) {
         print_usage(argc < 2 ? stderr : stdout);

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: MIT
+// The heap policy of the project's programs (tools/common/heap_policy.hpp): applied under glibc,
+// and never over a GLIBC_TUNABLES malloc setting the user chose.
+#include <cstdlib>
+#include <cstring>
+
+#include "../tools/common/heap_policy.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitized = true;  // the sanitizers' allocators ignore mallopt()
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
+void user_tunables_win(void **) {
+    setenv("GLIBC_TUNABLES", "glibc.malloc.trim_threshold=1048576", 1);
+    const lidarflow::tools::HeapPolicy p = lidarflow::tools::apply_heap_policy();
+    assert_false(p.applied);
+    assert_string_equal(p.describe(), "glibc defaults");
+    unsetenv("GLIBC_TUNABLES");
+}
+
+void applied_under_glibc(void **) {
+    // Tunables of other glibc parts are not the allocator's: the policy still applies.
+    setenv("GLIBC_TUNABLES", "glibc.cpu.hwcaps=-AVX512F", 1);
+    const lidarflow::tools::HeapPolicy p = lidarflow::tools::apply_heap_policy();
+    unsetenv("GLIBC_TUNABLES");
+#if defined(__GLIBC__)
+    if (!kSanitized) {
+        assert_true(p.applied);
+        assert_non_null(std::strstr(p.describe(), "keep"));
+    }
+#else
+    assert_false(p.applied);
+#endif
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(user_tunables_win),
+        cmocka_unit_test(applied_under_glibc),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -202,27 +202,28 @@ int run_bench(int argc, char **argv) {
         std::swap(rev.right0, rev.right1);
         std::swap(rev.lidar0, rev.lidar1);
         pipeline::StreamCache cache;
-        std::vector<double> stream_total, stream_features;
+        std::vector<double> stream_total;
+        std::map<std::string, std::vector<double>> stream_stage;
         int reused = 0;
         for (int r = 0; r <= a.runs; ++r) {
             const pipeline::EstimatorResult sr = estimator.run(r % 2 ? rev : c.input, &cache);
             if (r == 0) continue;  // the first frame of a stream has nothing to reuse
             reused += cache.last_reused() ? 1 : 0;
             stream_total.push_back(sr.total_seconds);
-            for (const pipeline::StageTime &t : sr.timings)
-                if (t.name == "features") stream_features.push_back(t.seconds);
+            for (const pipeline::StageTime &t : sr.timings) stream_stage[t.name].push_back(t.seconds);
         }
         for (int r = 0; r < a.runs; ++r) {
             const auto t0 = Clock::now();
             base_est = opencv_baseline(c.input);
             base.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
         }
-        for (const std::string &n : order) std::printf("  %-22s %7.3f s\n", n.c_str(), bench::median(stage[n]));
+        std::printf("  %-22s %9s %9s\n", "stage", "pair", "stream");
+        for (const std::string &n : order)
+            std::printf("  %-22s %7.3f s %7.3f s\n", n.c_str(), bench::median(stage[n]), bench::median(stream_stage[n]));
         std::printf("  %-22s %7.3f s   peak RSS %.0f MiB (%.0f MiB before the first run)\n", "total",
                     bench::median(total), rss_pipeline, rss_before);
-        std::printf("  %-22s %7.3f s   (features %.3f s; %d of %d frames reused the previous t1)\n",
-                    "streaming, per frame", bench::median(stream_total), bench::median(stream_features), reused,
-                    a.runs);
+        std::printf("  %-22s %7.3f s   (%d of %d frames reused the previous t1)\n", "streaming, per frame",
+                    bench::median(stream_total), reused, a.runs);
         const eval::EvalOptions eo;
         print_scores("lidarflow", eval::evaluate_frame(c.gt, last.dense, eo), bench::median(total));
         print_scores("OpenCV SGBM+DIS", eval::evaluate_frame(c.gt, base_est, eo), bench::median(base));

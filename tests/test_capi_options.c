@@ -68,7 +68,7 @@ static const key_t_ kKeys[] = {
     {"consistency.sparsify_support", INT, 1, 63, 0, ODD, NAN},
     {"interpolation.use_lidar", BOOL, 0, 1, 0, NONE, NAN},
     {"interpolation.superpixel_size", INT, 4, 512, 0, NONE, NAN},
-    {"interpolation.num_neighbors", INT, 1, 4096, 0, NONE, NAN},
+    {"interpolation.num_neighbors", INT, 1, 4096, 0, NONE, 256},
     {"interpolation.iterations", INT, 0, 1000, 0, NONE, NAN},
     {"interpolation.initial_hypotheses", INT, 1, 10000, 0, NONE, NAN},
     {"interpolation.random_hypotheses", INT, 0, 10000, 0, NONE, NAN},
@@ -284,9 +284,9 @@ static void test_named_presets(void **state) {
     assert_string_equal(s, "fast");
     assert_true(get_number(o, "threads") == 4.0);
     assert_true(get_number(o, "matching.grid_step") == 6.0);
-    assert_true(get_number(o, "matching.iterations") == 3.0);
+    assert_true(get_number(o, "matching.iterations") == 2.0);
     assert_true(get_number(o, "matching.min_coarsest_height") == 80.0);
-    assert_true(fabs(get_number(o, "processing_scale") - 0.7) < 1e-12);
+    assert_true(fabs(get_number(o, "processing_scale") - 0.6) < 1e-12);
     assert_true(get_number(o, "matching.thin_from_level") == get_number(fresh, "matching.thin_from_level"));
     assert_true(get_number(o, "matching.grid_step") != get_number(fresh, "matching.grid_step"));
 
@@ -295,6 +295,8 @@ static void test_named_presets(void **state) {
 
     assert_int_equal(lf_options_set_string(o, "preset", "balanced"), LF_OK);
     assert_true(get_number(o, "matching.thin_from_level") == 1.0);
+    assert_true(get_number(o, "matching.backward_grid_step") == 6.0);
+    assert_true(get_number(o, "consistency.fb_search_radius") == 2.0);
     assert_true(get_number(o, "matching.iterations") == get_number(fresh, "matching.iterations"));
     assert_true(get_number(o, "processing_scale") == 1.0);
     assert_true(get_number(o, "matching.thin_from_level") != get_number(fresh, "matching.thin_from_level"));

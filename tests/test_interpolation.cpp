@@ -139,6 +139,9 @@ void lidar_fixes_coherently_wrong_superpixel(void **) {
 
     interp::InterpolationOptions o;
     o.keep_lidar_values = false;
+    // The scenario needs a neighbourhood the wrong matches dominate: with the default 256
+    // neighbours the right matches around outvote them even without LiDAR.
+    o.num_neighbors = 64;
     // Default: only geometry is anchored; the LiDAR point still fixes d0 of its superpixel.
     const interp::InterpolationResult geo_only = interp::RobustInterpolator(o).run(m, lidar, s.image);
     o.lidar_motion_anchors = true;  // the paper's rule: the LiDAR match anchors motion as well

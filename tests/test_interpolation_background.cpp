@@ -140,10 +140,11 @@ void ego_motion_not_worse_on_planar_scene(void **) {
                 off.sf, off.epe_d0, off.epe_fl, on.sf, on.epe_d0, on.epe_fl);
     // This scene is not rigid (four independent affine motions): the background model then
     // explains one region and the others are interpolated as a non-planar remainder. Measured
-    // SF 1.09 -> 1.19 %, flow EPE 0.07 -> 0.24 px: a small, bounded cost.
+    // SF 1.09 -> 1.19 %, flow EPE 0.07 -> 0.24 px with 64 neighbours, 1.09 -> 1.20 % and 0.07 ->
+    // 0.35 px with 256 (the wider neighbourhood reaches across the regions): a small, bounded cost.
     assert_true(on.sf <= off.sf + 0.25);
     assert_true(on.epe_d0 <= off.epe_d0 + 0.01);
-    assert_true(on.epe_fl < 0.3);
+    assert_true(on.epe_fl < 0.45);
     assert_true(on.sf < 3.0);
 }
 
@@ -192,6 +193,9 @@ void geometry_hint_fills_holes(void **) {
     for (int y = 0; y < c.hole.rows; ++y)
         for (int x = 0; x < c.hole.cols; ++x) ground_hole(y, x) = c.hole(y, x) && c.s.region(y, x) == 1 ? 255 : 0;
     interp::InterpolationOptions o;
+    // A hole the neighbourhood cannot see across: with the default 256 neighbours the matches
+    // beyond it already bring d0 EPE to 1.01 px without the hint (0.73 with it).
+    o.num_neighbors = 64;
     o.use_geometry_hint = false;
     const interp::InterpolationResult no = interp::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
     o.use_geometry_hint = true;

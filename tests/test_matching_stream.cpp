@@ -135,6 +135,8 @@ void presets(void **) {
     const pipeline::EstimatorOptions b = pipeline::EstimatorOptions::preset("balanced");
     b.validate();
     assert_true(b.matching.thin_from_level < d.matching.thin_from_level);
+    assert_true(b.matching.backward_grid_step > d.matching.grid_step);
+    assert_int_equal(d.matching.backward_grid_step, 0);
     assert_true(d.processing_scale == 1.0);
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset("turbo"); }));
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { pipeline::EstimatorOptions::preset(""); }));

@@ -99,14 +99,15 @@ typedef struct lf_options lf_options_t;
  *   "preset"           string "default"  resets every option except "threads" to the preset:
  *                                        "default" (reference accuracy), "balanced" (matcher
  *                                        levels below full resolution thinned: thin_from_level
- *                                        1) or "fast" (grid_step 6, iterations 3,
- *                                        min_coarsest_height 80, processing_scale 0.7); set it
+ *                                        1; backward_grid_step 6, fb_search_radius 2) or
+ *                                        "fast" (grid_step 6, iterations 2,
+ *                                        min_coarsest_height 80, processing_scale 0.6); set it
  *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
- *                                        (default 1; the "fast" preset uses 0.7)
+ *                                        (default 1; the "fast" preset uses 0.6)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and
@@ -162,7 +163,8 @@ typedef struct lf_options lf_options_t;
  * stage 4: LiDAR-supported robust interpolation
  *   "interpolation.use_lidar"   0/1               LiDAR anchors
  *   "interpolation.superpixel_size" int [4, 512]
- *   "interpolation.num_neighbors" int [1, 4096]
+ *   "interpolation.num_neighbors" int [1, 4096]  geodesic nearest matches per superpixel
+ *                                                 (default 256)
  *   "interpolation.iterations"  int   [0, 1000]
  *   "interpolation.initial_hypotheses" int [1, 10000]
  *   "interpolation.random_hypotheses"  int [0, 10000]

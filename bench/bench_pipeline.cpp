@@ -5,7 +5,8 @@
 //   for the shared KITTI frames (paper LiDAR protocol) and the built-in synthetic scene.
 //
 //   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--preset NAME] [--no-synth]
-//                  [--no-kitti] [--heap keep|glibc]
+//                  [--no-kitti] [--heap keep|glibc] [--set KEY=VALUE,...]
+// --set: any option key of the C ABI (lidarflow.h), after the preset, as `lidarflow --set`.
 // --heap: the heap policy of the project's programs (keep, as the CLI and the bridge) or glibc's
 // defaults (as an application that embeds the library without configuring malloc).
 // Also measured: a stream (Estimator::run with a StreamCache) alternating each frame pair with its
@@ -27,6 +28,7 @@
 
 #include "bench_util.hpp"
 #include "heap_policy.hpp"
+#include "option_assignments.hpp"
 #include "eval/kitti_eval.hpp"
 #include "eval/metrics.hpp"
 #include "io/kitti_layout.hpp"
@@ -52,11 +54,12 @@ struct Args {
     std::string preset = "default";
     bool synth = true, kitti = true;
     bool keep_heap = true;
+    std::vector<std::string> assignments;
 };
 
 [[noreturn]] void usage(const char *msg) {
     std::fprintf(stderr, "bench_pipeline: %s\nusage: bench_pipeline [--root DIR] [--ids A,B] [--runs N] "
-                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti] [--heap keep|glibc]\n",
+                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti] [--heap keep|glibc] [--set K=V,..]\n",
                  msg);
     std::exit(2);
 }
@@ -79,7 +82,10 @@ Args parse(int argc, char **argv) {
         else if (k == "--preset") a.preset = value();
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
-        else if (k == "--heap") {
+        else if (k == "--set") {
+            std::stringstream ss(value());
+            for (std::string kv; std::getline(ss, kv, ',');) a.assignments.push_back(kv);
+        } else if (k == "--heap") {
             const std::string v = value();
             if (v != "keep" && v != "glibc") usage("--heap must be keep or glibc");
             a.keep_heap = v == "keep";
@@ -168,11 +174,14 @@ int run_bench(int argc, char **argv) {
     const std::vector<Case> cases = load_cases(a);
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(a.preset);
+    cli::apply_option_assignments(opt, a.assignments);
     opt.threads = a.threads;
     opt.keep_stage_fields = false;  // as the C ABI: only the dense result is read
     const pipeline::Estimator estimator(opt);
-    std::printf("bench_pipeline: preset %s, %d thread(s), median of %d run(s), %u hardware threads, heap: %s\n",
-                a.preset.c_str(), a.threads, a.runs, std::thread::hardware_concurrency(), heap.describe());
+    std::string set;
+    for (const std::string &kv : a.assignments) set += (set.empty() ? " --set " : ",") + kv;
+    std::printf("bench_pipeline: preset %s%s, %d thread(s), median of %d run(s), %u hardware threads, heap: %s\n",
+                a.preset.c_str(), set.c_str(), a.threads, a.runs, std::thread::hardware_concurrency(), heap.describe());
     for (const Case &c : cases) {
         std::printf("\n%s (%dx%d, LiDAR %zu + %zu points)\n", c.name.c_str(), c.input.left0.cols, c.input.left0.rows,
                     c.input.lidar0.points.size(), c.input.lidar1.points.size());

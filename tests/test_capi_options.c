@@ -73,7 +73,7 @@ static const key_t_ kKeys[] = {
     {"interpolation.initial_hypotheses", INT, 1, 10000, 0, NONE, NAN},
     {"interpolation.random_hypotheses", INT, 0, 10000, 0, NONE, NAN},
     {"interpolation.edge_gain", FLOAT, 0, 10000, 0, NONE, NAN},
-    {"interpolation.distance_sigma", FLOAT, 0, 10000, 1, NONE, NAN},
+    {"interpolation.distance_sigma", FLOAT, 0, 10000, 1, NONE, 36},
     {"interpolation.disparity_inlier", FLOAT, 0, 10000, 1, NONE, NAN},
     {"interpolation.flow_inlier", FLOAT, 0, 10000, 1, NONE, NAN},
     {"interpolation.lidar_anchor_distance", FLOAT, 0, 10000, 0, NONE, NAN},

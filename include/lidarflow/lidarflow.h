@@ -169,7 +169,7 @@ typedef struct lf_options lf_options_t;
  *   "interpolation.initial_hypotheses" int [1, 10000]
  *   "interpolation.random_hypotheses"  int [0, 10000]
  *   "interpolation.edge_gain"   float [0, 10000]
- *   "interpolation.distance_sigma" float (0, 10000]
+ *   "interpolation.distance_sigma" float (0, 10000]  neighbour weight scale [px] (default 36)
  *   "interpolation.disparity_inlier" float (0, 10000]
  *   "interpolation.flow_inlier" float (0, 10000]
  *   "interpolation.lidar_anchor_distance" float [0, 10000]

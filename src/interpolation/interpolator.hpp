@@ -47,8 +47,16 @@ struct InterpolationOptions {
     // synthetic frames 0-3 x seeds 1-4 9.49 / 8.64 / 8.31 / 8.16 / 8.36 %. 256 is where the
     // paper protocol and the synthetic scenes stop improving; it costs ~0.1 s per KITTI pair.
     int num_neighbors = 256;
-    // Neighbour weight exp(-geodesic / distance_sigma) in scoring and sampling (> 0) [px].
-    float distance_sigma = 24.0f;
+    // Neighbour weight exp(-geodesic / distance_sigma) in scoring and sampling (> 0) [px]. On the
+    // scale of the neighbourhood's extent: 256 neighbours at ~6 % density reach ~35-40 px, where
+    // 24 px left the outer half of them under a fifth of the weight, undoing part of what the
+    // wider neighbourhood bought. Measured with 256 neighbours (final SF, seed means; 24 / 36 /
+    // 48 px): paper protocol seeds 1-8 9.76 / 9.38 / 9.29 %, Velodyne seeds 1-4 6.18 / 5.97 /
+    // 5.95 %, image-only seeds 1-4 14.15 / 13.70 / 13.35 %, synthetic frames 0-3 x seeds 1-4
+    // 8.16 / 7.95 / 8.22 %. 36, not 48: at 48 far neighbours reach across motion boundaries, and
+    // the calibration-free background model took over part of the four-motion test scene
+    // (test_interpolation_background: SF 1.12 -> 4.25 % with it, 1.06 -> 1.45 % at 36).
+    float distance_sigma = 36.0f;
     float disparity_inlier = 2.0f;  // robust-cost truncation for d0, d1 residuals [px] (> 0)
     float flow_inlier = 3.0f;       // robust-cost truncation for (u, v) end-point errors [px] (> 0)
     int initial_hypotheses = 24;   // random minimal subsets per superpixel and channel (>= 1)

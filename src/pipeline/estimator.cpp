@@ -129,8 +129,9 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // 14.74 % (seeds 1-3) in 0.58 s. With 256 interpolation neighbours (stage 4's default
         // since) 3 iterations at 0.7 gave 11.71 %; the headroom below the speed issue's 14 % is
         // spent on time: 2 iterations at 0.6, 12.80 % (seeds 1-6) in 0.41 instead of 0.58 s per
-        // KITTI pair (bench_pipeline, two alternations). At 0.5 the small objects of 000003 go
-        // (15.85 %); 2 iterations at 0.7 12.16 %, 3 at 0.6 12.76 %.
+        // KITTI pair (bench_pipeline, two alternations); 12.89 % with the 36 px neighbour weight
+        // scale. At 0.5 the small objects of 000003 go (15.85 %); 2 iterations at 0.7 12.16 %, 3
+        // at 0.6 12.76 % (24 px scale).
         o.matching.iterations = 2;
         o.processing_scale = 0.6;
         return o;

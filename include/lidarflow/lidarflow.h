@@ -100,14 +100,14 @@ typedef struct lf_options lf_options_t;
  *                                        "default" (reference accuracy), "balanced" (matcher
  *                                        levels below full resolution thinned: thin_from_level
  *                                        1; backward_grid_step 6, fb_search_radius 2) or
- *                                        "fast" (grid_step 6, iterations 2,
- *                                        min_coarsest_height 80, processing_scale 0.6); set it
+ *                                        "fast" (grid_step 6, iterations 3,
+ *                                        min_coarsest_height 80, processing_scale 0.7); set it
  *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
- *                                        (default 1; the "fast" preset uses 0.6)
+ *                                        (default 1; the "fast" preset uses 0.7)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and

@@ -127,13 +127,12 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.matching.min_coarsest_height = 80;
         // Seeds 1-6: SF 15.21 % in 0.48 s; without thinning 14.77 % in 0.60 s; at 3/4 size
         // 14.74 % (seeds 1-3) in 0.58 s. With 256 interpolation neighbours (stage 4's default
-        // since) 3 iterations at 0.7 gave 11.71 %; the headroom below the speed issue's 14 % is
-        // spent on time: 2 iterations at 0.6, 12.80 % (seeds 1-6) in 0.41 instead of 0.58 s per
-        // KITTI pair (bench_pipeline, two alternations); 12.89 % with the 36 px neighbour weight
-        // scale. At 0.5 the small objects of 000003 go (15.85 %); 2 iterations at 0.7 12.16 %, 3
-        // at 0.6 12.76 % (24 px scale).
-        o.matching.iterations = 2;
-        o.processing_scale = 0.6;
+        // since) 11.71 %. Spending that headroom on time (2 iterations at 0.6: 12.80 %, 0.58 ->
+        // 0.41 s per KITTI pair) broke small frames: the 640x192 synthetic scenes went 9.27 ->
+        // 14.70 % (seeds 1-2; one frame of the 0.7 / 2-iteration variant failed outright), so
+        // fast keeps 3 iterations at 0.7.
+        o.matching.iterations = 3;
+        o.processing_scale = 0.7;
         return o;
     }
     throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast)");

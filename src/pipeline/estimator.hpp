@@ -56,7 +56,7 @@ struct EstimatorOptions {
     //  "default"  the reference settings;
     //  "balanced" every matcher level below full resolution thinned (thin_from_level 1), the
     //             backward direction on a 6 px grid (round-trip search radius 2);
-    //  "fast"     6 px seed grid, 2 iterations, 3 pyramid levels, at 0.6 resolution
+    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels, at 0.7 resolution
     //             (plain processing_scale 0.5 was both slower and worse).
     // Throws Error(InvalidArgument) for another name.
     static EstimatorOptions preset(const std::string &name);

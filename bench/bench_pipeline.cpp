@@ -64,6 +64,13 @@ struct Args {
     std::exit(2);
 }
 
+std::vector<std::string> split_commas(const std::string &list) {
+    std::vector<std::string> out;
+    std::stringstream ss(list);
+    for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+    return out;
+}
+
 Args parse(int argc, char **argv) {
     Args a;
     if (const char *k = std::getenv("LIDARFLOW_KITTI_DIR")) a.root = k;
@@ -74,18 +81,14 @@ Args parse(int argc, char **argv) {
             return argv[++i];
         };
         if (k == "--root") a.root = value();
-        else if (k == "--ids") {
-            std::stringstream ss(value());
-            for (std::string id; std::getline(ss, id, ',');) a.ids.push_back(id);
-        } else if (k == "--runs") a.runs = std::atoi(value().c_str());
+        else if (k == "--ids") a.ids = split_commas(value());
+        else if (k == "--runs") a.runs = std::atoi(value().c_str());
         else if (k == "--threads") a.threads = std::atoi(value().c_str());
         else if (k == "--preset") a.preset = value();
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
-        else if (k == "--set") {
-            std::stringstream ss(value());
-            for (std::string kv; std::getline(ss, kv, ',');) a.assignments.push_back(kv);
-        } else if (k == "--heap") {
+        else if (k == "--set") a.assignments = split_commas(value());
+        else if (k == "--heap") {
             const std::string v = value();
             if (v != "keep" && v != "glibc") usage("--heap must be keep or glibc");
             a.keep_heap = v == "keep";

@@ -5,21 +5,10 @@
 #include <cstring>
 
 #include "../tools/common/heap_policy.hpp"
+#include "core/sanitizers.hpp"
 #include "test_support.hpp"
 
 namespace {
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kSanitized = true;  // the sanitizers' allocators ignore mallopt()
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
 
 void user_tunables_win(void **) {
     setenv("GLIBC_TUNABLES", "glibc.malloc.trim_threshold=1048576", 1);
@@ -35,7 +24,7 @@ void applied_under_glibc(void **) {
     const lidarflow::tools::HeapPolicy p = lidarflow::tools::apply_heap_policy();
     unsetenv("GLIBC_TUNABLES");
 #if defined(__GLIBC__)
-    if (!kSanitized) {
+    if (!LIDARFLOW_SANITIZED) {  // the sanitizers' allocators ignore mallopt()
         assert_true(p.applied);
         assert_non_null(std::strstr(p.describe(), "keep"));
     }

@@ -24,17 +24,10 @@
 #include <sys/mman.h>
 #endif
 
+#include "core/sanitizers.hpp"
+
 // The sanitizers track malloc'd blocks only: under them the large blocks stay on malloc.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC 1
-#endif
-#endif
-#ifndef LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC
-#define LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC 0
-#endif
+#define LIDARFLOW_HUGE_PAGE_ALLOC_USES_MALLOC LIDARFLOW_SANITIZED
 
 namespace lidarflow::features {
 

@@ -679,17 +679,17 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy));
             float d1e = 0, ue = 0, ve = 0;
             if (subtract_d0) res.ego.predict(fx, fy, res.dense.d0(y, x), d1e, ue, ve);
-            res.dense.d1(y, x) = std::max(0.0f, d1e + m1.p[0].at(fx, fy));
-            res.dense.u(y, x) = ue + mf.p[0].at(fx, fy);
-            res.dense.v(y, x) = ve + mf.p[1].at(fx, fy);
+            float d1 = d1e + m1.p[0].at(fx, fy), u = ue + mf.p[0].at(fx, fy), v = ve + mf.p[1].at(fx, fy);
             // Leaving the image: no match can exist there, so the superpixel's model is an
             // extrapolation; when the background agrees that the point leaves, it decides.
-            if (exits_follow_background && !inside(fx + ue, fy + ve) &&
-                !inside(fx + res.dense.u(y, x), fy + res.dense.v(y, x))) {
-                res.dense.d1(y, x) = std::max(0.0f, d1e);
-                res.dense.u(y, x) = ue;
-                res.dense.v(y, x) = ve;
+            if (exits_follow_background && !inside(fx + ue, fy + ve) && !inside(fx + u, fy + v)) {
+                d1 = d1e;
+                u = ue;
+                v = ve;
             }
+            res.dense.d1(y, x) = std::max(0.0f, d1);
+            res.dense.u(y, x) = u;
+            res.dense.v(y, x) = v;
             const size_t base = static_cast<size_t>(sp.labels(y, x)) * kNumChannels;
             res.dense.confidence(y, x) = (share[base] + share[base + 1] + share[base + 2]) / 3.0f;
         }

@@ -40,8 +40,9 @@ struct EstimatorOptions {
     double processing_scale = 1.0;
     // Whether EstimatorResult holds every stage's field, or only output()'s (the others stay
     // empty, and are not brought back to full resolution at processing_scale < 1: that took
-    // 0.12-0.14 s of the `fast` preset's ~0.8 s per KITTI pair for five fields nobody read). The C ABI handle (and so the bridge and Python) reads only the output and
-    // sets this to false.
+    // 0.12-0.14 s of the `fast` preset's ~0.8 s per KITTI pair for five fields nobody read).
+    // The C ABI handle (and so the bridge and Python) reads only the output and sets this to
+    // false.
     bool keep_stage_fields = true;
 
     matching::MatchingOptions matching;

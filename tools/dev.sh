@@ -118,10 +118,12 @@ case "${1:-}" in
         # Under the sanitizers, leave out what only repeats covered code at real-time cost: the
         # argument-error script (40 bridge starts), the KITTI-rate and 3-shard udpm runs (the
         # synthetic udpm run stays; memq covers the dead-shard rules), the six KITTI pairs of
-        # the raw-Velodyne comparison, the README LCM walkthrough (real time), and a shorter soak (3,000 messages instead of 10,000).
+        # the raw-Velodyne comparison, the four KITTI-size matcher runs of test_matching_kitti (the
+        # golden test runs the same matcher on the same frames), the README LCM walkthrough (real
+        # time), and a shorter soak (3,000 messages instead of 10,000).
         LF_SOAK_MESSAGES=3000 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
             run_tests build-asan \
-            -E '^(bridge_args|bridge_udpm_kitti|bridge_udpm_shards|bridge_udpm_shard_dies|bridge_kitti_velodyne|bridge_readme_lcm)$' ;;
+            -E '^(bridge_args|bridge_udpm_kitti|bridge_udpm_shards|bridge_udpm_shard_dies|bridge_kitti_velodyne|test_matching_kitti|bridge_readme_lcm)$' ;;
     build-clang)
         deps
         packages=(clang-14); deps  # only this verb needs the second compiler

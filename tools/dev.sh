@@ -63,8 +63,19 @@ run_tests() {  # run_tests DIR [ctest args...]
     ctest --test-dir "$root/$dir" --output-on-failure -j "$jobs" "$@"
 }
 
-# fuzz SECONDS [TARGET...]: each target (default: all of tests/fuzz) for SECONDS, one after the
-# other, from its committed seeds (tests/fuzz/corpus/T) plus what earlier runs found
+# fuzz_one DIR TARGET SECONDS: one libFuzzer run; its exit status goes to fuzz-logs/TARGET.rc.
+fuzz_one() {
+    local dir="$1" t="$2" seconds="$3" rc=0
+    # -timeout: a C ABI program of 24 calls on images of at most 64x48 px takes well under a
+    # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too.
+    ASAN_OPTIONS=detect_leaks=1 "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
+        -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/findings/$t-" \
+        "$dir/corpus/$t" "$root/tests/fuzz/corpus/$t" >"$dir/fuzz-logs/$t.log" 2>&1 || rc=$?
+    echo "$rc" >"$dir/fuzz-logs/$t.rc"
+}
+
+# fuzz SECONDS [TARGET...]: each target (default: all of tests/fuzz) for SECONDS, one per core at a
+# time, from its committed seeds (tests/fuzz/corpus/T) plus what earlier runs found
 # (build-fuzz/corpus/T). Findings land in build-fuzz/findings/; logs in build-fuzz/fuzz-logs/.
 fuzz() {
     local seconds="$1"; shift
@@ -83,14 +94,20 @@ fuzz() {
               "$dir/tests/fuzz/lidarflow_fuzz_corpus tests/fuzz/corpus"; return 1; }
     fi
     mkdir -p "$dir/findings" "$dir/fuzz-logs"
+    # libFuzzer runs one thread per target: the targets run side by side, one per core, each for
+    # its own SECONDS (a target's result file says how it ended; its log what it found).
+    local running=0
+    for t in "${targets[@]}"; do
+        mkdir -p "$dir/corpus/$t"
+        rm -f "$dir/fuzz-logs/$t.rc"
+        while [ "$running" -ge "$jobs" ]; do wait -n || true; running=$((running - 1)); done
+        fuzz_one "$dir" "$t" "$seconds" &
+        running=$((running + 1))
+    done
+    wait || true
     for t in "${targets[@]}"; do
         local log="$dir/fuzz-logs/$t.log"
-        mkdir -p "$dir/corpus/$t"
-        # -timeout: a C ABI program of 24 calls on images of at most 64x48 px takes well under a
-        # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too.
-        if ASAN_OPTIONS=detect_leaks=1 "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
-               -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/findings/$t-" \
-               "$dir/corpus/$t" "$root/tests/fuzz/corpus/$t" >"$log" 2>&1; then
+        if [ "$(cat "$dir/fuzz-logs/$t.rc" 2>/dev/null)" = 0 ]; then
             printf 'dev.sh fuzz: %-22s %10s runs %7s exec/s  ok\n' "$t" \
                 "$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")" \
                 "$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")"

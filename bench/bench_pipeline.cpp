@@ -18,7 +18,6 @@
 #include <cstring>
 #include <map>
 #include <thread>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -26,6 +25,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "args.hpp"
 #include "bench_util.hpp"
 #include "heap_policy.hpp"
 #include "option_assignments.hpp"
@@ -64,13 +64,6 @@ struct Args {
     std::exit(2);
 }
 
-std::vector<std::string> split_commas(const std::string &list) {
-    std::vector<std::string> out;
-    std::stringstream ss(list);
-    for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-    return out;
-}
-
 Args parse(int argc, char **argv) {
     Args a;
     if (const char *k = std::getenv("LIDARFLOW_KITTI_DIR")) a.root = k;
@@ -81,13 +74,13 @@ Args parse(int argc, char **argv) {
             return argv[++i];
         };
         if (k == "--root") a.root = value();
-        else if (k == "--ids") a.ids = split_commas(value());
+        else if (k == "--ids") a.ids = cli::split_list(value());
         else if (k == "--runs") a.runs = std::atoi(value().c_str());
         else if (k == "--threads") a.threads = std::atoi(value().c_str());
         else if (k == "--preset") a.preset = value();
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
-        else if (k == "--set") a.assignments = split_commas(value());
+        else if (k == "--set") a.assignments = cli::split_list(value());
         else if (k == "--heap") {
             const std::string v = value();
             if (v != "keep" && v != "glibc") usage("--heap must be keep or glibc");

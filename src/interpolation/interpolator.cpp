@@ -553,7 +553,6 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         p.sx = sp.centroid[s].x;
         p.sy = sp.centroid[s].y;
         p.size = static_cast<float>(o.superpixels.region_size);
-        p.x.clear(), p.y.clear(), p.z0.clear(), p.z1.clear(), p.w.clear(), p.cw.clear();
         for (auto *v : {&p.x, &p.y, &p.z0, &p.w, &p.cw}) v->reserve(nb.size());
         if (p.dims == 2) p.z1.reserve(nb.size());
         float acc = 0;
@@ -596,10 +595,10 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
 #pragma omp for schedule(dynamic, 8)
             for (int s = 0; s < S; ++s) iteration_errors.run([&] {
                 for (int c = 0; c < kNumChannels; ++c) {
-                    const Problem &p = problems[static_cast<size_t>(s) * kNumChannels + c];
+                    const size_t slot = static_cast<size_t>(s) * kNumChannels + c;
+                    const Problem &p = problems[slot];
                     Rng rng(stream_seed(o.random_seed, s, it, c));
                     Candidate best;
-                    const size_t slot = static_cast<size_t>(s) * kNumChannels + c;
                     if (it == 0) {
                         // Constants always exist, so a superpixel with < 3 usable neighbours
                         // (or only collinear ones) still gets a model.

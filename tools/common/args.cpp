@@ -127,11 +127,13 @@ std::vector<std::string> Args::all(const std::string &name) const {
 }
 
 std::vector<std::string> Args::list(const std::string &name) const {
+    return has(name) ? split_list(str(name, "")) : std::vector<std::string>{};
+}
+
+std::vector<std::string> split_list(const std::string &text) {
     std::vector<std::string> out;
-    if (!has(name)) return out;
-    std::stringstream ss(str(name, ""));
-    std::string item;
-    while (std::getline(ss, item, ','))
+    std::stringstream ss(text);
+    for (std::string item; std::getline(ss, item, ',');)
         if (!item.empty()) out.push_back(item);
     return out;
 }

@@ -53,4 +53,7 @@ private:
     bool help_ = false;
 };
 
+// "a,b,,c" -> {"a", "b", "c"}: the items of a comma-separated list, empty ones dropped.
+std::vector<std::string> split_list(const std::string &text);
+
 }  // namespace lidarflow::cli

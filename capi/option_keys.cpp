@@ -3,8 +3,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/error.hpp"
+#include "core/limits.hpp"
 
 namespace lidarflow::capi {
 
@@ -49,6 +51,14 @@ const OptionKey kKeys[] = {
      [](const O &o) -> int64_t { return o.matching.window_size; },
      [](O &o, int64_t v) { o.matching.window_size = o.consistency.support_window = static_cast<int>(v); },
      nullptr, nullptr},
+    // LiDAR input (lidar/visibility_filter.hpp)
+    {"lidar.visibility_filter", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(lidar_visibility.enabled)},
+    {"lidar.visibility_half_width", KeyType::Int, 0, 64, false, Extra::None, LF_INT_FIELD(lidar_visibility.half_width)},
+    {"lidar.visibility_half_height", KeyType::Int, 0, 64, false, Extra::None,
+     LF_INT_FIELD(lidar_visibility.half_height)},
+    {"lidar.visibility_ratio", KeyType::Float, 0, 10, false, Extra::None, LF_FLOAT_FIELD(lidar_visibility.ratio)},
+    {"lidar.visibility_margin", KeyType::Float, 0, kMaxLidarDisparity, false, Extra::None,
+     LF_FLOAT_FIELD(lidar_visibility.margin)},
     // stage 1
     {"matching.support_windows", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.support_window)},
     {"matching.const1", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const1)},
@@ -150,6 +160,17 @@ std::string number(double v) {
     return buf;
 }
 
+// A float key's value is a float32: its shortest decimal that reads back as the same float
+// ("0.05", not the double expansion "0.05000000074505806").
+std::string float_number(double v) {
+    char buf[64];
+    for (int digits = 1; digits <= 9; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+        if (static_cast<float>(std::strtod(buf, nullptr)) == static_cast<float>(v)) break;
+    }
+    return buf;
+}
+
 std::string bounds_text(const OptionKey &k) {
     if (k.type == KeyType::Bool) return "0 or 1";
     std::string s = (k.lo_open ? "(" : "[") + number(k.lo) + ", " + number(k.hi) + "]";
@@ -206,7 +227,7 @@ std::vector<OptionKeyDescription> describe_option_keys() {
         else if (is_key(k, "last_stage")) d.bounds = "matching | consistency | sparse | interpolation";
         else d.bounds = "a file path, or \"\"";
         if (k.type == KeyType::String) d.defaults = std::string("\"") + get_option_string(fresh, k) + "\"";
-        else if (k.type == KeyType::Float) d.defaults = number(get_option_float(fresh, k));
+        else if (k.type == KeyType::Float) d.defaults = float_number(get_option_float(fresh, k));
         else d.defaults = std::to_string(get_option_int(fresh, k));
         rows.push_back(std::move(d));
     }

@@ -30,6 +30,11 @@ static const key_t_ kKeys[] = {
     {"use_lidar", BOOL, 0, 1, 0, NONE, 1},
     {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 1},
     {"support_window", INT, 1, 101, 0, ODD, 15},
+    {"lidar.visibility_filter", BOOL, 0, 1, 0, NONE, 1},
+    {"lidar.visibility_half_width", INT, 0, 64, 0, NONE, 6},
+    {"lidar.visibility_half_height", INT, 0, 64, 0, NONE, 4},
+    {"lidar.visibility_ratio", FLOAT, 0, 10, 0, NONE, NAN}, /* 0.05 as float32 */
+    {"lidar.visibility_margin", FLOAT, 0, 16384, 0, NONE, 1},
     {"matching.support_windows", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.const1", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.const2", BOOL, 0, 1, 0, NONE, NAN},

@@ -19,6 +19,7 @@
 #include "lidar/paper_protocol.hpp"
 #include "lidar/projection.hpp"
 #include "lidar/velodyne_protocol.hpp"
+#include "lidar/visibility_filter.hpp"
 // cmocka.h defines fail(), which breaks <ios>, and its 1.1.5 header lacks extern "C": include
 // it last, wrapped (test_support.hpp's own include is then a no-op).
 #include <setjmp.h>
@@ -415,6 +416,107 @@ void test_velodyne_protocol_real(void **) {
     }
 }
 
+// --- visibility filter ----------------------------------------------------------------------
+
+void test_visibility_filter_synthetic(void **) {
+    // A background at disparity 10 sampled every 2 px, a near box (disparity 40) over x 30-49,
+    // y 10-29 sampled the same way, and three background points that the LiDAR saw past the box's
+    // edge and that land inside it.
+    SparseLidar in{80, 40, {}};
+    for (int y = 0; y < 40; y += 2)
+        for (int x = 0; x < 80; x += 2) {
+            const bool box = x >= 30 && x < 50 && y >= 10 && y < 30;
+            in.points.push_back({x, y, box ? 40.0f : 10.0f});
+        }
+    const std::vector<LidarPoint> hidden = {{31, 11, 10.0f}, {45, 21, 10.5f}, {48, 27, 9.0f}};
+    in.points.insert(in.points.end(), hidden.begin(), hidden.end());
+    const lidar::VisibilityFilterOptions o;  // 13 x 9 window, hidden by d * 1.05 + 1
+    const SparseLidar out = lidar::remove_hidden_points(in, o);
+    assert_int_equal(out.width, 80);
+    assert_int_equal(out.height, 40);
+    for (const LidarPoint &h : hidden) assert_null(find_point(out, h.x, h.y));
+    // Every box point stays, and so does every background point farther from the box than the
+    // window; background points within the window of the box go (the price of the rule).
+    for (const LidarPoint &p : in.points) {
+        const bool hid = std::any_of(hidden.begin(), hidden.end(), [&](const LidarPoint &h) { return h.x == p.x && h.y == p.y; });
+        if (hid) continue;
+        const bool box = p.disparity == 40.0f;
+        const bool near_box = p.x >= 30 - 6 && p.x < 50 + 6 && p.y >= 10 - 4 && p.y < 30 + 4;
+        const LidarPoint *q = find_point(out, p.x, p.y);
+        if (box || !near_box) {
+            assert_non_null(q);
+            assert_true(q->disparity == p.disparity);
+        } else {
+            assert_null(q);
+        }
+    }
+    // Input order is kept.
+    for (size_t i = 1; i < out.points.size(); ++i)
+        assert_true(out.points[i - 1].y < out.points[i].y ||
+                    (out.points[i - 1].y == out.points[i].y && out.points[i - 1].x < out.points[i].x));
+    // A small step in depth (a slanted surface) is not an occlusion: 10 -> 11 is within 10 * 1.05 + 1.
+    SparseLidar ramp{40, 10, {}};
+    for (int x = 0; x < 40; ++x) ramp.points.push_back({x, 5, 10.0f + 0.1f * static_cast<float>(x)});
+    assert_int_equal(lidar::remove_hidden_points(ramp, o).points.size(), ramp.points.size());
+    // Sparse points (the paper's ~88, tens of px apart) never share a window.
+    SparseLidar sparse{200, 100, {{10, 10, 5.0f}, {30, 10, 60.0f}, {10, 30, 80.0f}, {50, 50, 1.0f}}};
+    assert_int_equal(lidar::remove_hidden_points(sparse, o).points.size(), 4);
+    // Off: the input as it is; no points: nothing to do.
+    lidar::VisibilityFilterOptions off;
+    off.enabled = false;
+    assert_int_equal(lidar::remove_hidden_points(in, off).points.size(), in.points.size());
+    assert_true(lidar::remove_hidden_points(SparseLidar{}, o).points.empty());
+}
+
+void test_visibility_filter_rejects_bad_input(void **) {
+    const SparseLidar in{20, 10, {{3, 3, 5.0f}}};
+    for (const auto &set : std::vector<std::function<void(lidar::VisibilityFilterOptions &)>>{
+             [](auto &o) { o.half_width = -1; }, [](auto &o) { o.half_height = 65; },
+             [](auto &o) { o.ratio = std::nanf(""); }, [](auto &o) { o.ratio = 11.0f; },
+             [](auto &o) { o.margin = -1.0f; }, [](auto &o) { o.margin = std::numeric_limits<float>::infinity(); }}) {
+        lidar::VisibilityFilterOptions o;
+        set(o);
+        assert_true(throws_code(ErrorCode::InvalidArgument, [&] { lidar::remove_hidden_points(in, o); }));
+    }
+    const SparseLidar outside{20, 10, {{20, 3, 5.0f}}};
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { lidar::remove_hidden_points(outside, {}); }));
+    const SparseLidar bad_value{20, 10, {{2, 3, std::nanf("")}}};
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { lidar::remove_hidden_points(bad_value, {}); }));
+}
+
+// On the real scans: the points the filter removes are where the scan disagrees with the ground
+// truth (the LiDAR saw past an edge), so the share of projected points that are KITTI outliers
+// (> 3 px and > 5 %) falls, while most points stay.
+void test_visibility_filter_real(void **) {
+    const std::string root = kitti_or_skip();
+    if (root.empty()) skip();
+    const io::KittiLayout L{root};
+    for (const std::string &id : L.frame_ids()) {
+        const io::CamToCamCalib calib = io::read_calib_cam_to_cam(L.calib_cam_to_cam(id));
+        const DisparityMap gt = io::read_disparity_png(L.gt_disp0(id));
+        const SparseLidar all = lidar::project_to_left(io::read_velodyne_bin(L.velodyne(id)).points, calib,
+                                                       io::read_calib_velo_to_cam(L.calib_velo_to_cam(id)), gt.size());
+        const SparseLidar kept = lidar::remove_hidden_points(all, {});
+        const auto outliers = [&](const SparseLidar &s) {
+            long n = 0, bad = 0;
+            for (const LidarPoint &p : s.points) {
+                const float g = gt(p.y, p.x);
+                if (!disparity_valid(g)) continue;
+                ++n;
+                const float e = std::fabs(g - p.disparity);
+                bad += e > 3.0f && e > 0.05f * g ? 1 : 0;
+            }
+            return 100.0 * static_cast<double>(bad) / static_cast<double>(std::max(n, 1L));
+        };
+        const double before = outliers(all), after = outliers(kept);
+        const double share = static_cast<double>(kept.points.size()) / static_cast<double>(all.points.size());
+        std::printf("%s: %zu -> %zu points (%.1f %% kept), outliers vs ground truth %.2f -> %.2f %%\n", id.c_str(),
+                    all.points.size(), kept.points.size(), 100.0 * share, before, after);
+        assert_true(share > 0.8);  // measured 85-90 %
+        assert_true(after < 0.25 * before);  // measured 2.1-2.5 -> 0.2-0.3 %
+    }
+}
+
 }  // namespace
 
 int main() {
@@ -428,6 +530,9 @@ int main() {
         cmocka_unit_test(test_paper_protocol_real),
         cmocka_unit_test(test_rings_and_beams),
         cmocka_unit_test(test_velodyne_protocol_real),
+        cmocka_unit_test(test_visibility_filter_synthetic),
+        cmocka_unit_test(test_visibility_filter_rejects_bad_input),
+        cmocka_unit_test(test_visibility_filter_real),
     };
     return cmocka_run_group_tests_name("lidar_inputs", tests, nullptr, nullptr);
 }

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "eval/metrics.hpp"
+#include "lidar/visibility_filter.hpp"
 #include "pipeline/estimator.hpp"
 #include "pipeline/resolution.hpp"
 #include "synth/scene.hpp"
@@ -121,7 +122,9 @@ void half_resolution_estimator(void **) {
     assert_int_equal(cv::countNonZero(r.dense.valid), 320 * 96);
     assert_int_equal(r.forward.width(), 320);
     assert_true(r.timings.front().name == "downscale" && r.timings.back().name == "upscale");
-    for (const LidarPoint &p : s.lidar0.points) assert_true(r.dense.d0(p.y, p.x) == p.disparity);
+    // Every point the visibility filter keeps is restored at full resolution.
+    for (const LidarPoint &p : lidar::remove_hidden_points(s.lidar0, o.lidar_visibility).points)
+        assert_true(r.dense.d0(p.y, p.x) == p.disparity);
     long n = 0, bad = 0;
     for (int y = 0; y < 96; ++y)
         for (int x = 0; x < 320; ++x) {
@@ -154,6 +157,41 @@ void half_resolution_estimator(void **) {
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { Estimator e(bad_scale); }));
 }
 
+// A LiDAR point the camera cannot see (the background's disparity, 3 px inside a near surface
+// whose points surround it) is removed before every stage: a scaled run restores the LiDAR d0
+// of the points it ran with, so the pixel keeps the estimate instead of the hidden value.
+void hidden_lidar_point_is_not_used(void **) {
+    synth::SynthConfig c;
+    c.width = 320;
+    c.height = 96;
+    c.seed = 3;
+    const synth::SynthScene s = synth::render(c);
+    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    const int hx = 160, hy = 70;
+    const float near = s.disp0_occ(hy, hx) > 0 ? s.disp0_occ(hy, hx) : 20.0f;
+    in.lidar0.points.clear();
+    for (int dx = -6; dx <= 6; dx += 3)
+        if (dx != 0) in.lidar0.points.push_back({hx + dx, hy, near});
+    const float hidden = near * 0.3f;
+    in.lidar0.points.push_back({hx, hy, hidden});
+    EstimatorOptions o;
+    o.processing_scale = 0.5;
+    o.threads = 2;
+    o.matching.min_coarsest_height = 16;
+    o.keep_stage_fields = false;
+    const EstimatorResult kept = Estimator([&] {
+        EstimatorOptions off = o;
+        off.lidar_visibility.enabled = false;
+        return off;
+    }()).run(in);
+    assert_true(kept.dense.d0(hy, hx) == hidden);
+    const EstimatorResult r = Estimator(o).run(in);
+    assert_true(r.dense.d0(hy, hx) != hidden);
+    assert_true(r.dense.d0(hy, hx + 3) == near);  // the visible neighbours stay
+    std::printf("hidden LiDAR point: d0 %.2f with the filter, %.2f without (near surface %.2f)\n",
+                r.dense.d0(hy, hx), kept.dense.d0(hy, hx), near);
+}
+
 }  // namespace
 
 int main() {
@@ -162,6 +200,7 @@ int main() {
         cmocka_unit_test(downscale_rejects_bad_input),
         cmocka_unit_test(upscale_scales_values_and_keeps_holes),
         cmocka_unit_test(half_resolution_estimator),
+        cmocka_unit_test(hidden_lidar_point_is_not_used),
     };
     return cmocka_run_group_tests_name("pipeline_resolution", tests, nullptr, nullptr);
 }

@@ -114,6 +114,14 @@ typedef struct lf_options lf_options_t;
  *                                        consistency check (default 15)
  * The stage keys below default to the values the core is tuned with (the paper's settings,
  * measured on KITTI); read them with lf_options_get_int / lf_options_get_float.
+ * LiDAR input: points the left camera cannot see (a nearer object hides them from the camera;
+ * the LiDAR, mounted elsewhere, sees past its edge) are removed before every stage. A point
+ * is hidden when a point of its window is nearer than d * (1 + ratio) + margin.
+ *   "lidar.visibility_filter"      0/1               (default 1)
+ *   "lidar.visibility_half_width"  int   [0, 64]     window half sizes [px] (default 6, 4)
+ *   "lidar.visibility_half_height" int   [0, 64]
+ *   "lidar.visibility_ratio"       float [0, 10]     (default 0.05)
+ *   "lidar.visibility_margin"      float [0, 16384]  [px of disparity] (default 1)
  * stage 1: LiDAR-supported matching
  *   "matching.support_windows"  0/1  "matching.const1" 0/1  "matching.const2" 0/1
  *                                    windows and the two constraints (need use_lidar; const1

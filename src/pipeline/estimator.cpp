@@ -107,6 +107,7 @@ void EstimatorOptions::validate() const {
             "last_stage out of range");
     require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
             ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");
+    lidar_visibility.validate();
     matching_options(*this).validate();
 }
 
@@ -162,8 +163,17 @@ EstimatorResult Estimator::drop_stage_fields(EstimatorResult r) const {
     return r;
 }
 
-EstimatorResult Estimator::run(const FrameInput &frame, StreamCache *cache) const {
-    check_frame(frame);
+EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) const {
+    check_frame(input);
+    // Every stage, and the LiDAR d0 restored after a scaled run, sees only the visible points.
+    FrameInput visible;
+    const bool filter = options_.use_lidar && options_.lidar_visibility.enabled &&
+                        !(input.lidar0.points.empty() && input.lidar1.points.empty());
+    if (filter)
+        visible = {input.left0, input.right0, input.left1, input.right1,
+                   lidar::remove_hidden_points(input.lidar0, options_.lidar_visibility),
+                   lidar::remove_hidden_points(input.lidar1, options_.lidar_visibility), input.camera};
+    const FrameInput &frame = filter ? visible : input;
     if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;

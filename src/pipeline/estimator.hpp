@@ -15,6 +15,7 @@
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
 #include "interpolation/interpolator.hpp"
+#include "lidar/visibility_filter.hpp"
 #include "matching/matching_options.hpp"
 #include "matching/scene_flow_matcher.hpp"
 
@@ -45,6 +46,10 @@ struct EstimatorOptions {
     // false.
     bool keep_stage_fields = true;
 
+    // LiDAR points the camera cannot see (behind an object's edge, seen past it from the
+    // LiDAR's position) are removed from lidar0 and lidar1 before every stage, at the input's
+    // resolution (lidar/visibility_filter.hpp).
+    lidar::VisibilityFilterOptions lidar_visibility;
     matching::MatchingOptions matching;
     consistency::ConsistencyOptions consistency;
     interp::InterpolationOptions interpolation;

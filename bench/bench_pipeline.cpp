@@ -207,6 +207,7 @@ int run_bench(int argc, char **argv) {
         std::swap(rev.right0, rev.right1);
         std::swap(rev.lidar0, rev.lidar1);
         pipeline::StreamCache cache;
+        bench::reset_peak_rss();
         std::vector<double> stream_total;
         std::map<std::string, std::vector<double>> stream_stage;
         int reused = 0;
@@ -217,6 +218,7 @@ int run_bench(int argc, char **argv) {
             stream_total.push_back(sr.total_seconds);
             for (const pipeline::StageTime &t : sr.timings) stream_stage[t.name].push_back(t.seconds);
         }
+        const double rss_stream = bench::peak_rss_mib();  // with the cache's two descriptor pairs
         for (int r = 0; r < a.runs; ++r) {
             const auto t0 = Clock::now();
             base_est = opencv_baseline(c.input);
@@ -227,8 +229,8 @@ int run_bench(int argc, char **argv) {
             std::printf("  %-22s %7.3f s %7.3f s\n", n.c_str(), bench::median(stage[n]), bench::median(stream_stage[n]));
         std::printf("  %-22s %7.3f s   peak RSS %.0f MiB (%.0f MiB before the first run)\n", "total",
                     bench::median(total), rss_pipeline, rss_before);
-        std::printf("  %-22s %7.3f s   (%d of %d frames reused the previous t1)\n", "streaming, per frame",
-                    bench::median(stream_total), reused, a.runs);
+        std::printf("  %-22s %7.3f s   peak RSS %.0f MiB (%d of %d frames reused the previous t1)\n",
+                    "streaming, per frame", bench::median(stream_total), rss_stream, reused, a.runs);
         const eval::EvalOptions eo;
         print_scores("lidarflow", eval::evaluate_frame(c.gt, last.dense, eo), bench::median(total));
         print_scores("OpenCV SGBM+DIS", eval::evaluate_frame(c.gt, base_est, eo), bench::median(base));

@@ -430,7 +430,8 @@ void test_visibility_filter_synthetic(void **) {
         }
     const std::vector<LidarPoint> hidden = {{31, 11, 10.0f}, {45, 21, 10.5f}, {48, 27, 9.0f}};
     in.points.insert(in.points.end(), hidden.begin(), hidden.end());
-    const lidar::VisibilityFilterOptions o;  // 13 x 9 window, hidden by d * 1.05 + 1
+    lidar::VisibilityFilterOptions o;  // 13 x 9 window, hidden by d * 1.05 + 1
+    o.half_height = 4;  // these points are 2 px apart: the automatic height would be 1 px
     const SparseLidar out = lidar::remove_hidden_points(in, o);
     assert_int_equal(out.width, 80);
     assert_int_equal(out.height, 40);
@@ -466,6 +467,32 @@ void test_visibility_filter_synthetic(void **) {
     off.enabled = false;
     assert_int_equal(lidar::remove_hidden_points(in, off).points.size(), in.points.size());
     assert_true(lidar::remove_hidden_points(SparseLidar{}, o).points.empty());
+}
+
+// half_height 0: the window's half height follows the scan's ring spacing.
+void test_visibility_filter_automatic_height(void **) {
+    const auto rings = [](int spacing) {
+        SparseLidar s{400, 200, {}};
+        for (int y = 2; y < 200; y += spacing)
+            for (int x = 0; x < 400; x += 2) s.points.push_back({x, y, 10.0f});
+        return s;
+    };
+    assert_int_equal(lidar::auto_half_height(rings(5)), 4);    // a 64-beam scan of KITTI
+    assert_int_equal(lidar::auto_half_height(rings(10)), 7);   // 32 beams
+    assert_int_equal(lidar::auto_half_height(rings(19)), 13);  // 16 beams
+    assert_int_equal(lidar::auto_half_height(rings(40)), lidar::kMaxAutoHalfHeight);
+    // Too few points sharing a column to tell: the 64-beam value.
+    assert_int_equal(lidar::auto_half_height(SparseLidar{200, 100, {{10, 10, 5.0f}, {10, 40, 6.0f}}}), 4);
+    // A far point 12 px below a ring of near ones on 19 px rings is hidden with the automatic
+    // height (13 px) and not with the 64-beam one (4 px).
+    SparseLidar s = rings(19);
+    for (LidarPoint &p : s.points)
+        if (p.y == 2 + 19 * 5) p.disparity = 40.0f;  // one near ring
+    s.points.push_back({101, 2 + 19 * 5 + 12, 10.0f});
+    lidar::VisibilityFilterOptions o;
+    assert_null(find_point(lidar::remove_hidden_points(s, o), 101, 2 + 19 * 5 + 12));
+    o.half_height = 4;
+    assert_non_null(find_point(lidar::remove_hidden_points(s, o), 101, 2 + 19 * 5 + 12));
 }
 
 void test_visibility_filter_rejects_bad_input(void **) {
@@ -531,6 +558,7 @@ int main() {
         cmocka_unit_test(test_rings_and_beams),
         cmocka_unit_test(test_velodyne_protocol_real),
         cmocka_unit_test(test_visibility_filter_synthetic),
+        cmocka_unit_test(test_visibility_filter_automatic_height),
         cmocka_unit_test(test_visibility_filter_rejects_bad_input),
         cmocka_unit_test(test_visibility_filter_real),
     };

@@ -118,8 +118,9 @@ typedef struct lf_options lf_options_t;
  * the LiDAR, mounted elsewhere, sees past its edge) are removed before every stage. A point
  * is hidden when a point of its window is nearer than d * (1 + ratio) + margin.
  *   "lidar.visibility_filter"      0/1               (default 1)
- *   "lidar.visibility_half_width"  int   [0, 64]     window half sizes [px] (default 6, 4)
- *   "lidar.visibility_half_height" int   [0, 64]
+ *   "lidar.visibility_half_width"  int   [0, 64]     window half sizes [px] (default 6 and
+ *   "lidar.visibility_half_height" int   [0, 64]     0 = from the points' ring spacing: 4 px
+ *                                                    for a 64-beam scan of a KITTI-size image)
  *   "lidar.visibility_ratio"       float [0, 10]     (default 0.05)
  *   "lidar.visibility_margin"      float [0, 16384]  [px of disparity] (default 1)
  * stage 1: LiDAR-supported matching

@@ -33,7 +33,7 @@ static const key_t_ kKeys[] = {
     {"lidar.visibility_filter", BOOL, 0, 1, 0, NONE, 1},
     {"lidar.visibility_half_width", INT, 0, 64, 0, NONE, 6},
     {"lidar.visibility_half_height", INT, 0, 64, 0, NONE, 0},
-    {"lidar.visibility_ratio", FLOAT, 0, 10, 0, NONE, NAN}, /* 0.05 as float32 */
+    {"lidar.visibility_ratio", FLOAT, 0, 10, 0, NONE, 0.05f}, /* stored as float32 */
     {"lidar.visibility_margin", FLOAT, 0, 16384, 0, NONE, 1},
     {"matching.support_windows", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.const1", BOOL, 0, 1, 0, NONE, NAN},

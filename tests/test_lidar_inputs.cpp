@@ -451,10 +451,23 @@ void test_visibility_filter_synthetic(void **) {
             assert_null(q);
         }
     }
-    // Input order is kept.
-    for (size_t i = 1; i < out.points.size(); ++i)
-        assert_true(out.points[i - 1].y < out.points[i].y ||
-                    (out.points[i - 1].y == out.points[i].y && out.points[i - 1].x < out.points[i].x));
+    // Input order is kept: the same points reversed come out reversed.
+    SparseLidar reversed = in;
+    std::reverse(reversed.points.begin(), reversed.points.end());
+    const SparseLidar rout = lidar::remove_hidden_points(reversed, o);
+    assert_int_equal(rout.points.size(), out.points.size());
+    for (size_t i = 0; i < out.points.size(); ++i) {
+        const LidarPoint &a = out.points[i], &b = rout.points[out.points.size() - 1 - i];
+        assert_true(a.x == b.x && a.y == b.y && a.disparity == b.disparity);
+    }
+    // Two points on one pixel: the nearer hides the farther, in either order.
+    for (const bool near_first : {true, false}) {
+        SparseLidar twin{20, 10, {{5, 5, 30.0f}, {5, 5, 10.0f}}};
+        if (!near_first) std::swap(twin.points[0], twin.points[1]);
+        const SparseLidar kept = lidar::remove_hidden_points(twin, o);
+        assert_int_equal(kept.points.size(), 1);
+        assert_true(kept.points[0].disparity == 30.0f);
+    }
     // A small step in depth (a slanted surface) is not an occlusion: 10 -> 11 is within 10 * 1.05 + 1.
     SparseLidar ramp{40, 10, {}};
     for (int x = 0; x < 40; ++x) ramp.points.push_back({x, 5, 10.0f + 0.1f * static_cast<float>(x)});

@@ -174,22 +174,26 @@ void hidden_lidar_point_is_not_used(void **) {
         if (dx != 0) in.lidar0.points.push_back({hx + dx, hy, near});
     const float hidden = near * 0.3f;
     in.lidar0.points.push_back({hx, hy, hidden});
-    EstimatorOptions o;
-    o.processing_scale = 0.5;
-    o.threads = 2;
-    o.matching.min_coarsest_height = 16;
-    o.keep_stage_fields = false;
-    const EstimatorResult kept = Estimator([&] {
-        EstimatorOptions off = o;
-        off.lidar_visibility.enabled = false;
-        return off;
-    }()).run(in);
-    assert_true(kept.dense.d0(hy, hx) == hidden);
-    const EstimatorResult r = Estimator(o).run(in);
-    assert_true(r.dense.d0(hy, hx) != hidden);
-    assert_true(r.dense.d0(hy, hx + 3) == near);  // the visible neighbours stay
-    std::printf("hidden LiDAR point: d0 %.2f with the filter, %.2f without (near surface %.2f)\n",
-                r.dense.d0(hy, hx), kept.dense.d0(hy, hx), near);
+    // At full resolution the matcher fixes a LiDAR pixel's d0 and stage 4 keeps it; at half
+    // resolution the scaled run restores it.
+    for (const double scale : {1.0, 0.5}) {
+        EstimatorOptions o;
+        o.processing_scale = scale;
+        o.threads = 2;
+        o.matching.min_coarsest_height = 16;
+        o.keep_stage_fields = false;
+        const EstimatorResult kept = Estimator([&] {
+            EstimatorOptions off = o;
+            off.lidar_visibility.enabled = false;
+            return off;
+        }()).run(in);
+        assert_true(kept.dense.d0(hy, hx) == hidden);
+        const EstimatorResult r = Estimator(o).run(in);
+        assert_true(r.dense.d0(hy, hx) != hidden);
+        assert_true(r.dense.d0(hy, hx + 3) == near);  // the visible neighbours stay
+        std::printf("hidden LiDAR point, scale %.1f: d0 %.2f with the filter, %.2f without (near surface %.2f)\n",
+                    scale, r.dense.d0(hy, hx), kept.dense.d0(hy, hx), near);
+    }
 }
 
 }  // namespace

@@ -116,7 +116,8 @@ typedef struct lf_options lf_options_t;
  * measured on KITTI); read them with lf_options_get_int / lf_options_get_float.
  * LiDAR input: points the left camera cannot see (a nearer object hides them from the camera;
  * the LiDAR, mounted elsewhere, sees past its edge) are removed before every stage. A point
- * is hidden when a point of its window is nearer than d * (1 + ratio) + margin.
+ * of disparity d is hidden when a point of its window has a disparity above
+ * d * (1 + ratio) + margin.
  *   "lidar.visibility_filter"      0/1               (default 1)
  *   "lidar.visibility_half_width"  int   [0, 64]     window half sizes [px] (default 6 and
  *   "lidar.visibility_half_height" int   [0, 64]     0 = from the points' ring spacing: 4 px

@@ -6,9 +6,9 @@
 // camera 2, 6 cm to its side), so it sees parts of the background that a nearer object hides
 // from the camera. Projected into the left image, such a point lands on the nearer object, a few
 // pixels inside its edge, with the background's disparity: the estimator would then anchor the
-// object's depth (and its superpixel's plane) to the wrong surface. A point counts as hidden when
-// a point within a small window around it is much nearer, i.e. its window holds a disparity above
-//   d * (1 + ratio) + margin.
+// object's depth (and its superpixel's plane) to the wrong surface. A point of disparity d counts
+// as hidden when a point within a small window around it is much nearer, i.e. has a disparity
+// above d * (1 + ratio) + margin.
 // The window spans the few pixels the offset between the sensors shifts an edge across, and
 // up and down most of the way to the next scan ring, where the nearer surface's own points are:
 // its half height follows the input's ring spacing unless set (the lower quartile of the
@@ -41,9 +41,11 @@ constexpr int kMaxAutoHalfHeight = 16;
 int auto_half_height(const SparseLidar &points);
 
 // The points of `in` that no point of their window hides, in their input order; width and
-// height are kept. Returns `in` unchanged when !o.enabled. Throws Error(InvalidArgument) for bad
-// options and the errors of SparseLidar::validate for points outside the image. Pure function,
-// thread-safe.
+// height are kept. Of several points on one pixel, the nearest hides the others by the same rule.
+// Returns `in` unchanged when !o.enabled. Throws Error(InvalidArgument) for bad options, and the
+// errors of SparseLidar::validate (SizeMismatch is impossible here; InvalidArgument for a point
+// outside the image or a disparity that is NaN or outside [0, kMaxLidarDisparity]). Pure
+// function, thread-safe.
 SparseLidar remove_hidden_points(const SparseLidar &in, const VisibilityFilterOptions &o);
 
 }  // namespace lidarflow::lidar

@@ -64,6 +64,10 @@ constexpr const char *kKeys[] = {
     "interpolation.distance_sigma", "interpolation.disparity_inlier", "interpolation.flow_inlier",
     "interpolation.lidar_anchor_distance", "interpolation.pixel_model_selection", "interpolation.keep_lidar_values",
     "interpolation.random_seed", "interpolation.sed_model",
+    // added later: appended, so that the seed corpus keeps its keys
+    "lidar.visibility_filter", "lidar.visibility_half_width", "lidar.visibility_half_height",
+    "lidar.visibility_ratio", "lidar.visibility_margin", "matching.backward_grid_step", "matching.settle_ratio",
+    "interpolation.exits_follow_background",
     // refused
     "", "threads ", "THREADS", "matching.", "matching.nonexistent", ".threads", "preset\n",
     "interpolation.sed_model.x",

@@ -60,6 +60,13 @@ std::string kitti_or_skip() {
 
 // --- projection -----------------------------------------------------------------------------
 
+// Frame `id`'s Velodyne scan projected into its left image (of the size of `size`).
+SparseLidar project_scan(const io::KittiLayout &L, const std::string &id, cv::Size size) {
+    return lidar::project_to_left(io::read_velodyne_bin(L.velodyne(id)).points,
+                                  io::read_calib_cam_to_cam(L.calib_cam_to_cam(id)),
+                                  io::read_calib_velo_to_cam(L.calib_velo_to_cam(id)), size);
+}
+
 void test_projection_synthetic(void **) {
     const io::CamToCamCalib calib = io::calib_from_camera(test_camera());
     const cv::Size size(80, 60);
@@ -118,10 +125,8 @@ void test_projection_matches_ground_truth(void **) {
     const io::KittiLayout L{root};
     std::vector<double> pooled;
     for (const std::string &id : L.frame_ids()) {
-        const io::CamToCamCalib calib = io::read_calib_cam_to_cam(L.calib_cam_to_cam(id));
         const DisparityMap gt = io::read_disparity_png(L.gt_disp0(id));
-        const SparseLidar s = lidar::project_to_left(io::read_velodyne_bin(L.velodyne(id)).points, calib,
-                                                     io::read_calib_velo_to_cam(L.calib_velo_to_cam(id)), gt.size());
+        const SparseLidar s = project_scan(L, id, gt.size());
         std::vector<double> err;
         for (const LidarPoint &p : s.points)
             if (disparity_valid(gt(p.y, p.x))) err.push_back(std::fabs(gt(p.y, p.x) - p.disparity));
@@ -532,10 +537,8 @@ void test_visibility_filter_real(void **) {
     if (root.empty()) skip();
     const io::KittiLayout L{root};
     for (const std::string &id : L.frame_ids()) {
-        const io::CamToCamCalib calib = io::read_calib_cam_to_cam(L.calib_cam_to_cam(id));
         const DisparityMap gt = io::read_disparity_png(L.gt_disp0(id));
-        const SparseLidar all = lidar::project_to_left(io::read_velodyne_bin(L.velodyne(id)).points, calib,
-                                                       io::read_calib_velo_to_cam(L.calib_velo_to_cam(id)), gt.size());
+        const SparseLidar all = project_scan(L, id, gt.size());
         const SparseLidar kept = lidar::remove_hidden_points(all, {});
         const auto outliers = [&](const SparseLidar &s) {
             long n = 0, bad = 0;

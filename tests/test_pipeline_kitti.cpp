@@ -4,6 +4,7 @@
 // the accuracy recorded, within a tolerance, and meet the targets on the mean.
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
 
 #include "eval/kitti_eval.hpp"
@@ -39,56 +40,55 @@ constexpr double kVelodyneD0MeanBound = 2.0;  // the accuracy issue's D0 target 
 
 std::string g_root;
 
-void golden_frames(void **) {
-    pipeline::EstimatorOptions opt;
-    opt.threads = 2;
-    const pipeline::Estimator estimator(opt);
-    double sum_sf = 0;
-    for (const Golden &g : kGolden) {
-        const pipeline::KittiFrame f = pipeline::load_kitti_frame(g_root, g.id, {});
-        const pipeline::EstimatorResult r = estimator.run(f.input);
-        const SceneFlowField &out = r.dense;
-        assert_int_equal(cv::countNonZero(out.valid), out.valid.rows * out.valid.cols);  // dense
-        for (const LidarPoint &p : f.input.lidar0.points)  // LiDAR d0 is honoured exactly
-            assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);
-        const eval::FrameScore s = eval::evaluate_frame(eval::load_ground_truth(g_root, g.id), out, eval::EvalOptions{});
-        const double sf = s.dense.occ.sf.outlier_pct(), d0 = s.dense.occ.d0.outlier_pct();
-        std::printf("%s: SF %.2f %% (golden %.2f), D0 %.2f %% (golden %.2f), %.2f s\n", g.id, sf, g.sf, d0, g.d0,
-                    r.total_seconds);
-        assert_true(std::fabs(sf - g.sf) <= kTolerance);
-        assert_true(d0 <= g.d0 + kTolerance);
-        sum_sf += sf;
-    }
-    const double mean = sum_sf / 2;
-    std::printf("mean SF %.2f %% (bound %.2f %%)\n", mean, kMeanBound);
-    assert_true(mean <= kMeanBound);
-}
+struct Means {
+    double sf = 0, d0 = 0;
+};
 
-void golden_frames_velodyne(void **) {
+// Runs the default estimator on the golden frames with LiDAR from `lidar`, checks each frame
+// against its record (and with `check`, if given) and returns the means over the frames.
+Means score_golden(const Golden (&golden)[2], const pipeline::LidarInputOptions &lidar, const char *label,
+                   const std::function<void(const pipeline::KittiFrame &, const SceneFlowField &)> &check = {}) {
     pipeline::EstimatorOptions opt;
     opt.threads = 2;
     const pipeline::Estimator estimator(opt);
-    pipeline::LidarInputOptions velodyne;
-    velodyne.protocol = pipeline::LidarProtocol::Velodyne;
-    velodyne.points = 0;  // the whole scan
-    double sum_sf = 0, sum_d0 = 0;
-    for (const Golden &g : kGoldenVelodyne) {
-        const pipeline::KittiFrame f = pipeline::load_kitti_frame(g_root, g.id, velodyne);
-        assert_true(f.input.lidar0.points.size() > 15000);
+    Means m;
+    for (const Golden &g : golden) {
+        const pipeline::KittiFrame f = pipeline::load_kitti_frame(g_root, g.id, lidar);
         const pipeline::EstimatorResult r = estimator.run(f.input);
+        if (check) check(f, r.dense);
         const eval::FrameScore s = eval::evaluate_frame(eval::load_ground_truth(g_root, g.id), r.dense, eval::EvalOptions{});
         const double sf = s.dense.occ.sf.outlier_pct(), d0 = s.dense.occ.d0.outlier_pct();
-        std::printf("%s, Velodyne: SF %.2f %% (golden %.2f), D0 %.2f %% (golden %.2f), %.2f s\n", g.id, sf, g.sf, d0,
+        std::printf("%s%s: SF %.2f %% (golden %.2f), D0 %.2f %% (golden %.2f), %.2f s\n", g.id, label, sf, g.sf, d0,
                     g.d0, r.total_seconds);
         assert_true(std::fabs(sf - g.sf) <= kTolerance);
         assert_true(d0 <= g.d0 + kTolerance);
-        sum_sf += sf;
-        sum_d0 += d0;
+        m.sf += sf / 2;
+        m.d0 += d0 / 2;
     }
-    std::printf("Velodyne: mean SF %.2f %% (bound %.2f %%), mean D0 %.2f %% (bound %.2f %%)\n", sum_sf / 2,
-                kVelodyneMeanBound, sum_d0 / 2, kVelodyneD0MeanBound);
-    assert_true(sum_sf / 2 <= kVelodyneMeanBound);
-    assert_true(sum_d0 / 2 <= kVelodyneD0MeanBound);
+    return m;
+}
+
+void golden_frames(void **) {
+    const Means m = score_golden(kGolden, {}, "", [](const pipeline::KittiFrame &f, const SceneFlowField &out) {
+        assert_int_equal(cv::countNonZero(out.valid), out.valid.rows * out.valid.cols);  // dense
+        for (const LidarPoint &p : f.input.lidar0.points)  // LiDAR d0 is honoured exactly
+            assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);
+    });
+    std::printf("mean SF %.2f %% (bound %.2f %%)\n", m.sf, kMeanBound);
+    assert_true(m.sf <= kMeanBound);
+}
+
+void golden_frames_velodyne(void **) {
+    pipeline::LidarInputOptions velodyne;
+    velodyne.protocol = pipeline::LidarProtocol::Velodyne;
+    velodyne.points = 0;  // the whole scan
+    const Means m = score_golden(kGoldenVelodyne, velodyne, ", Velodyne", [](const pipeline::KittiFrame &f, const SceneFlowField &) {
+        assert_true(f.input.lidar0.points.size() > 15000);
+    });
+    std::printf("Velodyne: mean SF %.2f %% (bound %.2f %%), mean D0 %.2f %% (bound %.2f %%)\n", m.sf,
+                kVelodyneMeanBound, m.d0, kVelodyneD0MeanBound);
+    assert_true(m.sf <= kVelodyneMeanBound);
+    assert_true(m.d0 <= kVelodyneD0MeanBound);
 }
 
 }  // namespace

@@ -163,17 +163,15 @@ EstimatorResult Estimator::drop_stage_fields(EstimatorResult r) const {
     return r;
 }
 
+SparseLidar lidar_in_use(const EstimatorOptions &o, const SparseLidar &lidar) {
+    return o.use_lidar ? lidar::remove_hidden_points(lidar, o.lidar_visibility) : lidar;
+}
+
 EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) const {
     check_frame(input);
-    // Every stage, and the LiDAR d0 restored after a scaled run, sees only the visible points.
-    FrameInput visible;
-    const bool filter = options_.use_lidar && options_.lidar_visibility.enabled &&
-                        !(input.lidar0.points.empty() && input.lidar1.points.empty());
-    if (filter)
-        visible = {input.left0, input.right0, input.left1, input.right1,
-                   lidar::remove_hidden_points(input.lidar0, options_.lidar_visibility),
-                   lidar::remove_hidden_points(input.lidar1, options_.lidar_visibility), input.camera};
-    const FrameInput &frame = filter ? visible : input;
+    // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
+    const FrameInput frame{input.left0, input.right0, input.left1, input.right1,
+                           lidar_in_use(options_, input.lidar0), lidar_in_use(options_, input.lidar1), input.camera};
     if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;

@@ -68,6 +68,11 @@ struct EstimatorOptions {
     static EstimatorOptions preset(const std::string &name);
 };
 
+// The points of `lidar` that the estimator's stages use under `o`: those the visibility filter
+// keeps (lidar/visibility_filter.hpp), or all of them when it is off or LiDAR is not used.
+// Throws like lidar::remove_hidden_points.
+SparseLidar lidar_in_use(const EstimatorOptions &o, const SparseLidar &lidar);
+
 // Caller-owned views, only read during run().
 struct FrameInput {
     cv::Mat left0, right0, left1, right1;  // rectified, 8-bit gray or BGR, all one size

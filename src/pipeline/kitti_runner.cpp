@@ -17,7 +17,6 @@
 #include "io/velodyne.hpp"
 #include "lidar/paper_protocol.hpp"
 #include "lidar/velodyne_protocol.hpp"
-#include "lidar/visibility_filter.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
@@ -200,9 +199,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         if (progress) progress(i, ids.size(), id + ": loading");
         const KittiFrame frame = load_kitti_frame(o.root, id, o.lidar);
         // Table II scores the D_l^0 the estimator used: after its visibility filter.
-        const bool filtered = main_opt.use_lidar && main_opt.lidar_visibility.enabled;
-        const DisparityMap seeds =
-            (filtered ? lidar::remove_hidden_points(frame.input.lidar0, main_opt.lidar_visibility) : frame.input.lidar0).to_map();
+        const DisparityMap seeds = lidar_in_use(main_opt, frame.input.lidar0).to_map();
         const bool scored = has_ground_truth(k, id);
         eval::FrameGroundTruth gt;
         if (scored) gt = eval::load_ground_truth(o.root, id);

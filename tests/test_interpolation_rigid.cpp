@@ -114,6 +114,15 @@ void rigid_fit_robust_and_deterministic(void **) {
     assert_int_equal(again.inliers, m.inliers);
     for (int k = 0; k < 9; ++k) assert_true(again.R[k] == m.R[k]);
     for (int k = 0; k < 3; ++k) assert_true(again.t[k] == m.t[k]);
+    // The hypotheses are scored in parallel: the same model, bit for bit, on any thread count.
+    for (int threads : {2, 3, 7}) {
+        interp::EgoMotionOptions o;
+        o.threads = threads;
+        const interp::EgoMotion par = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, o, cam);
+        assert_int_equal(par.inliers, m.inliers);
+        for (int k = 0; k < 9; ++k) assert_true(par.R[k] == m.R[k]);
+        for (int k = 0; k < 3; ++k) assert_true(par.t[k] == m.t[k]);
+    }
 }
 
 void rigid_fit_refuses(void **) {

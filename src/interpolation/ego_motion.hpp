@@ -48,6 +48,7 @@ struct EgoMotionOptions {
     int min_inliers = 50;
     int joint_rounds = 4;           // depth/flow alternations after the separate fits (>= 0)
     unsigned seed = 1;
+    int threads = 1;  // OpenMP threads of the rigid model's hypothesis scoring; results do not depend on it
 };
 
 // Fits the model to matches given as parallel arrays (same length; d0, d1 > 0 where usable:

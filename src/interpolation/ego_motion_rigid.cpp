@@ -8,6 +8,7 @@
 // which stays finite for d0 -> 0 (points at infinity move by the rotation only).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "core/random.hpp"
 #include "interpolation/ego_motion.hpp"
@@ -83,10 +84,11 @@ struct Data {
         e_f = std::hypot(p.xp - x[i] - u[i], p.yp - y[i] - v[i]);
     }
 
-    // One damped Gauss-Newton step on the points `ids`; false when the system is singular.
-    bool step(Rigid &m, const std::vector<int> &ids) const {
+    // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
+    bool step(Rigid &m, const int *ids, size_t n) const {
         double A[36] = {}, b[6] = {};
-        for (int i : ids) {
+        for (size_t k = 0; k < n; ++k) {
+            const int i = ids[k];
             const Prediction p = project(m, cam, x[i], y[i], d0[i]);
             if (p.n[2] < kMinDepthRatio) continue;
             const double iz = 1.0 / p.n[2];
@@ -178,36 +180,64 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     for (int k = 0; k < n; k += stride) probe.push_back(ids[k]);
     Rng rng(0x516ull ^ (static_cast<uint64_t>(o.seed) << 17));
 
+    const int threads = std::max(1, o.threads);
+    // Inliers of m among set[0 .. count); their ids, in set order, into *out when given. The
+    // per-point tests run in parallel, the count is an integer: the same on any thread count.
+    std::vector<uint8_t> is_inlier(static_cast<size_t>(n));
     auto inliers_of = [&](const Rigid &m, const std::vector<int> &set, std::vector<int> *out) {
-        int count = 0;
-        if (out) out->clear();
-        for (int i : set) {
+        const int count = static_cast<int>(set.size());
+        if (is_inlier.size() < set.size()) is_inlier.resize(set.size());
+        int inliers = 0;
+#pragma omp parallel for schedule(static) reduction(+ : inliers) num_threads(threads)
+        for (int k = 0; k < count; ++k) {
             double ed, ef;
-            data.errors(m, i, ed, ef);
-            if (ed < o.disparity_inlier && ef < o.flow_inlier) {
-                ++count;
-                if (out) out->push_back(i);
-            }
+            data.errors(m, set[k], ed, ef);
+            is_inlier[k] = ed < o.disparity_inlier && ef < o.flow_inlier;
+            inliers += is_inlier[k];
         }
-        return count;
+        if (out) {
+            out->clear();
+            for (int k = 0; k < count; ++k)
+                if (is_inlier[k]) out->push_back(set[k]);
+        }
+        return inliers;
     };
-    Rigid best;
-    int best_count = -1;
-    std::vector<int> sample(3);
-    for (int h = 0; h < o.hypotheses; ++h) {
+    // Every hypothesis' sample is drawn first, in the order one loop over them would draw it;
+    // the hypotheses are then solved and scored in parallel, and the first of the best in draw
+    // order wins, as in that loop.
+    const int hypotheses = o.hypotheses;
+    std::vector<int> samples(3 * static_cast<size_t>(std::max(hypotheses, 0)));
+    for (int h = 0; h < hypotheses; ++h) {
+        int *sample = &samples[3 * static_cast<size_t>(h)];
         for (int k = 0; k < 3; ++k) {
             int tries = 0;
             do {
                 sample[k] = probe[rng.below(static_cast<int>(probe.size()))];
-            } while (std::find(sample.begin(), sample.begin() + k, sample[k]) != sample.begin() + k && ++tries < 8);
+            } while (std::find(sample, sample + k, sample[k]) != sample + k && ++tries < 8);
         }
+    }
+    std::vector<Rigid> models(samples.size() / 3);
+    std::vector<int> counts(samples.size() / 3, -1);
+    const int probes = static_cast<int>(probe.size());
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+    for (int h = 0; h < hypotheses; ++h) {
         Rigid m;
         bool ok = true;
-        for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, sample);
+        for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, &samples[3 * static_cast<size_t>(h)], 3);
         if (!ok) continue;
-        const int count = inliers_of(m, probe, nullptr);
-        if (count > best_count) best_count = count, best = m;
+        int count = 0;
+        for (int k = 0; k < probes; ++k) {
+            double ed, ef;
+            data.errors(m, probe[k], ed, ef);
+            count += ed < o.disparity_inlier && ef < o.flow_inlier;
+        }
+        models[h] = m;
+        counts[h] = count;
     }
+    Rigid best;
+    int best_count = -1;
+    for (int h = 0; h < hypotheses; ++h)
+        if (counts[h] > best_count) best_count = counts[h], best = models[h];
     if (best_count < 4) return em;
     // Refit on the inliers of all matches; the inlier set is re-selected each round.
     std::vector<int> in;
@@ -215,7 +245,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         if (inliers_of(best, ids, &in) < 4) break;
         Rigid m = best;
         bool ok = true;
-        for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in);
+        for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in.data(), in.size());
         if (!ok) break;
         best = m;
     }

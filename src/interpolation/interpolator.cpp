@@ -464,6 +464,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     if (o.ego_motion) {
         EgoMotionOptions eo = o.ego;
         eo.seed = o.random_seed;
+        eo.threads = o.num_threads;
         std::vector<float> mx, my, md0, md1, mu, mv;
         for (int i = 0; i < seeds.size(); ++i)
             if (seeds.has_motion[i]) {

@@ -15,6 +15,11 @@
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
 #   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
+#   tools/dev.sh bridge-rate [PRESET] [HZ] [LOOPS]  build, then play the KITTI frames of
+#                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
+#                            2), LOOPS times (default 10), through the bridge at PRESET (default
+#                            default); prints the bridge's final counters (stale drops, results,
+#                            latency)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
@@ -120,6 +125,25 @@ fuzz() {
     [ ${#failed[@]} -eq 0 ] || { echo "dev.sh fuzz: findings in ${failed[*]}"; return 1; }
 }
 
+# bridge_rate PRESET HZ LOOPS: whether the bridge keeps up with a KITTI stream of that rate.
+bridge_rate() {
+    local preset="$1" hz="$2" loops="$3"
+    kitti_env
+    [ -n "${LIDARFLOW_KITTI_DIR:-}" ] || { echo "dev.sh bridge-rate: needs LIDARFLOW_KITTI_DIR"; return 1; }
+    local url='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=16777216' log
+    log="$(mktemp)"
+    "$root/build/bridge/lidarflow-lcm-bridge" --lcm-url "$url" --option "preset=$preset" >"$log" 2>&1 &
+    local bridge=$!
+    sleep 1  # the bridge subscribes before the first calibration goes out
+    "$root/build/tools/lidarflow/lidarflow" publish-kitti --root "$LIDARFLOW_KITTI_DIR" --lidar paper \
+        --lcm-url "$url" --rate "$hz" --loop "$loops" >/dev/null
+    sleep 4  # the last pair's result
+    kill -INT "$bridge"
+    wait "$bridge" || true
+    grep 'stopped' "$log" || { cat "$log"; rm -f "$log"; return 1; }
+    rm -f "$log"
+}
+
 case "${1:-}" in
     deps) deps ;;
     build) deps; build build ;;
@@ -174,5 +198,6 @@ case "${1:-}" in
         # lintian's errors fail the verb; its warnings are printed (docs/ARCHITECTURE.md lists them).
         lintian --fail-on error "$root"/build/packages/*.deb
         ls -1 "$root"/build/packages/*.deb ;;
+    bridge-rate) deps; build build; shift; bridge_rate "${1:-default}" "${2:-2}" "${3:-10}" ;;
     *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;
 esac

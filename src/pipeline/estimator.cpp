@@ -245,6 +245,11 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
         return r;
     }
 
+    // Stage 4 reads only the sparse matches and the SGM disparity: fields nobody keeps are
+    // released first, so that stage 4's own memory reuses theirs instead of adding to it.
+    if (!options_.keep_stage_fields)
+        for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb}) *f = SceneFlowField();
+
     // Stage 4.
     t = Clock::now();
     r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera).dense;

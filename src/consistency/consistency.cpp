@@ -30,30 +30,36 @@ ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlow
     detail::check_size(sgm, h, w, "SGM disparity");
     const LidarReference lidar = LidarReference::build(lidar0, w, h, opt.support_window);
 
-    // LiDAR d0 is exact (the matcher may not move it); put it in so that every output carries it.
-    SceneFlowField input = forward;
-    if (!lidar.image_only()) {
-        input.d0 = forward.d0.clone();
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x)
-                if (lidar.is_lidar(y, x) && forward.valid(y, x)) input.d0(y, x) = lidar.disparity(y, x);
-    }
-
     ConsistencyResult r;
     r.sgm = sgm.clone();
     r.lidar_pixels = lidar.is_lidar.clone();
-    r.counts.input = count_valid(input);
     r.counts.lidar_pixels = lidar.count;
 
-    Clock::time_point t = Clock::now();
-    const SceneFlowField checked_sgm = sgm_check(input, sgm, lidar, opt);
-    r.seconds.sgm_check = seconds_since(t);
-    r.counts.after_sgm_check = count_valid(checked_sgm);
+    // Intermediate fields (~10 MB each on KITTI) live only as long as the next step needs them:
+    // this stage's high-water mark stays resident in a process that keeps its freed heap.
+    Clock::time_point t;
+    {
+        // LiDAR d0 is exact (the matcher may not move it); put it in so that every output carries it.
+        SceneFlowField input = forward;
+        if (!lidar.image_only()) {
+            input.d0 = forward.d0.clone();
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x)
+                    if (lidar.is_lidar(y, x) && forward.valid(y, x)) input.d0(y, x) = lidar.disparity(y, x);
+        }
+        r.counts.input = count_valid(input);
 
-    t = Clock::now();
-    r.after_sgm = remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), opt).field;
-    r.seconds.sgm_clusters = seconds_since(t);
-    r.counts.after_sgm_clusters = count_valid(r.after_sgm);
+        t = Clock::now();
+        SceneFlowField checked_sgm = sgm_check(input, sgm, lidar, opt);
+        r.seconds.sgm_check = seconds_since(t);
+        r.counts.after_sgm_check = count_valid(checked_sgm);
+        input = SceneFlowField();
+
+        t = Clock::now();
+        r.after_sgm = remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), opt).field;
+        r.seconds.sgm_clusters = seconds_since(t);
+        r.counts.after_sgm_clusters = count_valid(r.after_sgm);
+    }
 
     t = Clock::now();
     ForwardBackwardResult fb = forward_backward_check(r.after_sgm, backward, lidar, opt);
@@ -63,6 +69,7 @@ ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlow
 
     t = Clock::now();
     r.after_fb = remove_small_clusters(fb.field, lidar, fb.lidar_motion_unreliable, opt).field;
+    fb.field = SceneFlowField();
     r.seconds.fb_clusters = seconds_since(t);
     r.counts.after_fb_clusters = count_valid(r.after_fb);
 

@@ -181,6 +181,11 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     Rng rng(0x516ull ^ (static_cast<uint64_t>(o.seed) << 17));
 
     const int threads = std::max(1, o.threads);
+    const auto fits = [&](const Rigid &m, int i) {
+        double ed, ef;
+        data.errors(m, i, ed, ef);
+        return ed < o.disparity_inlier && ef < o.flow_inlier;
+    };
     // Inliers of m among set[0 .. count); their ids, in set order, into *out when given. The
     // per-point tests run in parallel, the count is an integer: the same on any thread count.
     std::vector<uint8_t> is_inlier(static_cast<size_t>(n));
@@ -190,9 +195,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         int inliers = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inliers) num_threads(threads)
         for (int k = 0; k < count; ++k) {
-            double ed, ef;
-            data.errors(m, set[k], ed, ef);
-            is_inlier[k] = ed < o.disparity_inlier && ef < o.flow_inlier;
+            is_inlier[k] = fits(m, set[k]);
             inliers += is_inlier[k];
         }
         if (out) {
@@ -226,11 +229,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, &samples[3 * static_cast<size_t>(h)], 3);
         if (!ok) continue;
         int count = 0;
-        for (int k = 0; k < probes; ++k) {
-            double ed, ef;
-            data.errors(m, probe[k], ed, ef);
-            count += ed < o.disparity_inlier && ef < o.flow_inlier;
-        }
+        for (int k = 0; k < probes; ++k) count += fits(m, probe[k]);
         models[h] = m;
         counts[h] = count;
     }

@@ -2,11 +2,18 @@
 // Stage 2a (SGM check) and stage 2b (forward-backward check) on hand-built fields, the SGM
 // reference disparity on a shifted random texture, and input validation.
 #include <cmath>
+#include <cstdio>
+#include <new>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <opencv2/imgproc.hpp>
 
 #include "consistency/consistency.hpp"
 #include "consistency/ground_truth_fields.hpp"
+#include "core/sanitizers.hpp"
 #include "consistency_fixtures.hpp"  // last: brings cmocka
 
 using namespace lidarflow;
@@ -113,6 +120,48 @@ void sgm_disparity_of_shifted_texture(void **) {
     opt.num_disparities = 20;  // not a multiple of 16
     assert_int_equal(static_cast<int>(error_code_of([&] { compute_sgm_disparity(left, right, opt); })),
                      static_cast<int>(ErrorCode::InvalidArgument));
+}
+
+// Under an address-space limit too tight for SGBM's scratch, compute_sgm_disparity throws
+// std::bad_alloc instead of letting OpenCV 4.6 end the process (its BufferArea asserts after a
+// failed allocation). In a forked child, so that the limit and a crash stay there.
+void sgm_reports_missing_address_space(void **) {
+#if LIDARFLOW_SANITIZED
+    skip();  // the sanitizers' shadow memory ignores (and breaks under) address-space limits
+#else
+    fflush(nullptr);
+    const pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        cv::Mat1b left(375, 1242), right(375, 1242);
+        cv::RNG rng(3);
+        rng.fill(left, cv::RNG::UNIFORM, 0, 256);
+        rng.fill(right, cv::RNG::UNIFORM, 0, 256);
+        (void)compute_sgm_disparity(left(cv::Rect(0, 0, 64, 32)), right(cv::Rect(0, 0, 64, 32)));  // warm up
+        std::FILE *f = std::fopen("/proc/self/statm", "r");
+        unsigned long pages = 0;
+        if (!f || std::fscanf(f, "%lu", &pages) != 1) _exit(3);
+        std::fclose(f);
+        struct rlimit lim;
+        getrlimit(RLIMIT_AS, &lim);
+        lim.rlim_cur = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (1 << 20);  // 1 MiB to spare
+        if (setrlimit(RLIMIT_AS, &lim) != 0) _exit(3);
+        try {
+            (void)compute_sgm_disparity(left, right);
+        } catch (const std::bad_alloc &) {
+            _exit(0);
+        } catch (const cv::Exception &e) {
+            _exit(e.code == cv::Error::StsNoMem ? 0 : 2);  // a cv::Mat of its own: also clean
+        } catch (...) {
+            _exit(2);
+        }
+        _exit(1);  // 1 MiB cannot hold a KITTI-size SGM
+    }
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+#endif
 }
 
 void forward_backward_keeps_consistent_round_trips(void **) {
@@ -335,6 +384,7 @@ int main() {
         cmocka_unit_test(sgm_check_spares_lidar_and_support_windows),
         cmocka_unit_test(sgm_check_unverified_pixels_follow_option),
         cmocka_unit_test(sgm_disparity_of_shifted_texture),
+        cmocka_unit_test(sgm_reports_missing_address_space),
         cmocka_unit_test(forward_backward_keeps_consistent_round_trips),
         cmocka_unit_test(forward_backward_removes_each_kind_of_mismatch),
         cmocka_unit_test(forward_backward_checks_windows_and_lidar_motion),

@@ -1,8 +1,15 @@
 // SPDX-License-Identifier: MIT
 #include "consistency/sgm_check.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <new>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <opencv2/calib3d.hpp>
 
@@ -10,6 +17,39 @@
 #include "core/error.hpp"
 
 namespace lidarflow::consistency {
+namespace {
+
+// Bytes of address space the process may still map under RLIMIT_AS (`ulimit -v`), or SIZE_MAX
+// without a limit or when it cannot be read.
+size_t address_space_headroom() {
+    struct rlimit lim;
+    if (getrlimit(RLIMIT_AS, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY) return SIZE_MAX;
+    std::FILE *f = std::fopen("/proc/self/statm", "r");
+    if (!f) return SIZE_MAX;
+    unsigned long pages = 0;
+    const bool ok = std::fscanf(f, "%lu", &pages) == 1;
+    std::fclose(f);
+    if (!ok) return SIZE_MAX;
+    const size_t used = static_cast<size_t>(pages) * static_cast<size_t>(sysconf(_SC_PAGESIZE));
+    return used >= lim.rlim_cur ? 0 : static_cast<size_t>(lim.rlim_cur) - used;
+}
+
+// OpenCV 4.6's SGBM ends the process (std::terminate) when one of its scratch buffers cannot be
+// allocated: its cv::utils::BufferArea asserts in the destructor that runs after the failed
+// allocation (later OpenCV releases dropped that assertion). Under an address-space limit,
+// where malloc does fail, the headroom is checked first and a shortfall reported as
+// std::bad_alloc (LF_ERR_OUT_OF_MEMORY in the C ABI). The need is bounded generously: each
+// OpenCV worker holds a few 16-bit cost lines (pixels x disparities) and block + 1 lines of
+// partial sums; counted as block + 8 lines (~1.3x that) per worker, times 1.5 (~4.5 MB per
+// worker on a padded KITTI row). Without a limit this costs one getrlimit call.
+void require_sgm_headroom(int width, int num_disparities, int block_size) {
+    const size_t line = static_cast<size_t>(width + num_disparities + 2) * num_disparities * sizeof(short);
+    const size_t per_worker = line * static_cast<size_t>(block_size + 8);
+    const size_t need = per_worker * static_cast<size_t>(std::max(1, cv::getNumThreads())) * 3 / 2;
+    if (address_space_headroom() < need) throw std::bad_alloc();
+}
+
+}  // namespace
 
 DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmOptions &opt) {
     require(!left.empty() && !right.empty(), ErrorCode::InvalidArgument, "SGM: empty image");
@@ -44,7 +84,8 @@ DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, co
         cv::copyMakeBorder(left, l, 0, 0, pad, 0, cv::BORDER_REPLICATE);
         cv::copyMakeBorder(right, r, 0, 0, pad, 0, cv::BORDER_REPLICATE);
     }
-    cv::Mat disp16;
+    cv::Mat disp16(l.size(), CV_16S);  // allocated here, where a failure throws cleanly
+    require_sgm_headroom(l.cols, opt.num_disparities, b);
     sgbm->compute(l, r, disp16);
     CV_Assert(disp16.type() == CV_16S);
     DisparityMap out(left.rows, left.cols, kInvalidDisparity);

@@ -13,13 +13,13 @@
 // time-reversed pair, so every run after the first starts from the previous run's t1 images.
 // DIR defaults to $LIDARFLOW_KITTI_DIR; without it only the synthetic scene is measured.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
-#include <thread>
-#include <cmath>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "core/lidar.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -14,7 +15,7 @@ DisparityMap SparseLidar::to_map() const {
     for (const LidarPoint &p : points) {
         require(p.x >= 0 && p.y >= 0 && p.x < width && p.y < height, ErrorCode::InvalidArgument,
                 "LiDAR point outside the image");
-        map(p.y, p.x) = p.disparity;
+        map(p.y, p.x) = std::max(map(p.y, p.x), p.disparity);
     }
     return map;
 }

@@ -17,7 +17,8 @@ struct SparseLidar {
     int width = 0, height = 0;  // size of the image the points live in
     std::vector<LidarPoint> points;
 
-    // Dense map with the points' disparities and kInvalidDisparity elsewhere.
+    // Dense map with the points' disparities and kInvalidDisparity elsewhere. Of several points
+    // on one pixel the largest disparity (the nearest, visible surface) wins, whatever their order.
     DisparityMap to_map() const;
     // Every valid pixel of a disparity map becomes a point (row-major order).
     static SparseLidar from_map(const DisparityMap &map);

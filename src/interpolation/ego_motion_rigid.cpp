@@ -186,22 +186,20 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         data.errors(m, i, ed, ef);
         return ed < o.disparity_inlier && ef < o.flow_inlier;
     };
-    // Inliers of m among set[0 .. count); their ids, in set order, into *out when given. The
-    // per-point tests run in parallel, the count is an integer: the same on any thread count.
+    // Inliers of m among all matches; their ids, in order, into *out when given. The per-point
+    // tests run in parallel, the count is an integer: the same on any thread count.
     std::vector<uint8_t> is_inlier(static_cast<size_t>(n));
-    auto inliers_of = [&](const Rigid &m, const std::vector<int> &set, std::vector<int> *out) {
-        const int count = static_cast<int>(set.size());
-        if (is_inlier.size() < set.size()) is_inlier.resize(set.size());
+    auto inliers_of = [&](const Rigid &m, std::vector<int> *out) {
         int inliers = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inliers) num_threads(threads)
-        for (int k = 0; k < count; ++k) {
-            is_inlier[k] = fits(m, set[k]);
+        for (int k = 0; k < n; ++k) {
+            is_inlier[k] = fits(m, ids[k]);
             inliers += is_inlier[k];
         }
         if (out) {
             out->clear();
-            for (int k = 0; k < count; ++k)
-                if (is_inlier[k]) out->push_back(set[k]);
+            for (int k = 0; k < n; ++k)
+                if (is_inlier[k]) out->push_back(ids[k]);
         }
         return inliers;
     };
@@ -241,7 +239,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     // Refit on the inliers of all matches; the inlier set is re-selected each round.
     std::vector<int> in;
     for (int round = 0; round < 3; ++round) {
-        if (inliers_of(best, ids, &in) < 4) break;
+        if (inliers_of(best, &in) < 4) break;
         Rigid m = best;
         bool ok = true;
         for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in.data(), in.size());
@@ -252,7 +250,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     em.camera = camera;
     std::copy(best.R, best.R + 9, em.R);
     std::copy(best.t, best.t + 3, em.t);
-    em.inliers = inliers_of(best, ids, nullptr);
+    em.inliers = inliers_of(best, nullptr);
     em.valid = em.inliers >= std::max(o.min_inliers, static_cast<int>(std::ceil(o.min_inlier_share * n)));
     return em;
 }

@@ -48,9 +48,7 @@ SparseLidar remove_hidden_points(const SparseLidar &in, const VisibilityFilterOp
     // The nearest point of every window at once: a max filter (dilation) of the sparse
     // disparity map, whose empty pixels (kInvalidDisparity < 0) never win.
     const int half_height = o.half_height > 0 ? o.half_height : auto_half_height(in);
-    // Several points on one pixel: the nearest is the one that hides, whatever their order.
-    DisparityMap map(in.height, in.width, kInvalidDisparity);
-    for (const LidarPoint &p : in.points) map(p.y, p.x) = std::max(map(p.y, p.x), p.disparity);
+    const DisparityMap map = in.to_map();  // of several points on one pixel, the nearest
     DisparityMap nearest;
     cv::dilate(map, nearest,
                cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * o.half_width + 1, 2 * half_height + 1)),

@@ -2,7 +2,8 @@
 // Stage 4 with a known camera: the rigid ego-motion fit (fit_rigid_ego_motion) recovers an
 // exact rigid motion from clean and from outlier-ridden matches and refuses without a camera or
 // support; the interpolator uses it when run() gets a valid camera; occlusion reasoning gives
-// matches hidden at t1 (d1 matched on a near object) the background's d1; new options are
+// matches hidden at t1 (d1 matched on a near object) the background's d1, and matches that
+// its flow shows static too, unless they may move along the optical axis; new options are
 // validated.
 #include "test_support.hpp"
 
@@ -221,6 +222,8 @@ void occlusion_reasoning_fixes_hidden_d1(void **) {
     // The hidden band's wrong d1 must dominate its superpixels' neighbourhoods: with the default
     // 256 neighbours the visible matches around it already fix it (0.16 px off and on).
     o.num_neighbors = 64;
+    // The hidden wall is static by its flow, so the static-d1 rule alone would fix it too.
+    o.static_d1_from_background = false;
     o.occlusion_reasoning = false;
     const interp::InterpolationResult off = interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
     o.occlusion_reasoning = true;
@@ -241,6 +244,92 @@ void occlusion_reasoning_fixes_hidden_d1(void **) {
     assert_false(nocam.ego.calibrated);
 }
 
+// A wall at 20 m seen by a camera driving forward, with a patch of matches whose d1 is 3 px
+// off (a coherent t1 stereo mistake, flow right), and a car ahead, around the principal point,
+// that keeps its distance: its flow is within the static tolerance of the background's, but
+// its d1 is not the background's. The rule must fix the patch and leave the car alone; without
+// the discrimination guard it paints the car with the background's d1.
+struct StaticCase {
+    cv::Mat image;
+    SceneFlowField truth, matches;
+    cv::Rect patch, car;
+    StereoCamera cam;
+};
+
+StaticCase static_case() {
+    StaticCase c;
+    const int w = 320, h = 160;
+    c.cam.fx = c.cam.fy = 200;
+    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
+    interp::EgoMotion ego;
+    ego.valid = ego.calibrated = true;
+    ego.camera = c.cam;
+    ego.t[2] = -0.5;
+    c.patch = cv::Rect(20, 50, 48, 48);
+    c.car = cv::Rect(150, 70, 21, 21);  // 5 m ahead, within ~14 px of the principal point
+    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
+    c.image(c.car).setTo(cv::Scalar(30, 40, 200));
+    c.truth = SceneFlowField::zeros(w, h);
+    c.truth.valid.setTo(1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float d1, u, v;
+            if (c.car.contains({x, y})) {
+                c.truth.d0(y, x) = c.truth.d1(y, x) = 20.0f;  // same speed as the camera
+            } else {
+                ego.predict(static_cast<float>(x), static_cast<float>(y), 5.0f, d1, u, v);
+                c.truth.d0(y, x) = 5.0f, c.truth.d1(y, x) = d1, c.truth.u(y, x) = u, c.truth.v(y, x) = v;
+            }
+        }
+    c.matches = SceneFlowField::zeros(w, h);
+    test::TestRng rng(5);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (rng.uniform() >= 0.15) continue;
+            c.matches.u(y, x) = c.truth.u(y, x), c.matches.v(y, x) = c.truth.v(y, x);
+            c.matches.d0(y, x) = c.truth.d0(y, x);
+            c.matches.d1(y, x) = c.truth.d1(y, x) + (c.patch.contains({x, y}) ? 3.0f : 0.0f);
+            c.matches.valid(y, x) = 1;
+        }
+    return c;
+}
+
+double mean_d1_error(const SceneFlowField &est, const SceneFlowField &truth, const cv::Rect &r) {
+    double sum = 0;
+    for (int y = r.y; y < r.y + r.height; ++y)
+        for (int x = r.x; x < r.x + r.width; ++x) sum += std::fabs(est.d1(y, x) - truth.d1(y, x));
+    return sum / r.area();
+}
+
+void static_matches_take_background_d1(void **) {
+    const StaticCase c = static_case();
+    interp::InterpolationOptions o;
+    o.num_neighbors = 64;  // the patch's wrong d1 must dominate its superpixels' neighbourhoods
+    auto run = [&](bool rule, float discrimination) {
+        o.static_d1_from_background = rule;
+        o.static_d1_discrimination = discrimination;
+        return interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+    };
+    const interp::InterpolationResult off = run(false, 2.0f), on = run(true, 2.0f), unguarded = run(true, 0.0f);
+    std::printf("static d1: car error off %.2f; patch error off %.2f / on %.2f px (%d matches released); car error on %.2f, "
+                "without the guard %.2f px\n",
+                mean_d1_error(off.dense, c.truth, c.car), mean_d1_error(off.dense, c.truth, c.patch), mean_d1_error(on.dense, c.truth, c.patch),
+                on.static_d1_seeds, mean_d1_error(on.dense, c.truth, c.car),
+                mean_d1_error(unguarded.dense, c.truth, c.car));
+    assert_true(on.ego.valid && on.ego.calibrated);
+    assert_int_equal(off.static_d1_seeds, 0);
+    assert_true(mean_d1_error(off.dense, c.truth, c.patch) > 2.0);
+    assert_true(mean_d1_error(on.dense, c.truth, c.patch) < 0.5);
+    // The car is left as it was without the rule (its edge pixels share superpixels with the
+    // wall either way); unguarded, the rule moves it onto the background's d1.
+    const double car_off = mean_d1_error(off.dense, c.truth, c.car);
+    assert_true(std::fabs(mean_d1_error(on.dense, c.truth, c.car) - car_off) < 0.05);
+    assert_true(mean_d1_error(unguarded.dense, c.truth, c.car) > car_off + 1.0);
+    // Without the camera there is no rigid model, and nothing is released.
+    o.static_d1_from_background = true;
+    assert_int_equal(interp::RobustInterpolator(o).run(c.matches, {}, c.image).static_d1_seeds, 0);
+}
+
 void rejects_bad_rigid_options(void **) {
     using O = interp::InterpolationOptions;
     auto bad = [](void (*edit)(O &)) {
@@ -253,6 +342,10 @@ void rejects_bad_rigid_options(void **) {
     bad([](O &o) { o.background_preference = std::nanf(""); });
     bad([](O &o) { o.occlusion_margin = 0; });
     bad([](O &o) { o.occlusion_margin = std::nanf(""); });
+    bad([](O &o) { o.static_flow_tolerance = 0; });
+    bad([](O &o) { o.static_flow_tolerance = std::nanf(""); });
+    bad([](O &o) { o.static_d1_discrimination = -1; });
+    bad([](O &o) { o.static_d1_discrimination = INFINITY; });
 }
 
 }  // namespace
@@ -263,6 +356,7 @@ int main(void) {
         cmocka_unit_test(rigid_fit_robust_and_deterministic),
         cmocka_unit_test(rigid_fit_refuses),
         cmocka_unit_test(occlusion_reasoning_fixes_hidden_d1),
+        cmocka_unit_test(static_matches_take_background_d1),
         cmocka_unit_test(rejects_bad_rigid_options),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

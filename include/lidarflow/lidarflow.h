@@ -186,6 +186,8 @@ typedef struct lf_options lf_options_t;
  *   "interpolation.pixel_model_selection" 0/1
  *   "interpolation.exits_follow_background" 0/1  pixels that leave the image at t1 take the
  *                                   background (ego-motion) d1 and flow (default 1)
+ *   "interpolation.static_d1_from_background" 0/1  matches whose flow the background
+ *                                   explains take its d1 (default 1)
  *   "interpolation.keep_lidar_values" 0/1
  *   "interpolation.random_seed" int   [0, 2^32 - 1]
  *   "interpolation.sed_model"   string            path of an OpenCV structured-edge model;

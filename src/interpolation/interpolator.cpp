@@ -84,6 +84,10 @@ void validate_options(const InterpolationOptions &o) {
             ErrorCode::InvalidArgument, "interpolation: LiDAR tolerances must be > 0");
     require(positive(o.lidar_weight), ErrorCode::InvalidArgument, "interpolation: lidar_weight must be > 0");
     require(positive(o.occlusion_margin), ErrorCode::InvalidArgument, "interpolation: occlusion_margin must be > 0");
+    require(positive(o.static_flow_tolerance), ErrorCode::InvalidArgument,
+            "interpolation: static_flow_tolerance must be > 0");
+    require(std::isfinite(o.static_d1_discrimination) && o.static_d1_discrimination >= 0.0f,
+            ErrorCode::InvalidArgument, "interpolation: static_d1_discrimination must be finite and >= 0");
     require(positive(o.background_preference) && o.background_preference <= 1.0f, ErrorCode::InvalidArgument,
             "interpolation: background_preference must be in (0, 1]");
     const EgoMotionOptions &e = o.ego;
@@ -227,6 +231,25 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
             s.z1[i] = 0.0f;
             ++released;
         }
+    }
+    return released;
+}
+
+// Matches the rigid background explains by their flow take its d1 (see
+// InterpolationOptions::static_d1_from_background). Runs on the remainders, after
+// release_occluded.
+int release_static_d1(Seeds &s, const EgoMotion &ego, const InterpolationOptions &o) {
+    int released = 0;
+    for (int i = 0; i < s.size(); ++i) {
+        if (!s.has_motion[i] || s.z1[i] == 0.0f || std::hypot(s.zu[i], s.zv[i]) >= o.static_flow_tolerance) continue;
+        float d1e, ue, ve;
+        ego.predict(s.x[i], s.y[i], s.d0_match[i], d1e, ue, ve);
+        const float r = std::hypot(s.x[i] + ue - static_cast<float>(ego.camera.cx),
+                                   s.y[i] + ve - static_cast<float>(ego.camera.cy));
+        // The floor keeps the ratio finite for points at infinity (d1e ~ 0).
+        if (r * std::fabs(s.z1[i]) / std::max(d1e, 0.5f) < o.static_d1_discrimination) continue;
+        s.z1[i] = 0.0f;
+        ++released;
     }
     return released;
 }
@@ -488,6 +511,8 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         seeds.zv[i] = seeds.v[i] - ve;
     }
     if (res.ego.valid && o.occlusion_reasoning) res.occluded_seeds = release_occluded(seeds, res.ego, w, h, o);
+    if (res.ego.valid && res.ego.calibrated && o.static_d1_from_background)
+        res.static_d1_seeds = release_static_d1(seeds, res.ego, o);
     // After the ego-motion fit: hints carry no motion.
     if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
         res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);

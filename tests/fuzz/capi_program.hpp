@@ -67,7 +67,7 @@ constexpr const char *kKeys[] = {
     // added later: appended, so that the seed corpus keeps its keys
     "lidar.visibility_filter", "lidar.visibility_half_width", "lidar.visibility_half_height",
     "lidar.visibility_ratio", "lidar.visibility_margin", "matching.backward_grid_step", "matching.settle_ratio",
-    "interpolation.exits_follow_background",
+    "interpolation.exits_follow_background", "interpolation.static_d1_from_background",
     // refused
     "", "threads ", "THREADS", "matching.", "matching.nonexistent", ".threads", "preset\n",
     "interpolation.sed_model.x",

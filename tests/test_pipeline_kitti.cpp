@@ -22,20 +22,20 @@ struct Golden {
     double sf, d0;  // recorded SF and D0 outliers [%] (occ), lidarflow kitti --lidar paper
 };
 // Recorded 2026-11-30 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1),
-// after stage 4 took 256 geodesic neighbours per superpixel instead of 64, weighted on a 36 px
-// instead of a 24 px scale (10.99 -> 9.38 % over seeds 1-8; before that, pixels leaving the image
-// had started to follow the rigid background, 11.47 -> 10.99 %). Single seeds spread by about
-// +-0.5 points per frame: over seeds 1-8 the mean SF is 9.38 % (8.62 / 10.14), so the tolerance
-// and the bound on the mean below allow for it.
-constexpr Golden kGolden[] = {{"000002", 8.29, 6.40}, {"000003", 10.03, 7.52}};
+// after matches whose flow the rigid background explains started to take its d1
+// (interpolation.static_d1_from_background; 9.38 -> 9.08 % over seeds 1-8; before that, stage 4's
+// 256-match neighbourhood on a 36 px scale, 10.99 -> 9.38 %). Single seeds spread by about +-0.5
+// points per frame: over seeds 1-8 the mean SF is 9.08 % (8.37 / 9.79), so the tolerance and the
+// bound on the mean below allow for it.
+constexpr Golden kGolden[] = {{"000002", 8.02, 6.40}, {"000003", 9.77, 7.52}};
 constexpr double kTolerance = 1.0;  // points; covers float differences across CPUs/compilers
-constexpr double kMeanBound = 9.9;  // the seed mean plus the seed spread (the paper: 11.52 %)
+constexpr double kMeanBound = 9.6;  // the seed mean plus the seed spread (the paper: 11.52 %)
 
 // The real Velodyne scan at t0 (`lidarflow kitti --lidar velodyne`, seed 1), recorded
-// 2026-11-30 after the estimator started to drop the points the camera cannot see
-// (lidar.visibility_filter): over seeds 1-8 SF 5.97 -> 4.21 %, D0 3.50 -> 1.73 % (1.35 / 2.11).
-constexpr Golden kGoldenVelodyne[] = {{"000002", 3.17, 1.37}, {"000003", 5.41, 2.09}};
-constexpr double kVelodyneMeanBound = 4.8;  // the seed mean plus the seed spread
+// 2026-11-30 with the static-d1 rule above (seeds 1-8: SF 4.21 -> 4.07 %); the estimator drops
+// the points the camera cannot see (lidar.visibility_filter: SF 5.97 -> 4.21 %, D0 3.50 -> 1.73 %).
+constexpr Golden kGoldenVelodyne[] = {{"000002", 3.14, 1.37}, {"000003", 5.20, 2.09}};
+constexpr double kVelodyneMeanBound = 4.7;  // the seed mean plus the seed spread
 constexpr double kVelodyneD0MeanBound = 2.0;  // the accuracy issue's D0 target with a real scan
 
 std::string g_root;

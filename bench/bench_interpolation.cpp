@@ -58,6 +58,7 @@ struct Frame {
 struct Input {
     SceneFlowField matches;
     SparseLidar lidar;
+    SparseLidar lidar1;  // --sparse: D_l^1, as the estimator passes it
     DisparityMap hint;  // --sparse: the stage-2a SGM disparity, as the estimator passes it
     StereoCamera camera;  // from calib_cam_to_cam, as load_kitti_frame reads it
     int num_matches = 0, num_outliers = 0;
@@ -372,6 +373,7 @@ int main(int argc, char **argv) try {
             const pipeline::KittiFrame kf = pipeline::load_kitti_frame(root, frames[i].id, lio);
             inputs.push_back(sparse_input(sparse_dir, frames[i], kf.input.lidar0, values_gt));
             inputs.back().camera = kf.input.camera;
+            inputs.back().lidar1 = kf.input.lidar1;
             inputs.back().hint = consistency::compute_sgm_disparity(kf.input.left0, kf.input.right0,
                                                                     consistency::ConsistencyOptions{}.sgm);
         }
@@ -420,7 +422,7 @@ int main(int argc, char **argv) try {
             const double c0 = cpu_seconds();
             const auto t0 = std::chrono::steady_clock::now();
             const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
-                                                      inputs[i].camera);
+                                                      inputs[i].camera, inputs[i].lidar1);
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             secs += s;
             cpu += cpu_seconds() - c0;
@@ -430,10 +432,12 @@ int main(int argc, char **argv) try {
             noc.add(n);
             const auto &t = r.timings;
             std::printf("  %s: %.3f s (edges %.3f, superpixels %.3f, geodesic %.3f, models %.3f, output %.3f); "
-                        "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds, %d occluded\n",
+                        "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds, %d occluded, "
+                        "%d static d1, %d t1 LiDAR points\n",
                         frames[i].id.c_str(), s, t.edges_s, t.superpixels_s, t.geodesic_s, t.models_s,
                         t.output_s, r.num_superpixels, r.lidar_anchored_geometry, r.lidar_anchored_motion,
-                        r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds, r.occluded_seeds);
+                        r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds, r.occluded_seeds, r.static_d1_seeds,
+                        r.lidar1_points);
             std::printf("    all: %s\n    noc: %s\n", a.str().c_str(), n.str().c_str());
             if (r.ego.valid && r.ego.calibrated)
                 std::printf("    ego R %.5f %.5f %.5f | t %.3f %.3f %.3f m\n", r.ego.R[5], r.ego.R[2], r.ego.R[1],

@@ -136,6 +136,8 @@ const OptionKey kKeys[] = {
      LF_INT_FIELD(interpolation.exits_follow_background)},
     {"interpolation.static_d1_from_background", KeyType::Bool, 0, 1, false, Extra::None,
      LF_INT_FIELD(interpolation.static_d1_from_background)},
+    {"interpolation.lidar1_from_background", KeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.lidar1_from_background)},
     {"interpolation.keep_lidar_values", KeyType::Bool, 0, 1, false, Extra::None,
      LF_INT_FIELD(interpolation.keep_lidar_values)},
     {"interpolation.random_seed", KeyType::Int, 0, 4294967295.0, false, Extra::None,

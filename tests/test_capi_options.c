@@ -85,6 +85,7 @@ static const key_t_ kKeys[] = {
     {"interpolation.pixel_model_selection", BOOL, 0, 1, 0, NONE, NAN},
     {"interpolation.exits_follow_background", BOOL, 0, 1, 0, NONE, 1},
     {"interpolation.static_d1_from_background", BOOL, 0, 1, 0, NONE, 1},
+    {"interpolation.lidar1_from_background", BOOL, 0, 1, 0, NONE, 1},
     {"interpolation.keep_lidar_values", BOOL, 0, 1, 0, NONE, NAN},
     {"interpolation.random_seed", INT, 0, 4294967295.0, 0, NONE, NAN},
 };

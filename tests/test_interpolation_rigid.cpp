@@ -3,7 +3,8 @@
 // exact rigid motion from clean and from outlier-ridden matches and refuses without a camera or
 // support; the interpolator uses it when run() gets a valid camera; occlusion reasoning gives
 // matches hidden at t1 (d1 matched on a near object) the background's d1, and matches that
-// its flow shows static too, unless they may move along the optical axis; new options are
+// its flow shows static too, unless they may move along the optical axis; t1 LiDAR points moved
+// back to t0 measure d0 unless the matches where they land contradict them; new options are
 // validated.
 #include "test_support.hpp"
 
@@ -330,6 +331,111 @@ void static_matches_take_background_d1(void **) {
     assert_int_equal(interp::RobustInterpolator(o).run(c.matches, {}, c.image).static_d1_seeds, 0);
 }
 
+// A wall at 20 m, a near block at 8.3 m without a single match (a hole), and a box 10 m away
+// that moves 1 m sideways on its own. The t1 scan has points on the block and on the box; the
+// t0 scan has only a few on the wall. Moved back by the background motion, the block's t1
+// points measure its d0; the box's land 20 px beside it, on the box's own moving matches or on
+// the wall's (another depth), and must be dropped.
+struct Lidar1Case {
+    cv::Mat image;
+    SceneFlowField truth, matches;
+    SparseLidar lidar0, lidar1, lidar1_box;  // lidar1: the block's and the box's points
+    cv::Rect block, box;
+    int block_points = 0;
+    StereoCamera cam;
+};
+
+Lidar1Case lidar1_case() {
+    Lidar1Case c;
+    const int w = 320, h = 160;
+    c.cam.fx = c.cam.fy = 200;
+    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
+    interp::EgoMotion ego, box_motion;
+    ego.valid = ego.calibrated = true;
+    ego.camera = c.cam;
+    ego.t[2] = -0.5;
+    box_motion = ego;
+    box_motion.t[0] = 1.0;  // its own 1 m to the side, on top of the camera's motion
+    c.block = cv::Rect(20, 40, 80, 80);
+    c.box = cv::Rect(200, 50, 50, 50);
+    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
+    c.image(c.block).setTo(cv::Scalar(60, 160, 60));
+    c.image(c.box).setTo(cv::Scalar(30, 40, 200));
+    c.truth = SceneFlowField::zeros(w, h);
+    c.truth.valid.setTo(1);
+    c.lidar0 = {w, h, {}};
+    c.lidar1 = {w, h, {}};
+    c.lidar1_box = {w, h, {}};
+    c.matches = SceneFlowField::zeros(w, h);
+    test::TestRng rng(9);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const bool in_block = c.block.contains({x, y}), in_box = c.box.contains({x, y});
+            const float d0 = in_block ? 12.0f : in_box ? 10.0f : 5.0f;
+            float d1, u, v;
+            (in_box ? box_motion : ego).predict(static_cast<float>(x), static_cast<float>(y), d0, d1, u, v);
+            c.truth.d0(y, x) = d0, c.truth.d1(y, x) = d1, c.truth.u(y, x) = u, c.truth.v(y, x) = v;
+            if (!in_block && rng.uniform() < 0.15) {
+                c.matches.u(y, x) = u, c.matches.v(y, x) = v, c.matches.d0(y, x) = d0, c.matches.d1(y, x) = d1;
+                c.matches.valid(y, x) = 1;
+            }
+            if (x % 8 != 4 || y % 8 != 4) continue;
+            if (!in_block && !in_box) {
+                if (x % 64 == 4 && y % 64 == 4) c.lidar0.points.push_back({x, y, d0});
+                continue;
+            }
+            const int tx = static_cast<int>(std::lround(x + u)), ty = static_cast<int>(std::lround(y + v));
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h) continue;
+            c.lidar1.points.push_back({tx, ty, d1});
+            if (in_box) c.lidar1_box.points.push_back({tx, ty, d1});
+            c.block_points += in_block;
+        }
+    return c;
+}
+
+double mean_d0_error(const SceneFlowField &est, const SceneFlowField &truth, const cv::Rect &r) {
+    double sum = 0;
+    for (int y = r.y; y < r.y + r.height; ++y)
+        for (int x = r.x; x < r.x + r.width; ++x) sum += std::fabs(est.d0(y, x) - truth.d0(y, x));
+    return sum / r.area();
+}
+
+void lidar1_points_measure_static_holes(void **) {
+    const Lidar1Case c = lidar1_case();
+    assert_true(c.block_points > 50 && c.lidar1_box.points.size() > 20);
+    interp::InterpolationOptions o;
+    auto run = [&](bool rule, int radius, const SparseLidar &lidar1) {
+        o.lidar1_from_background = rule;
+        o.lidar1_check_radius = radius;
+        return interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, lidar1);
+    };
+    const interp::InterpolationResult off = run(false, 10, c.lidar1), on = run(true, 10, c.lidar1);
+    const interp::InterpolationResult box = run(true, 10, c.lidar1_box), box_unchecked = run(true, 0, c.lidar1_box);
+    // Block points within the check radius of its edge see the wall's matches, another depth,
+    // in the majority, and are dropped too: the block's inside is measured.
+    const cv::Rect inside(c.block.x + 10, c.block.y + 10, c.block.width - 20, c.block.height - 20);
+    const double off_err = mean_d0_error(off.dense, c.truth, c.block), on_err = mean_d0_error(on.dense, c.truth, c.block);
+    std::printf("t1 LiDAR: block d0 error off %.2f / on %.2f px (inside %.2f); %d of %zu points used (%d on the "
+                "block); of the moving box's %zu points %d used, %d without the check\n",
+                off_err, on_err, mean_d0_error(on.dense, c.truth, inside), on.lidar1_points, c.lidar1.points.size(),
+                c.block_points, c.lidar1_box.points.size(), box.lidar1_points, box_unchecked.lidar1_points);
+    assert_true(on.ego.valid && on.ego.calibrated);
+    assert_int_equal(off.lidar1_points, 0);
+    assert_true(off_err > 3.0);
+    assert_true(on_err < off_err / 3);
+    assert_true(mean_d0_error(on.dense, c.truth, inside) < 0.5);
+    assert_true(on.lidar1_points > c.block_points / 2);
+    assert_int_equal(box.lidar1_points, 0);
+    assert_true(box_unchecked.lidar1_points > static_cast<int>(c.lidar1_box.points.size()) / 2);
+    // Without the camera there is no rigid model to move the points back.
+    o.lidar1_check_radius = 10;
+    assert_int_equal(interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, {}, c.lidar1).lidar1_points, 0);
+    // A t1 scan of another size is refused like a t0 one.
+    const SparseLidar wrong{c.lidar1.width / 2, c.lidar1.height, c.lidar1.points};
+    expect_error([&] { interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, wrong); },
+                 ErrorCode::SizeMismatch);
+}
+
 void rejects_bad_rigid_options(void **) {
     using O = interp::InterpolationOptions;
     auto bad = [](void (*edit)(O &)) {
@@ -346,6 +452,9 @@ void rejects_bad_rigid_options(void **) {
     bad([](O &o) { o.static_flow_tolerance = std::nanf(""); });
     bad([](O &o) { o.static_d1_discrimination = -1; });
     bad([](O &o) { o.static_d1_discrimination = INFINITY; });
+    bad([](O &o) { o.lidar1_check_radius = -1; });
+    bad([](O &o) { o.lidar1_relative_tolerance = 0; });
+    bad([](O &o) { o.lidar1_relative_tolerance = std::nanf(""); });
 }
 
 }  // namespace
@@ -357,6 +466,7 @@ int main(void) {
         cmocka_unit_test(rigid_fit_refuses),
         cmocka_unit_test(occlusion_reasoning_fixes_hidden_d1),
         cmocka_unit_test(static_matches_take_background_d1),
+        cmocka_unit_test(lidar1_points_measure_static_holes),
         cmocka_unit_test(rejects_bad_rigid_options),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

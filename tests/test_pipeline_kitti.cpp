@@ -22,14 +22,14 @@ struct Golden {
     double sf, d0;  // recorded SF and D0 outliers [%] (occ), lidarflow kitti --lidar paper
 };
 // Recorded 2026-11-30 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1),
-// after matches whose flow the rigid background explains started to take its d1
-// (interpolation.static_d1_from_background; 9.38 -> 9.08 % over seeds 1-8; before that, stage 4's
-// 256-match neighbourhood on a 36 px scale, 10.99 -> 9.38 %). Single seeds spread by about +-0.5
-// points per frame: over seeds 1-8 the mean SF is 9.08 % (8.37 / 9.79), so the tolerance and the
-// bound on the mean below allow for it.
-constexpr Golden kGolden[] = {{"000002", 8.02, 6.40}, {"000003", 9.77, 7.52}};
+// after the t1 LiDAR points started to measure d0 at t0 through the rigid background motion
+// (interpolation.lidar1_from_background; 9.08 -> 8.59 % over seeds 1-8) and matches whose flow
+// the background explains to take its d1 (interpolation.static_d1_from_background; 9.38 ->
+// 9.08 %). Single seeds spread by about +-0.5 points per frame: over seeds 1-8 the mean SF is
+// 8.59 % (7.74 / 9.43), so the tolerance and the bound on the mean below allow for it.
+constexpr Golden kGolden[] = {{"000002", 7.75, 6.07}, {"000003", 9.75, 7.50}};
 constexpr double kTolerance = 1.0;  // points; covers float differences across CPUs/compilers
-constexpr double kMeanBound = 9.6;  // the seed mean plus the seed spread (the paper: 11.52 %)
+constexpr double kMeanBound = 9.1;  // the seed mean plus the seed spread (the paper: 11.52 %)
 
 // The real Velodyne scan at t0 (`lidarflow kitti --lidar velodyne`, seed 1), recorded
 // 2026-11-30 with the static-d1 rule above (seeds 1-8: SF 4.21 -> 4.07 %); the estimator drops

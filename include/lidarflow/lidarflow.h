@@ -188,6 +188,9 @@ typedef struct lf_options lf_options_t;
  *                                   background (ego-motion) d1 and flow (default 1)
  *   "interpolation.static_d1_from_background" 0/1  matches whose flow the background
  *                                   explains take its d1 (default 1)
+ *   "interpolation.lidar1_from_background" 0/1  t1 LiDAR points moved back by the background
+ *                                   motion measure d0 where the matches do not contradict
+ *                                   them (default 1)
  *   "interpolation.keep_lidar_values" 0/1
  *   "interpolation.random_seed" int   [0, 2^32 - 1]
  *   "interpolation.sed_model"   string            path of an OpenCV structured-edge model;

@@ -88,6 +88,10 @@ void validate_options(const InterpolationOptions &o) {
             "interpolation: static_flow_tolerance must be > 0");
     require(std::isfinite(o.static_d1_discrimination) && o.static_d1_discrimination >= 0.0f,
             ErrorCode::InvalidArgument, "interpolation: static_d1_discrimination must be finite and >= 0");
+    require(o.lidar1_check_radius >= 0 && o.lidar1_check_radius <= 1000, ErrorCode::InvalidArgument,
+            "interpolation: lidar1_check_radius must be in [0, 1000]");
+    require(positive(o.lidar1_relative_tolerance), ErrorCode::InvalidArgument,
+            "interpolation: lidar1_relative_tolerance must be > 0");
     require(positive(o.background_preference) && o.background_preference <= 1.0f, ErrorCode::InvalidArgument,
             "interpolation: background_preference must be in (0, 1]");
     const EgoMotionOptions &e = o.ego;
@@ -157,6 +161,18 @@ Seeds collect_seeds(const SceneFlowField &m, const SparseLidar &lidar, bool use_
     return s;
 }
 
+void validate_lidar(const SparseLidar &lidar, const cv::Size &sz, const std::string &what) {
+    if (lidar.points.empty()) return;
+    require(lidar.width == sz.width && lidar.height == sz.height, ErrorCode::SizeMismatch,
+            "interpolation: " + what + " and reference image differ in size");
+    for (const LidarPoint &p : lidar.points) {
+        require(p.x >= 0 && p.y >= 0 && p.x < sz.width && p.y < sz.height, ErrorCode::InvalidArgument,
+                "interpolation: " + what + " point outside the image");
+        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
+                "interpolation: " + what + " disparity must be finite and >= 0");
+    }
+}
+
 void validate_inputs(const SceneFlowField &m, const SparseLidar &lidar, const cv::Mat &image) {
     require(!image.empty(), ErrorCode::InvalidArgument, "interpolation: empty reference image");
     require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),
@@ -168,15 +184,7 @@ void validate_inputs(const SceneFlowField &m, const SparseLidar &lidar, const cv
                                &static_cast<const cv::Mat &>(m.valid)})
         require(mat->size() == sz, ErrorCode::SizeMismatch,
                 "interpolation: match field and reference image differ in size");
-    if (lidar.points.empty()) return;
-    require(lidar.width == sz.width && lidar.height == sz.height, ErrorCode::SizeMismatch,
-            "interpolation: LiDAR and reference image differ in size");
-    for (const LidarPoint &p : lidar.points) {
-        require(p.x >= 0 && p.y >= 0 && p.x < sz.width && p.y < sz.height, ErrorCode::InvalidArgument,
-                "interpolation: LiDAR point outside the image");
-        require(std::isfinite(p.disparity) && p.disparity >= 0.0f, ErrorCode::InvalidArgument,
-                "interpolation: LiDAR disparity must be finite and >= 0");
-    }
+    validate_lidar(lidar, sz, "LiDAR");
 }
 
 void validate_hint(const DisparityMap &hint, const cv::Size &sz) {
@@ -252,6 +260,54 @@ int release_static_d1(Seeds &s, const EgoMotion &ego, const InterpolationOptions
         ++released;
     }
     return released;
+}
+
+// t1 LiDAR points as d0 measurements at t0 (see InterpolationOptions::lidar1_from_background):
+// P0 = R^T (P1 - t) undoes the background motion. A point is used unless the seeds around where
+// it lands (matches and t0 LiDAR points) contradict it in the majority: by a motion of their own
+// (matches) or by another depth.
+// Runs after the remainders are final and before the hint seeds (which must not sit on it).
+int add_lidar1_points(Seeds &s, cv::Mat1i &seed_at, const SparseLidar &lidar1, const EgoMotion &ego,
+                      const InterpolationOptions &o) {
+    const StereoCamera &cam = ego.camera;
+    const int w = seed_at.cols, h = seed_at.rows, r = o.lidar1_check_radius;
+    const int matches_end = s.size();  // points added here never vote
+    int added = 0;
+    for (const LidarPoint &q : lidar1.points) {
+        if (q.disparity <= 0.0f) continue;  // at infinity: no depth to move
+        const double z1 = cam.fx * cam.baseline / q.disparity;
+        const double p1[3] = {(q.x - cam.cx) * z1 / cam.fx, (q.y - cam.cy) * z1 / cam.fy, z1};
+        const double d[3] = {p1[0] - ego.t[0], p1[1] - ego.t[1], p1[2] - ego.t[2]};
+        double p0[3];
+        for (int i = 0; i < 3; ++i) p0[i] = ego.R[i] * d[0] + ego.R[3 + i] * d[1] + ego.R[6 + i] * d[2];
+        if (!(p0[2] > 0.1)) continue;  // behind (or at) the t0 camera
+        const double fx = cam.fx * p0[0] / p0[2] + cam.cx, fy = cam.fy * p0[1] / p0[2] + cam.cy;
+        if (!(fx > -0.5 && fy > -0.5 && fx < w - 0.5 && fy < h - 0.5)) continue;
+        const int x = static_cast<int>(std::lround(fx)), y = static_cast<int>(std::lround(fy));
+        if (seed_at(y, x) >= 0 && s.is_lidar[seed_at(y, x)]) continue;  // a t0 measurement wins
+        const float d0 = static_cast<float>(cam.fx * cam.baseline / p0[2]);
+        const float tol = std::max(3.0f, o.lidar1_relative_tolerance * d0);
+        int against = 0, total = 0;
+        for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
+            for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx) {
+                const int id = seed_at(yy, xx);
+                if (id < 0 || id >= matches_end) continue;
+                ++total;
+                against += (s.has_motion[id] && std::hypot(s.zu[id], s.zv[id]) > o.flow_inlier) ||
+                           std::fabs(s.d0[id] - d0) > tol;
+            }
+        if (2 * against > total) continue;
+        const int id = seed_at(y, x);
+        if (id >= 0) {
+            s.d0[id] = d0;  // as a t0 measurement on a match's pixel (collect_seeds)
+            s.is_lidar[id] = 1;
+        } else {
+            seed_at(y, x) = s.size();
+            s.push(x, y, 0.0f, 0.0f, d0, 0.0f, false, true);
+        }
+        ++added;
+    }
+    return added;
 }
 
 // Geometry-hint seeds (see InterpolationOptions::use_geometry_hint): grid pixels in the holes
@@ -470,10 +526,11 @@ RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : op
 
 InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
                                             const cv::Mat &image, const DisparityMap &geometry_hint,
-                                            const StereoCamera &camera) const {
+                                            const StereoCamera &camera, const SparseLidar &lidar1) const {
     const InterpolationOptions &o = options_;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
+    validate_lidar(lidar1, image.size(), "t1 LiDAR");
     validate_hint(geometry_hint, image.size());
     const int w = image.cols, h = image.rows;
     const bool use_lidar = o.use_lidar && !lidar0.points.empty();
@@ -513,6 +570,8 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     if (res.ego.valid && o.occlusion_reasoning) res.occluded_seeds = release_occluded(seeds, res.ego, w, h, o);
     if (res.ego.valid && res.ego.calibrated && o.static_d1_from_background)
         res.static_d1_seeds = release_static_d1(seeds, res.ego, o);
+    if (res.ego.valid && res.ego.calibrated && use_lidar && o.lidar1_from_background)
+        res.lidar1_points = add_lidar1_points(seeds, seed_at, lidar1, res.ego, o);
     // After the ego-motion fit: hints carry no motion.
     if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
         res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);

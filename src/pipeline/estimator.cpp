@@ -252,7 +252,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
     // Stage 4.
     t = Clock::now();
-    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera).dense;
+    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1).dense;
     r.timings.push_back({"interpolation", seconds_since(t)});
     r.total_seconds = seconds_since(t_total);
     return r;

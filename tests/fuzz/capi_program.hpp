@@ -68,6 +68,7 @@ constexpr const char *kKeys[] = {
     "lidar.visibility_filter", "lidar.visibility_half_width", "lidar.visibility_half_height",
     "lidar.visibility_ratio", "lidar.visibility_margin", "matching.backward_grid_step", "matching.settle_ratio",
     "interpolation.exits_follow_background", "interpolation.static_d1_from_background",
+    "interpolation.lidar1_from_background",
     // refused
     "", "threads ", "THREADS", "matching.", "matching.nonexistent", ".threads", "preset\n",
     "interpolation.sed_model.x",

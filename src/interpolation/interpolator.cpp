@@ -271,7 +271,7 @@ int add_lidar1_points(Seeds &s, cv::Mat1i &seed_at, const SparseLidar &lidar1, c
                       const InterpolationOptions &o) {
     const StereoCamera &cam = ego.camera;
     const int w = seed_at.cols, h = seed_at.rows, r = o.lidar1_check_radius;
-    const int matches_end = s.size();  // points added here never vote
+    const int voters_end = s.size();  // matches and t0 LiDAR points; points added here never vote
     int added = 0;
     for (const LidarPoint &q : lidar1.points) {
         if (q.disparity <= 0.0f) continue;  // at infinity: no depth to move
@@ -291,7 +291,7 @@ int add_lidar1_points(Seeds &s, cv::Mat1i &seed_at, const SparseLidar &lidar1, c
         for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
             for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx) {
                 const int id = seed_at(yy, xx);
-                if (id < 0 || id >= matches_end) continue;
+                if (id < 0 || id >= voters_end) continue;
                 ++total;
                 against += (s.has_motion[id] && std::hypot(s.zu[id], s.zv[id]) > o.flow_inlier) ||
                            std::fabs(s.d0[id] - d0) > tol;

@@ -81,6 +81,19 @@ void rigid_fit_exact(void **) {
     assert_true(e_d1 < 0.01 && e_fl < 0.01);
     for (int k = 0; k < 3; ++k) assert_true(std::fabs(m.t[k] - truth.t[k]) < 1e-3);
     for (int k = 0; k < 9; ++k) assert_true(std::fabs(m.R[k] - truth.R[k]) < 1e-5);
+    // The inverse motion takes every point back to where it was; a point the motion puts behind
+    // the camera is reported; only rigid models have an inverse.
+    const interp::EgoMotion back = truth.inverse();
+    for (size_t i = 0; i < held.x.size(); ++i) {
+        float d0, u, v;
+        assert_true(back.predict(held.x[i] + held.u[i], held.y[i] + held.v[i], held.d1[i], d0, u, v));
+        assert_true(std::fabs(d0 - held.d0[i]) < 1e-3 && std::fabs(held.u[i] + u) < 1e-3 && std::fabs(held.v[i] + v) < 1e-3);
+    }
+    interp::EgoMotion away = truth;
+    away.t[2] = -100;  // 100 m forward: a point 50 m ahead ends up behind the camera
+    float d1, u, v;
+    assert_false(away.predict(610, 175, 720 * 0.54 / 50, d1, u, v));
+    assert_false(interp::EgoMotion{}.inverse().valid);
 }
 
 void rigid_fit_robust_and_deterministic(void **) {
@@ -150,6 +163,27 @@ void rigid_fit_refuses(void **) {
     assert_false(interp::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
 }
 
+// The rig of the street scenes below (320x160) and its motion: 0.5 m straight ahead.
+StereoCamera street_camera() {
+    StereoCamera c;
+    c.fx = c.fy = 200;
+    c.cx = 160, c.cy = 80, c.baseline = 0.5;
+    return c;
+}
+
+interp::EgoMotion driving_forward(const StereoCamera &cam) {
+    interp::EgoMotion ego;
+    ego.valid = ego.calibrated = true;
+    ego.camera = cam;
+    ego.t[2] = -0.5;
+    return ego;
+}
+
+// Mean |est - truth| over a rectangle.
+double mean_error(const cv::Mat1f &est, const cv::Mat1f &truth, const cv::Rect &r) {
+    return cv::norm(est(r), truth(r), cv::NORM_L1) / r.area();
+}
+
 // A static street front: a wall at 20 m and, before it, a post at 5 m, seen by a camera that
 // drives forward. The wall just left of the post is hidden by it in the right view at t1, so
 // the stereo matcher found the post's d1 there (what a real matcher does).
@@ -163,12 +197,8 @@ struct OcclusionCase {
 OcclusionCase occlusion_case() {
     OcclusionCase c;
     const int w = 320, h = 160;
-    c.cam.fx = c.cam.fy = 200;
-    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
-    interp::EgoMotion ego;
-    ego.valid = ego.calibrated = true;
-    ego.camera = c.cam;
-    ego.t[2] = -0.5;
+    c.cam = street_camera();
+    const interp::EgoMotion ego = driving_forward(c.cam);
     c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
     const cv::Rect post(150, 30, 30, 110);
     c.image(post).setTo(cv::Scalar(30, 40, 200));
@@ -260,12 +290,8 @@ struct StaticCase {
 StaticCase static_case() {
     StaticCase c;
     const int w = 320, h = 160;
-    c.cam.fx = c.cam.fy = 200;
-    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
-    interp::EgoMotion ego;
-    ego.valid = ego.calibrated = true;
-    ego.camera = c.cam;
-    ego.t[2] = -0.5;
+    c.cam = street_camera();
+    const interp::EgoMotion ego = driving_forward(c.cam);
     c.patch = cv::Rect(20, 50, 48, 48);
     c.car = cv::Rect(150, 70, 21, 21);  // 5 m ahead, within ~14 px of the principal point
     c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
@@ -295,13 +321,6 @@ StaticCase static_case() {
     return c;
 }
 
-double mean_d1_error(const SceneFlowField &est, const SceneFlowField &truth, const cv::Rect &r) {
-    double sum = 0;
-    for (int y = r.y; y < r.y + r.height; ++y)
-        for (int x = r.x; x < r.x + r.width; ++x) sum += std::fabs(est.d1(y, x) - truth.d1(y, x));
-    return sum / r.area();
-}
-
 void static_matches_take_background_d1(void **) {
     const StaticCase c = static_case();
     interp::InterpolationOptions o;
@@ -314,18 +333,18 @@ void static_matches_take_background_d1(void **) {
     const interp::InterpolationResult off = run(false, 2.0f), on = run(true, 2.0f), unguarded = run(true, 0.0f);
     std::printf("static d1: car error off %.2f; patch error off %.2f / on %.2f px (%d matches released); car error on %.2f, "
                 "without the guard %.2f px\n",
-                mean_d1_error(off.dense, c.truth, c.car), mean_d1_error(off.dense, c.truth, c.patch), mean_d1_error(on.dense, c.truth, c.patch),
-                on.static_d1_seeds, mean_d1_error(on.dense, c.truth, c.car),
-                mean_d1_error(unguarded.dense, c.truth, c.car));
+                mean_error(off.dense.d1, c.truth.d1, c.car), mean_error(off.dense.d1, c.truth.d1, c.patch), mean_error(on.dense.d1, c.truth.d1, c.patch),
+                on.static_d1_seeds, mean_error(on.dense.d1, c.truth.d1, c.car),
+                mean_error(unguarded.dense.d1, c.truth.d1, c.car));
     assert_true(on.ego.valid && on.ego.calibrated);
     assert_int_equal(off.static_d1_seeds, 0);
-    assert_true(mean_d1_error(off.dense, c.truth, c.patch) > 2.0);
-    assert_true(mean_d1_error(on.dense, c.truth, c.patch) < 0.5);
+    assert_true(mean_error(off.dense.d1, c.truth.d1, c.patch) > 2.0);
+    assert_true(mean_error(on.dense.d1, c.truth.d1, c.patch) < 0.5);
     // The car is left as it was without the rule (its edge pixels share superpixels with the
     // wall either way); unguarded, the rule moves it onto the background's d1.
-    const double car_off = mean_d1_error(off.dense, c.truth, c.car);
-    assert_true(std::fabs(mean_d1_error(on.dense, c.truth, c.car) - car_off) < 0.05);
-    assert_true(mean_d1_error(unguarded.dense, c.truth, c.car) > car_off + 1.0);
+    const double car_off = mean_error(off.dense.d1, c.truth.d1, c.car);
+    assert_true(std::fabs(mean_error(on.dense.d1, c.truth.d1, c.car) - car_off) < 0.05);
+    assert_true(mean_error(unguarded.dense.d1, c.truth.d1, c.car) > car_off + 1.0);
     // Without the camera there is no rigid model, and nothing is released.
     o.static_d1_from_background = true;
     assert_int_equal(interp::RobustInterpolator(o).run(c.matches, {}, c.image).static_d1_seeds, 0);
@@ -348,13 +367,9 @@ struct Lidar1Case {
 Lidar1Case lidar1_case() {
     Lidar1Case c;
     const int w = 320, h = 160;
-    c.cam.fx = c.cam.fy = 200;
-    c.cam.cx = 160, c.cam.cy = 80, c.cam.baseline = 0.5;
-    interp::EgoMotion ego, box_motion;
-    ego.valid = ego.calibrated = true;
-    ego.camera = c.cam;
-    ego.t[2] = -0.5;
-    box_motion = ego;
+    c.cam = street_camera();
+    const interp::EgoMotion ego = driving_forward(c.cam);
+    interp::EgoMotion box_motion = ego;
     box_motion.t[0] = 1.0;  // its own 1 m to the side, on top of the camera's motion
     c.block = cv::Rect(20, 40, 80, 80);
     c.box = cv::Rect(200, 50, 50, 50);
@@ -393,13 +408,6 @@ Lidar1Case lidar1_case() {
     return c;
 }
 
-double mean_d0_error(const SceneFlowField &est, const SceneFlowField &truth, const cv::Rect &r) {
-    double sum = 0;
-    for (int y = r.y; y < r.y + r.height; ++y)
-        for (int x = r.x; x < r.x + r.width; ++x) sum += std::fabs(est.d0(y, x) - truth.d0(y, x));
-    return sum / r.area();
-}
-
 void lidar1_points_measure_static_holes(void **) {
     const Lidar1Case c = lidar1_case();
     assert_true(c.block_points > 50 && c.lidar1_box.points.size() > 20);
@@ -414,16 +422,16 @@ void lidar1_points_measure_static_holes(void **) {
     // Block points within the check radius of its edge see the wall's matches, another depth,
     // in the majority, and are dropped too: the block's inside is measured.
     const cv::Rect inside(c.block.x + 10, c.block.y + 10, c.block.width - 20, c.block.height - 20);
-    const double off_err = mean_d0_error(off.dense, c.truth, c.block), on_err = mean_d0_error(on.dense, c.truth, c.block);
+    const double off_err = mean_error(off.dense.d0, c.truth.d0, c.block), on_err = mean_error(on.dense.d0, c.truth.d0, c.block);
     std::printf("t1 LiDAR: block d0 error off %.2f / on %.2f px (inside %.2f); %d of %zu points used (%d on the "
                 "block); of the moving box's %zu points %d used, %d without the check\n",
-                off_err, on_err, mean_d0_error(on.dense, c.truth, inside), on.lidar1_points, c.lidar1.points.size(),
+                off_err, on_err, mean_error(on.dense.d0, c.truth.d0, inside), on.lidar1_points, c.lidar1.points.size(),
                 c.block_points, c.lidar1_box.points.size(), box.lidar1_points, box_unchecked.lidar1_points);
     assert_true(on.ego.valid && on.ego.calibrated);
     assert_int_equal(off.lidar1_points, 0);
     assert_true(off_err > 3.0);
     assert_true(on_err < off_err / 3);
-    assert_true(mean_d0_error(on.dense, c.truth, inside) < 0.5);
+    assert_true(mean_error(on.dense.d0, c.truth.d0, inside) < 0.5);
     assert_true(on.lidar1_points > c.block_points / 2);
     assert_int_equal(box.lidar1_points, 0);
     assert_true(box_unchecked.lidar1_points > static_cast<int>(c.lidar1_box.points.size()) / 2);

@@ -51,15 +51,12 @@ struct Data {
 
 }  // namespace
 
-void EgoMotion::predict(float x, float y, float d0, float &d1_out, float &u_out, float &v_out) const {
+bool EgoMotion::predict(float x, float y, float d0, float &d1_out, float &u_out, float &v_out) const {
     if (!valid) {
         d1_out = d0, u_out = 0, v_out = 0;
-        return;
+        return true;
     }
-    if (calibrated) {
-        detail::predict_rigid(*this, x, y, d0, d1_out, u_out, v_out);
-        return;
-    }
+    if (calibrated) return detail::predict_rigid(*this, x, y, d0, d1_out, u_out, v_out);
     const double r = 1.0 / depth_ratio(a, x, y, d0);
     const double d1 = r * d0;
     double rx[4], ry[4];
@@ -70,6 +67,7 @@ void EgoMotion::predict(float x, float y, float d0, float &d1_out, float &u_out,
     d1_out = static_cast<float>(d1);
     u_out = static_cast<float>(xp - x);
     v_out = static_cast<float>(yp - y);
+    return true;
 }
 
 EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,

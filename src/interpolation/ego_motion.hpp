@@ -36,8 +36,12 @@ struct EgoMotion {
     int inliers = 0;  // matches consistent with the model (d1 and flow)
 
     // Predicted t1 disparity and flow of a background point at (x, y) with disparity d0 >= 0.
-    // Without a valid model: d1 = d0, (u, v) = 0.
-    void predict(float x, float y, float d0, float &d1, float &u, float &v) const;
+    // Without a valid model: d1 = d0, (u, v) = 0. Returns false when a rigid model moves the
+    // point behind the camera (its prediction is then only kept finite).
+    bool predict(float x, float y, float d0, float &d1, float &u, float &v) const;
+    // The motion from t1 back to t0 (R^T, -R^T t), so that predict() maps a t1 pixel and
+    // disparity to the t0 ones. Rigid models only; any other gives an invalid model.
+    EgoMotion inverse() const;
 };
 
 struct EgoMotionOptions {
@@ -60,7 +64,7 @@ EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &
 
 namespace detail {
 // EgoMotion::predict for calibrated models (ego_motion_rigid.cpp).
-void predict_rigid(const EgoMotion &m, float x, float y, float d0, float &d1, float &u, float &v);
+bool predict_rigid(const EgoMotion &m, float x, float y, float d0, float &d1, float &u, float &v);
 }  // namespace detail
 
 // The rigid model for a known camera (camera.valid() with finite values required, else

@@ -149,7 +149,7 @@ struct Data {
 
 }  // namespace
 
-void detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, float &d1, float &u, float &v) {
+bool detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, float &d1, float &u, float &v) {
     Rigid m;
     std::copy(em.R, em.R + 9, m.R);
     std::copy(em.t, em.t + 3, m.t);
@@ -157,6 +157,21 @@ void detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, floa
     d1 = static_cast<float>(p.d1);
     u = static_cast<float>(p.xp - x);
     v = static_cast<float>(p.yp - y);
+    return p.n[2] >= kMinDepthRatio;
+}
+
+EgoMotion EgoMotion::inverse() const {
+    EgoMotion inv;
+    if (!valid || !calibrated) return inv;
+    inv = *this;
+    for (int i = 0; i < 3; ++i) {
+        inv.t[i] = 0;
+        for (int j = 0; j < 3; ++j) {
+            inv.R[i * 3 + j] = R[j * 3 + i];
+            inv.t[i] -= R[j * 3 + i] * t[j];
+        }
+    }
+    return inv;
 }
 
 EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,

@@ -250,10 +250,11 @@ int release_static_d1(Seeds &s, const EgoMotion &ego, const InterpolationOptions
     int released = 0;
     for (int i = 0; i < s.size(); ++i) {
         if (!s.has_motion[i] || s.z1[i] == 0.0f || std::hypot(s.zu[i], s.zv[i]) >= o.static_flow_tolerance) continue;
-        float d1e, ue, ve;
-        ego.predict(s.x[i], s.y[i], s.d0_match[i], d1e, ue, ve);
-        const float r = std::hypot(s.x[i] + ue - static_cast<float>(ego.camera.cx),
-                                   s.y[i] + ve - static_cast<float>(ego.camera.cy));
+        // The background's prediction is the match minus its remainder (released matches,
+        // whose remainders were zeroed, are skipped above).
+        const float d1e = s.d1[i] - s.z1[i];
+        const float r = std::hypot(s.x[i] + s.u[i] - s.zu[i] - static_cast<float>(ego.camera.cx),
+                                   s.y[i] + s.v[i] - s.zv[i] - static_cast<float>(ego.camera.cy));
         // The floor keeps the ratio finite for points at infinity (d1e ~ 0).
         if (r * std::fabs(s.z1[i]) / std::max(d1e, 0.5f) < o.static_d1_discrimination) continue;
         s.z1[i] = 0.0f;
@@ -263,29 +264,24 @@ int release_static_d1(Seeds &s, const EgoMotion &ego, const InterpolationOptions
 }
 
 // t1 LiDAR points as d0 measurements at t0 (see InterpolationOptions::lidar1_from_background):
-// P0 = R^T (P1 - t) undoes the background motion. A point is used unless the seeds around where
-// it lands (matches and t0 LiDAR points) contradict it in the majority: by a motion of their own
-// (matches) or by another depth.
+// the inverse background motion (EgoMotion::inverse) moves them back. A point is used unless
+// the seeds around where it lands (matches and t0 LiDAR points) contradict it in the majority:
+// by a motion of their own (matches) or by another depth.
 // Runs after the remainders are final and before the hint seeds (which must not sit on it).
 int add_lidar1_points(Seeds &s, cv::Mat1i &seed_at, const SparseLidar &lidar1, const EgoMotion &ego,
                       const InterpolationOptions &o) {
-    const StereoCamera &cam = ego.camera;
+    const EgoMotion back = ego.inverse();
     const int w = seed_at.cols, h = seed_at.rows, r = o.lidar1_check_radius;
     const int voters_end = s.size();  // matches and t0 LiDAR points; points added here never vote
     int added = 0;
     for (const LidarPoint &q : lidar1.points) {
         if (q.disparity <= 0.0f) continue;  // at infinity: no depth to move
-        const double z1 = cam.fx * cam.baseline / q.disparity;
-        const double p1[3] = {(q.x - cam.cx) * z1 / cam.fx, (q.y - cam.cy) * z1 / cam.fy, z1};
-        const double d[3] = {p1[0] - ego.t[0], p1[1] - ego.t[1], p1[2] - ego.t[2]};
-        double p0[3];
-        for (int i = 0; i < 3; ++i) p0[i] = ego.R[i] * d[0] + ego.R[3 + i] * d[1] + ego.R[6 + i] * d[2];
-        if (!(p0[2] > 0.1)) continue;  // behind (or at) the t0 camera
-        const double fx = cam.fx * p0[0] / p0[2] + cam.cx, fy = cam.fy * p0[1] / p0[2] + cam.cy;
-        if (!(fx > -0.5 && fy > -0.5 && fx < w - 0.5 && fy < h - 0.5)) continue;
+        float d0, u, v;
+        if (!back.predict(static_cast<float>(q.x), static_cast<float>(q.y), q.disparity, d0, u, v)) continue;
+        const float fx = q.x + u, fy = q.y + v;
+        if (!(fx > -0.5f && fy > -0.5f && fx < w - 0.5f && fy < h - 0.5f)) continue;
         const int x = static_cast<int>(std::lround(fx)), y = static_cast<int>(std::lround(fy));
         if (seed_at(y, x) >= 0 && s.is_lidar[seed_at(y, x)]) continue;  // a t0 measurement wins
-        const float d0 = static_cast<float>(cam.fx * cam.baseline / p0[2]);
         const float tol = std::max(3.0f, o.lidar1_relative_tolerance * d0);
         int against = 0, total = 0;
         for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)

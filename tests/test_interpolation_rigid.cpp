@@ -179,6 +179,43 @@ interp::EgoMotion driving_forward(const StereoCamera &cam) {
     return ego;
 }
 
+// What every street scene holds: the reference image (the wall's colour until the scene paints
+// its objects), the exact field, the matches the interpolator gets, and the rig.
+struct StreetScene {
+    cv::Mat image;
+    SceneFlowField truth, matches;
+    StereoCamera cam;
+};
+
+// A plain 320x160 wall image, an all-valid zero truth for the scene to fill, the street rig;
+// returns the camera's motion.
+interp::EgoMotion start_street(StreetScene &c) {
+    const int w = 320, h = 160;
+    c.cam = street_camera();
+    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
+    c.truth = SceneFlowField::zeros(w, h);
+    c.truth.valid.setTo(1);
+    return driving_forward(c.cam);
+}
+
+// The exact field at a random `rate` of the pixels `where` admits (the generator is drawn only
+// there, in row order), as matches.
+template <class Where>
+SceneFlowField sample_matches(const SceneFlowField &truth, double rate, uint64_t seed, Where where) {
+    SceneFlowField m = SceneFlowField::zeros(truth.width(), truth.height());
+    test::TestRng rng(seed);
+    for (int y = 0; y < m.height(); ++y)
+        for (int x = 0; x < m.width(); ++x) {
+            if (!where(x, y) || rng.uniform() >= rate) continue;
+            m.u(y, x) = truth.u(y, x), m.v(y, x) = truth.v(y, x);
+            m.d0(y, x) = truth.d0(y, x), m.d1(y, x) = truth.d1(y, x);
+            m.valid(y, x) = 1;
+        }
+    return m;
+}
+
+bool everywhere(int, int) { return true; }
+
 // Mean |est - truth| over a rectangle.
 double mean_error(const cv::Mat1f &est, const cv::Mat1f &truth, const cv::Rect &r) {
     return cv::norm(est(r), truth(r), cv::NORM_L1) / r.area();
@@ -187,23 +224,16 @@ double mean_error(const cv::Mat1f &est, const cv::Mat1f &truth, const cv::Rect &
 // A static street front: a wall at 20 m and, before it, a post at 5 m, seen by a camera that
 // drives forward. The wall just left of the post is hidden by it in the right view at t1, so
 // the stereo matcher found the post's d1 there (what a real matcher does).
-struct OcclusionCase {
-    cv::Mat image;
-    SceneFlowField truth, matches;
+struct OcclusionCase : StreetScene {
     cv::Mat1b hidden;  // wall pixels whose d1 match is the post's
-    StereoCamera cam;
 };
 
 OcclusionCase occlusion_case() {
     OcclusionCase c;
-    const int w = 320, h = 160;
-    c.cam = street_camera();
-    const interp::EgoMotion ego = driving_forward(c.cam);
-    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
+    const interp::EgoMotion ego = start_street(c);
+    const int w = c.image.cols, h = c.image.rows;
     const cv::Rect post(150, 30, 30, 110);
     c.image(post).setTo(cv::Scalar(30, 40, 200));
-    c.truth = SceneFlowField::zeros(w, h);
-    c.truth.valid.setTo(1);
     cv::Mat1f right_post(h, w, -1.0f);  // post's d1 where the post lands in the right view at t1
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -216,15 +246,7 @@ OcclusionCase occlusion_case() {
             if (rx >= 0 && rx < w && ry >= 0 && ry < h) right_post(ry, rx) = d1;
         }
     c.hidden = cv::Mat1b(h, w, uint8_t{0});
-    c.matches = SceneFlowField::zeros(w, h);
-    test::TestRng rng(3);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            if (rng.uniform() >= 0.12) continue;
-            c.matches.u(y, x) = c.truth.u(y, x), c.matches.v(y, x) = c.truth.v(y, x);
-            c.matches.d0(y, x) = c.truth.d0(y, x), c.matches.d1(y, x) = c.truth.d1(y, x);
-            c.matches.valid(y, x) = 1;
-        }
+    c.matches = sample_matches(c.truth, 0.12, 3, everywhere);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             if (post.contains({x, y})) continue;
@@ -280,24 +302,17 @@ void occlusion_reasoning_fixes_hidden_d1(void **) {
 // that keeps its distance: its flow is within the static tolerance of the background's, but
 // its d1 is not the background's. The rule must fix the patch and leave the car alone; without
 // the discrimination guard it paints the car with the background's d1.
-struct StaticCase {
-    cv::Mat image;
-    SceneFlowField truth, matches;
+struct StaticCase : StreetScene {
     cv::Rect patch, car;
-    StereoCamera cam;
 };
 
 StaticCase static_case() {
     StaticCase c;
-    const int w = 320, h = 160;
-    c.cam = street_camera();
-    const interp::EgoMotion ego = driving_forward(c.cam);
+    const interp::EgoMotion ego = start_street(c);
+    const int w = c.image.cols, h = c.image.rows;
     c.patch = cv::Rect(20, 50, 48, 48);
     c.car = cv::Rect(150, 70, 21, 21);  // 5 m ahead, within ~14 px of the principal point
-    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
     c.image(c.car).setTo(cv::Scalar(30, 40, 200));
-    c.truth = SceneFlowField::zeros(w, h);
-    c.truth.valid.setTo(1);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             float d1, u, v;
@@ -308,16 +323,10 @@ StaticCase static_case() {
                 c.truth.d0(y, x) = 5.0f, c.truth.d1(y, x) = d1, c.truth.u(y, x) = u, c.truth.v(y, x) = v;
             }
         }
-    c.matches = SceneFlowField::zeros(w, h);
-    test::TestRng rng(5);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            if (rng.uniform() >= 0.15) continue;
-            c.matches.u(y, x) = c.truth.u(y, x), c.matches.v(y, x) = c.truth.v(y, x);
-            c.matches.d0(y, x) = c.truth.d0(y, x);
-            c.matches.d1(y, x) = c.truth.d1(y, x) + (c.patch.contains({x, y}) ? 3.0f : 0.0f);
-            c.matches.valid(y, x) = 1;
-        }
+    c.matches = sample_matches(c.truth, 0.15, 5, everywhere);
+    for (int y = c.patch.y; y < c.patch.br().y; ++y)
+        for (int x = c.patch.x; x < c.patch.br().x; ++x)
+            if (c.matches.valid(y, x)) c.matches.d1(y, x) += 3.0f;  // the coherent t1 stereo mistake
     return c;
 }
 
@@ -355,34 +364,25 @@ void static_matches_take_background_d1(void **) {
 // t0 scan has only a few on the wall. Moved back by the background motion, the block's t1
 // points measure its d0; the box's land 20 px beside it, on the box's own moving matches or on
 // the wall's (another depth), and must be dropped.
-struct Lidar1Case {
-    cv::Mat image;
-    SceneFlowField truth, matches;
+struct Lidar1Case : StreetScene {
     SparseLidar lidar0, lidar1, lidar1_box;  // lidar1: the block's and the box's points
     cv::Rect block, box;
     int block_points = 0;
-    StereoCamera cam;
 };
 
 Lidar1Case lidar1_case() {
     Lidar1Case c;
-    const int w = 320, h = 160;
-    c.cam = street_camera();
-    const interp::EgoMotion ego = driving_forward(c.cam);
+    const interp::EgoMotion ego = start_street(c);
+    const int w = c.image.cols, h = c.image.rows;
     interp::EgoMotion box_motion = ego;
     box_motion.t[0] = 1.0;  // its own 1 m to the side, on top of the camera's motion
     c.block = cv::Rect(20, 40, 80, 80);
     c.box = cv::Rect(200, 50, 50, 50);
-    c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
     c.image(c.block).setTo(cv::Scalar(60, 160, 60));
     c.image(c.box).setTo(cv::Scalar(30, 40, 200));
-    c.truth = SceneFlowField::zeros(w, h);
-    c.truth.valid.setTo(1);
     c.lidar0 = {w, h, {}};
     c.lidar1 = {w, h, {}};
     c.lidar1_box = {w, h, {}};
-    c.matches = SceneFlowField::zeros(w, h);
-    test::TestRng rng(9);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const bool in_block = c.block.contains({x, y}), in_box = c.box.contains({x, y});
@@ -390,10 +390,6 @@ Lidar1Case lidar1_case() {
             float d1, u, v;
             (in_box ? box_motion : ego).predict(static_cast<float>(x), static_cast<float>(y), d0, d1, u, v);
             c.truth.d0(y, x) = d0, c.truth.d1(y, x) = d1, c.truth.u(y, x) = u, c.truth.v(y, x) = v;
-            if (!in_block && rng.uniform() < 0.15) {
-                c.matches.u(y, x) = u, c.matches.v(y, x) = v, c.matches.d0(y, x) = d0, c.matches.d1(y, x) = d1;
-                c.matches.valid(y, x) = 1;
-            }
             if (x % 8 != 4 || y % 8 != 4) continue;
             if (!in_block && !in_box) {
                 if (x % 64 == 4 && y % 64 == 4) c.lidar0.points.push_back({x, y, d0});
@@ -405,6 +401,8 @@ Lidar1Case lidar1_case() {
             if (in_box) c.lidar1_box.points.push_back({tx, ty, d1});
             c.block_points += in_block;
         }
+    // The block is a hole: not a single match on it.
+    c.matches = sample_matches(c.truth, 0.15, 9, [&](int x, int y) { return !c.block.contains({x, y}); });
     return c;
 }
 

@@ -61,6 +61,23 @@ struct Seeds {
         is_lidar.push_back(lidar);
         is_hint.push_back(hint);
     }
+    // How far seed i moves on its own, beyond the background motion (its flow remainder).
+    float own_flow(int i) const { return std::hypot(zu[i], zv[i]); }
+    // A LiDAR d0 measurement at (px, py): it replaces the d0 of a match on the same pixel (the
+    // measurement is exact, the matched d0 is not) or becomes a seed of its own. False, and
+    // nothing changed, when a LiDAR measurement already holds the pixel: the first one wins.
+    bool add_lidar(cv::Mat1i &seed_at, int px, int py, float dd0) {
+        const int id = seed_at(py, px);
+        if (id >= 0 && is_lidar[id]) return false;
+        if (id >= 0) {
+            d0[id] = dd0;
+            is_lidar[id] = 1;
+        } else {
+            seed_at(py, px) = size();
+            push(px, py, 0.0f, 0.0f, dd0, 0.0f, false, true);
+        }
+        return true;
+    }
 };
 
 void validate_options(const InterpolationOptions &o) {
@@ -147,17 +164,7 @@ Seeds collect_seeds(const SceneFlowField &m, const SparseLidar &lidar, bool use_
         }
     require(s.size() > 0, ErrorCode::InvalidArgument, "interpolation: no valid match to interpolate");
     if (!use_lidar) return s;
-    for (const LidarPoint &p : lidar.points) {
-        const int id = seed_at(p.y, p.x);
-        if (id >= 0 && s.is_lidar[id]) continue;  // duplicate pixel: the first point wins
-        if (id >= 0) {
-            s.d0[id] = p.disparity;  // the measurement is exact, the matched d0 is not
-            s.is_lidar[id] = 1;
-        } else {
-            seed_at(p.y, p.x) = s.size();
-            s.push(p.x, p.y, 0.0f, 0.0f, p.disparity, 0.0f, false, true);
-        }
-    }
+    for (const LidarPoint &p : lidar.points) s.add_lidar(seed_at, p.x, p.y, p.disparity);
     return s;
 }
 
@@ -235,7 +242,7 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
         if (ego.calibrated && hidden(zl, tx, ty, d1e)) {
             s.z1[i] = s.zu[i] = s.zv[i] = 0.0f;
             ++released;
-        } else if (hidden(zr, tx - d1e, ty, d1e) && std::hypot(s.zu[i], s.zv[i]) < o.flow_inlier) {
+        } else if (hidden(zr, tx - d1e, ty, d1e) && s.own_flow(i) < o.flow_inlier) {
             s.z1[i] = 0.0f;
             ++released;
         }
@@ -249,7 +256,7 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
 int release_static_d1(Seeds &s, const EgoMotion &ego, const InterpolationOptions &o) {
     int released = 0;
     for (int i = 0; i < s.size(); ++i) {
-        if (!s.has_motion[i] || s.z1[i] == 0.0f || std::hypot(s.zu[i], s.zv[i]) >= o.static_flow_tolerance) continue;
+        if (!s.has_motion[i] || s.z1[i] == 0.0f || s.own_flow(i) >= o.static_flow_tolerance) continue;
         // The background's prediction is the match minus its remainder (released matches,
         // whose remainders were zeroed, are skipped above).
         const float d1e = s.d1[i] - s.z1[i];
@@ -289,19 +296,11 @@ int add_lidar1_points(Seeds &s, cv::Mat1i &seed_at, const SparseLidar &lidar1, c
                 const int id = seed_at(yy, xx);
                 if (id < 0 || id >= voters_end) continue;
                 ++total;
-                against += (s.has_motion[id] && std::hypot(s.zu[id], s.zv[id]) > o.flow_inlier) ||
+                against += (s.has_motion[id] && s.own_flow(id) > o.flow_inlier) ||
                            std::fabs(s.d0[id] - d0) > tol;
             }
         if (2 * against > total) continue;
-        const int id = seed_at(y, x);
-        if (id >= 0) {
-            s.d0[id] = d0;  // as a t0 measurement on a match's pixel (collect_seeds)
-            s.is_lidar[id] = 1;
-        } else {
-            seed_at(y, x) = s.size();
-            s.push(x, y, 0.0f, 0.0f, d0, 0.0f, false, true);
-        }
-        ++added;
+        added += s.add_lidar(seed_at, x, y, d0) ? 1 : 0;  // as a t0 measurement (collect_seeds)
     }
     return added;
 }

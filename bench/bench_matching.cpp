@@ -48,6 +48,7 @@ void apply_override(MatchingOptions &o, const std::string &kv) {
     else if (k == "penalty") o.out_of_image_penalty = float(v);
     else if (k == "cell_size") o.sift.cell_size = int(v);
     else if (k == "dim") o.sift.dim = int(v);
+    else if (k == "bits") o.sift.bits = int(v);
     else if (k == "norm_floor") o.sift.norm_floor = float(v);
     else if (k == "window_size") o.window_size = int(v);
     else if (k == "const2_abs") o.const2_abs = float(v);

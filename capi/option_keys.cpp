@@ -12,7 +12,7 @@ namespace lidarflow::capi {
 
 using O = pipeline::EstimatorOptions;
 
-enum class Extra { None, Odd, MultipleOf16 };
+enum class Extra { None, Odd, MultipleOf16, PowerOfTwo };
 
 struct OptionKey {
     const char *name;
@@ -79,6 +79,7 @@ const OptionKey kKeys[] = {
      LF_INT_FIELD(matching.min_coarsest_height)},
     {"matching.lazy_random_search", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.lazy_random_search)},
     {"matching.settle_ratio", KeyType::Float, 0, 100, false, Extra::None, LF_FLOAT_FIELD(matching.settle_ratio)},
+    {"matching.descriptor_bits", KeyType::Int, 4, 8, false, Extra::PowerOfTwo, LF_INT_FIELD(matching.sift.bits)},
     {"matching.patch_radius", KeyType::Int, 0, 16, false, Extra::None, LF_INT_FIELD(matching.patch_radius)},
     {"matching.stop_ratio", KeyType::Float, 0, 1, false, Extra::None, LF_FLOAT_FIELD(matching.stop_ratio)},
     {"matching.max_flow", KeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_flow)},
@@ -180,6 +181,7 @@ std::string bounds_text(const OptionKey &k) {
     std::string s = (k.lo_open ? "(" : "[") + number(k.lo) + ", " + number(k.hi) + "]";
     if (k.extra == Extra::Odd) s += " and odd";
     if (k.extra == Extra::MultipleOf16) s += " and a multiple of 16";
+    if (k.extra == Extra::PowerOfTwo) s += " and a power of two";
     return s;
 }
 
@@ -187,6 +189,7 @@ void check_bounds(const OptionKey &k, double v, const std::string &shown) {
     bool ok = std::isfinite(v) && (k.lo_open ? v > k.lo : v >= k.lo) && v <= k.hi;
     if (ok && k.extra == Extra::Odd) ok = std::fmod(v, 2.0) != 0.0;
     if (ok && k.extra == Extra::MultipleOf16) ok = std::fmod(v, 16.0) == 0.0;
+    if (ok && k.extra == Extra::PowerOfTwo) ok = v >= 1 && std::exp2(std::round(std::log2(v))) == v;
     require(ok, ErrorCode::InvalidArgument,
             std::string("option '") + k.name + "' must be " + bounds_text(k) + ", got " + shown);
 }

@@ -163,10 +163,65 @@ void invalid_arguments(void **) {
         o.norm_floor = NAN;
         compute_dense_sift(cv::Mat1f(8, 8, 0.f), o);
     });
+    expect_invalid([] {
+        DenseSiftOptions o;
+        o.bits = 6;
+        compute_dense_sift(cv::Mat1f(8, 8, 0.f), o);
+    });
     expect_invalid([] { compute_dense_sift(cv::Mat1f(8, 8, 0.f), DenseSiftOptions{}, 0); });
     expect_invalid([] { to_gray_float(cv::Mat()); });
     expect_invalid([] { to_gray_float(cv::Mat(4, 4, CV_16UC1, cv::Scalar(0))); });
     expect_invalid([] { to_gray_float(cv::Mat(4, 4, CV_8UC2, cv::Scalar(0))); });
+}
+
+// Value i of a packed descriptor (features::DenseSiftOptions::bits = 4), decoded.
+int packed_value(const DescriptorImage &d, int x, int y, int i) {
+    const uint8_t byte = d.at(x, y)[i % (d.dim / 2)];
+    return packed_levels(d.contrast[static_cast<size_t>(y) * d.width + x])[i < d.dim / 2 ? byte & 15 : byte >> 4];
+}
+
+// 4-bit descriptors: half the bytes, a contrast index per pixel, and decoded values close to
+// the 8-bit ones at normal and at low contrast (the contrast keeps a faint texture's relative
+// precision instead of rounding its small values to the lowest levels).
+void packed_descriptors_follow_the_byte_ones(void **) {
+    const cv::Mat1f normal = texture(48, 40, 5);
+    const cv::Mat1f faint = normal * 0.004f + 0.5f;  // gradients below the contrast floor
+    for (int dim : {128, 64})
+        for (const cv::Mat1f &img : {normal, faint}) {
+            DenseSiftOptions o8, o4;
+            o8.dim = o4.dim = dim;
+            o4.bits = 4;
+            const DescriptorImage d8 = compute_dense_sift(img, o8), d4 = compute_dense_sift(img, o4, 2);
+            assert_int_equal(d4.stride, dim / 2);
+            assert_int_equal(d4.bits, 4);
+            assert_int_equal(d4.data.size(), 48u * 40u * dim / 2);
+            assert_int_equal(d4.contrast.size(), 48u * 40u);
+            assert_true(d8.contrast.empty());
+            for (int y = 4; y < 36; y += 3)
+                for (int x = 4; x < 44; x += 3) {
+                    double diff = 0, len = 0;
+                    for (int i = 0; i < dim; ++i) {
+                        const double e = packed_value(d4, x, y, i) - d8.at(x, y)[i];
+                        diff += e * e;
+                        len += double(d8.at(x, y)[i]) * d8.at(x, y)[i];
+                    }
+                    if (&img == &faint) {
+                        const int c = d4.contrast[static_cast<size_t>(y) * 48 + x];
+                        assert_true(c > 0 && c < kContrastSteps);
+                        assert_true(std::sqrt(len) < 400.0);
+                    }
+                    // Error of the decoded descriptor: ~6 % typical for the 16 square-root
+                    // levels (a tenth as the bound), plus one contrast step of the length 512.
+                    if (std::sqrt(diff) > 0.1 * std::sqrt(len) + 512.0 / kContrastSteps)
+                        fail_msg("dim %d pixel (%d, %d): |packed - bytes| %.1f of %.1f", dim, x, y, std::sqrt(diff),
+                                 std::sqrt(len));
+                }
+        }
+    // The flat image: zero contrast, zero descriptors.
+    DenseSiftOptions o4;
+    o4.bits = 4;
+    const DescriptorImage flat = compute_dense_sift(cv::Mat1f(20, 24, 0.5f), o4);
+    for (uint8_t c : flat.contrast) assert_int_equal(c, 0);
 }
 
 long resident_kib() {
@@ -233,6 +288,7 @@ int main() {
         cmocka_unit_test(rows_do_not_depend_on_band_seams),
         cmocka_unit_test(reuses_output_storage),
         cmocka_unit_test(gray_conversion),
+        cmocka_unit_test(packed_descriptors_follow_the_byte_ones),
         cmocka_unit_test(invalid_arguments),
         cmocka_unit_test(huge_page_allocator_blocks),
     };

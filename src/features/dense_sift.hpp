@@ -27,17 +27,33 @@ struct DenseSiftOptions {
     int dim = 128;             // 128 (16 cells x 8 signed bins) or 64 (16 cells x 4 unsigned bins)
     float clip = 0.2f;         // SIFT clipping of normalised entries before renormalising
     float norm_floor = 0.03f;  // lower bound of the normalising L2 norm (gray scale in [0, 1])
+    // 8: one byte per value. 4: the full-contrast descriptor's values coded on 16 levels
+    // spaced on the square root, two per byte (a 128-value descriptor takes 64 bytes: half the
+    // memory, one cache line per sample), and its contrast (the low-contrast scale below) on
+    // 16 steps in a byte of its own.
+    int bits = 8;
 };
+
+// Decoded values of the 16 codes of a packed descriptor of contrast index k (contrast k /
+// kContrastSteps), on the scale of the 8-bit values. Distances of packed descriptors are
+// distances of these values, so low-contrast descriptors keep the relative precision of the
+// others. Filled during static initialisation; read-only afterwards.
+constexpr int kContrastSteps = 63;
+extern uint8_t kPackedLevels[kContrastSteps + 1][16];
+inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast & kContrastSteps]; }
 
 // Descriptor image. Owns its storage; copies are deep only through clone().
 struct DescriptorImage {
-    int width = 0, height = 0, dim = 0;
-    std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * dim, row-major, pixel-major
+    int width = 0, height = 0, dim = 0;  // dim: values per descriptor
+    int bits = 8;                        // 8, or 4 (byte i: value i in the low nibble, i + dim/2 high)
+    int stride = 0;                      // bytes per descriptor: dim * bits / 8
+    std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * stride, row-major, pixel-major
+    std::vector<uint8_t, HugePageAllocator<uint8_t>> contrast;  // bits 4: width * height indices; else empty
 
     const uint8_t *at(int x, int y) const {
-        return data.data() + (static_cast<size_t>(y) * width + x) * dim;
+        return data.data() + (static_cast<size_t>(y) * width + x) * stride;
     }
-    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * dim; }
+    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * stride; }
     bool empty() const { return data.empty(); }
 };
 

@@ -11,8 +11,8 @@ float case_cost(const SlotDescriptors &d, CostCase c, int x, int y, int u, int v
         require(d.image[s] != nullptr && !d.image[s]->empty(), ErrorCode::InvalidArgument,
                 "case_cost: missing descriptor image");
         require(d.image[s]->width == d.image[0]->width && d.image[s]->height == d.image[0]->height &&
-                    d.image[s]->dim == d.image[0]->dim,
-                ErrorCode::InvalidArgument, "case_cost: descriptor images differ in size or dim");
+                    d.image[s]->dim == d.image[0]->dim && d.image[s]->bits == d.image[0]->bits,
+                ErrorCode::InvalidArgument, "case_cost: descriptor images differ in size, dim or bits");
     }
     const int sx[4] = {x, x - d0, x + u, x + u - d1};
     const int sy[4] = {y, y, y + v, y + v};

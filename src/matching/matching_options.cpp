@@ -48,6 +48,7 @@ void MatchingOptions::validate() const {
     check(std::isfinite(max_flow) && max_flow >= 1.0f, "max_flow must be >= 1");
     check(std::isfinite(max_disparity) && max_disparity >= 1.0f, "max_disparity must be >= 1");
     check(sift.dim == 128 || sift.dim == 64, "sift.dim must be 128 or 64");
+    check(sift.bits == 8 || sift.bits == 4, "sift.bits must be 8 or 4");
     check(sift.cell_size >= 1 && sift.cell_size <= 16, "sift.cell_size must be in [1, 16]");
     check(std::isfinite(sift.clip) && sift.clip > 0, "sift.clip must be > 0");
     check(std::isfinite(sift.norm_floor) && sift.norm_floor > 0, "sift.norm_floor must be > 0");

@@ -56,6 +56,26 @@ __attribute__((always_inline)) inline uint32_t l1(const uint8_t *a, const uint8_
     return static_cast<uint32_t>(_mm_cvtsi128_si32(acc) + _mm_cvtsi128_si32(_mm_srli_si128(acc, 8)));
 }
 
+// Packed 4-bit descriptors (features::DenseSiftOptions::bits): `bytes` bytes of two codes
+// each, compared through their decoded values.
+__attribute__((always_inline)) inline uint32_t l2sq_packed(const uint8_t *a, const uint8_t *b, int bytes,
+                                                           const uint8_t *ta, const uint8_t *tb) {
+    uint32_t acc = 0;
+    for (int i = 0; i < bytes; ++i) {
+        const int dl = ta[a[i] & 15] - tb[b[i] & 15], dh = ta[a[i] >> 4] - tb[b[i] >> 4];
+        acc += static_cast<uint32_t>(dl * dl + dh * dh);
+    }
+    return acc;
+}
+
+__attribute__((always_inline)) inline uint32_t l1_packed(const uint8_t *a, const uint8_t *b, int bytes,
+                                                         const uint8_t *ta, const uint8_t *tb) {
+    uint32_t acc = 0;
+    for (int i = 0; i < bytes; ++i)
+        acc += static_cast<uint32_t>(std::abs(ta[a[i] & 15] - tb[b[i] & 15]) + std::abs(ta[a[i] >> 4] - tb[b[i] >> 4]));
+    return acc;
+}
+
 }  // namespace
 
 float descriptor_distance(const uint8_t *a, const uint8_t *b, int dim, DescriptorNorm norm) {
@@ -65,9 +85,9 @@ float descriptor_distance(const uint8_t *a, const uint8_t *b, int dim, Descripto
 
 namespace {
 
-// The patch loop, generic over the per-sample distance kernel.
-template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int),
-          uint32_t (*L1)(const uint8_t *, const uint8_t *, int)>
+// The patch loop, generic over the per-sample distance: K::sample(a, pixel of a, b, pixel of b,
+// norm) with pixels as indices y * width + x.
+template <class K>
 inline float patch_cost_impl(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax,
                              int ay, int bx, int by, const PatchShape &shape, DescriptorNorm norm,
                              float penalty, float bound) {
@@ -75,31 +95,24 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
     if (ax < 0 || ay < 0 || ax >= a.width || ay >= a.height || bx < 0 || by < 0 || bx >= b.width ||
         by >= b.height)
         return penalty * static_cast<float>(n);
-    const int dim = a.dim;
-    // Eq. 2's per-sample term: the descriptor distance of one patch sample.
-    const auto sample = [dim, norm](const uint8_t *da, const uint8_t *db) {
-        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, dim))
-                                          : std::sqrt(static_cast<float>(L2SQ(da, db, dim)));
+    const auto pixel = [](const features::DescriptorImage &d, int x, int y) {
+        return static_cast<ptrdiff_t>(y) * d.width + x;
     };
     float sum = 0.0f;
     const int r = shape.radius;
     if (ax >= r && ay >= r && bx >= r && by >= r && ax + r < a.width && ay + r < a.height &&
         bx + r < b.width && by + r < b.height) {
         // Fast path: the whole patch is inside both images, no clamping.
-        const uint8_t *ca = a.at(ax, ay), *cb = b.at(bx, by);
-        const ptrdiff_t rowa = static_cast<ptrdiff_t>(a.width) * dim, rowb = static_cast<ptrdiff_t>(b.width) * dim;
+        const ptrdiff_t ca = pixel(a, ax, ay), cb = pixel(b, bx, by);
         // The samples lie in rows far apart (cache and TLB misses): request all their lines
         // first so that the misses overlap instead of being paid one after another.
         for (int k = 0; k < n; ++k) {
-            const uint8_t *da = ca + shape.dy[k] * rowa + shape.dx[k] * dim;
-            const uint8_t *db = cb + shape.dy[k] * rowb + shape.dx[k] * dim;
-            for (int off = 0; off < dim; off += 64) {
-                _mm_prefetch(reinterpret_cast<const char *>(da + off), _MM_HINT_T0);
-                _mm_prefetch(reinterpret_cast<const char *>(db + off), _MM_HINT_T0);
-            }
+            K::prefetch(a, ca + shape.dy[k] * a.width + shape.dx[k]);
+            K::prefetch(b, cb + shape.dy[k] * b.width + shape.dx[k]);
         }
         for (int k = 0; k < n; ++k) {
-            sum += sample(ca + shape.dy[k] * rowa + shape.dx[k] * dim, cb + shape.dy[k] * rowb + shape.dx[k] * dim);
+            sum += K::sample(a, ca + shape.dy[k] * a.width + shape.dx[k], b, cb + shape.dy[k] * b.width + shape.dx[k],
+                             norm);
             if (sum > bound) return sum;
         }
         return sum;
@@ -109,11 +122,48 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
         const int pay = std::clamp(ay + shape.dy[k], 0, a.height - 1);
         const int pbx = std::clamp(bx + shape.dx[k], 0, b.width - 1);
         const int pby = std::clamp(by + shape.dy[k], 0, b.height - 1);
-        sum += sample(a.at(pax, pay), b.at(pbx, pby));
+        sum += K::sample(a, pixel(a, pax, pay), b, pixel(b, pbx, pby), norm);
         if (sum > bound) return sum;
     }
     return sum;
 }
+
+inline void prefetch_bytes(const uint8_t *p, int bytes) {
+    for (int off = 0; off < bytes; off += 64) _mm_prefetch(reinterpret_cast<const char *>(p + off), _MM_HINT_T0);
+}
+
+// Eq. 2's per-sample term on 8-bit descriptors.
+template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int),
+          uint32_t (*L1)(const uint8_t *, const uint8_t *, int)>
+struct ByteKernel {
+    static void prefetch(const features::DescriptorImage &d, ptrdiff_t i) {
+        prefetch_bytes(d.data.data() + i * d.stride, d.stride);
+    }
+    static float sample(const features::DescriptorImage &a, ptrdiff_t ia, const features::DescriptorImage &b,
+                        ptrdiff_t ib, DescriptorNorm norm) {
+        const uint8_t *da = a.data.data() + ia * a.stride, *db = b.data.data() + ib * b.stride;
+        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, a.stride))
+                                          : std::sqrt(static_cast<float>(L2SQ(da, db, a.stride)));
+    }
+};
+
+// The same on packed 4-bit descriptors: each descriptor's codes are decoded through the table
+// of its own contrast (features::packed_levels).
+template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *),
+          uint32_t (*L1)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *)>
+struct PackedKernel {
+    static void prefetch(const features::DescriptorImage &d, ptrdiff_t i) {
+        prefetch_bytes(d.data.data() + i * d.stride, d.stride);
+        _mm_prefetch(reinterpret_cast<const char *>(d.contrast.data() + i), _MM_HINT_T0);
+    }
+    static float sample(const features::DescriptorImage &a, ptrdiff_t ia, const features::DescriptorImage &b,
+                        ptrdiff_t ib, DescriptorNorm norm) {
+        const uint8_t *da = a.data.data() + ia * a.stride, *db = b.data.data() + ib * b.stride;
+        const uint8_t *ta = features::packed_levels(a.contrast[ia]), *tb = features::packed_levels(b.contrast[ib]);
+        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, a.stride, ta, tb))
+                                          : std::sqrt(static_cast<float>(L2SQ(da, db, a.stride, ta, tb)));
+    }
+};
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
 #define LIDARFLOW_HAVE_AVX2_PATH 1
@@ -152,12 +202,65 @@ __attribute__((target("avx2"))) inline uint32_t l1_avx2(const uint8_t *a, const 
     return total;
 }
 
+// Both nibbles of 32 packed bytes as decoded values (vpshufb looks each code up in the table).
+struct Decoded {
+    __m256i lo, hi;
+};
+__attribute__((target("avx2"))) inline Decoded decode_packed_avx2(const uint8_t *p, const uint8_t *levels) {
+    const __m256i table = _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i *>(levels)));
+    const __m256i m = _mm256_set1_epi8(0x0F);
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(p));
+    return {_mm256_shuffle_epi8(table, _mm256_and_si256(v, m)),
+            _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), m))};
+}
+
+__attribute__((target("avx2"))) inline __m256i absdiff_epu8_avx2(__m256i a, __m256i b) {
+    return _mm256_or_si256(_mm256_subs_epu8(a, b), _mm256_subs_epu8(b, a));
+}
+
+__attribute__((target("avx2"))) inline uint32_t l2sq_packed_avx2(const uint8_t *a, const uint8_t *b, int bytes,
+                                                                 const uint8_t *ta, const uint8_t *tb) {
+    const __m256i zero = _mm256_setzero_si256();
+    __m256i acc = zero;
+    int i = 0;
+    for (; i + 32 <= bytes; i += 32) {
+        const Decoded da = decode_packed_avx2(a + i, ta), db = decode_packed_avx2(b + i, tb);
+        for (const __m256i d : {absdiff_epu8_avx2(da.lo, db.lo), absdiff_epu8_avx2(da.hi, db.hi)}) {
+            const __m256i lo = _mm256_unpacklo_epi8(d, zero), hi = _mm256_unpackhi_epi8(d, zero);
+            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(lo, lo));
+            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(hi, hi));
+        }
+    }
+    const __m128i s = _mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
+    uint32_t total = hsum_epi32(s);
+    if (i < bytes) total += l2sq_packed(a + i, b + i, bytes - i, ta, tb);
+    return total;
+}
+
+__attribute__((target("avx2"))) inline uint32_t l1_packed_avx2(const uint8_t *a, const uint8_t *b, int bytes,
+                                                               const uint8_t *ta, const uint8_t *tb) {
+    __m256i acc = _mm256_setzero_si256();
+    int i = 0;
+    for (; i + 32 <= bytes; i += 32) {
+        const Decoded da = decode_packed_avx2(a + i, ta), db = decode_packed_avx2(b + i, tb);
+        acc = _mm256_add_epi64(acc, _mm256_sad_epu8(da.lo, db.lo));
+        acc = _mm256_add_epi64(acc, _mm256_sad_epu8(da.hi, db.hi));
+    }
+    const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
+    uint32_t total = static_cast<uint32_t>(_mm_cvtsi128_si32(s) + _mm_cvtsi128_si32(_mm_srli_si128(s, 8)));
+    if (i < bytes) total += l1_packed(a + i, b + i, bytes - i, ta, tb);
+    return total;
+}
+
 // flatten: the generic patch loop and the AVX2 kernels are inlined into one AVX2 function.
 __attribute__((target("avx2"), flatten)) float patch_cost_avx2(const features::DescriptorImage &a,
                                                       const features::DescriptorImage &b, int ax, int ay,
                                                       int bx, int by, const PatchShape &shape,
                                                       DescriptorNorm norm, float penalty, float bound) {
-    return patch_cost_impl<l2sq_avx2, l1_avx2>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    if (a.bits == 4)
+        return patch_cost_impl<PackedKernel<l2sq_packed_avx2, l1_packed_avx2>>(a, b, ax, ay, bx, by, shape, norm,
+                                                                               penalty, bound);
+    return patch_cost_impl<ByteKernel<l2sq_avx2, l1_avx2>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 
 const bool kUseAvx2 = __builtin_cpu_supports("avx2");
@@ -168,7 +271,9 @@ const bool kUseAvx2 = __builtin_cpu_supports("avx2");
 namespace {
 float patch_cost_sse2(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax, int ay,
                       int bx, int by, const PatchShape &shape, DescriptorNorm norm, float penalty, float bound) {
-    return patch_cost_impl<l2sq, l1>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    if (a.bits == 4)
+        return patch_cost_impl<PackedKernel<l2sq_packed, l1_packed>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    return patch_cost_impl<ByteKernel<l2sq, l1>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 }  // namespace
 

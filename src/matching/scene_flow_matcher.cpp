@@ -726,7 +726,7 @@ bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingO
         return true;
     };
     return static_cast<int>(desc[0].size()) == levels && sift.cell_size == o.sift.cell_size &&
-           sift.dim == o.sift.dim && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
+           sift.dim == o.sift.dim && sift.bits == o.sift.bits && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
            same(left, l) && same(right, r);
 }
 

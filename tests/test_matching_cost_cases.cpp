@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/error.hpp"
@@ -79,6 +80,9 @@ void patch_distance_matches_eq2(void **) {
         for (int dx = -3; dx <= 3; dx += 3)
             s += descriptor_distance(a.at(8 + dx, 7 + dy), b.at(11 + dx, 9 + dy), 32, DescriptorNorm::L2);
     near(patch_cost(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f), s);
+    near(patch_cost_baseline_kernel()(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f,
+                                      std::numeric_limits<float>::infinity()),
+         s);
 }
 
 // Packed 4-bit descriptors (DenseSiftOptions::bits = 4): random codes and contrasts.
@@ -98,8 +102,9 @@ int decoded(const DescriptorImage &d, int x, int y, int i) {
     return levels[i < d.dim / 2 ? byte & 15 : byte >> 4];
 }
 
-// The packed kernels (AVX2 where the CPU has it) compute Eq. 2 on the decoded values, inside
-// the image and with clamped samples at its border, in both norms.
+// The packed kernels (AVX2 where the CPU has it, and the baseline one every CPU can run)
+// compute Eq. 2 on the decoded values, inside the image and with clamped samples at its
+// border, in both norms.
 void packed_patch_cost_is_eq2_on_decoded_values(void **) {
     for (int dim : {128, 64}) {
         const DescriptorImage a = random_packed(20, 16, dim, 21), b = random_packed(20, 16, dim, 22);
@@ -119,6 +124,7 @@ void packed_patch_cost_is_eq2_on_decoded_values(void **) {
                     s += norm == DescriptorNorm::L1 ? e : std::sqrt(e);
                 }
                 near(patch_cost(a, b, ax, ay, bx, by, sub, norm, 1e9f), s);
+                near(patch_cost_baseline_kernel()(a, b, ax, ay, bx, by, sub, norm, 0.0f, 1e9f), s);
             }
     }
 }

@@ -277,6 +277,8 @@ float patch_cost_sse2(const features::DescriptorImage &a, const features::Descri
 }
 }  // namespace
 
+PatchCostFn patch_cost_baseline_kernel() { return patch_cost_sse2; }
+
 PatchCostFn patch_cost_kernel() {
 #ifdef LIDARFLOW_HAVE_AVX2_PATH
     if (kUseAvx2) return patch_cost_avx2;

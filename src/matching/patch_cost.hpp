@@ -45,5 +45,7 @@ float patch_cost(const features::DescriptorImage &a, const features::DescriptorI
 using PatchCostFn = float (*)(const features::DescriptorImage &, const features::DescriptorImage &, int, int,
                               int, int, const PatchShape &, DescriptorNorm, float, float);
 PatchCostFn patch_cost_kernel();
+// The SSE2 / portable implementation, which CPUs without AVX2 get (for tests on those that have it).
+PatchCostFn patch_cost_baseline_kernel();
 
 }  // namespace lidarflow::matching

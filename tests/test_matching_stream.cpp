@@ -65,6 +65,9 @@ void matcher_reuses_t1_of_previous_frame(void **) {
     MatchingOptions o64 = small();
     o64.sift.dim = 64;
     assert_false(SceneFlowMatcher(rev, o64, first.features_t1()).reused_t0());
+    MatchingOptions packed = small();
+    packed.sift.bits = 4;
+    assert_false(SceneFlowMatcher(rev, packed, first.features_t1()).reused_t0());
     MatchingOptions fewer = small();
     fewer.max_levels = 1;
     assert_false(SceneFlowMatcher(rev, fewer, first.features_t1()).reused_t0());
@@ -91,6 +94,18 @@ void matcher_recycles_released_storage(void **) {
         assert_true(same_field(second.run(d).dense, fresh.run(d).dense));
     // t0 of `second` is `t1`, still held here: not handed out for writing.
     assert_null(second.release_t0().get());
+
+    // Packed descriptors written into a released 8-bit pair (their contrast plane is new).
+    MatchingOptions packed = small();
+    packed.sift.bits = 4;
+    SceneFlowMatcher third(fwd, small());
+    std::shared_ptr<StereoFeatures> spare8 = third.release_t0();
+    assert_non_null(spare8.get());
+    const SceneFlowMatcher from_spare(fwd, packed, nullptr, std::move(spare8));
+    assert_int_equal(from_spare.features_t1()->desc[0][0].bits, 4);
+    const SceneFlowMatcher packed_fresh(fwd, packed);
+    for (Direction d : {Direction::Forward, Direction::Backward})
+        assert_true(same_field(from_spare.run(d).dense, packed_fresh.run(d).dense));
 }
 
 void estimator_stream_cache_keeps_results(void **) {

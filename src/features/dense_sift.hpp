@@ -30,7 +30,7 @@ struct DenseSiftOptions {
     // 8: one byte per value. 4: the full-contrast descriptor's values coded on 16 levels
     // spaced on the square root, two per byte (a 128-value descriptor takes 64 bytes: half the
     // memory, one cache line per sample), and its contrast (the low-contrast scale below) on
-    // 16 steps in a byte of its own.
+    // kContrastSteps steps in a byte of a separate plane.
     int bits = 8;
 };
 

@@ -38,7 +38,7 @@ struct DenseSiftOptions {
 // kContrastSteps), on the scale of the 8-bit values. Distances of packed descriptors are
 // distances of these values, so low-contrast descriptors keep the relative precision of the
 // others. Filled during static initialisation; read-only afterwards.
-constexpr int kContrastSteps = 63;
+constexpr int kContrastSteps = 255;
 extern uint8_t kPackedLevels[kContrastSteps + 1][16];
 inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast & kContrastSteps]; }
 

@@ -151,7 +151,9 @@ typedef struct lf_options lf_options_t;
  *                                                 x their neighbours' mean (0 = off; default 1)
  *   "matching.descriptor_bits"  int 8 or 4   4: descriptors packed to 64 bytes (4-bit codes
  *                                            and a contrast byte; ~150 MiB less on KITTI
- *                                            pairs, same accuracy within the seeds' spread)
+ *                                            pairs, KITTI SF within the seeds' spread, the
+ *                                            synthetic scenes' textureless regions ~1 point
+ *                                            worse; default 8)
  *   "matching.max_flow"         float [1, 10000]
  *   "matching.max_disparity"    float [1, 10000]
  *   "matching.const2_abs"       float [0, 10000]

@@ -13,7 +13,7 @@
 #include "lidarflow/lidarflow.h"
 
 enum kind { INT, BOOL, FLOAT };
-enum extra { NONE, ODD, MULT16 };
+enum extra { NONE, ODD, MULT16, POW2 };
 
 /* The table of include/lidarflow/lidarflow.h, as a caller reads it. */
 typedef struct key_t_ {
@@ -49,6 +49,7 @@ static const key_t_ kKeys[] = {
     {"matching.min_coarsest_height", INT, 8, 4096, 0, NONE, NAN},
     {"matching.lazy_random_search", BOOL, 0, 1, 0, NONE, NAN},
     {"matching.settle_ratio", FLOAT, 0, 100, 0, NONE, 1},
+    {"matching.descriptor_bits", INT, 4, 8, 0, POW2, 8},
     {"matching.patch_radius", INT, 0, 16, 0, NONE, NAN},
     {"matching.stop_ratio", FLOAT, 0, 1, 0, NONE, NAN},
     {"matching.max_flow", FLOAT, 1, 10000, 0, NONE, NAN},
@@ -158,6 +159,7 @@ static void test_defaults_match_documentation(void **state) {
             assert_true((double)iv == v);
             if (k->extra == ODD) assert_true(iv % 2 == 1);
             if (k->extra == MULT16) assert_true(iv % 16 == 0);
+            if (k->extra == POW2) assert_true(iv > 0 && (iv & (iv - 1)) == 0);
         }
     }
     const char *s = NULL;
@@ -197,6 +199,9 @@ static void test_bounds_of_every_key(void **state) {
                 expect_rejected_int(o, k, lo + 8);
                 expect_accepted_int(o, k, lo + 16);
             }
+            if (k->extra == POW2)
+                for (int64_t v = lo + 1; v < hi; ++v)
+                    if (v & (v - 1)) expect_rejected_int(o, k, v);
             /* integer keys are not floats */
             assert_int_equal(lf_options_set_float(o, k->key, k->lo), LF_ERR_INVALID_ARGUMENT);
             assert_non_null(strstr(lf_options_last_error(o), "lf_options_set_float"));

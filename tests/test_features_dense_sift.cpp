@@ -84,9 +84,14 @@ void shift_equivariance(void **) {
 
 void thread_count_does_not_change_output(void **) {
     const cv::Mat1f img = texture(50, 33, 4);
-    const DescriptorImage a = compute_dense_sift(img, DenseSiftOptions{}, 1);
-    const DescriptorImage b = compute_dense_sift(img, DenseSiftOptions{}, 3);
-    assert_true(a.data == b.data);
+    for (int bits : {8, 4}) {
+        DenseSiftOptions o;
+        o.bits = bits;
+        const DescriptorImage a = compute_dense_sift(img, o, 1);
+        const DescriptorImage b = compute_dense_sift(img, o, 3);
+        assert_true(a.data == b.data);
+        assert_true(a.contrast == b.contrast);
+    }
 }
 
 // Descriptors are computed in bands of rows with their own halo: a row must not depend on where

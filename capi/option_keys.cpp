@@ -189,7 +189,7 @@ void check_bounds(const OptionKey &k, double v, const std::string &shown) {
     bool ok = std::isfinite(v) && (k.lo_open ? v > k.lo : v >= k.lo) && v <= k.hi;
     if (ok && k.extra == Extra::Odd) ok = std::fmod(v, 2.0) != 0.0;
     if (ok && k.extra == Extra::MultipleOf16) ok = std::fmod(v, 16.0) == 0.0;
-    if (ok && k.extra == Extra::PowerOfTwo) ok = v >= 1 && std::exp2(std::round(std::log2(v))) == v;
+    if (ok && k.extra == Extra::PowerOfTwo) ok = (static_cast<int64_t>(v) & (static_cast<int64_t>(v) - 1)) == 0;
     require(ok, ErrorCode::InvalidArgument,
             std::string("option '") + k.name + "' must be " + bounds_text(k) + ", got " + shown);
 }

@@ -197,7 +197,7 @@ void packed_descriptors_follow_the_byte_ones(void **) {
             o8.dim = o4.dim = dim;
             o4.bits = 4;
             const DescriptorImage d8 = compute_dense_sift(img, o8), d4 = compute_dense_sift(img, o4, 2);
-            assert_int_equal(d4.stride, dim / 2);
+            assert_int_equal(d4.stride(), dim / 2);
             assert_int_equal(d4.bits, 4);
             assert_int_equal(d4.data.size(), 48u * 40u * dim / 2);
             assert_int_equal(d4.contrast.size(), 48u * 40u);

@@ -28,7 +28,7 @@ DescriptorImage random_descriptors(int w, int h, int dim, uint32_t seed) {
     DescriptorImage d;
     d.width = w;
     d.height = h;
-    d.dim = d.stride = dim;
+    d.dim = dim;
     d.data.resize(size_t(w) * h * dim);
     for (auto &v : d.data) v = static_cast<uint8_t>(rng() & 0xFF);
     return d;
@@ -80,7 +80,7 @@ void patch_distance_matches_eq2(void **) {
         for (int dx = -3; dx <= 3; dx += 3)
             s += descriptor_distance(a.at(8 + dx, 7 + dy), b.at(11 + dx, 9 + dy), 32, DescriptorNorm::L2);
     near(patch_cost(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f), s);
-    near(patch_cost_baseline_kernel()(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f,
+    near(patch_cost_baseline_kernel(a.bits)(a, b, 8, 7, 11, 9, sub, DescriptorNorm::L2, 1e9f,
                                       std::numeric_limits<float>::infinity()),
          s);
 }
@@ -124,7 +124,7 @@ void packed_patch_cost_is_eq2_on_decoded_values(void **) {
                     s += norm == DescriptorNorm::L1 ? e : std::sqrt(e);
                 }
                 near(patch_cost(a, b, ax, ay, bx, by, sub, norm, 1e9f), s);
-                near(patch_cost_baseline_kernel()(a, b, ax, ay, bx, by, sub, norm, 0.0f, 1e9f), s);
+                near(patch_cost_baseline_kernel(a.bits)(a, b, ax, ay, bx, by, sub, norm, 0.0f, 1e9f), s);
             }
     }
 }

@@ -204,17 +204,15 @@ void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, 
 
     // clear() first: a resize that must grow would otherwise copy the old descriptors over.
     // The image is empty until the storage is there, so a bad_alloc leaves it consistent.
-    const int stride = options.dim * options.bits / 8;
-    out.width = out.height = out.dim = out.stride = 0;
+    out.width = out.height = out.dim = 0;
     out.data.clear();
     out.contrast.clear();
-    out.data.resize(static_cast<size_t>(w) * h * stride);
+    out.data.resize(static_cast<size_t>(w) * h * options.dim * options.bits / 8);
     if (options.bits == 4) out.contrast.resize(static_cast<size_t>(w) * h);
     out.width = w;
     out.height = h;
     out.dim = options.dim;
     out.bits = options.bits;
-    out.stride = stride;
 
     // Bands of output rows, each computed from its own slice of histogram rows (plus the halo
     // the two filters and the cell offsets need) in per-thread scratch: the scratch stays a few

@@ -40,20 +40,21 @@ struct DenseSiftOptions {
 // others. Filled during static initialisation; read-only afterwards.
 constexpr int kContrastSteps = 255;
 extern uint8_t kPackedLevels[kContrastSteps + 1][16];
-inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast & kContrastSteps]; }
+static_assert(kContrastSteps == 255, "every value of the contrast byte must have its row");
+inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast]; }
 
 // Descriptor image. Owns its storage; copies are deep only through clone().
 struct DescriptorImage {
     int width = 0, height = 0, dim = 0;  // dim: values per descriptor
     int bits = 8;                        // 8, or 4 (byte i: value i in the low nibble, i + dim/2 high)
-    int stride = 0;                      // bytes per descriptor: dim * bits / 8
-    std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * stride, row-major, pixel-major
+    std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * stride(), row-major, pixel-major
     std::vector<uint8_t, HugePageAllocator<uint8_t>> contrast;  // bits 4: width * height indices; else empty
 
+    int stride() const { return dim * bits / 8; }  // bytes per descriptor
     const uint8_t *at(int x, int y) const {
-        return data.data() + (static_cast<size_t>(y) * width + x) * stride;
+        return data.data() + (static_cast<size_t>(y) * width + x) * stride();
     }
-    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * stride; }
+    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * stride(); }
     bool empty() const { return data.empty(); }
 };
 

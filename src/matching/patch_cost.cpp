@@ -85,31 +85,37 @@ float descriptor_distance(const uint8_t *a, const uint8_t *b, int dim, Descripto
 
 namespace {
 
+// One descriptor image as the patch loop reads it, its fields read once per patch cost.
+struct View {
+    const uint8_t *data, *contrast;
+    ptrdiff_t width;
+    int stride;  // bytes per descriptor
+    explicit View(const features::DescriptorImage &d)
+        : data(d.data.data()), contrast(d.contrast.data()), width(d.width), stride(d.stride()) {}
+    const uint8_t *at(ptrdiff_t i) const { return data + i * stride; }  // i = y * width + x
+};
+
 // The patch loop, generic over the per-sample distance: K::sample(a, pixel of a, b, pixel of b,
 // norm) with pixels as indices y * width + x.
 template <class K>
-inline float patch_cost_impl(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax,
+inline float patch_cost_impl(const features::DescriptorImage &da, const features::DescriptorImage &db, int ax,
                              int ay, int bx, int by, const PatchShape &shape, DescriptorNorm norm,
                              float penalty, float bound) {
     const int n = shape.samples();
-    if (ax < 0 || ay < 0 || ax >= a.width || ay >= a.height || bx < 0 || by < 0 || bx >= b.width ||
-        by >= b.height)
+    if (ax < 0 || ay < 0 || ax >= da.width || ay >= da.height || bx < 0 || by < 0 || bx >= db.width ||
+        by >= db.height)
         return penalty * static_cast<float>(n);
-    const auto pixel = [](const features::DescriptorImage &d, int x, int y) {
-        return static_cast<ptrdiff_t>(y) * d.width + x;
-    };
+    const View a(da), b(db);
     float sum = 0.0f;
     const int r = shape.radius;
-    if (ax >= r && ay >= r && bx >= r && by >= r && ax + r < a.width && ay + r < a.height &&
-        bx + r < b.width && by + r < b.height) {
+    if (ax >= r && ay >= r && bx >= r && by >= r && ax + r < da.width && ay + r < da.height &&
+        bx + r < db.width && by + r < db.height) {
         // Fast path: the whole patch is inside both images, no clamping.
-        const ptrdiff_t ca = pixel(a, ax, ay), cb = pixel(b, bx, by);
+        const ptrdiff_t ca = ay * a.width + ax, cb = by * b.width + bx;
         // The samples lie in rows far apart (cache and TLB misses): request all their lines
         // first so that the misses overlap instead of being paid one after another.
-        for (int k = 0; k < n; ++k) {
-            K::prefetch(a, ca + shape.dy[k] * a.width + shape.dx[k]);
-            K::prefetch(b, cb + shape.dy[k] * b.width + shape.dx[k]);
-        }
+        for (int k = 0; k < n; ++k)
+            K::prefetch(a, ca + shape.dy[k] * a.width + shape.dx[k], b, cb + shape.dy[k] * b.width + shape.dx[k]);
         for (int k = 0; k < n; ++k) {
             sum += K::sample(a, ca + shape.dy[k] * a.width + shape.dx[k], b, cb + shape.dy[k] * b.width + shape.dx[k],
                              norm);
@@ -118,32 +124,35 @@ inline float patch_cost_impl(const features::DescriptorImage &a, const features:
         return sum;
     }
     for (int k = 0; k < n; ++k) {
-        const int pax = std::clamp(ax + shape.dx[k], 0, a.width - 1);
-        const int pay = std::clamp(ay + shape.dy[k], 0, a.height - 1);
-        const int pbx = std::clamp(bx + shape.dx[k], 0, b.width - 1);
-        const int pby = std::clamp(by + shape.dy[k], 0, b.height - 1);
-        sum += K::sample(a, pixel(a, pax, pay), b, pixel(b, pbx, pby), norm);
+        const int pax = std::clamp(ax + shape.dx[k], 0, da.width - 1);
+        const int pay = std::clamp(ay + shape.dy[k], 0, da.height - 1);
+        const int pbx = std::clamp(bx + shape.dx[k], 0, db.width - 1);
+        const int pby = std::clamp(by + shape.dy[k], 0, db.height - 1);
+        sum += K::sample(a, pay * a.width + pax, b, pby * b.width + pbx, norm);
         if (sum > bound) return sum;
     }
     return sum;
 }
 
-inline void prefetch_bytes(const uint8_t *p, int bytes) {
-    for (int off = 0; off < bytes; off += 64) _mm_prefetch(reinterpret_cast<const char *>(p + off), _MM_HINT_T0);
+// Both samples' descriptor lines, interleaved a / b / a / b: requesting all of a's lines
+// first made stage 1 ~3 % slower (user CPU of bench_matching, four alternations).
+inline void prefetch_pair(const uint8_t *pa, const uint8_t *pb, int bytes) {
+    for (int off = 0; off < bytes; off += 64) {
+        _mm_prefetch(reinterpret_cast<const char *>(pa + off), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char *>(pb + off), _MM_HINT_T0);
+    }
 }
 
 // Eq. 2's per-sample term on 8-bit descriptors.
 template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int),
           uint32_t (*L1)(const uint8_t *, const uint8_t *, int)>
 struct ByteKernel {
-    static void prefetch(const features::DescriptorImage &d, ptrdiff_t i) {
-        prefetch_bytes(d.data.data() + i * d.stride, d.stride);
+    static void prefetch(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib) {
+        prefetch_pair(a.at(ia), b.at(ib), a.stride);
     }
-    static float sample(const features::DescriptorImage &a, ptrdiff_t ia, const features::DescriptorImage &b,
-                        ptrdiff_t ib, DescriptorNorm norm) {
-        const uint8_t *da = a.data.data() + ia * a.stride, *db = b.data.data() + ib * b.stride;
-        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, a.stride))
-                                          : std::sqrt(static_cast<float>(L2SQ(da, db, a.stride)));
+    static float sample(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib, DescriptorNorm norm) {
+        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(a.at(ia), b.at(ib), a.stride))
+                                          : std::sqrt(static_cast<float>(L2SQ(a.at(ia), b.at(ib), a.stride)));
     }
 };
 
@@ -152,38 +161,54 @@ struct ByteKernel {
 template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *),
           uint32_t (*L1)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *)>
 struct PackedKernel {
-    static void prefetch(const features::DescriptorImage &d, ptrdiff_t i) {
-        prefetch_bytes(d.data.data() + i * d.stride, d.stride);
-        _mm_prefetch(reinterpret_cast<const char *>(d.contrast.data() + i), _MM_HINT_T0);
+    static void prefetch(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib) {
+        prefetch_pair(a.at(ia), b.at(ib), a.stride);
+        _mm_prefetch(reinterpret_cast<const char *>(a.contrast + ia), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char *>(b.contrast + ib), _MM_HINT_T0);
     }
-    static float sample(const features::DescriptorImage &a, ptrdiff_t ia, const features::DescriptorImage &b,
-                        ptrdiff_t ib, DescriptorNorm norm) {
-        const uint8_t *da = a.data.data() + ia * a.stride, *db = b.data.data() + ib * b.stride;
+    static float sample(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib, DescriptorNorm norm) {
         const uint8_t *ta = features::packed_levels(a.contrast[ia]), *tb = features::packed_levels(b.contrast[ib]);
-        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(da, db, a.stride, ta, tb))
-                                          : std::sqrt(static_cast<float>(L2SQ(da, db, a.stride, ta, tb)));
+        return norm == DescriptorNorm::L1 ? static_cast<float>(L1(a.at(ia), b.at(ib), a.stride, ta, tb))
+                                          : std::sqrt(static_cast<float>(L2SQ(a.at(ia), b.at(ib), a.stride, ta, tb)));
     }
 };
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
 #define LIDARFLOW_HAVE_AVX2_PATH 1
 // AVX2 kernels (dim is a multiple of 16; 32-byte steps plus one 16-byte tail when needed),
-// compiled for AVX2 only in these functions and chosen at run time.
-__attribute__((target("avx2"))) inline uint32_t l2sq_avx2(const uint8_t *a, const uint8_t *b, int dim) {
+// compiled for AVX2 only in these functions and chosen at run time. The 8-bit and the packed
+// kernels share the per-step arithmetic and the horizontal sums below.
+__attribute__((target("avx2"))) inline __m256i absdiff_epu8_avx2(__m256i a, __m256i b) {
+    return _mm256_or_si256(_mm256_subs_epu8(a, b), _mm256_subs_epu8(b, a));
+}
+
+// acc (8 x int32) += the squares of the 32 byte differences of a and b.
+__attribute__((target("avx2"))) inline __m256i add_squares_avx2(__m256i acc, __m256i a, __m256i b) {
     const __m256i zero = _mm256_setzero_si256();
-    __m256i acc = zero;
+    const __m256i d = absdiff_epu8_avx2(a, b);
+    const __m256i lo = _mm256_unpacklo_epi8(d, zero), hi = _mm256_unpackhi_epi8(d, zero);
+    acc = _mm256_add_epi32(acc, _mm256_madd_epi16(lo, lo));
+    return _mm256_add_epi32(acc, _mm256_madd_epi16(hi, hi));
+}
+
+__attribute__((target("avx2"))) inline uint32_t hsum256_epi32(__m256i acc) {
+    return hsum_epi32(_mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1)));
+}
+
+__attribute__((target("avx2"))) inline uint32_t hsum256_epi64(__m256i acc) {
+    const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
+    return static_cast<uint32_t>(_mm_cvtsi128_si32(s) + _mm_cvtsi128_si32(_mm_srli_si128(s, 8)));
+}
+
+__attribute__((target("avx2"))) inline __m256i load256(const uint8_t *p) {
+    return _mm256_loadu_si256(reinterpret_cast<const __m256i *>(p));
+}
+
+__attribute__((target("avx2"))) inline uint32_t l2sq_avx2(const uint8_t *a, const uint8_t *b, int dim) {
+    __m256i acc = _mm256_setzero_si256();
     int i = 0;
-    for (; i + 32 <= dim; i += 32) {
-        const __m256i va = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(a + i));
-        const __m256i vb = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b + i));
-        const __m256i d = _mm256_or_si256(_mm256_subs_epu8(va, vb), _mm256_subs_epu8(vb, va));
-        const __m256i lo = _mm256_unpacklo_epi8(d, zero);
-        const __m256i hi = _mm256_unpackhi_epi8(d, zero);
-        acc = _mm256_add_epi32(acc, _mm256_madd_epi16(lo, lo));
-        acc = _mm256_add_epi32(acc, _mm256_madd_epi16(hi, hi));
-    }
-    __m128i s = _mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
-    uint32_t total = hsum_epi32(s);
+    for (; i + 32 <= dim; i += 32) acc = add_squares_avx2(acc, load256(a + i), load256(b + i));
+    uint32_t total = hsum256_epi32(acc);
     if (i < dim) total += l2sq(a + i, b + i, dim - i);
     return total;
 }
@@ -191,105 +216,97 @@ __attribute__((target("avx2"))) inline uint32_t l2sq_avx2(const uint8_t *a, cons
 __attribute__((target("avx2"))) inline uint32_t l1_avx2(const uint8_t *a, const uint8_t *b, int dim) {
     __m256i acc = _mm256_setzero_si256();
     int i = 0;
-    for (; i + 32 <= dim; i += 32) {
-        const __m256i va = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(a + i));
-        const __m256i vb = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b + i));
-        acc = _mm256_add_epi64(acc, _mm256_sad_epu8(va, vb));
-    }
-    const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
-    uint32_t total = static_cast<uint32_t>(_mm_cvtsi128_si32(s) + _mm_cvtsi128_si32(_mm_srli_si128(s, 8)));
+    for (; i + 32 <= dim; i += 32) acc = _mm256_add_epi64(acc, _mm256_sad_epu8(load256(a + i), load256(b + i)));
+    uint32_t total = hsum256_epi64(acc);
     if (i < dim) total += l1(a + i, b + i, dim - i);
     return total;
 }
 
-// Both nibbles of 32 packed bytes as decoded values (vpshufb looks each code up in the table).
+// A descriptor's 16 decoded values in both lanes: the table vpshufb looks its codes up in.
+__attribute__((target("avx2"))) inline __m256i levels_avx2(const uint8_t *levels) {
+    return _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i *>(levels)));
+}
+
+// Both nibbles of 32 packed bytes as decoded values.
 struct Decoded {
     __m256i lo, hi;
 };
-__attribute__((target("avx2"))) inline Decoded decode_packed_avx2(const uint8_t *p, const uint8_t *levels) {
-    const __m256i table = _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i *>(levels)));
+__attribute__((target("avx2"))) inline Decoded decode_packed_avx2(const uint8_t *p, __m256i table) {
     const __m256i m = _mm256_set1_epi8(0x0F);
-    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(p));
+    const __m256i v = load256(p);
     return {_mm256_shuffle_epi8(table, _mm256_and_si256(v, m)),
             _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), m))};
 }
 
-__attribute__((target("avx2"))) inline __m256i absdiff_epu8_avx2(__m256i a, __m256i b) {
-    return _mm256_or_si256(_mm256_subs_epu8(a, b), _mm256_subs_epu8(b, a));
-}
-
 __attribute__((target("avx2"))) inline uint32_t l2sq_packed_avx2(const uint8_t *a, const uint8_t *b, int bytes,
                                                                  const uint8_t *ta, const uint8_t *tb) {
-    const __m256i zero = _mm256_setzero_si256();
-    __m256i acc = zero;
+    const __m256i la = levels_avx2(ta), lb = levels_avx2(tb);
+    __m256i acc = _mm256_setzero_si256();
     int i = 0;
     for (; i + 32 <= bytes; i += 32) {
-        const Decoded da = decode_packed_avx2(a + i, ta), db = decode_packed_avx2(b + i, tb);
-        for (const __m256i d : {absdiff_epu8_avx2(da.lo, db.lo), absdiff_epu8_avx2(da.hi, db.hi)}) {
-            const __m256i lo = _mm256_unpacklo_epi8(d, zero), hi = _mm256_unpackhi_epi8(d, zero);
-            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(lo, lo));
-            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(hi, hi));
-        }
+        const Decoded da = decode_packed_avx2(a + i, la), db = decode_packed_avx2(b + i, lb);
+        acc = add_squares_avx2(acc, da.lo, db.lo);
+        acc = add_squares_avx2(acc, da.hi, db.hi);
     }
-    const __m128i s = _mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
-    uint32_t total = hsum_epi32(s);
+    uint32_t total = hsum256_epi32(acc);
     if (i < bytes) total += l2sq_packed(a + i, b + i, bytes - i, ta, tb);
     return total;
 }
 
 __attribute__((target("avx2"))) inline uint32_t l1_packed_avx2(const uint8_t *a, const uint8_t *b, int bytes,
                                                                const uint8_t *ta, const uint8_t *tb) {
+    const __m256i la = levels_avx2(ta), lb = levels_avx2(tb);
     __m256i acc = _mm256_setzero_si256();
     int i = 0;
     for (; i + 32 <= bytes; i += 32) {
-        const Decoded da = decode_packed_avx2(a + i, ta), db = decode_packed_avx2(b + i, tb);
+        const Decoded da = decode_packed_avx2(a + i, la), db = decode_packed_avx2(b + i, lb);
         acc = _mm256_add_epi64(acc, _mm256_sad_epu8(da.lo, db.lo));
         acc = _mm256_add_epi64(acc, _mm256_sad_epu8(da.hi, db.hi));
     }
-    const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
-    uint32_t total = static_cast<uint32_t>(_mm_cvtsi128_si32(s) + _mm_cvtsi128_si32(_mm_srli_si128(s, 8)));
+    uint32_t total = hsum256_epi64(acc);
     if (i < bytes) total += l1_packed(a + i, b + i, bytes - i, ta, tb);
     return total;
 }
 
 // flatten: the generic patch loop and the AVX2 kernels are inlined into one AVX2 function.
+template <class K>
 __attribute__((target("avx2"), flatten)) float patch_cost_avx2(const features::DescriptorImage &a,
                                                       const features::DescriptorImage &b, int ax, int ay,
                                                       int bx, int by, const PatchShape &shape,
                                                       DescriptorNorm norm, float penalty, float bound) {
-    if (a.bits == 4)
-        return patch_cost_impl<PackedKernel<l2sq_packed_avx2, l1_packed_avx2>>(a, b, ax, ay, bx, by, shape, norm,
-                                                                               penalty, bound);
-    return patch_cost_impl<ByteKernel<l2sq_avx2, l1_avx2>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    return patch_cost_impl<K>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 
 const bool kUseAvx2 = __builtin_cpu_supports("avx2");
 #endif
 
-}  // namespace
-
-namespace {
+template <class K>
 float patch_cost_sse2(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax, int ay,
                       int bx, int by, const PatchShape &shape, DescriptorNorm norm, float penalty, float bound) {
-    if (a.bits == 4)
-        return patch_cost_impl<PackedKernel<l2sq_packed, l1_packed>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
-    return patch_cost_impl<ByteKernel<l2sq, l1>>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    return patch_cost_impl<K>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
+
 }  // namespace
 
-PatchCostFn patch_cost_baseline_kernel() { return patch_cost_sse2; }
+// The descriptor layout is chosen here, once per caller (the matcher keeps the function), so
+// each kernel is one straight loop for one layout.
+PatchCostFn patch_cost_baseline_kernel(int bits) {
+    return bits == 4 ? patch_cost_sse2<PackedKernel<l2sq_packed, l1_packed>> : patch_cost_sse2<ByteKernel<l2sq, l1>>;
+}
 
-PatchCostFn patch_cost_kernel() {
+PatchCostFn patch_cost_kernel(int bits) {
 #ifdef LIDARFLOW_HAVE_AVX2_PATH
-    if (kUseAvx2) return patch_cost_avx2;
+    if (kUseAvx2)
+        return bits == 4 ? patch_cost_avx2<PackedKernel<l2sq_packed_avx2, l1_packed_avx2>>
+                         : patch_cost_avx2<ByteKernel<l2sq_avx2, l1_avx2>>;
 #endif
-    return patch_cost_sse2;
+    return patch_cost_baseline_kernel(bits);
 }
 
 float patch_cost(const features::DescriptorImage &a, const features::DescriptorImage &b, int ax,
                  int ay, int bx, int by, const PatchShape &shape, DescriptorNorm norm,
                  float penalty, float bound) {
-    return patch_cost_kernel()(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
+    return patch_cost_kernel(a.bits)(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 
 }  // namespace lidarflow::matching

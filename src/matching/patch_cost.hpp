@@ -44,8 +44,9 @@ float patch_cost(const features::DescriptorImage &a, const features::DescriptorI
 // frame pair's CPU samples landed on that frame's set-up in perf).
 using PatchCostFn = float (*)(const features::DescriptorImage &, const features::DescriptorImage &, int, int,
                               int, int, const PatchShape &, DescriptorNorm, float, float);
-PatchCostFn patch_cost_kernel();
+// `bits`: the descriptors' (features::DescriptorImage::bits); the function takes only those.
+PatchCostFn patch_cost_kernel(int bits);
 // The SSE2 / portable implementation, which CPUs without AVX2 get (for tests on those that have it).
-PatchCostFn patch_cost_baseline_kernel();
+PatchCostFn patch_cost_baseline_kernel(int bits);
 
 }  // namespace lidarflow::matching

@@ -172,7 +172,7 @@ private:
     cv::Mat1i tgt_labels_;         // D1 hits on the level
     std::vector<cv::Point> tgt_centre_;
     PatchShape shape_;
-    const PatchCostFn cost_fn_ = patch_cost_kernel();
+    const PatchCostFn cost_fn_ = patch_cost_kernel(opt_.sift.bits);  // the descriptors are computed with opt_.sift
     float penalty_ = 0, dmax_ = 0, max_r_ = 0;
 
     std::vector<Scored> best_;
@@ -726,8 +726,8 @@ bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingO
         return true;
     };
     return static_cast<int>(desc[0].size()) == levels && sift.cell_size == o.sift.cell_size &&
-           sift.dim == o.sift.dim && sift.bits == o.sift.bits && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
-           same(left, l) && same(right, r);
+           sift.dim == o.sift.dim && sift.bits == o.sift.bits && sift.clip == o.sift.clip &&
+           sift.norm_floor == o.sift.norm_floor && same(left, l) && same(right, r);
 }
 
 SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,

@@ -250,6 +250,69 @@ void matcher_costs_are_the_case_formulas(void **) {
     matcher_costs_are_the_case_formulas_for(D1Terms::ReferenceAnchored);
 }
 
+// 128-byte 8-bit descriptors with the Euclidean distance (every preset's) take a kernel that
+// computes three samples at a time. Its costs equal the one-sample loop's bit for bit (the
+// baseline kernel's, which keeps that loop), and its early exit returns a partial sum above
+// the bound exactly when the full cost is above it, for sample counts that are and are not
+// multiples of three.
+void byte_kernel_equals_the_one_sample_loop(void **) {
+    const DescriptorImage a = random_descriptors(24, 20, 128, 31), b = random_descriptors(24, 20, 128, 32);
+    const PatchCostFn fast = patch_cost_kernel(8), base = patch_cost_baseline_kernel(8);
+    const float inf = std::numeric_limits<float>::infinity();
+    for (const PatchShape &shape : {PatchShape(3, 3), PatchShape(2, 1), PatchShape(4, 2), PatchShape(0, 1)})
+        for (const auto &p : {std::array<int, 4>{8, 7, 11, 9}, std::array<int, 4>{12, 10, 9, 12}}) {
+            const auto [ax, ay, bx, by] = p;
+            const float full = base(a, b, ax, ay, bx, by, shape, DescriptorNorm::L2, 1e9f, inf);
+            double s = 0;
+            for (int k = 0; k < shape.samples(); ++k)
+                s += descriptor_distance(a.at(ax + shape.dx[k], ay + shape.dy[k]),
+                                         b.at(bx + shape.dx[k], by + shape.dy[k]), 128, DescriptorNorm::L2);
+            near(full, s);
+            const float got = fast(a, b, ax, ay, bx, by, shape, DescriptorNorm::L2, 1e9f, inf);
+            if (got != full) fail_msg("%d samples: %.9g != %.9g", shape.samples(), double(got), double(full));
+            for (double frac : {0.05, 0.3, 0.5, 0.7, 0.95, 1.0, 1.2}) {
+                const float bound = static_cast<float>(frac * full);
+                const float partial = fast(a, b, ax, ay, bx, by, shape, DescriptorNorm::L2, 1e9f, bound);
+                if (full > bound) {
+                    assert_true(partial > bound && partial <= full);
+                    assert_true(base(a, b, ax, ay, bx, by, shape, DescriptorNorm::L2, 1e9f, bound) > bound);
+                } else {
+                    assert_true(partial == full);
+                }
+            }
+        }
+}
+
+// Remembering the candidates a seed tried (MatchingOptions::remember_tried) skips work but
+// changes no result: the same matches and costs in both directions, with the LiDAR cases.
+void remembering_tried_candidates_changes_nothing(void **) {
+    synth::SynthConfig sc;
+    sc.width = 160;
+    sc.height = 96;
+    sc.seed = 7;
+    sc.threads = 1;
+    const synth::SynthScene scene = synth::render(sc);
+    MatchInput in{scene.left0, scene.right0, scene.left1, scene.right1, scene.lidar0, scene.lidar1};
+    MatchingOptions on = MatchingOptions::for_variant(MatchVariant::Full);
+    on.min_coarsest_height = 24;
+    assert_true(on.remember_tried);
+    MatchingOptions off = on;
+    off.remember_tried = false;
+    for (Direction dir : {Direction::Forward, Direction::Backward}) {
+        const MatchResult a = match_scene_flow(in, on, dir), b = match_scene_flow(in, off, dir);
+        assert_true(a.tried_skips > 0);
+        assert_int_equal(b.tried_skips, 0);
+        assert_int_equal(a.seeds.size(), b.seeds.size());
+        for (size_t i = 0; i < a.seeds.size(); ++i) {
+            const SeedMatch &p = a.seeds[i], &q = b.seeds[i];
+            if (p.u != q.u || p.v != q.v || p.d0 != q.d0 || p.d1 != q.d1 || p.cost != q.cost ||
+                p.cost_case != q.cost_case)
+                fail_msg("seed %zu differs: (%g %g %g %g, %g) vs (%g %g %g %g, %g)", i, p.u, p.v, p.d0, p.d1,
+                         p.cost, q.u, q.v, q.d0, q.d1, q.cost);
+        }
+    }
+}
+
 }  // namespace
 
 int main() {
@@ -260,6 +323,8 @@ int main() {
         cmocka_unit_test(four_cases_follow_the_paper),
         cmocka_unit_test(case_cost_validates),
         cmocka_unit_test(matcher_costs_are_the_case_formulas),
+        cmocka_unit_test(byte_kernel_equals_the_one_sample_loop),
+        cmocka_unit_test(remembering_tried_candidates_changes_nothing),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -58,6 +58,9 @@ struct MatchResult {
     std::vector<SeedMatch> seeds;  // grid seeds first (row-major), then extra LiDAR seeds
     int grid_width = 0, grid_height = 0;
     double seconds_features = 0, seconds_matching = 0;
+    // Candidates not evaluated because their seed had tried their positions before on the same
+    // level and case (MatchingOptions::remember_tried): a count for benchmarks and tests.
+    uint64_t tried_skips = 0;
 };
 
 // Descriptor pyramids of one stereo pair (left, right) at one time step, with deep copies of

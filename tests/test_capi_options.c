@@ -297,7 +297,7 @@ static void test_named_presets(void **state) {
     assert_true(get_number(o, "threads") == 4.0);
     assert_true(get_number(o, "matching.grid_step") == 6.0);
     assert_true(get_number(o, "matching.iterations") == 3.0);
-    assert_true(get_number(o, "matching.min_coarsest_height") == 80.0);
+    assert_true(get_number(o, "matching.min_coarsest_height") == get_number(fresh, "matching.min_coarsest_height"));
     assert_true(fabs(get_number(o, "processing_scale") - 0.7) < 1e-12);
     assert_true(get_number(o, "matching.thin_from_level") == get_number(fresh, "matching.thin_from_level"));
     assert_true(get_number(o, "matching.grid_step") != get_number(fresh, "matching.grid_step"));

@@ -101,7 +101,7 @@ typedef struct lf_options lf_options_t;
  *                                        levels below full resolution thinned: thin_from_level
  *                                        1; backward_grid_step 6, fb_search_radius 2) or
  *                                        "fast" (grid_step 6, iterations 3,
- *                                        min_coarsest_height 80, processing_scale 0.7); set it
+ *                                        processing_scale 0.7); set it
  *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused

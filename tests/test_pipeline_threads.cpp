@@ -81,6 +81,25 @@ void thread_count_does_not_change_results(void **) {
     assert_int_equal(named, 6);
 }
 
+// A wide LiDAR support window links grid seeds to LiDAR seeds several strips away; the matcher
+// then colours its strips so that no two strips running together read each other's seeds, and
+// the results still do not depend on the thread count.
+void wide_support_windows_do_not_depend_on_threads(void **) {
+    const synth::SynthScene s = scene();
+    const FrameInput in = frame_of(s);
+    EstimatorOptions o = small_options(1);
+    o.matching.window_size = o.consistency.support_window = 61;
+    o.matching.grid_step = 2;  // a quarter of the LiDAR points on grid nodes, linked from far
+    o.last_stage = Stage::Matching;
+    const EstimatorResult one = Estimator(o).run(in);
+    for (int threads : {2, 3, 4}) {
+        o.threads = threads;
+        const EstimatorResult many = Estimator(o).run(in);
+        assert_true(same_field(one.forward, many.forward));
+        assert_true(same_field(one.backward, many.backward));
+    }
+}
+
 void lazy_random_search_is_deterministic_and_accurate(void **) {
     const synth::SynthScene s = scene();
     const FrameInput in = frame_of(s);
@@ -133,6 +152,7 @@ void settle_ratio_is_deterministic_and_accurate(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(thread_count_does_not_change_results),
+        cmocka_unit_test(wide_support_windows_do_not_depend_on_threads),
         cmocka_unit_test(lazy_random_search_is_deterministic_and_accurate),
         cmocka_unit_test(settle_ratio_is_deterministic_and_accurate),
     };

@@ -205,18 +205,33 @@ void case_cost_validates(void **) {
     }
 }
 
-// Every seed's reported cost is the case formula of its reported case at its match, and the
-// case follows the LiDAR rules: D0 part for LiDAR pixels (and, with const1, window seeds).
-void matcher_costs_are_the_case_formulas_for(D1Terms terms) {
+// A 160x96 synthetic scene with its LiDAR, and the full LiDAR-Flow options with a pyramid
+// level below it.
+synth::SynthScene small_scene(uint64_t seed) {
     synth::SynthConfig sc;
     sc.width = 160;
     sc.height = 96;
-    sc.seed = 5;
+    sc.seed = seed;
     sc.threads = 1;
-    const synth::SynthScene scene = synth::render(sc);
-    MatchInput in{scene.left0, scene.right0, scene.left1, scene.right1, scene.lidar0, scene.lidar1};
+    return synth::render(sc);
+}
+
+MatchInput input_of(const synth::SynthScene &s) {
+    return MatchInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+}
+
+MatchingOptions small_scene_options() {
     MatchingOptions o = MatchingOptions::for_variant(MatchVariant::Full);
     o.min_coarsest_height = 24;
+    return o;
+}
+
+// Every seed's reported cost is the case formula of its reported case at its match, and the
+// case follows the LiDAR rules: D0 part for LiDAR pixels (and, with const1, window seeds).
+void matcher_costs_are_the_case_formulas_for(D1Terms terms) {
+    const synth::SynthScene scene = small_scene(5);
+    const MatchInput in = input_of(scene);
+    MatchingOptions o = small_scene_options();
     o.d1_terms = terms;
     const MatchResult r = match_scene_flow(in, o, Direction::Forward);
 
@@ -286,15 +301,9 @@ void byte_kernel_equals_the_one_sample_loop(void **) {
 // Remembering the candidates a seed tried (MatchingOptions::remember_tried) skips work but
 // changes no result: the same matches and costs in both directions, with the LiDAR cases.
 void remembering_tried_candidates_changes_nothing(void **) {
-    synth::SynthConfig sc;
-    sc.width = 160;
-    sc.height = 96;
-    sc.seed = 7;
-    sc.threads = 1;
-    const synth::SynthScene scene = synth::render(sc);
-    MatchInput in{scene.left0, scene.right0, scene.left1, scene.right1, scene.lidar0, scene.lidar1};
-    MatchingOptions on = MatchingOptions::for_variant(MatchVariant::Full);
-    on.min_coarsest_height = 24;
+    const synth::SynthScene scene = small_scene(7);
+    const MatchInput in = input_of(scene);
+    MatchingOptions on = small_scene_options();
     assert_true(on.remember_tried);
     MatchingOptions off = on;
     off.remember_tried = false;

@@ -144,15 +144,19 @@ inline void prefetch_pair(const uint8_t *pa, const uint8_t *pb, int bytes) {
     }
 }
 
-// Eq. 2's per-sample term on 8-bit descriptors.
-template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int),
-          uint32_t (*L1)(const uint8_t *, const uint8_t *, int)>
-struct ByteKernel {
-    // A kernel for the whole in-image patch, where the layout and norm have one (else false).
+// K::whole_patch(a, centre of a, b, centre of b, shape, norm, bound, cost): a kernel for the
+// whole in-image patch where the layout and norm have one; false (the per-sample loop) here.
+struct NoWholePatch {
     static bool whole_patch(const View &, ptrdiff_t, const View &, ptrdiff_t, const PatchShape &, DescriptorNorm,
                             float, float &) {
         return false;
     }
+};
+
+// Eq. 2's per-sample term on 8-bit descriptors.
+template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int),
+          uint32_t (*L1)(const uint8_t *, const uint8_t *, int)>
+struct ByteKernel : NoWholePatch {
     static void prefetch(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib) {
         prefetch_pair(a.at(ia), b.at(ib), a.stride);
     }
@@ -166,11 +170,7 @@ struct ByteKernel {
 // of its own contrast (features::packed_levels).
 template <uint32_t (*L2SQ)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *),
           uint32_t (*L1)(const uint8_t *, const uint8_t *, int, const uint8_t *, const uint8_t *)>
-struct PackedKernel {
-    static bool whole_patch(const View &, ptrdiff_t, const View &, ptrdiff_t, const PatchShape &, DescriptorNorm,
-                            float, float &) {
-        return false;
-    }
+struct PackedKernel : NoWholePatch {
     static void prefetch(const View &a, ptrdiff_t ia, const View &b, ptrdiff_t ib) {
         prefetch_pair(a.at(ia), b.at(ib), a.stride);
         _mm_prefetch(reinterpret_cast<const char *>(a.contrast + ia), _MM_HINT_T0);

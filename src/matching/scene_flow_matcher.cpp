@@ -195,7 +195,7 @@ private:
     std::vector<float> radius_, radius_d0_, radius_d1_;
     // Per strip: the iteration whose visit of the strip has finished (run_iteration).
     std::unique_ptr<std::atomic<int>[]> strip_done_;
-    std::vector<int> strip_order_, strip_phase_;
+    std::vector<int> strip_order_;  // run_iteration's claim order
     // Candidates tried before (exact): a candidate's cost depends only on its four image
     // positions, the case formula and the level, and a seed's best only improves while those
     // hold, so a position tuple the seed tried before cannot beat its best now. On 000002 (seed
@@ -652,13 +652,10 @@ int Engine::run_iteration(bool reverse, int iteration) {
     const Graph &g = *graph_;
     const int num_strips = static_cast<int>(g.strip_seeds.size());
     const int colours = g.reach + 1;
+    const auto phase = [&](int k) { return reverse ? colours - 1 - k % colours : k % colours; };
     strip_order_.clear();
-    strip_phase_.assign(num_strips, 0);
     for (int c = 0; c < colours; ++c)
-        for (int k = reverse ? colours - 1 - c : c; k < num_strips; k += colours) {
-            strip_order_.push_back(k);
-            strip_phase_[k] = c;
-        }
+        for (int k = reverse ? colours - 1 - c : c; k < num_strips; k += colours) strip_order_.push_back(k);
     std::atomic<int> next{0};
     int updates = 0;
 #pragma omp parallel num_threads(opt_.threads) reduction(+ : updates)
@@ -667,7 +664,7 @@ int Engine::run_iteration(bool reverse, int iteration) {
         // itself waits only for earlier ones: no deadlock.
         const int k = strip_order_[j];
         for (int d = std::max(0, k - g.reach); d <= std::min(num_strips - 1, k + g.reach); ++d)
-            if (strip_phase_[d] < strip_phase_[k]) wait_for(strip_done_[d], iteration);
+            if (phase(d) < phase(k)) wait_for(strip_done_[d], iteration);
         updates += run_strip(k, reverse, iteration);
         strip_done_[k].store(iteration, std::memory_order_release);
     }

@@ -49,11 +49,11 @@ void matcher_reuses_t1_of_previous_frame(void **) {
     const auto &s = scene();
     const MatchInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
     const MatchInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0};
-    const SceneFlowMatcher first(fwd, small());
+    SceneFlowMatcher first(fwd, small());
     assert_false(first.reused_t0());
-    const SceneFlowMatcher cached(rev, small(), first.features_t1());
+    SceneFlowMatcher cached(rev, small(), first.features_t1());
     assert_true(cached.reused_t0());
-    const SceneFlowMatcher fresh(rev, small());
+    SceneFlowMatcher fresh(rev, small());
     for (Direction d : {Direction::Forward, Direction::Backward})
         assert_true(same_field(cached.run(d).dense, fresh.run(d).dense));
 
@@ -68,9 +68,45 @@ void matcher_reuses_t1_of_previous_frame(void **) {
     MatchingOptions packed = small();
     packed.sift.bits = 4;
     assert_false(SceneFlowMatcher(rev, packed, first.features_t1()).reused_t0());
+    // Only the full resolution is kept: another pyramid depth reuses it and still matches as a
+    // fresh matcher does.
     MatchingOptions fewer = small();
-    fewer.max_levels = 1;
-    assert_false(SceneFlowMatcher(rev, fewer, first.features_t1()).reused_t0());
+    fewer.max_levels = 2;
+    SceneFlowMatcher shallow(rev, fewer, first.features_t1());
+    assert_true(shallow.reused_t0());
+    SceneFlowMatcher shallow_fresh(rev, fewer);
+    assert_true(same_field(shallow.run(Direction::Forward).dense, shallow_fresh.run(Direction::Forward).dense));
+}
+
+// run_both puts the coarse levels into the t1 pair's full-resolution buffers and frees them
+// before it computes the full resolution's descriptors; its results are those of the two single
+// runs (8-bit and packed descriptors, fresh and recycled buffers), and the matcher stays usable
+// after it.
+void run_both_equals_single_runs(void **) {
+    const auto &s = scene();
+    const MatchInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    for (int levels : {1, 3})
+        for (int bits : {8, 4})
+            for (bool recycled : {false, true}) {
+                MatchingOptions o = small();
+                o.max_levels = levels;
+                o.sift.bits = bits;
+                std::shared_ptr<StereoFeatures> storage;
+                if (recycled) {
+                    SceneFlowMatcher earlier(fwd, small());
+                    earlier.run_both();
+                    storage = earlier.release_t0();
+                    assert_non_null(storage.get());
+                }
+                SceneFlowMatcher both(fwd, o, nullptr, storage), single(fwd, o);
+                const MatchPair p = both.run_both();
+                assert_true(same_field(p.forward.dense, single.run(Direction::Forward).dense));
+                assert_true(same_field(p.backward.dense, single.run(Direction::Backward).dense));
+                assert_true(same_field(both.run(Direction::Backward).dense, p.backward.dense));
+                assert_true(same_field(both.run_both().forward.dense, p.forward.dense));
+                assert_true(p.forward.seconds_matching > 0 && p.backward.seconds_matching > 0);
+                assert_true(both.seconds_features() > 0);
+            }
 }
 
 // A matcher hands its t0 pair back for reuse only when nothing else holds it; the next matcher
@@ -84,12 +120,12 @@ void matcher_recycles_released_storage(void **) {
     std::shared_ptr<StereoFeatures> spare = first.release_t0();
     assert_non_null(spare.get());
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { first.run(Direction::Forward); }));
-    const uint8_t *buffer = spare->desc[0][0].data.data();
+    const uint8_t *buffer = spare->desc[0].data.data();
 
     SceneFlowMatcher second(rev, small(), t1, std::move(spare));
     assert_true(second.reused_t0());
-    assert_ptr_equal(second.features_t1()->desc[0][0].data.data(), buffer);
-    const SceneFlowMatcher fresh(rev, small());
+    assert_ptr_equal(second.features_t1()->desc[0].data.data(), buffer);
+    SceneFlowMatcher fresh(rev, small());
     for (Direction d : {Direction::Forward, Direction::Backward})
         assert_true(same_field(second.run(d).dense, fresh.run(d).dense));
     // t0 of `second` is `t1`, still held here: not handed out for writing.
@@ -101,9 +137,9 @@ void matcher_recycles_released_storage(void **) {
     SceneFlowMatcher third(fwd, small());
     std::shared_ptr<StereoFeatures> spare8 = third.release_t0();
     assert_non_null(spare8.get());
-    const SceneFlowMatcher from_spare(fwd, packed, nullptr, std::move(spare8));
-    assert_int_equal(from_spare.features_t1()->desc[0][0].bits, 4);
-    const SceneFlowMatcher packed_fresh(fwd, packed);
+    SceneFlowMatcher from_spare(fwd, packed, nullptr, std::move(spare8));
+    assert_int_equal(from_spare.features_t1()->desc[0].bits, 4);
+    SceneFlowMatcher packed_fresh(fwd, packed);
     for (Direction d : {Direction::Forward, Direction::Backward})
         assert_true(same_field(from_spare.run(d).dense, packed_fresh.run(d).dense));
 }
@@ -163,6 +199,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(matcher_reuses_t1_of_previous_frame),
         cmocka_unit_test(matcher_recycles_released_storage),
+        cmocka_unit_test(run_both_equals_single_runs),
         cmocka_unit_test(estimator_stream_cache_keeps_results),
         cmocka_unit_test(presets),
     };

@@ -170,6 +170,16 @@ DescriptorImage compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions
 
 void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
                         DescriptorImage &out) {
+    compute_dense_sift(gray, options, threads, out, nullptr);
+}
+
+size_t descriptor_bytes(int width, int height, const DenseSiftOptions &options) {
+    const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(height);
+    return pixels * static_cast<size_t>(options.dim * options.bits / 8) + (options.bits == 4 ? pixels : 0);
+}
+
+void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
+                        DescriptorImage &out, uint8_t *memory) {
     require(!gray.empty(), ErrorCode::InvalidArgument, "compute_dense_sift: empty image");
     require(options.dim == 128 || options.dim == 64, ErrorCode::InvalidArgument,
             "compute_dense_sift: dim must be 128 or 64");
@@ -205,10 +215,19 @@ void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, 
     // clear() first: a resize that must grow would otherwise copy the old descriptors over.
     // The image is empty until the storage is there, so a bad_alloc leaves it consistent.
     out.width = out.height = out.dim = 0;
+    out.lent = out.lent_contrast = nullptr;
     out.data.clear();
     out.contrast.clear();
-    out.data.resize(static_cast<size_t>(w) * h * options.dim * options.bits / 8);
-    if (options.bits == 4) out.contrast.resize(static_cast<size_t>(w) * h);
+    const size_t data_bytes = static_cast<size_t>(w) * h * options.dim * options.bits / 8;
+    if (memory) {
+        decltype(out.data)().swap(out.data);
+        decltype(out.contrast)().swap(out.contrast);
+        out.lent = memory;
+        if (options.bits == 4) out.lent_contrast = memory + data_bytes;
+    } else {
+        out.data.resize(data_bytes);
+        if (options.bits == 4) out.contrast.resize(static_cast<size_t>(w) * h);
+    }
     out.width = w;
     out.height = h;
     out.dim = options.dim;
@@ -283,7 +302,7 @@ void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, 
                 for (int y = y0; y < y1; ++y) {
                     const float *rows[4];
                     for (int i = 0; i < 4; ++i) rows[i] = hrow(hist.get(), std::clamp(y + rp.offs[i], 0, h - 1));
-                    uint8_t *contrast = options.bits == 8 ? nullptr : out.contrast.data() + static_cast<size_t>(y) * w;
+                    uint8_t *contrast = options.bits == 8 ? nullptr : out.contrast_bytes() + static_cast<size_t>(y) * w;
                     if (options.bits == 8)
                         (nb == 8 ? describe_row8 : describe_row4)(rows, rp, out.at(0, y), contrast);
                     else

@@ -43,19 +43,24 @@ extern uint8_t kPackedLevels[kContrastSteps + 1][16];
 static_assert(kContrastSteps == 255, "every value of the contrast byte must have its row");
 inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast]; }
 
-// Descriptor image. Owns its storage; copies are deep only through clone().
+// Descriptor image. Owns its storage (copies are deep only through clone()), unless it was
+// written into memory lent by its caller (compute_dense_sift with `memory`).
 struct DescriptorImage {
     int width = 0, height = 0, dim = 0;  // dim: values per descriptor
     int bits = 8;                        // 8, or 4 (byte i: value i in the low nibble, i + dim/2 high)
     std::vector<uint8_t, HugePageAllocator<uint8_t>> data;  // width * height * stride(), row-major, pixel-major
     std::vector<uint8_t, HugePageAllocator<uint8_t>> contrast;  // bits 4: width * height indices; else empty
+    // Lent storage used instead of data / contrast (null when owned).
+    uint8_t *lent = nullptr, *lent_contrast = nullptr;
 
     int stride() const { return dim * bits / 8; }  // bytes per descriptor
-    const uint8_t *at(int x, int y) const {
-        return data.data() + (static_cast<size_t>(y) * width + x) * stride();
-    }
-    uint8_t *at(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * stride(); }
-    bool empty() const { return data.empty(); }
+    const uint8_t *bytes() const { return lent ? lent : data.data(); }
+    uint8_t *bytes() { return lent ? lent : data.data(); }
+    const uint8_t *contrast_bytes() const { return lent ? lent_contrast : contrast.data(); }
+    uint8_t *contrast_bytes() { return lent ? lent_contrast : contrast.data(); }
+    const uint8_t *at(int x, int y) const { return bytes() + (static_cast<size_t>(y) * width + x) * stride(); }
+    uint8_t *at(int x, int y) { return bytes() + (static_cast<size_t>(y) * width + x) * stride(); }
+    bool empty() const { return width == 0 || height == 0; }
 };
 
 // Descriptors of a single-channel CV_32F image with values in [0, 1]. Throws
@@ -69,6 +74,14 @@ DescriptorImage compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions
 // exception `out` is left empty or with undefined content.
 void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
                         DescriptorImage &out);
+
+// Bytes compute_dense_sift writes for a width x height image: the descriptors, then (bits 4)
+// the contrast plane.
+size_t descriptor_bytes(int width, int height, const DenseSiftOptions &options);
+// Same, written into `memory` (descriptor_bytes(...) bytes, 64-byte aligned), which `out` then
+// refers to and which must outlive its use; `out`'s own storage is freed.
+void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
+                        DescriptorImage &out, uint8_t *memory);
 
 // 8-bit gray or BGR(A) image -> CV_32F gray in [0, 1]. Throws InvalidArgument otherwise.
 cv::Mat1f to_gray_float(const cv::Mat &image);

@@ -91,7 +91,7 @@ struct View {
     ptrdiff_t width;
     int stride;  // bytes per descriptor
     explicit View(const features::DescriptorImage &d)
-        : data(d.data.data()), contrast(d.contrast.data()), width(d.width), stride(d.stride()) {}
+        : data(d.bytes()), contrast(d.contrast_bytes()), width(d.width), stride(d.stride()) {}
     const uint8_t *at(ptrdiff_t i) const { return data + i * stride; }  // i = y * width + x
 };
 

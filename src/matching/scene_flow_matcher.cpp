@@ -6,7 +6,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -80,16 +82,28 @@ struct MatcherData {
     MatchingOptions opt;
     int width = 0, height = 0;
     std::vector<LidarPoint> lidar[2];  // t0 (aligned to left0), t1 (aligned to left1)
-    // levels[l].desc[i]: image i in (left0, right0, left1, right1) order.
+    // levels[l].desc[i]: image i in (left0, right0, left1, right1) order. Level 0 points into
+    // the pairs, the others into coarse[i].
     struct Level {
         int w = 0, h = 0;
         const features::DescriptorImage *desc[4] = {nullptr, nullptr, nullptr, nullptr};
     };
     std::vector<Level> levels;
-    // Owners of the descriptors: the (left0, right0) and (left1, right1) pairs.
+    // Owners of the full-resolution descriptors: the (left0, right0) and (left1, right1) pairs.
     std::shared_ptr<const StereoFeatures> pair[2];
+    // The pairs whose full-resolution descriptors this matcher still has to compute (null: done
+    // or reused); the same objects as pair[t].
+    StereoFeatures *pending[2] = {nullptr, nullptr};
+    // Levels 1.. of each image (coarse[i][l - 1]), this matcher's own; empty once released.
+    std::vector<features::DescriptorImage> coarse[4];
     double seconds_features = 0;
     bool reused_t0 = false;
+
+    // lend: into the t1 pair's full-resolution buffers (run_both), else owned storage.
+    void describe_coarse(bool lend);
+    bool coarse_lent() const;
+    void release_coarse();
+    void describe_full();
 };
 
 // Pyramid levels: factor 0.5 while the coarser image stays min_coarsest_height high.
@@ -107,7 +121,10 @@ public:
     };
 
     Engine(const MatcherData &m, Direction dir);
-    MatchResult run();
+    // Runs the levels from the next one not run yet down to `last` (coarse to fine); each
+    // level's descriptors must exist when it runs.
+    void run_levels(int last);
+    MatchResult result() const;
 
 private:
     struct SeedInfo {
@@ -179,7 +196,10 @@ private:
     cv::Mat1i tgt_labels_;         // D1 hits on the level
     std::vector<cv::Point> tgt_centre_;
     PatchShape shape_;
-    const PatchCostFn cost_fn_ = patch_cost_kernel(opt_.sift.bits);  // the descriptors are computed with opt_.sift
+    const PatchCostFn cost_fn_ = patch_cost_kernel(opt_.sift.bits);
+    int next_level_ = 0;  // the next level run_levels runs
+    int iteration_stamp_ = 0;
+    double seconds_ = 0;  // the descriptors are computed with opt_.sift
     float penalty_ = 0, dmax_ = 0, max_r_ = 0;
 
     std::vector<Scored> best_;
@@ -218,6 +238,7 @@ Engine::Engine(const MatcherData &m, Direction dir)
     slot_img_[kL1] = fwd ? 2 : 0;
     slot_img_[kR1] = fwd ? 3 : 1;
     setup_seeds();
+    next_level_ = static_cast<int>(m_.levels.size()) - 1;
 }
 
 void Engine::setup_seeds() {
@@ -713,12 +734,11 @@ void Engine::update_radii(int l) {
     }
 }
 
-MatchResult Engine::run() {
+void Engine::run_levels(int last) {
+    const auto t0 = Clock::now();
     const int nlev = static_cast<int>(m_.levels.size());
-    const int n = static_cast<int>(info_.size());
     const int threads = opt_.threads;
-    int iteration_stamp = 0;
-    for (int l = nlev - 1; l >= 0; --l) {
+    for (int l = next_level_; l >= last; --l) {
         const Graph *coarser = graph_;
         setup_level(l);
         const Graph &g = *graph_;
@@ -746,7 +766,7 @@ MatchResult Engine::run() {
             for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
         std::fill(explore_.begin(), explore_.end(), 1);
         for (int it = 0; it < opt_.iterations; ++it) {
-            const int stamp = iteration_stamp++;
+            const int stamp = iteration_stamp_++;
             const bool reverse = it % 2 == 1;
             int updates = run_iteration(reverse, stamp);
             const int ne = static_cast<int>(extra_seeds_.size());
@@ -756,8 +776,15 @@ MatchResult Engine::run() {
         }
         if (l > 0) update_radii(l);
     }
+    next_level_ = std::min(next_level_, last - 1);
+    seconds_ += seconds_since(t0);
+}
 
+MatchResult Engine::result() const {
+    const int n = static_cast<int>(info_.size());
+    const int threads = opt_.threads;
     MatchResult r;
+    r.seconds_matching = seconds_;
     r.grid_width = gw_;
     r.grid_height = gh_;
     for (uint32_t k : skips_) r.tried_skips += k;
@@ -800,23 +827,147 @@ MatchResult Engine::run() {
     return r;
 }
 
-}  // namespace
-
-struct SceneFlowMatcher::Impl : MatcherData {
-    MatchResult run(Direction dir) const;
-};
-
-MatchResult SceneFlowMatcher::Impl::run(Direction dir) const {
-    require(!levels.empty(), ErrorCode::InvalidArgument, "SceneFlowMatcher::run after release_t0()");
+// The engine's result; its seconds count building it too.
+MatchResult result_of(const Engine &e) {
     const auto t0 = Clock::now();
-    Engine engine(*this, dir);
-    MatchResult r = engine.run();
-    r.seconds_features = seconds_features;
-    r.seconds_matching = seconds_since(t0);
+    MatchResult r = e.result();
+    r.seconds_matching += seconds_since(t0);
     return r;
 }
 
-bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o, int levels) const {
+// One job per image, images in parallel; each job's descriptor loops get the threads left.
+void run_image_jobs(const std::vector<std::function<void(int)>> &jobs, int threads) {
+    const int n = static_cast<int>(jobs.size());
+    if (n == 0) return;
+    const int outer = std::max(1, std::min(threads, n));
+    const int inner = std::max(1, threads / outer);
+    ParallelErrors errors;  // descriptor images are large: bad_alloc is likely here
+#pragma omp parallel for schedule(static) num_threads(outer)
+    for (int i = 0; i < n; ++i) errors.run([&] { jobs[i](inner); });
+    errors.rethrow_if_any();
+}
+
+const cv::Mat &image_of(const MatcherData &m, int i) { return i % 2 == 0 ? m.pair[i / 2]->left : m.pair[i / 2]->right; }
+
+bool MatcherData::coarse_lent() const {
+    for (const auto &c : coarse)
+        for (const features::DescriptorImage &d : c)
+            if (d.lent) return true;
+    return false;
+}
+
+void MatcherData::describe_coarse(bool lend) {
+    const int nlev = static_cast<int>(levels.size());
+    if (nlev < 2) return;
+    bool complete = true;
+    for (const auto &c : coarse)
+        for (const features::DescriptorImage &d : c) complete = complete && !d.empty();
+    // Lent levels live in the t1 pair's full-resolution buffers, which a single run needs at the
+    // same time: it recomputes them into owned storage.
+    if (complete && (lend || !coarse_lent())) return;
+    const auto t0 = Clock::now();
+    release_coarse();
+    // Each image's levels go to consecutive 64-byte aligned slices of the two buffers, sized for
+    // the full resolution first (sizing touches no page; a recycled pair already has the size).
+    std::vector<uint8_t *> memory(4 * (nlev - 1), nullptr);
+    if (lend && pending[1]) {
+        const size_t need = features::descriptor_bytes(width, height, opt.sift) + 64;
+        uint8_t *base[2];
+        size_t used[2] = {0, 0}, room[2];
+        for (int b = 0; b < 2; ++b) {
+            auto &data = pending[1]->desc[b].data;
+            if (data.size() < need) {
+                data.clear();  // a growing resize would copy the old bytes over first
+                data.resize(need);
+            }
+            const auto addr = reinterpret_cast<std::uintptr_t>(data.data());
+            base[b] = data.data() + ((addr + 63) / 64 * 64 - addr);
+            room[b] = data.size() - static_cast<size_t>(base[b] - data.data());
+        }
+        int b = 0;
+        for (int i = 0; i < 4; ++i)
+            for (int l = 1; l < nlev; ++l) {
+                const size_t bytes = (features::descriptor_bytes(levels[l].w, levels[l].h, opt.sift) + 63) / 64 * 64;
+                while (b < 2 && used[b] + bytes > room[b]) ++b;
+                if (b == 2) break;  // the rest in owned storage
+                memory[i * (nlev - 1) + l - 1] = base[b] + used[b];
+                used[b] += bytes;
+            }
+    }
+    std::vector<std::function<void(int)>> jobs;
+    for (int i = 0; i < 4; ++i)
+        jobs.emplace_back([this, i, nlev, &memory](int inner) {
+            cv::Mat1f g = features::to_gray_float(image_of(*this, i));
+            for (int l = 1; l < nlev; ++l) {
+                cv::Mat1f next;
+                cv::pyrDown(g, next);
+                g = next;
+                features::compute_dense_sift(g, opt.sift, inner, coarse[i][l - 1], memory[i * (nlev - 1) + l - 1]);
+            }
+        });
+    run_image_jobs(jobs, opt.threads);
+    seconds_features += seconds_since(t0);
+}
+
+void MatcherData::release_coarse() {
+    for (auto &c : coarse)
+        for (features::DescriptorImage &d : c) d = features::DescriptorImage();
+}
+
+void MatcherData::describe_full() {
+    if (!pending[0] && !pending[1]) return;
+    if (pending[1] && coarse_lent()) release_coarse();  // their memory is overwritten now
+    const auto t0 = Clock::now();
+    std::vector<std::function<void(int)>> jobs;
+    for (int t = 0; t < 2; ++t)
+        for (int k = 0; k < 2 && pending[t]; ++k)
+            jobs.emplace_back([this, t, k](int inner) {
+                StereoFeatures &p = *pending[t];
+                features::compute_dense_sift(features::to_gray_float(k == 0 ? p.left : p.right), opt.sift, inner,
+                                             p.desc[k]);
+            });
+    run_image_jobs(jobs, opt.threads);
+    pending[0] = pending[1] = nullptr;
+    seconds_features += seconds_since(t0);
+}
+
+}  // namespace
+
+struct SceneFlowMatcher::Impl : MatcherData {
+    void require_usable() const {
+        require(!levels.empty(), ErrorCode::InvalidArgument, "SceneFlowMatcher used after release_t0()");
+    }
+};
+
+MatchResult SceneFlowMatcher::run(Direction dir) {
+    Impl &m = *impl_;
+    m.require_usable();
+    m.describe_coarse(false);
+    m.describe_full();
+    Engine engine(m, dir);
+    engine.run_levels(0);
+    MatchResult r = result_of(engine);
+    r.seconds_features = m.seconds_features;
+    return r;
+}
+
+MatchPair SceneFlowMatcher::run_both() {
+    Impl &m = *impl_;
+    m.require_usable();
+    m.describe_coarse(true);
+    Engine fwd(m, Direction::Forward), bwd(m, Direction::Backward);
+    fwd.run_levels(1);
+    bwd.run_levels(1);
+    m.release_coarse();
+    m.describe_full();
+    fwd.run_levels(0);
+    bwd.run_levels(0);
+    MatchPair r{result_of(fwd), result_of(bwd)};
+    r.forward.seconds_features = r.backward.seconds_features = m.seconds_features;
+    return r;
+}
+
+bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const {
     auto same = [](const cv::Mat &a, const cv::Mat &b) {
         if (a.size() != b.size() || a.type() != b.type()) return false;
         const size_t row = a.cols * a.elemSize();
@@ -824,9 +975,9 @@ bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingO
             if (std::memcmp(a.ptr(y), b.ptr(y), row) != 0) return false;
         return true;
     };
-    return static_cast<int>(desc[0].size()) == levels && sift.cell_size == o.sift.cell_size &&
-           sift.dim == o.sift.dim && sift.bits == o.sift.bits && sift.clip == o.sift.clip &&
-           sift.norm_floor == o.sift.norm_floor && same(left, l) && same(right, r);
+    return !desc[0].empty() && !desc[1].empty() && sift.cell_size == o.sift.cell_size && sift.dim == o.sift.dim &&
+           sift.bits == o.sift.bits && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
+           same(left, l) && same(right, r);
 }
 
 SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
@@ -834,7 +985,6 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
                                    std::shared_ptr<StereoFeatures> storage)
     : impl_(std::make_unique<Impl>()) {
     options.validate();
-    const auto t0 = Clock::now();
     const cv::Mat *imgs[4] = {&in.left0, &in.right0, &in.left1, &in.right1};
     const char *names[4] = {"left0", "right0", "left1", "right1"};
     for (int i = 0; i < 4; ++i) {
@@ -858,72 +1008,53 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
         m.lidar[1] = dedupe(in.lidar1);
     }
 
-    const int threads = options.threads;
-    const int nlev = pyramid_levels(options, m.width, m.height);
-    m.levels.resize(nlev);
-    // The t0 pair's descriptors come from the previous frame when it is the same stereo pair
-    // (streaming: that frame's t1); everything else is computed here.
-    const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options, nlev);
-    auto fresh0 = std::make_shared<StereoFeatures>();
+    // The t0 pair's full-resolution descriptors come from the previous frame when it is the
+    // same stereo pair (streaming: that frame's t1); everything else is computed here or later.
+    const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options);
+    auto fresh0 = reuse0 ? nullptr : std::make_shared<StereoFeatures>();
     auto fresh1 = storage ? std::move(storage) : std::make_shared<StereoFeatures>();
-    StereoFeatures *pending[2] = {reuse0 ? nullptr : fresh0.get(), fresh1.get()};
+    m.pending[0] = fresh0.get();
+    m.pending[1] = fresh1.get();
     const cv::Mat *src[2][2] = {{&in.left0, &in.right0}, {&in.left1, &in.right1}};
     for (int t = 0; t < 2; ++t)
-        if (pending[t]) {
-            pending[t]->left = src[t][0]->clone();
-            pending[t]->right = src[t][1]->clone();
-            pending[t]->sift = options.sift;
-            pending[t]->desc[0].resize(nlev);
-            pending[t]->desc[1].resize(nlev);
+        if (m.pending[t]) {
+            m.pending[t]->left = src[t][0]->clone();
+            m.pending[t]->right = src[t][1]->clone();
+            m.pending[t]->sift = options.sift;
         }
-    // Pyramids of the images still to describe; the images are independent.
-    std::vector<std::pair<features::DescriptorImage *, cv::Mat1f>> jobs;
-    for (int t = 0; t < 2; ++t)
-        for (int k = 0; k < 2 && pending[t]; ++k) {
-            cv::Mat1f g = features::to_gray_float(*src[t][k]);
-            for (int l = 0; l < nlev; ++l) {
-                cv::Mat1f next;
-                if (l + 1 < nlev) cv::pyrDown(g, next);
-                jobs.emplace_back(&pending[t]->desc[k][l], g);
-                g = next;
-            }
-        }
-    const int nimg = static_cast<int>(jobs.size()) / nlev;
-    const int outer = std::max(1, std::min(threads, nimg));
-    const int inner = std::max(1, threads / outer);
-    ParallelErrors errors;  // descriptor images are large: bad_alloc is likely here
-#pragma omp parallel for schedule(static) num_threads(outer)
-    for (int i = 0; i < nimg; ++i)
-        for (int l = 0; l < nlev; ++l)
-            errors.run([&] {
-                auto &job = jobs[static_cast<size_t>(i) * nlev + l];
-                features::compute_dense_sift(job.second, options.sift, inner, *job.first);
-            });
-    errors.rethrow_if_any();
     m.pair[0] = reuse0 ? reuse_t0 : std::shared_ptr<const StereoFeatures>(fresh0);
     m.pair[1] = fresh1;
-    for (int l = 0; l < nlev; ++l) {
-        m.levels[l].w = m.pair[1]->desc[0][l].width;
-        m.levels[l].h = m.pair[1]->desc[0][l].height;
-        for (int i = 0; i < 4; ++i) m.levels[l].desc[i] = &m.pair[i / 2]->desc[i % 2][l];
-    }
     m.reused_t0 = reuse0;
-    m.seconds_features = seconds_since(t0);
+
+    // Level sizes as cv::pyrDown makes them; descriptor images have their image's size.
+    const int nlev = pyramid_levels(options, m.width, m.height);
+    m.levels.resize(nlev);
+    for (int i = 0; i < 4; ++i) m.coarse[i].resize(nlev - 1);
+    for (int l = 0; l < nlev; ++l) {
+        MatcherData::Level &lev = m.levels[l];
+        lev.w = l == 0 ? m.width : (m.levels[l - 1].w + 1) / 2;
+        lev.h = l == 0 ? m.height : (m.levels[l - 1].h + 1) / 2;
+        for (int i = 0; i < 4; ++i) lev.desc[i] = l == 0 ? &m.pair[i / 2]->desc[i % 2] : &m.coarse[i][l - 1];
+    }
 }
 
 SceneFlowMatcher::~SceneFlowMatcher() = default;
 
-MatchResult SceneFlowMatcher::run(Direction direction) const { return impl_->run(direction); }
-
 double SceneFlowMatcher::seconds_features() const { return impl_->seconds_features; }
 
-std::shared_ptr<const StereoFeatures> SceneFlowMatcher::features_t1() const { return impl_->pair[1]; }
+std::shared_ptr<const StereoFeatures> SceneFlowMatcher::features_t1() {
+    impl_->require_usable();
+    impl_->describe_full();
+    return impl_->pair[1];
+}
 
 bool SceneFlowMatcher::reused_t0() const { return impl_->reused_t0; }
 
 std::shared_ptr<StereoFeatures> SceneFlowMatcher::release_t0() {
     std::shared_ptr<const StereoFeatures> t0 = std::move(impl_->pair[0]);
     impl_->levels.clear();
+    impl_->pending[0] = impl_->pending[1] = nullptr;
+    impl_->release_coarse();
     if (!t0 || t0.use_count() != 1) return nullptr;
     // Every pair is created non-const (make_shared above); the const of pair[] only says that
     // matching reads it. The sole owner may therefore hand it on for writing.

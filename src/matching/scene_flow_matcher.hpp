@@ -16,9 +16,10 @@
 //     per-seed search radius given by how much its neighbours disagree.
 //  4. Dense output: each pixel takes the match of its grid seed; LiDAR pixels keep their own.
 //
-// Determinism: seed rows are cut into fixed strips; even strips run in parallel, then odd
-// strips, then the LiDAR seeds, each strip scanned sequentially (alternating direction per
-// iteration). Random numbers are a counter-based hash of (random_seed, level, iteration, seed),
+// Determinism: seed rows are cut into fixed strips, coloured so that strips of one colour never
+// read each other's seeds; colours run in order (a strip waits only for the earlier-coloured
+// strips next to it), then the LiDAR seeds, each strip scanned sequentially (alternating
+// direction per iteration). Random numbers are a counter-based hash of (random_seed, level, iteration, seed),
 // so results are identical for any thread count.
 #include <memory>
 #include <vector>
@@ -63,24 +64,34 @@ struct MatchResult {
     uint64_t tried_skips = 0;
 };
 
-// Descriptor pyramids of one stereo pair (left, right) at one time step, with deep copies of
-// the 8-bit images they describe. Immutable once built; shared (shared_ptr) so that a stream can
-// hand the newer pair of one frame to the next frame's matcher.
+// The full-resolution descriptors of one stereo pair (left, right) at one time step, with deep
+// copies of the 8-bit images they describe. Immutable once handed out; shared (shared_ptr) so
+// that a stream can hand the newer pair of one frame to the next frame's matcher. The coarser
+// pyramid levels are not part of it: each matcher computes its own from the images (a third of
+// the pixels, ~a quarter of the descriptor time) and frees them before it computes the
+// full-resolution descriptors, so that a frame never holds all of a pyramid at once.
 struct StereoFeatures {
     cv::Mat left, right;
     features::DenseSiftOptions sift;
-    std::vector<features::DescriptorImage> desc[2];  // [0] left, [1] right; index = level
+    features::DescriptorImage desc[2];  // [0] left, [1] right
 
     // True when these are the descriptors of exactly (l, r) (pixel-identical) under the
-    // options' descriptor settings and level count. Never throws.
-    bool matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o, int levels) const;
+    // options' descriptor settings. Never throws.
+    bool matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const;
 };
 
+// Both directions of one matcher (SceneFlowMatcher::run_both).
+struct MatchPair {
+    MatchResult forward, backward;
+};
+
+// Not thread-safe: one thread uses a matcher at a time (each call parallelises internally).
 class SceneFlowMatcher {
 public:
-    // Validates and copies the input, builds pyramids and descriptors (shared by both
-    // directions). reuse_t0 (may be null): the previous frame's features_t1(); used for
-    // (left0, right0) when it matches them (StereoFeatures::matches), ignored otherwise.
+    // Validates and copies the input and computes the coarse pyramid levels' descriptors; the
+    // full-resolution ones are computed by the first run, run_both or features_t1.
+    // reuse_t0 (may be null): the previous frame's features_t1(); used for (left0, right0)
+    // when it matches them (StereoFeatures::matches), ignored otherwise.
     // Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),
     // InvalidArgument (empty or non-8-bit images, LiDAR points outside the image, not finite
     // or negative disparities, bad options).
@@ -94,16 +105,23 @@ public:
     SceneFlowMatcher &operator=(const SceneFlowMatcher &) = delete;
 
     // Runs one direction; may be called repeatedly, results depend only on inputs and options.
-    MatchResult run(Direction direction) const;
+    MatchResult run(Direction direction);
+    // Both directions, with results identical to run(Forward) and run(Backward), level by
+    // level: the coarse levels of both, then their descriptors are freed, then the full
+    // resolution's are computed and matched. Why: the four full pyramids were the process's
+    // peak (~317 MB on a KITTI frame, ~75 MB of it the coarse levels).
+    MatchPair run_both();
 
+    // Seconds spent computing descriptors so far.
     double seconds_features() const;
-    // The (left1, right1) descriptors, to pass as reuse_t0 of the next frame of a sequence.
-    std::shared_ptr<const StereoFeatures> features_t1() const;
+    // The (left1, right1) descriptors, to pass as reuse_t0 of the next frame of a sequence
+    // (computed now if no run has yet).
+    std::shared_ptr<const StereoFeatures> features_t1();
     // Whether the constructor took (left0, right0)'s descriptors from reuse_t0.
     bool reused_t0() const;
     // Ends this matcher's use (run() then throws InvalidArgument) and hands back the (left0,
     // right0) pair as `storage` for a later matcher when nothing else holds it (else null).
-    // Why: a stream's descriptor images are ~160 MB per KITTI pair; fresh ones cost the kernel
+    // Why: a stream's descriptor images are ~120 MB per KITTI pair; fresh ones cost the kernel
     // a page fault and a page clear per 4 KiB (or 2 MiB) on every frame.
     std::shared_ptr<StereoFeatures> release_t0();
 

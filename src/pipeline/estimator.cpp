@@ -208,30 +208,33 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     // Stage 1. Descriptors are computed once and shared by both directions, and released before
     // stage 2: they are ~70 % of the peak RSS, and only the next frame needs (the cache's) t1 pair.
     {
-        auto t = Clock::now();
         const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
         matching::SceneFlowMatcher matcher(mi, matching_options(stage_options_), cache ? cache->t1_ : nullptr,
                                            cache ? std::move(cache->spare_) : nullptr);
+        // The matcher holds the previous t1 pair when it reuses it; otherwise it is dead weight
+        // now. A run that throws leaves the cache empty: nothing half-computed is reused.
+        if (cache) cache->t1_.reset();
+        matching::MatchPair m;
+        if (options_.last_stage == Stage::Matching)
+            m.forward = matcher.run(matching::Direction::Forward);
+        else
+            m = matcher.run_both();
+        r.timings.push_back({"features", matcher.seconds_features()});
+        r.timings.push_back({"matching_forward", m.forward.seconds_matching});
+        r.forward = std::move(m.forward.dense);
+        if (options_.last_stage != Stage::Matching) {
+            r.timings.push_back({"matching_backward", m.backward.seconds_matching});
+            r.backward = std::move(m.backward.dense);
+        }
         if (cache) {
             cache->t1_ = matcher.features_t1();
             cache->last_reused_ = matcher.reused_t0();
+            cache->spare_ = matcher.release_t0();
         }
-        const auto recycle = [&] {
-            if (cache) cache->spare_ = matcher.release_t0();
-        };
-        r.timings.push_back({"features", seconds_since(t)});
-        t = Clock::now();
-        r.forward = matcher.run(matching::Direction::Forward).dense;
-        r.timings.push_back({"matching_forward", seconds_since(t)});
         if (options_.last_stage == Stage::Matching) {
-            recycle();
             r.total_seconds = seconds_since(t_total);
             return r;
         }
-        t = Clock::now();
-        r.backward = matcher.run(matching::Direction::Backward).dense;
-        r.timings.push_back({"matching_backward", seconds_since(t)});
-        recycle();
     }
 
     // Stages 2-3.

@@ -62,7 +62,7 @@ struct EstimatorOptions {
     //  "default"  the reference settings;
     //  "balanced" every matcher level below full resolution thinned (thin_from_level 1), the
     //             backward direction on a 6 px grid (round-trip search radius 2);
-    //  "fast"     6 px seed grid, 3 iterations, 3 pyramid levels, at 0.7 resolution
+    //  "fast"     6 px seed grid, 3 iterations, at 0.7 resolution
     //             (plain processing_scale 0.5 was both slower and worse).
     // Throws Error(InvalidArgument) for another name.
     static EstimatorOptions preset(const std::string &name);
@@ -103,12 +103,13 @@ struct EstimatorResult {
 };
 
 // What a stream of frames keeps between consecutive Estimator::run calls: the newer stereo
-// pair's descriptor pyramids (frame k's t1 images are frame k+1's t0 images). Used only when the
+// pair's full-resolution descriptors (frame k's t1 images are frame k+1's t0 images; the coarse
+// levels are recomputed, see matching::StereoFeatures). Used only when the
 // next frame's left0/right0 are pixel-identical to the previous left1/right1, so a wrong or
 // stale cache costs time, never accuracy. One per stream; not safe for concurrent runs.
 //
 // It also keeps the buffers of the pair the last frame no longer needed (its t0) and writes the
-// next frame's t1 descriptors into them: a stream then stops faulting in and clearing ~160 MB
+// next frame's t1 descriptors into them: a stream then stops faulting in and clearing ~120 MB
 // of fresh pages per KITTI frame, at the price of holding them between frames.
 class StreamCache {
 public:

@@ -3,6 +3,8 @@
 // reference disparity on a shifted random texture, and input validation.
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <string>
 #include <new>
 
 #include <sys/resource.h>
@@ -20,6 +22,7 @@ using namespace lidarflow;
 using namespace lidarflow::consistency;
 using lidarflow::test::constant_field;
 using lidarflow::test::error_code_of;
+using lidarflow::test::error_message_of;
 using lidarflow::test::lidar_at;
 using lidarflow::test::matching_backward;
 
@@ -339,6 +342,15 @@ void bad_inputs_throw(void **) {
     SceneFlowField inf = lidarflow::test::deep_copy(f);
     inf.confidence(2, 2) = INFINITY;
     assert_int_equal(code([&] { sgm_check(inf, sgm, no_lidar(), opt); }), arg);
+    // Every plane, up to the last pixel (the scan's vectorised tail), and the message names it.
+    for (cv::Mat1f SceneFlowField::*plane :
+         {&SceneFlowField::u, &SceneFlowField::v, &SceneFlowField::d0, &SceneFlowField::d1, &SceneFlowField::confidence}) {
+        SceneFlowField bad_plane = lidarflow::test::deep_copy(f);
+        bad_plane.valid(H - 1, W - 1) = 1;
+        (bad_plane.*plane)(H - 1, W - 1) = -INFINITY;
+        const std::string msg = error_message_of([&] { forward_backward_check(f, bad_plane, no_lidar(), opt); });
+        assert_non_null(std::strstr(msg.c_str(), ("(" + std::to_string(W - 1) + ", " + std::to_string(H - 1) + ")").c_str()));
+    }
     DisparityMap nan_sgm = sgm.clone();
     nan_sgm(4, 4) = std::nanf("");
     assert_int_equal(code([&] { sgm_check(f, nan_sgm, no_lidar(), opt); }), arg);

@@ -49,6 +49,18 @@ ErrorCode error_code_of(F &&f) {
     return ErrorCode::Internal;
 }
 
+// The message of the lidarflow::Error thrown by f(); fails the test when f does not throw one.
+template <class F>
+std::string error_message_of(F &&f) {
+    try {
+        f();
+    } catch (const Error &e) {
+        return e.what();
+    }
+    fail_msg("expected a lidarflow::Error");
+    return "";
+}
+
 // Fails the test unless f throws lidarflow::Error with exactly `code`.
 template <class F>
 void expect_error(F &&f, ErrorCode code) {

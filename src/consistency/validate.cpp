@@ -2,6 +2,8 @@
 #include "consistency/validate.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "core/error.hpp"
 
@@ -21,6 +23,24 @@ void check_field(const SceneFlowField &f, const std::string &name) {
     check_size(f.d1, h, w, name + ".d1");
     check_size(f.valid, h, w, name + ".valid");
     if (!f.confidence.empty()) check_size(f.confidence, h, w, name + ".confidence");
+    // Stage 2-3 checks every field it is handed (nine scans per frame): a branch-free pass that
+    // the compiler vectorises answers "all finite" (~20 ms per KITTI frame as the loop below);
+    // the loop only runs to name the first bad pixel.
+    const auto nonfinite = [](const float *p, int x) {
+        uint32_t bits;
+        std::memcpy(&bits, p + x, sizeof bits);
+        return static_cast<uint32_t>((bits & 0x7f800000u) == 0x7f800000u);
+    };
+    uint32_t bad = 0;
+    for (int y = 0; y < h; ++y) {
+        const uint8_t *valid = f.valid[y];
+        const float *u = f.u[y], *v = f.v[y], *d0 = f.d0[y], *d1 = f.d1[y];
+        const float *c = f.confidence.empty() ? d1 : f.confidence[y];
+        for (int x = 0; x < w; ++x)
+            bad |= (nonfinite(u, x) | nonfinite(v, x) | nonfinite(d0, x) | nonfinite(d1, x) | nonfinite(c, x)) &
+                   static_cast<uint32_t>(valid[x] != 0);
+    }
+    if (!bad) return;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             if (!f.valid(y, x)) continue;

@@ -9,6 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
 
@@ -132,30 +133,18 @@ __attribute__((always_inline)) inline void describe_row_impl(const float *const 
     }
 }
 
-// Compiled for AVX2 and for the baseline ISA; the loader picks one (GCC function multiversioning).
-// The pick runs in an IFUNC resolver during relocation, before a ThreadSanitizer runtime is
-// up, and crashes there: TSan builds keep only the baseline version.
-#if defined(__SANITIZE_THREAD__)
-#define LF_AVX2_CLONES
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define LF_AVX2_CLONES
-#endif
-#endif
-#ifndef LF_AVX2_CLONES
-#define LF_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
-LF_AVX2_CLONES void describe_row8(const float *const rows[4], const RowParams &p, uint8_t *dst, uint8_t *contrast) {
+// AVX2 and baseline versions (core/cpu_dispatch.hpp).
+LIDARFLOW_AVX2_CLONES void describe_row8(const float *const rows[4], const RowParams &p, uint8_t *dst, uint8_t *contrast) {
     describe_row_impl<8, 8>(rows, p, dst, contrast);
 }
-LF_AVX2_CLONES void describe_row4(const float *const rows[4], const RowParams &p, uint8_t *dst, uint8_t *contrast) {
+LIDARFLOW_AVX2_CLONES void describe_row4(const float *const rows[4], const RowParams &p, uint8_t *dst, uint8_t *contrast) {
     describe_row_impl<4, 8>(rows, p, dst, contrast);
 }
-LF_AVX2_CLONES void describe_row8_packed(const float *const rows[4], const RowParams &p, uint8_t *dst,
+LIDARFLOW_AVX2_CLONES void describe_row8_packed(const float *const rows[4], const RowParams &p, uint8_t *dst,
                                          uint8_t *contrast) {
     describe_row_impl<8, 4>(rows, p, dst, contrast);
 }
-LF_AVX2_CLONES void describe_row4_packed(const float *const rows[4], const RowParams &p, uint8_t *dst,
+LIDARFLOW_AVX2_CLONES void describe_row4_packed(const float *const rows[4], const RowParams &p, uint8_t *dst,
                                          uint8_t *contrast) {
     describe_row_impl<4, 4>(rows, p, dst, contrast);
 }

@@ -3,9 +3,6 @@
 
 #include "core/random.hpp"
 
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -350,6 +347,7 @@ int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const
 
 using Rng = SplitMix64;
 
+
 uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
     Rng r(base * 0x100000001B3ull ^ (static_cast<uint64_t>(sp) << 20) ^
           (static_cast<uint64_t>(iteration) << 8) ^ static_cast<uint64_t>(channel));
@@ -382,44 +380,13 @@ struct Problem {
         return std::sqrt(r0 * r0 + r1 * r1);
     }
     bool admissible(const Model &m) const { return anchor < 0 || residual(m, anchor) <= anchor_tol; }
-    // Robust cost of m: the hot loop of stage 4 (every hypothesis of every superpixel and
-    // channel, over up to num_neighbors seeds). Eight running sums, added in a fixed order at the
-    // end, so that SSE keeps them in two registers: one running sum is a chain the compiler may
-    // not reorder. The portable loop computes the same sums (same operations per lane).
+    // Robust cost of m (piecewise_model.hpp, robust_lanes): eight lane sums added in a fixed order.
     float cost(const Model &m) const {
         constexpr int L = 8;
-        alignas(16) float acc[L] = {};
+        float acc[L] = {};
         const int count = n();
         const int full = count - count % L;
-        const Plane p0 = m.p[0], p1 = m.p[1];
-#if defined(__SSE2__)
-        const __m128 a0 = _mm_set1_ps(p0.a), b0 = _mm_set1_ps(p0.b), c0 = _mm_set1_ps(p0.c);
-        const __m128 a1 = _mm_set1_ps(p1.a), b1 = _mm_set1_ps(p1.b), c1 = _mm_set1_ps(p1.c);
-        const __m128 t = _mm_set1_ps(tau), sign = _mm_set1_ps(-0.0f);
-        __m128 s[2] = {_mm_setzero_ps(), _mm_setzero_ps()};
-        for (int i = 0; i < full; i += L)
-            for (int h = 0; h < 2; ++h) {
-                const int j = i + 4 * h;
-                const __m128 xs = _mm_loadu_ps(&x[j]), ys = _mm_loadu_ps(&y[j]);
-                const __m128 r0 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(a0, xs), _mm_mul_ps(b0, ys)), c0),
-                                             _mm_loadu_ps(&z0[j]));
-                __m128 r;
-                if (dims == 1) {
-                    r = _mm_andnot_ps(sign, r0);
-                } else {
-                    const __m128 r1 = _mm_sub_ps(
-                        _mm_add_ps(_mm_add_ps(_mm_mul_ps(a1, xs), _mm_mul_ps(b1, ys)), c1), _mm_loadu_ps(&z1[j]));
-                    r = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(r0, r0), _mm_mul_ps(r1, r1)));
-                }
-                // min(tau, r) in this order is std::min(r, tau), NaN included.
-                s[h] = _mm_add_ps(s[h], _mm_mul_ps(_mm_loadu_ps(&w[j]), _mm_min_ps(t, r)));
-            }
-        _mm_store_ps(acc, s[0]);
-        _mm_store_ps(acc + 4, s[1]);
-#else
-        for (int i = 0; i < full; i += L)
-            for (int k = 0; k < L; ++k) acc[k] += w[i + k] * std::min(residual(m, i + k), tau);
-#endif
+        robust_lanes(m, dims, x.data(), y.data(), z0.data(), z1.data(), w.data(), full, tau, acc);
         for (int i = full; i < count; ++i) acc[i - full] += w[i] * std::min(residual(m, i), tau);
         float c = 0;
         for (int k = 0; k < L; ++k) c += acc[k];

@@ -2,6 +2,11 @@
 #include "interpolation/piecewise_model.hpp"
 
 #include <algorithm>
+#include <cmath>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 namespace lidarflow::interp {
 
@@ -58,6 +63,112 @@ bool PlaneLsq::solve(int dims, Model &out) const {
         out.p[k].c = static_cast<float>(c0 - a * ox_ - b * oy_);
     }
     return true;
+}
+
+namespace {
+
+void lanes_portable(const Model &m, bool two, const float *x, const float *y, const float *z0, const float *z1,
+                    const float *w, int n, float tau, float acc[8]) {
+    for (int j = 0; j < n; ++j) {
+        const float r0 = m.p[0].at(x[j], y[j]) - z0[j];
+        float r;
+        if (two) {
+            const float r1 = m.p[1].at(x[j], y[j]) - z1[j];
+            r = std::sqrt(r0 * r0 + r1 * r1);
+        } else {
+            r = std::fabs(r0);
+        }
+        acc[j % 8] += w[j] * (tau < r ? tau : r);
+    }
+}
+
+#if defined(__SSE2__)
+void lanes_sse2(const Model &m, bool two, const float *x, const float *y, const float *z0, const float *z1,
+                const float *w, int n, float tau, float acc[8]) {
+    const Plane p0 = m.p[0], p1 = m.p[1];
+    const __m128 a0 = _mm_set1_ps(p0.a), b0 = _mm_set1_ps(p0.b), c0 = _mm_set1_ps(p0.c);
+    const __m128 a1 = _mm_set1_ps(p1.a), b1 = _mm_set1_ps(p1.b), c1 = _mm_set1_ps(p1.c);
+    const __m128 t = _mm_set1_ps(tau), sign = _mm_set1_ps(-0.0f);
+    __m128 s[2] = {_mm_loadu_ps(acc), _mm_loadu_ps(acc + 4)};
+    for (int i = 0; i < n; i += 8)
+        for (int h = 0; h < 2; ++h) {
+            const int j = i + 4 * h;
+            const __m128 xs = _mm_loadu_ps(x + j), ys = _mm_loadu_ps(y + j);
+            const __m128 r0 =
+                _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(a0, xs), _mm_mul_ps(b0, ys)), c0), _mm_loadu_ps(z0 + j));
+            __m128 r;
+            if (two) {
+                const __m128 r1 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(a1, xs), _mm_mul_ps(b1, ys)), c1),
+                                             _mm_loadu_ps(z1 + j));
+                r = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(r0, r0), _mm_mul_ps(r1, r1)));
+            } else {
+                r = _mm_andnot_ps(sign, r0);
+            }
+            // minps(t, r) is t < r ? t : r, NaN included.
+            s[h] = _mm_add_ps(s[h], _mm_mul_ps(_mm_loadu_ps(w + j), _mm_min_ps(t, r)));
+        }
+    _mm_storeu_ps(acc, s[0]);
+    _mm_storeu_ps(acc + 4, s[1]);
+}
+#endif
+
+#if defined(__x86_64__) && defined(__SSE2__)
+// The same per lane as lanes_sse2, eight lanes in one register (AVX2 without FMA).
+__attribute__((target("avx2"))) void lanes_avx2(const Model &m, bool two, const float *x, const float *y,
+                                                const float *z0, const float *z1, const float *w, int n,
+                                                float tau, float acc[8]) {
+    const Plane p0 = m.p[0], p1 = m.p[1];
+    const __m256 a0 = _mm256_set1_ps(p0.a), b0 = _mm256_set1_ps(p0.b), c0 = _mm256_set1_ps(p0.c);
+    const __m256 a1 = _mm256_set1_ps(p1.a), b1 = _mm256_set1_ps(p1.b), c1 = _mm256_set1_ps(p1.c);
+    const __m256 t = _mm256_set1_ps(tau), sign = _mm256_set1_ps(-0.0f);
+    __m256 s = _mm256_loadu_ps(acc);
+    for (int j = 0; j < n; j += 8) {
+        const __m256 xs = _mm256_loadu_ps(x + j), ys = _mm256_loadu_ps(y + j);
+        const __m256 r0 = _mm256_sub_ps(
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a0, xs), _mm256_mul_ps(b0, ys)), c0), _mm256_loadu_ps(z0 + j));
+        __m256 r;
+        if (two) {
+            const __m256 r1 = _mm256_sub_ps(
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a1, xs), _mm256_mul_ps(b1, ys)), c1), _mm256_loadu_ps(z1 + j));
+            r = _mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(r0, r0), _mm256_mul_ps(r1, r1)));
+        } else {
+            r = _mm256_andnot_ps(sign, r0);
+        }
+        s = _mm256_add_ps(s, _mm256_mul_ps(_mm256_loadu_ps(w + j), _mm256_min_ps(t, r)));
+    }
+    _mm256_storeu_ps(acc, s);
+}
+
+const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
+#endif
+
+}  // namespace
+
+bool lane_isa_available(LaneIsa isa) {
+    switch (isa) {
+    case LaneIsa::Best:
+    case LaneIsa::Portable: return true;
+#if defined(__SSE2__)
+    case LaneIsa::Sse2: return true;
+#endif
+#if defined(__x86_64__) && defined(__SSE2__)
+    case LaneIsa::Avx2: return kHaveAvx2;
+#endif
+    default: return false;
+    }
+}
+
+void robust_lanes(const Model &m, int dims, const float *x, const float *y, const float *z0, const float *z1,
+                  const float *w, int n, float tau, float acc[8], LaneIsa isa) {
+    const bool two = dims == 2;
+#if defined(__x86_64__) && defined(__SSE2__)
+    if ((isa == LaneIsa::Best && kHaveAvx2) || (isa == LaneIsa::Avx2 && kHaveAvx2))
+        return lanes_avx2(m, two, x, y, z0, z1, w, n, tau, acc);
+#endif
+#if defined(__SSE2__)
+    if (isa == LaneIsa::Best || isa == LaneIsa::Sse2) return lanes_sse2(m, two, x, y, z0, z1, w, n, tau, acc);
+#endif
+    lanes_portable(m, two, x, y, z0, z1, w, n, tau, acc);
 }
 
 }  // namespace lidarflow::interp

@@ -37,4 +37,16 @@ private:
     double sxz_[2] = {0, 0}, syz_[2] = {0, 0}, sz_[2] = {0, 0};
 };
 
+// Stage 4's hot loop: the robust cost of a model over a superpixel's neighbours, as eight lane
+// sums (one running sum would be a chain the compiler may not reorder). Over the points
+// j < n (n a multiple of 8), lane j mod 8 adds, in order of j, w_j * min(tau, r_j) where r_j is
+// |p0(x_j, y_j) - z0_j| for dims 1, the norm of (p0 - z0, p1 - z1) at j for dims 2 (z1 unread
+// for dims 1). Every instruction set computes the same operations per lane, so all give the
+// same sums, NaN included (a NaN residual adds min(tau, NaN) = NaN).
+enum class LaneIsa { Best, Portable, Sse2, Avx2 };
+void robust_lanes(const Model &m, int dims, const float *x, const float *y, const float *z0, const float *z1,
+                  const float *w, int n, float tau, float acc[8], LaneIsa isa = LaneIsa::Best);
+// Whether robust_lanes can run isa here (Portable always; Best is whichever is fastest).
+bool lane_isa_available(LaneIsa isa);
+
 }  // namespace lidarflow::interp

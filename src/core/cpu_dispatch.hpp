@@ -1,0 +1,17 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+// LIDARFLOW_AVX2_CLONES: compiles a function for AVX2 and for the baseline ISA; the loader picks
+// one (GCC function multiversioning). For plain loops the compiler vectorises: AVX2 without FMA
+// performs the same IEEE operations per element, so both versions give the same results.
+// The pick runs in an IFUNC resolver during relocation, before a ThreadSanitizer runtime is
+// up, and crashes there: TSan builds keep only the baseline version.
+#if defined(__SANITIZE_THREAD__)
+#define LIDARFLOW_AVX2_CLONES
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define LIDARFLOW_AVX2_CLONES
+#endif
+#endif
+#ifndef LIDARFLOW_AVX2_CLONES
+#define LIDARFLOW_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#endif

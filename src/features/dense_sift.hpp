@@ -43,8 +43,8 @@ extern uint8_t kPackedLevels[kContrastSteps + 1][16];
 static_assert(kContrastSteps == 255, "every value of the contrast byte must have its row");
 inline const uint8_t *packed_levels(uint8_t contrast) { return kPackedLevels[contrast]; }
 
-// Descriptor image. Owns its storage (copies are deep only through clone()), unless it was
-// written into memory lent by its caller (compute_dense_sift with `memory`).
+// Descriptor image. Owns its storage (a copy copies it), unless it was written into memory lent
+// by its caller (compute_dense_sift with `memory`; a copy then refers to the same memory).
 struct DescriptorImage {
     int width = 0, height = 0, dim = 0;  // dim: values per descriptor
     int bits = 8;                        // 8, or 4 (byte i: value i in the low nibble, i + dim/2 high)

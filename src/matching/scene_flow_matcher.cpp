@@ -719,7 +719,11 @@ void Engine::update_radii(int l) {
     const float maxr = std::max(1.0f, opt_.max_flow * std::ldexp(1.0f, -l));
     const float maxd = std::max(1.0f, opt_.max_disparity * std::ldexp(1.0f, -l));
     const Graph &g = *graph_;
-    for (int i : g.seeds) {
+    const int na = static_cast<int>(g.seeds.size());
+    // Each seed writes only its own radii from matches nobody writes here: rows in parallel.
+#pragma omp parallel for schedule(static) num_threads(opt_.threads)
+    for (int a = 0; a < na; ++a) {
+        const int i = g.seeds[a];
         const State &s = best_[i].s;
         float rf = 0, r0 = 0, r1 = 0;
         for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) {
@@ -762,8 +766,11 @@ void Engine::run_levels(int last) {
             score(i, s, best_[i], target_hit(i, s) >= 0);
         }
         // New level, new costs: every neighbour is worth one try.
-        for (int i : g.seeds)
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (int a = 0; a < na; ++a) {
+            const int i = g.seeds[a];
             for (int k = g.nb_offset[i]; k < g.nb_offset[i + 1]; ++k) seen_[k] = version_[g.nb[k]] - 1;
+        }
         std::fill(explore_.begin(), explore_.end(), 1);
         for (int it = 0; it < opt_.iterations; ++it) {
             const int stamp = iteration_stamp_++;

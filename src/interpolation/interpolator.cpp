@@ -701,7 +701,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     res.timings.models_s = seconds_since(t);
 
     t = Clock::now();
-    res.dense = SceneFlowField::zeros(w, h);
+    res.dense = SceneFlowField::uninitialized(w, h);  // the pixel loop below writes every value
     res.dense.valid.setTo(1);
     // Per-pixel model choice: a pixel keeps its superpixel's model unless the matches around
     // it (its geodesically nearest seed and that seed's graph neighbours) are better explained

@@ -5,8 +5,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <future>
-#include <system_error>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -540,35 +538,17 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
         res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);
 
-    // The edge map (OpenCV filters that hardly use a second core) and the superpixels (mostly
-    // serial after their vectorised assignment) both read only the image: side by side.
     auto t = Clock::now();
-    std::future<cv::Mat1f> edges;
-    if (o.num_threads > 1) {
-        try {
-            edges = std::async(std::launch::async, [&] {
-                const auto te = Clock::now();
-                cv::Mat1f e = compute_edge_map(image, o.edges, sed_.get());
-                res.timings.edges_s = seconds_since(te);
-                return e;
-            });
-        } catch (const std::system_error &) {
-            // No thread to be had: the edge map follows the superpixels below.
-        }
-    }
+    res.edges = compute_edge_map(image, o.edges, sed_.get());
+    res.timings.edges_s = seconds_since(t);
+
+    t = Clock::now();
     SuperpixelOptions spo = o.superpixels;
     spo.num_threads = o.num_threads;
     const Superpixels sp = compute_superpixels(image, spo);
     res.superpixels = sp.labels;
     res.num_superpixels = sp.count;
     res.timings.superpixels_s = seconds_since(t);
-    if (edges.valid()) {
-        res.edges = edges.get();
-    } else {
-        t = Clock::now();
-        res.edges = compute_edge_map(image, o.edges, sed_.get());
-        res.timings.edges_s = seconds_since(t);
-    }
 
     t = Clock::now();
     const SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);

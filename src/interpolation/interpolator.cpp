@@ -347,7 +347,6 @@ int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const
 
 using Rng = SplitMix64;
 
-
 uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
     Rng r(base * 0x100000001B3ull ^ (static_cast<uint64_t>(sp) << 20) ^
           (static_cast<uint64_t>(iteration) << 8) ^ static_cast<uint64_t>(channel));

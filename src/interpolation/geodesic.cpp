@@ -73,25 +73,18 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
             best = c < best ? c : best;
             bl = (lp[q] & better) | (bl & ~better);
         };
-        const auto one = [&](int x) {
+        const auto cell = [&](int x, bool first_diagonal, bool second_diagonal) {
             float best = dp[x] + 1.0f * (hr[x] + hp[x]);
             int bl = lp[x];
-            const int a = x - s, b = x + s;  // the diagonal neighbours, in the sweep's order
-            if (a >= 0 && a < w) step(x, a, kDiag, best, bl);
-            if (b >= 0 && b < w) step(x, b, kDiag, best, bl);
+            if (first_diagonal) step(x, x - s, kDiag, best, bl);
+            if (second_diagonal) step(x, x + s, kDiag, best, bl);
             vd[x] = best;
             vl[x] = bl;
         };
-        one(0);
-        if (w > 1) one(w - 1);
-        for (int x = 1; x + 1 < w; ++x) {  // both diagonals exist: no branch
-            float best = dp[x] + 1.0f * (hr[x] + hp[x]);
-            int bl = lp[x];
-            step(x, x - s, kDiag, best, bl);
-            step(x, x + s, kDiag, best, bl);
-            vd[x] = best;
-            vl[x] = bl;
-        }
+        const auto border = [&](int x) { cell(x, x - s >= 0 && x - s < w, x + s >= 0 && x + s < w); };
+        border(0);
+        if (w > 1) border(w - 1);
+        for (int x = 1; x + 1 < w; ++x) cell(x, true, true);  // both diagonals exist: no branch
     };
     // The serial step along row y from x - s, then the row before's best.
     auto along = [&](int y, int s) {

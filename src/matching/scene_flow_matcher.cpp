@@ -196,10 +196,10 @@ private:
     cv::Mat1i tgt_labels_;         // D1 hits on the level
     std::vector<cv::Point> tgt_centre_;
     PatchShape shape_;
-    const PatchCostFn cost_fn_ = patch_cost_kernel(opt_.sift.bits);
-    int next_level_ = 0;  // the next level run_levels runs
-    int iteration_stamp_ = 0;
-    double seconds_ = 0;  // the descriptors are computed with opt_.sift
+    const PatchCostFn cost_fn_ = patch_cost_kernel(opt_.sift.bits);  // the descriptors are computed with opt_.sift
+    int next_level_ = 0;      // the next level run_levels runs
+    int iteration_stamp_ = 0;  // iterations over all levels so far (strip_done_ values)
+    double seconds_ = 0;      // spent in run_levels
     float penalty_ = 0, dmax_ = 0, max_r_ = 0;
 
     std::vector<Scored> best_;

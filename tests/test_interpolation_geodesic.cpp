@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The geodesic distance transform of build_seed_graph against the plain one-pixel-at-a-time
 // sweeps (each pixel tries W, N, NW, NE forward and E, S, SE, SW backward, keeping the first
-// least candidate): the same distances and nearest seeds, bit for bit, ties included.
+// least candidate): the same distances and nearest seeds, bit for bit, ties included. And the
+// seed search's one-traversal pair of neighbour lists against two separate searches.
 #include "test_support.hpp"
 
 #include <cstring>
@@ -93,11 +94,53 @@ void distance_transform_equals_the_plain_sweeps(void **) {
     assert_int_equal(compared, 12);
 }
 
+// The interpolator asks for the k nearest seeds and the k nearest seeds with a motion from the
+// same pixel in one traversal: each list must be what its own search returns, ties included.
+void one_traversal_gives_both_neighbour_lists(void **) {
+    std::mt19937 gen(5);
+    int compared = 0, differ = 0;
+    for (int flat = 0; flat < 2; ++flat) {
+        const cv::Size size(64, 40);
+        cv::Mat1f edges(size, 0.0f);
+        if (!flat) cv::randu(edges, 0.0f, 1.0f);
+        std::vector<cv::Point> seeds;
+        cv::Mat1b used(size, 0);
+        std::uniform_int_distribution<int> px(0, size.width - 1), py(0, size.height - 1);
+        while (seeds.size() < 90) {
+            const cv::Point p(px(gen), py(gen));
+            if (used(p)) continue;
+            used(p) = 1;
+            seeds.push_back(p);
+        }
+        std::vector<char> moving(seeds.size());
+        for (char &m : moving) m = gen() % 3 != 0;
+        const auto accept = [&](int i) { return moving[i] != 0; };
+        const SeedGraph g = build_seed_graph(edges, seeds, 3.0f);
+        SeedSearch search(g.num_seeds());
+        std::vector<std::pair<int, float>> all, some, all2, some2;
+        for (int q = 0; q < 40; ++q) {
+            const cv::Point from(px(gen), py(gen));
+            for (auto [k, kb] : {std::pair{16, 16}, {5, 30}, {30, 5}, {0, 8}, {8, 0}, {200, 200}}) {
+                search.nearest(g, from, k, [](int) { return true; }, all);
+                search.nearest(g, from, kb, accept, some);
+                search.nearest_two(g, from, k, all2, kb, accept, some2);
+                assert_true(all == all2);
+                assert_true(some == some2);
+                differ += all != some;
+                ++compared;
+            }
+        }
+    }
+    assert_int_equal(compared, 2 * 40 * 6);
+    assert_true(differ > 0);  // the lists are not trivially the same
+}
+
 }  // namespace
 
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(distance_transform_equals_the_plain_sweeps),
+        cmocka_unit_test(one_traversal_gives_both_neighbour_lists),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

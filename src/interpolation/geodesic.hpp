@@ -37,8 +37,18 @@ public:
     template <class Accept>
     void nearest(const SeedGraph &g, cv::Point from, int k, Accept accept,
                  std::vector<std::pair<int, float>> &out);
+    // One traversal for two lists from the same pixel: `out` gets the k nearest seeds (as
+    // nearest() with every seed accepted), `out_b` the k_b nearest seeds accepted by accept_b.
+    // Each list is exactly what its own nearest() call returns (the order in which seeds are
+    // settled does not depend on what is collected); the traversal stops once both are full.
+    template <class Accept>
+    void nearest_two(const SeedGraph &g, cv::Point from, int k, std::vector<std::pair<int, float>> &out, int k_b,
+                     Accept accept_b, std::vector<std::pair<int, float>> &out_b);
 
 private:
+    template <class Visit>
+    void traverse(const SeedGraph &g, cv::Point from, Visit visit);
+
     std::vector<float> dist_;
     std::vector<unsigned> stamp_;
     unsigned epoch_ = 0;

@@ -5,10 +5,10 @@
 
 namespace lidarflow::interp {
 
-template <class Accept>
-void SeedSearch::nearest(const SeedGraph &g, cv::Point from, int k, Accept accept,
-                         std::vector<std::pair<int, float>> &out) {
-    out.clear();
+// The traversal settles seeds in order of increasing distance whatever the callers collect,
+// and stops as soon as `visit(seed, distance)` says it has enough.
+template <class Visit>
+void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
     if (++epoch_ == 0) {  // wrapped: old stamps could alias the new epoch
         std::fill(stamp_.begin(), stamp_.end(), 0u);
         epoch_ = 1;
@@ -21,17 +21,13 @@ void SeedSearch::nearest(const SeedGraph &g, cv::Point from, int k, Accept accep
     stamp_[s0] = epoch_;
     heap_.emplace_back(dist_[s0], s0);
     const auto cmp = std::greater<std::pair<float, int>>();
-    int accepted = 0;
-    while (!heap_.empty() && accepted < k) {
+    while (!heap_.empty()) {
         std::pop_heap(heap_.begin(), heap_.end(), cmp);
         const auto [d, s] = heap_.back();
         heap_.pop_back();
         if (dist_[s] < 0.0f || d > dist_[s]) continue;  // settled or stale entry
         dist_[s] = -1.0f;
-        if (accept(s)) {
-            out.emplace_back(s, d);
-            ++accepted;
-        }
+        if (visit(s, d)) return;
         for (int e = g.start[s]; e < g.start[s + 1]; ++e) {
             const int t = g.nbr[e];
             const float nd = d + g.weight[e];
@@ -47,6 +43,31 @@ void SeedSearch::nearest(const SeedGraph &g, cv::Point from, int k, Accept accep
             std::push_heap(heap_.begin(), heap_.end(), cmp);
         }
     }
+}
+
+template <class Accept>
+void SeedSearch::nearest(const SeedGraph &g, cv::Point from, int k, Accept accept,
+                         std::vector<std::pair<int, float>> &out) {
+    out.clear();
+    if (k <= 0) return;
+    traverse(g, from, [&](int s, float d) {
+        if (accept(s)) out.emplace_back(s, d);
+        return static_cast<int>(out.size()) >= k;
+    });
+}
+
+template <class Accept>
+void SeedSearch::nearest_two(const SeedGraph &g, cv::Point from, int k, std::vector<std::pair<int, float>> &out,
+                             int k_b, Accept accept_b, std::vector<std::pair<int, float>> &out_b) {
+    out.clear();
+    out_b.clear();
+    const size_t n = static_cast<size_t>(std::max(k, 0)), n_b = static_cast<size_t>(std::max(k_b, 0));
+    if (n == 0 && n_b == 0) return;
+    traverse(g, from, [&](int s, float d) {
+        if (out.size() < n) out.emplace_back(s, d);
+        if (out_b.size() < n_b && accept_b(s)) out_b.emplace_back(s, d);
+        return out.size() >= n && out_b.size() >= n_b;
+    });
 }
 
 }  // namespace lidarflow::interp

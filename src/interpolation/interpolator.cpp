@@ -568,13 +568,13 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
             const int ga = anchors.geometry[s], ma = anchors.motion[s];
             const cv::Point gp = ga >= 0 ? seeds.pos[ga] : sp.anchor[s];
             const cv::Point mp = ma >= 0 ? seeds.pos[ma] : sp.anchor[s];
-            search->nearest(graph, gp, K, [](int) { return true; }, geo_nb[s]);
-            bool reuse = gp == mp;
-            for (const auto &e : geo_nb[s]) reuse = reuse && seeds.has_motion[e.first];
-            if (reuse)
-                mot_nb[s] = geo_nb[s];
-            else
-                search->nearest(graph, mp, K, [&](int i) { return seeds.has_motion[i] != 0; }, mot_nb[s]);
+            const auto moving = [&](int i) { return seeds.has_motion[i] != 0; };
+            if (gp == mp) {
+                search->nearest_two(graph, gp, K, geo_nb[s], K, moving, mot_nb[s]);
+            } else {
+                search->nearest(graph, gp, K, [](int) { return true; }, geo_nb[s]);
+                search->nearest(graph, mp, K, moving, mot_nb[s]);
+            }
         });
     }
     errors.rethrow_if_any();

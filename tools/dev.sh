@@ -72,8 +72,8 @@ run_tests() {  # run_tests DIR [ctest args...]
 fuzz_one() {
     local dir="$1" t="$2" seconds="$3" rc=0
     # -timeout: a C ABI program of 24 calls on images of at most 64x48 px takes well under a
-    # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too.
-    ASAN_OPTIONS=detect_leaks=1 "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
+    # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too (tests/lsan.supp: glibc's).
+    ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS="suppressions=$root/tests/lsan.supp" "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
         -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/findings/$t-" \
         "$dir/corpus/$t" "$root/tests/fuzz/corpus/$t" >"$dir/fuzz-logs/$t.log" 2>&1 || rc=$?
     echo "$rc" >"$dir/fuzz-logs/$t.rc"
@@ -164,8 +164,10 @@ case "${1:-}" in
         # the raw-Velodyne comparison, the four KITTI-size matcher runs of test_matching_kitti (the
         # golden test runs the same matcher on the same frames), the README LCM walkthrough (real
         # time), and a shorter soak (3,000 messages instead of 10,000).
+        # tests/lsan.supp: a glibc buffer that LeakSanitizer may report depending on which
+        # thread first starts TBB (the comment there).
         LF_SOAK_MESSAGES=3000 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-            run_tests build-asan \
+            LSAN_OPTIONS="suppressions=$root/tests/lsan.supp" run_tests build-asan \
             -E '^(bridge_args|bridge_udpm_kitti|bridge_udpm_shards|bridge_udpm_shard_dies|bridge_kitti_velodyne|test_matching_kitti|bridge_readme_lcm)$' ;;
     build-clang)
         deps

@@ -17,7 +17,7 @@ inputs=(--stereo-channel STEREO_CAMERA --lidar-channel VELODYNE_POINTS --calib "
         --lidar-to-camera "$l2c")
 
 "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/out.log" "${inputs[@]}" "${opts[@]}" 2>"$tmp/replay.err" \
-    || { cat "$tmp/replay.err"; fail "replay exited $?"; }
+    || { rc=$?; cat "$tmp/replay.err"; fail "replay exited $rc"; }
 cat "$tmp/replay.err"
 grep -q "events (stereo $frames, lidar $frames, calibration 0, other channels $frames, left out); stereo processed $frames, dropped 0, missing from the log 0; lidar malformed 0, rejected 0" \
     "$tmp/replay.err" || fail "not every frame / sweep accounted for"

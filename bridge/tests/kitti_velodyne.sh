@@ -26,7 +26,7 @@ publish() {  # NAME, then publish-kitti options
 replay() {  # NAME IN, then bridge options
     local name=$1 in=$2; shift 2
     "$LIDARFLOW_BRIDGE" --replay "$tmp/in_$in.log" --out "$tmp/out_$name.log" "$@" 2>"$tmp/$name.err" \
-        || { cat "$tmp/$name.err"; fail "replay $name exited $?"; }
+        || { rc=$?; cat "$tmp/$name.err"; fail "replay $name exited $rc"; }
     grep -q "stereo processed 4, dropped 0, missing from the log 0; lidar malformed 0, rejected 0" "$tmp/$name.err" \
         || { cat "$tmp/$name.err"; fail "$name: not every frame / sweep processed"; }
 }

@@ -19,7 +19,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 opts=(--option matching.min_coarsest_height=16 --option threads=2)
 
 "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/out.log" "${opts[@]}" 2>"$tmp/replay.err" \
-    || { cat "$tmp/replay.err"; fail "replay exited $?"; }
+    || { rc=$?; cat "$tmp/replay.err"; fail "replay exited $rc"; }
 cat "$tmp/replay.err"
 grep -q "stereo processed 8, dropped 0, missing from the log 0" "$tmp/replay.err" || fail "not every frame processed"
 "$LIDARFLOW_LOG_CHECK" verify "$tmp/out.log" --inputs "$tmp/in.log" "${opts[@]}" --min-results 4
@@ -51,6 +51,6 @@ expect_lost "$tmp/nocal.log" "LOST: stereo frame .*sequence 0, frame_number 0.* 
 # Garbage appended to a good log (a torn write): every frame still processed, exit 0.
 cp "$tmp/in.log" "$tmp/torn.log" && head -c 1000 /dev/urandom >>"$tmp/torn.log"
 "$LIDARFLOW_BRIDGE" --replay "$tmp/torn.log" --out "$tmp/torn_out.log" "${opts[@]}" 2>"$tmp/torn.err" \
-    || { cat "$tmp/torn.err"; fail "replay of a torn log exited $?"; }
+    || { rc=$?; cat "$tmp/torn.err"; fail "replay of a torn log exited $rc"; }
 "$LIDARFLOW_BRIDGE" --replay "$tmp/missing.log" --out "$tmp/x.log" 2>/dev/null && fail "missing input accepted"
 echo "replay_log: ok"

@@ -162,9 +162,18 @@ void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, 
     compute_dense_sift(gray, options, threads, out, nullptr);
 }
 
+namespace {
+
+// The descriptors' bytes; bits 4 adds a contrast byte per pixel after them.
+size_t descriptor_data_bytes(int width, int height, const DenseSiftOptions &options) {
+    return static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(options.dim * options.bits / 8);
+}
+
+}  // namespace
+
 size_t descriptor_bytes(int width, int height, const DenseSiftOptions &options) {
-    const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(height);
-    return pixels * static_cast<size_t>(options.dim * options.bits / 8) + (options.bits == 4 ? pixels : 0);
+    const size_t contrast = options.bits == 4 ? static_cast<size_t>(width) * static_cast<size_t>(height) : 0;
+    return descriptor_data_bytes(width, height, options) + contrast;
 }
 
 void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, int threads,
@@ -207,7 +216,7 @@ void compute_dense_sift(const cv::Mat1f &gray, const DenseSiftOptions &options, 
     out.lent = out.lent_contrast = nullptr;
     out.data.clear();
     out.contrast.clear();
-    const size_t data_bytes = static_cast<size_t>(w) * h * options.dim * options.bits / 8;
+    const size_t data_bytes = descriptor_data_bytes(w, h, options);
     if (memory) {
         decltype(out.data)().swap(out.data);
         decltype(out.contrast)().swap(out.contrast);

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <functional>
 #include <limits>
 #include <vector>
 
+#include "core/branchless.hpp"
 #include "core/error.hpp"
 
 namespace lidarflow::interp {
@@ -68,10 +68,7 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
         float *vd = vdist.data();
         int *vl = vlab.data();
         const auto step = [&](int x, int q, float len, float &best, int &bl) {
-            const float c = dp[q] + len * (hr[x] + hp[q]);
-            const int32_t better = -static_cast<int32_t>(c < best);
-            best = c < best ? c : best;
-            bl = (lp[q] & better) | (bl & ~better);
+            keep_first_least(dp[q] + len * (hr[x] + hp[q]), lp[q], best, bl);
         };
         const auto cell = [&](int x, bool first_diagonal, bool second_diagonal) {
             float best = dp[x] + 1.0f * (hr[x] + hp[x]);

@@ -162,7 +162,7 @@ void robust_lanes(const Model &m, int dims, const float *x, const float *y, cons
                   const float *w, int n, float tau, float acc[8], LaneIsa isa) {
     const bool two = dims == 2;
 #if defined(__x86_64__) && defined(__SSE2__)
-    if ((isa == LaneIsa::Best && kHaveAvx2) || (isa == LaneIsa::Avx2 && kHaveAvx2))
+    if ((isa == LaneIsa::Best || isa == LaneIsa::Avx2) && kHaveAvx2)
         return lanes_avx2(m, two, x, y, z0, z1, w, n, tau, acc);
 #endif
 #if defined(__SSE2__)

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/branchless.hpp"
 #include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
@@ -78,19 +78,15 @@ int enforce_connectivity(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
     return next;
 }
 
-// Offers centre c (index k) to the pixels [x0, x1) of one row. A mask instead of a branch:
-// unconditional stores let the compiler vectorise (gcc 12 does not if-convert the branch), with
-// the same operations per pixel, so the same result.
+// Offers centre c (index k) to the pixels [x0, x1) of one row, branch-free so that it vectorises
+// (core/branchless.hpp).
 LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *__restrict A, const float *__restrict B, const Centre &c,
                  float spatial, float dy2, int k, int x0, int x1, float *__restrict best, int *__restrict arow) {
     const float cl = c.l, ca = c.a, cb = c.b, cx = c.x;
     for (int x = x0; x < x1; ++x) {
         const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx;
         const float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2;
-        const float b = best[x];
-        const int32_t better = -static_cast<int32_t>(d < b);  // all ones where c is nearer
-        best[x] = d < b ? d : b;
-        arow[x] = (k & better) | (arow[x] & ~better);
+        keep_first_least(d, k, best[x], arow[x]);
     }
 }
 

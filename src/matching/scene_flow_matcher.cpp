@@ -877,6 +877,7 @@ void MatcherData::describe_coarse(bool lend) {
     // Each image's levels go to consecutive 64-byte aligned slices of the two buffers, sized for
     // the full resolution first (sizing touches no page; a recycled pair already has the size).
     std::vector<uint8_t *> memory(4 * (nlev - 1), nullptr);
+    const auto round64 = [](size_t n) { return (n + 63) / 64 * 64; };
     if (lend && pending[1]) {
         const size_t need = features::descriptor_bytes(width, height, opt.sift) + 64;
         uint8_t *base[2];
@@ -888,13 +889,13 @@ void MatcherData::describe_coarse(bool lend) {
                 data.resize(need);
             }
             const auto addr = reinterpret_cast<std::uintptr_t>(data.data());
-            base[b] = data.data() + ((addr + 63) / 64 * 64 - addr);
+            base[b] = data.data() + (round64(addr) - addr);
             room[b] = data.size() - static_cast<size_t>(base[b] - data.data());
         }
         int b = 0;
         for (int i = 0; i < 4; ++i)
             for (int l = 1; l < nlev; ++l) {
-                const size_t bytes = (features::descriptor_bytes(levels[l].w, levels[l].h, opt.sift) + 63) / 64 * 64;
+                const size_t bytes = round64(features::descriptor_bytes(levels[l].w, levels[l].h, opt.sift));
                 while (b < 2 && used[b] + bytes > room[b]) ++b;
                 if (b == 2) break;  // the rest in owned storage
                 memory[i * (nlev - 1) + l - 1] = base[b] + used[b];

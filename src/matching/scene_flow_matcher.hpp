@@ -88,8 +88,9 @@ struct MatchPair {
 // Not thread-safe: one thread uses a matcher at a time (each call parallelises internally).
 class SceneFlowMatcher {
 public:
-    // Validates and copies the input and computes the coarse pyramid levels' descriptors; the
-    // full-resolution ones are computed by the first run, run_both or features_t1.
+    // Validates and copies the input; computes no descriptor. The coarse levels' descriptors are
+    // computed by run and run_both, the full resolution's by the first run, run_both or
+    // features_t1.
     // reuse_t0 (may be null): the previous frame's features_t1(); used for (left0, right0)
     // when it matches them (StereoFeatures::matches), ignored otherwise.
     // Throws lidarflow::Error: SizeMismatch (image / LiDAR sizes differ),

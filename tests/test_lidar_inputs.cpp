@@ -305,6 +305,55 @@ void test_paper_protocol_rejects_correspondences(void **) {
     assert_true(throws_code(ErrorCode::InvalidArgument, [&] { lidar::sample_paper_protocol(d0, d1, f, bad); }));
 }
 
+// Other placements move both grids by the same whole pixels (their stagger stays), the paper's
+// placement is placement 0, and the placements spread over the step.
+void test_paper_protocol_placements(void **) {
+    const int W = 60, H = 40, step = 10;
+    const DisparityMap d0(H, W, 7.0f), d1(H, W, 9.0f);
+    FlowField f = FlowField::zeros(W, H);
+    f.valid.setTo(1);
+    lidar::PaperProtocolOptions opt;
+    opt.step = step;
+    const lidar::PaperSamples paper = lidar::sample_paper_protocol(d0, d1, f, opt);
+    opt.phase = lidar::placement_phase(0);
+    const lidar::PaperSamples first = lidar::sample_paper_protocol(d0, d1, f, opt);
+    assert_int_equal(first.d0.points.size(), paper.d0.points.size());
+    for (std::size_t i = 0; i < paper.d0.points.size(); ++i) {
+        assert_int_equal(first.d0.points[i].x, paper.d0.points[i].x);
+        assert_int_equal(first.d0.points[i].y, paper.d0.points[i].y);
+    }
+    for (const LidarPoint &p : paper.d0.points) assert_true(p.x % step == 5 && p.y % step == 5);
+    for (const LidarPoint &p : paper.d1.points) assert_true(p.x % step == 0 && p.y % step == 0);
+
+    opt.phase = cv::Point2d(0.3, 0.74);  // 3 and 7 px at this step
+    const lidar::PaperSamples moved = lidar::sample_paper_protocol(d0, d1, f, opt);
+    assert_int_equal(moved.d0.points.size(), (W / step) * (H / step));
+    assert_true(!moved.d1.points.empty());
+    for (const LidarPoint &p : moved.d0.points) assert_true(p.x % step == 8 && p.y % step == 2);
+    for (const LidarPoint &p : moved.d1.points) assert_true(p.x % step == 3 && p.y % step == 7);
+
+    // The first 64 placements: distinct, inside the unit square, and every quadrant holds a
+    // fair share (a lattice-like sequence, not clustered draws).
+    int quadrant[4] = {0, 0, 0, 0};
+    std::vector<cv::Point2d> seen;
+    for (int j = 0; j < 64; ++j) {
+        const cv::Point2d q = lidar::placement_phase(j);
+        assert_true(q.x >= 0 && q.x < 1 && q.y >= 0 && q.y < 1);
+        for (const cv::Point2d &o : seen) assert_true(std::abs(o.x - q.x) + std::abs(o.y - q.y) > 1e-6);
+        seen.push_back(q);
+        ++quadrant[(q.x >= 0.5) + 2 * (q.y >= 0.5)];
+    }
+    assert_true(seen[0].x == 0 && seen[0].y == 0);
+    for (int n : quadrant) assert_true(n >= 12 && n <= 20);
+
+    assert_true(throws_code(ErrorCode::InvalidArgument, [] { lidar::placement_phase(-1); }));
+    for (const cv::Point2d bad : {cv::Point2d(1.0, 0), cv::Point2d(0, -0.1),
+                                  cv::Point2d(std::numeric_limits<double>::quiet_NaN(), 0)}) {
+        opt.phase = bad;
+        assert_true(throws_code(ErrorCode::InvalidArgument, [&] { lidar::sample_paper_protocol(d0, d1, f, opt); }));
+    }
+}
+
 void test_paper_protocol_real(void **) {
     const std::string root = kitti_or_skip();
     if (root.empty()) skip();
@@ -337,6 +386,15 @@ void test_paper_protocol_real(void **) {
         assert_int_equal(again.step, s.step);
         assert_int_equal(again.d1.points.size(), s.d1.points.size());
         for (std::size_t i = 0; i < s.d0.points.size(); ++i) assert_int_equal(again.d0.points[i].x, s.d0.points[i].x);
+        // Another placement still gives about N points per map, on other pixels.
+        lidar::PaperProtocolOptions other;
+        other.phase = lidar::placement_phase(3);
+        const lidar::PaperSamples o = lidar::sample_paper_protocol(d0, d1, f, other);
+        assert_true(o.d0.points.size() >= 60 && o.d0.points.size() <= 120);
+        assert_true(o.d1.points.size() >= 60 && o.d1.points.size() <= 120);
+        int shared = 0;
+        for (const LidarPoint &p : o.d0.points) shared += find_point(s.d0, p.x, p.y) != nullptr;
+        assert_true(shared < static_cast<int>(o.d0.points.size()) / 4);
     }
     std::printf("mean over %zu frames: D0 %.1f, D1 %.1f points\n", ids.size(), mean0, mean1);
     assert_true(mean0 >= 70 && mean0 <= 110);
@@ -570,6 +628,7 @@ int main() {
         cmocka_unit_test(test_dewarp_occlusion),
         cmocka_unit_test(test_dewarp_gap_in_nearer_surface),
         cmocka_unit_test(test_paper_protocol_rejects_correspondences),
+        cmocka_unit_test(test_paper_protocol_placements),
         cmocka_unit_test(test_paper_protocol_real),
         cmocka_unit_test(test_rings_and_beams),
         cmocka_unit_test(test_velodyne_protocol_real),

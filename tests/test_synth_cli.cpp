@@ -170,7 +170,8 @@ void test_viz_pictures_and_error_maps(void **) {
 
 void expect_failure(const std::string &args, const fs::path &dir, int code);
 
-// `kitti` on rendered frames: options by key (--set), several seeds summarised (--seeds).
+// `kitti` on rendered frames: options by key (--set), several seeds summarised (--seeds), and
+// other placements of the paper protocol's grids (--placements).
 void test_kitti_set_and_seeds(void **) {
     const fs::path dir = test::scratch_dir("cli_kitti_seeds");
     const fs::path root = dir / "kitti";
@@ -184,6 +185,12 @@ void test_kitti_set_and_seeds(void **) {
     expect_failure(base + " --set matching.nope=1", dir, 2);         // unknown key
     expect_failure(base + " --set matching.iterations", dir, 2);     // no value
     expect_failure(base + " --seeds 0", dir, 2);
+
+    r = run(base + " --placements 3 --set matching.min_coarsest_height=16,matching.iterations=2", dir);
+    if (r.code != 0) fail_msg("kitti --placements failed (%d): %s", r.code, r.output.c_str());
+    assert_true(r.output.find("Over 1 seed(s) x 3 LiDAR placements") != std::string::npos);
+    expect_failure(base + " --placements 0", dir, 2);
+    expect_failure(base + " --lidar velodyne --placements 2", dir, 2);  // a real scan has no grid
 }
 
 void expect_failure(const std::string &args, const fs::path &dir, int code) {

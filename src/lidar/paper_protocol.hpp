@@ -58,6 +58,12 @@ struct PaperProtocolOptions {
     int target_points = 88;  // N per map, used when step == 0
     int step = 0;            // fixed grid step (>= window); 0 = search per frame
     int window = 5;          // odd
+    // Shift of both grids against the paper's origin (grid_spec), as a fraction of the step in
+    // [0, 1) per axis, rounded to whole pixels. The paper fixes one placement; with ~88 points it
+    // decides which surfaces get a measurement at all, and on the shared KITTI frames a shift of
+    // one pixel moves the final SF by about as much as a change of method (docs/ARCHITECTURE.md,
+    // "LiDAR placement"), so other placements tell how much a result owes to that one draw.
+    cv::Point2d phase{0, 0};
     DewarpOptions dewarp;
 };
 
@@ -71,9 +77,13 @@ struct PaperSamples {
 
 // Runs the protocol on ground-truth maps of one frame (disp0 = disp_occ_0, disp1 =
 // disp_occ_1, flow = flow_occ). The result owns everything. Throws Error: InvalidArgument for
-// empty input, non-finite valid values, target_points < 1, an even window, or 0 < step <
-// window; SizeMismatch when the maps differ in size.
+// empty input, non-finite valid values, target_points < 1, an even window, 0 < step < window,
+// or a phase outside [0, 1); SizeMismatch when the maps differ in size.
 PaperSamples sample_paper_protocol(const DisparityMap &disp0, const DisparityMap &disp1, const FlowField &flow,
                                    const PaperProtocolOptions &opt = {});
+
+// The grid phase of placement j (PaperProtocolOptions::phase): (0, 0), the paper's, for j = 0,
+// then a low-discrepancy sequence over [0, 1)^2. Throws InvalidArgument for j < 0.
+cv::Point2d placement_phase(int placement);
 
 }  // namespace lidarflow::lidar

@@ -132,6 +132,7 @@ KittiFrame load_kitti_frame(const std::string &root, const std::string &id, cons
     if (lidar.protocol == LidarProtocol::Paper) {
         lidar::PaperProtocolOptions po;
         po.target_points = lidar.points;
+        po.phase = lidar::placement_phase(lidar.placement);
         lidar::PaperSamples s = lidar::sample_paper_protocol(io::read_disparity_png(k.gt_disp0(id)),
                                                              io::read_disparity_png(k.gt_disp1(id)),
                                                              io::read_flow_png(k.gt_flow(id)), po);

@@ -22,6 +22,7 @@ struct LidarInputOptions {
     LidarProtocol protocol = LidarProtocol::Paper;
     int points = 88;  // paper: target per map; velodyne: thin to N (0 = the full scan)
     int beams = 0;    // velodyne only: keep K beams (0 = all)
+    int placement = 0;  // paper only: placement of the sampling grids (lidar::placement_phase; 0 = the paper's)
 };
 
 // One KITTI frame pair with its sparse LiDAR, as the estimator takes it.

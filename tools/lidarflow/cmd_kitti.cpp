@@ -18,12 +18,19 @@ namespace lidarflow::cli {
 namespace {
 
 // Per row and frame: mean (+- standard error of the mean) of the occ outlier rates over the
-// runs, which differ only in their random seeds.
-std::string format_seed_summary(const std::vector<pipeline::KittiRunReport> &runs) {
+// runs, which differ in their random seeds and, with --placements, in where the paper
+// protocol's sampling grids fall.
+std::string format_seed_summary(const std::vector<pipeline::KittiRunReport> &runs, int seeds, int placements) {
     std::string out;
     char line[256];
-    std::snprintf(line, sizeof line, "Over %zu seeds: outliers [%%] (occ), mean +- standard error of the mean\n",
-                  runs.size());
+    if (placements == 1)
+        std::snprintf(line, sizeof line, "Over %d seeds: outliers [%%] (occ), mean +- standard error of the mean\n",
+                      seeds);
+    else
+        std::snprintf(line, sizeof line,
+                      "Over %d seed(s) x %d LiDAR placements: outliers [%%] (occ), mean +- standard error of the "
+                      "mean\n",
+                      seeds, placements);
     out += line;
     std::snprintf(line, sizeof line, "%-52s %-8s %15s %15s %15s %15s\n", "variant", "frame", "D0", "D1", "Fl", "SF");
     out += line;
@@ -60,6 +67,7 @@ int run_kitti_command(int argc, char **argv) {
                {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne (t1: velodyne/ID_11.bin if present) | none"},
                {"points", true, "N    LiDAR points per map (paper: default 88; velodyne: thin to N, 0 = full scan)"},
                {"beams", true, "K    velodyne: keep K beams (default all)"},
+               {"placements", true, "P    paper: also score P - 1 other placements of the sampling grids per seed (default 1: the paper's only)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
@@ -102,6 +110,11 @@ int run_kitti_command(int argc, char **argv) {
 
     const int seeds = args.integer("seeds", 1);
     require(seeds >= 1 && seeds <= 1000, ErrorCode::InvalidArgument, "kitti: --seeds must be in [1, 1000]");
+    const int placements = args.integer("placements", 1);
+    require(placements >= 1 && placements <= 1000, ErrorCode::InvalidArgument,
+            "kitti: --placements must be in [1, 1000]");
+    require(placements == 1 || o.lidar.protocol == pipeline::LidarProtocol::Paper, ErrorCode::InvalidArgument,
+            "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
 
     const bool tty = isatty(fileno(stderr));
     // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one line per step, so a
@@ -113,15 +126,19 @@ int run_kitti_command(int argc, char **argv) {
             std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, n, what.c_str());
     };
     const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
-    // Further seeds: scored only (the first seed's run is the one written to --out).
+    // Further seeds and placements: scored only (the first seed's run at the paper's placement
+    // is the one written to --out).
     std::vector<pipeline::KittiRunReport> more;
-    for (int k = 1; k < seeds; ++k) {
-        pipeline::KittiRunOptions ok = o;
-        ok.out.clear();
-        ok.estimator.matching.random_seed = o.estimator.matching.random_seed + static_cast<uint64_t>(k);
-        ok.estimator.interpolation.random_seed = o.estimator.interpolation.random_seed + static_cast<unsigned>(k);
-        more.push_back(pipeline::run_kitti(ok, progress));
-    }
+    for (int k = 0; k < seeds; ++k)
+        for (int j = 0; j < placements; ++j) {
+            if (k == 0 && j == 0) continue;
+            pipeline::KittiRunOptions ok = o;
+            ok.out.clear();
+            ok.lidar.placement = j;
+            ok.estimator.matching.random_seed = o.estimator.matching.random_seed + static_cast<uint64_t>(k);
+            ok.estimator.interpolation.random_seed = o.estimator.interpolation.random_seed + static_cast<unsigned>(k);
+            more.push_back(pipeline::run_kitti(ok, progress));
+        }
     if (tty) std::fprintf(stderr, "\r\033[K");
 
     std::printf("lidarflow kitti: %zu frame(s), LiDAR %s, stage %s, %d thread(s)\n", rep.timings.size(),
@@ -144,10 +161,10 @@ int run_kitti_command(int argc, char **argv) {
                         without_t1.c_str());
     }
     std::printf("\n%s", pipeline::format_report(rep).c_str());
-    if (seeds > 1) {
+    if (!more.empty()) {
         std::vector<pipeline::KittiRunReport> all{rep};
         all.insert(all.end(), more.begin(), more.end());
-        std::printf("\n%s", format_seed_summary(all).c_str());
+        std::printf("\n%s", format_seed_summary(all, seeds, placements).c_str());
     }
     if (!o.out.empty()) std::printf("\nwrote %s/{disp_0,disp_1,flow,viz}/ and %s/report.json\n", o.out.c_str(), o.out.c_str());
     return 0;

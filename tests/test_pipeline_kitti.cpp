@@ -21,20 +21,21 @@ struct Golden {
     const char *id;
     double sf, d0;  // recorded SF and D0 outliers [%] (occ), lidarflow kitti --lidar paper
 };
-// Recorded 2026-11-30 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1),
-// after the t1 LiDAR points started to measure d0 at t0 through the rigid background motion
-// (interpolation.lidar1_from_background; 9.08 -> 8.59 % over seeds 1-8) and matches whose flow
-// the background explains to take its d1 (interpolation.static_d1_from_background; 9.38 ->
-// 9.08 %). Single seeds spread by about +-0.5 points per frame: over seeds 1-8 the mean SF is
-// 8.59 % (7.74 / 9.43), so the tolerance and the bound on the mean below allow for it.
-constexpr Golden kGolden[] = {{"000002", 7.75, 6.07}, {"000003", 9.75, 7.50}};
+// Recorded 2026-12-01 from a clean build with `lidarflow kitti --root K --lidar paper` (seed 1),
+// after stage 4 let a LiDAR point anchor superpixels up to 18 px away instead of 12
+// (interpolation.lidar_anchor_distance: 8.59 -> 8.47 % over seeds 1-8; over placements of the
+// paper protocol's grids 9.59 -> 9.36 %). Single seeds spread by about +-0.5 points per frame:
+// over seeds 1-8 the mean SF is 8.47 % (7.63 / 9.30), so the tolerance and the bound on the mean
+// below allow for it.
+constexpr Golden kGolden[] = {{"000002", 7.58, 5.79}, {"000003", 9.59, 7.34}};
 constexpr double kTolerance = 1.0;  // points; covers float differences across CPUs/compilers
-constexpr double kMeanBound = 9.1;  // the seed mean plus the seed spread (the paper: 11.52 %)
+constexpr double kMeanBound = 9.0;  // the seed mean plus the seed spread (the paper: 11.52 %)
 
 // The real Velodyne scan at t0 (`lidarflow kitti --lidar velodyne`, seed 1), recorded
-// 2026-11-30 with the static-d1 rule above (seeds 1-8: SF 4.21 -> 4.07 %); the estimator drops
+// 2026-12-01 (seeds 1-4: SF 4.03 %; the static-d1 rule had taken seeds 1-8 from 4.21 to 4.07 %
+// and the anchor distance hardly matters with a scan this dense); the estimator drops
 // the points the camera cannot see (lidar.visibility_filter: SF 5.97 -> 4.21 %, D0 3.50 -> 1.73 %).
-constexpr Golden kGoldenVelodyne[] = {{"000002", 3.14, 1.37}, {"000003", 5.20, 2.09}};
+constexpr Golden kGoldenVelodyne[] = {{"000002", 3.14, 1.37}, {"000003", 5.15, 2.05}};
 constexpr double kVelodyneMeanBound = 4.7;  // the seed mean plus the seed spread
 constexpr double kVelodyneD0MeanBound = 2.0;  // the accuracy issue's D0 target with a real scan
 

@@ -2,20 +2,25 @@
 #include "lidar/grid_sampling.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "core/error.hpp"
 
 namespace lidarflow::lidar {
 
-GridSpec grid_spec(int step, bool half_shift, int window) {
+GridSpec grid_spec(int step, bool half_shift, int window, cv::Point2d phase) {
     require(step >= 1, ErrorCode::InvalidArgument, "grid step must be >= 1");
+    const auto fraction = [](double v) { return std::isfinite(v) && v >= 0.0 && v < 1.0; };
+    require(fraction(phase.x) && fraction(phase.y), ErrorCode::InvalidArgument,
+            "grid phase must lie in [0, 1) of the step");
     GridSpec g;
     g.step = step;
     g.window = window;
     const int o = step / 2;
     const int off = half_shift ? (o + step / 2) % step : o;
-    g.offset = cv::Point(off, off);
+    const auto moved = [&](double p) { return (off + static_cast<int>(std::lround(p * step))) % step; };
+    g.offset = cv::Point(moved(phase.x), moved(phase.y));
     return g;
 }
 

@@ -23,8 +23,11 @@ struct GridSpec {
 };
 
 // The usual origin: centres in the middle of step x step cells (offset step/2), or, with
-// half_shift, shifted by a further half step (the cell corners of the unshifted grid).
-GridSpec grid_spec(int step, bool half_shift, int window = 5);
+// half_shift, shifted by a further half step (the cell corners of the unshifted grid); phase
+// moves either by a further round(phase * step) px per axis (modulo the step), so grids built
+// with the same step and phase keep their stagger. Throws Error(InvalidArgument) for step < 1 or
+// a phase outside [0, 1).
+GridSpec grid_spec(int step, bool half_shift, int window = 5, cv::Point2d phase = {0, 0});
 
 // Keeps per window the valid pixel of `dense` nearest to the centre for which accept(x, y) is
 // true (accept empty: all valid pixels). The result owns its points, one per non-empty window,

@@ -94,9 +94,6 @@ PaperSamples sample_paper_protocol(const DisparityMap &disp0, const DisparityMap
     require(opt.window >= 1 && opt.window % 2 == 1, ErrorCode::InvalidArgument, "paper protocol: window must be odd");
     require(opt.step == 0 || opt.step >= opt.window, ErrorCode::InvalidArgument,
             "paper protocol: step must be 0 (search) or >= the window");
-    const auto fraction = [](double v) { return std::isfinite(v) && v >= 0.0 && v < 1.0; };
-    require(fraction(opt.phase.x) && fraction(opt.phase.y), ErrorCode::InvalidArgument,
-            "paper protocol: the grid phase must lie in [0, 1) of the step");
     require(opt.step != 0 || opt.target_points >= 1, ErrorCode::InvalidArgument,
             "paper protocol: target point count must be >= 1");
 
@@ -114,19 +111,10 @@ PaperSamples sample_paper_protocol(const DisparityMap &disp0, const DisparityMap
                 if (marks(sy, sx)) return false;
         return true;
     };
-    // Both grids move by the same whole number of pixels, so their half-step stagger stays.
-    auto placed = [&](int step, bool half_shift) {
-        GridSpec g = grid_spec(step, half_shift, opt.window);
-        const auto shifted = [step](int offset, double phase) {
-            return (offset + static_cast<int>(std::lround(phase * step))) % step;
-        };
-        g.offset = cv::Point(shifted(g.offset.x, opt.phase.x), shifted(g.offset.y, opt.phase.y));
-        return g;
-    };
     auto run = [&](int step, SparseLidar &d0, SparseLidar &d1) {
-        d0 = sample_grid(disp0, placed(step, false));
+        d0 = sample_grid(disp0, grid_spec(step, false, opt.window, opt.phase));
         for (const LidarPoint &p : d0.points) marks(p.y, p.x) = 1;
-        d1 = sample_grid(out.dewarp.disp, placed(step, true), far_from_d0);
+        d1 = sample_grid(out.dewarp.disp, grid_spec(step, true, opt.window, opt.phase), far_from_d0);
         for (const LidarPoint &p : d0.points) marks(p.y, p.x) = 0;
     };
 

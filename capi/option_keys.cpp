@@ -60,6 +60,16 @@ const OptionKey kKeys[] = {
     {"lidar.visibility_margin", KeyType::Float, 0, kMaxLidarDisparity, false, Extra::None,
      LF_FLOAT_FIELD(lidar_visibility.margin)},
     // stage 1
+    {"matching.method", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    {"matching.flow_finest_scale", KeyType::Int, 0, 8, false, Extra::None, LF_INT_FIELD(matching.flow.finest_scale)},
+    {"matching.flow_patch_size", KeyType::Int, 2, 32, false, Extra::None, LF_INT_FIELD(matching.flow.patch_size)},
+    {"matching.flow_patch_stride", KeyType::Int, 1, 31, false, Extra::None, LF_INT_FIELD(matching.flow.patch_stride)},
+    {"matching.flow_descent_iterations", KeyType::Int, 1, 200, false, Extra::None,
+     LF_INT_FIELD(matching.flow.descent_iterations)},
+    {"matching.flow_refine_iterations", KeyType::Int, 0, 100, false, Extra::None,
+     LF_INT_FIELD(matching.flow.refine_iterations)},
+    {"matching.flow_prior_track_step", KeyType::Int, 0, 256, false, Extra::None,
+     LF_INT_FIELD(matching.flow.prior_track_step)},
     {"matching.support_windows", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.support_window)},
     {"matching.const1", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const1)},
     {"matching.const2", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const2)},
@@ -230,7 +240,8 @@ std::vector<OptionKeyDescription> describe_option_keys() {
         case KeyType::String: d.type = "string"; break;
         }
         if (k.type != KeyType::String) d.bounds = bounds_text(k);
-        else if (is_key(k, "preset")) d.bounds = "default | balanced | fast";
+        else if (is_key(k, "preset")) d.bounds = "default | balanced | fast | realtime";
+        else if (is_key(k, "matching.method")) d.bounds = "patchmatch | decoupled";
         else if (is_key(k, "last_stage")) d.bounds = "matching | consistency | sparse | interpolation";
         else d.bounds = "a file path, or \"\"";
         if (k.type == KeyType::String) d.defaults = std::string("\"") + get_option_string(fresh, k) + "\"";
@@ -263,6 +274,8 @@ void set_option_string(OptionValues &values, const OptionKey &k, const std::stri
         values = preset_values(v, values);
     } else if (is_key(k, "last_stage")) {
         values.estimator.last_stage = pipeline::parse_stage(v);
+    } else if (is_key(k, "matching.method")) {
+        values.estimator.matching.method = matching::parse_match_method(v);
     } else {  // interpolation.sed_model
         interp::EdgeMapOptions &e = values.estimator.interpolation.edges;
         e.sed_model_path = v;
@@ -285,6 +298,7 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k) {
     if (k.type != KeyType::String) wrong_type(k, "lf_options_get_string");
     if (is_key(k, "preset")) return values.preset.c_str();
     if (is_key(k, "last_stage")) return pipeline::stage_name(values.estimator.last_stage);
+    if (is_key(k, "matching.method")) return matching::match_method_name(values.estimator.matching.method);
     return values.estimator.interpolation.edges.sed_model_path.c_str();
 }
 

@@ -487,8 +487,12 @@ RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : op
 
 InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
                                             const cv::Mat &image, const DisparityMap &geometry_hint,
-                                            const StereoCamera &camera, const SparseLidar &lidar1) const {
-    const InterpolationOptions &o = options_;
+                                            const StereoCamera &camera, const SparseLidar &lidar1,
+                                            int threads) const {
+    require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
+    InterpolationOptions this_call = options_;
+    if (threads > 0) this_call.num_threads = threads;
+    const InterpolationOptions &o = this_call;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
     validate_lidar(lidar1, image.size(), "t1 LiDAR");

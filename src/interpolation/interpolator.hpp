@@ -231,10 +231,11 @@ public:
     // only by the background model (rigid_ego_motion). Not validated beyond valid().
     // lidar1: D_l^1 points (may be empty; otherwise checked as lidar0), used only with LiDAR on
     // and a rigid background model (lidar1_from_background).
+    // threads: OpenMP threads of this call, 0 = options().num_threads (results do not depend on it).
     InterpolationResult run(const SceneFlowField &matches, const SparseLidar &lidar0, const cv::Mat &image,
                             const DisparityMap &geometry_hint = DisparityMap(),
                             const StereoCamera &camera = StereoCamera(),
-                            const SparseLidar &lidar1 = SparseLidar()) const;
+                            const SparseLidar &lidar1 = SparseLidar(), int threads = 0) const;
 
     const InterpolationOptions &options() const { return options_; }
 

@@ -7,6 +7,16 @@
 
 namespace lidarflow::matching {
 
+const char *match_method_name(MatchMethod m) {
+    return m == MatchMethod::Decoupled ? "decoupled" : "patchmatch";
+}
+
+MatchMethod parse_match_method(const std::string &name) {
+    for (MatchMethod m : {MatchMethod::PatchMatch, MatchMethod::Decoupled})
+        if (name == match_method_name(m)) return m;
+    throw Error(ErrorCode::InvalidArgument, "unknown matching method '" + name + "' (patchmatch, decoupled)");
+}
+
 const char *variant_name(MatchVariant v) {
     switch (v) {
     case MatchVariant::ImageOnly: return "im-only";
@@ -62,6 +72,16 @@ void MatchingOptions::validate() const {
     check(std::isfinite(const2_rel) && const2_rel >= 0, "const2_rel must be >= 0");
     check(strip_rows >= 1, "strip_rows must be >= 1");
     check(threads >= 1 && threads <= 1024, "threads must be in [1, 1024]");
+    check(method == MatchMethod::PatchMatch || method == MatchMethod::Decoupled, "unknown method");
+    check(flow.finest_scale >= 0 && flow.finest_scale <= 8, "flow.finest_scale must be in [0, 8]");
+    check(flow.patch_size >= 2 && flow.patch_size <= 32, "flow.patch_size must be in [2, 32]");
+    check(flow.patch_stride >= 1 && flow.patch_stride < flow.patch_size,
+          "flow.patch_stride must be in [1, flow.patch_size)");
+    check(flow.descent_iterations >= 1 && flow.descent_iterations <= 200,
+          "flow.descent_iterations must be in [1, 200]");
+    check(flow.refine_iterations >= 0 && flow.refine_iterations <= 100,
+          "flow.refine_iterations must be in [0, 100]");
+    check(flow.prior_track_step >= 0 && flow.prior_track_step <= 256, "flow.prior_track_step must be in [0, 256]");
     check(use_lidar || (!support_window && !const1 && !const2),
           "support_window / const1 / const2 need use_lidar");
     check(support_window || (!const1 && !const2), "const1 / const2 act inside support windows: "

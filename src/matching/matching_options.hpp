@@ -47,6 +47,7 @@
 //    10.24 -> 10.79), so it is not the default.
 //    Image-only matching is unaffected by both (no LiDAR case, no LiDAR rule).
 #include <cstdint>
+#include <string>
 
 #include "features/dense_sift.hpp"
 #include "matching/cost_cases.hpp"
@@ -54,12 +55,35 @@
 
 namespace lidarflow::matching {
 
+// Stage 1's design: the paper's joint 4-D PatchMatch over dense SIFT (scene_flow_matcher.hpp),
+// or stereo and flow searched apart (decoupled_matcher.hpp), which presets choose for speed.
+enum class MatchMethod { PatchMatch, Decoupled };
+// "patchmatch", "decoupled"; parse_match_method throws Error(InvalidArgument) for another name.
+const char *match_method_name(MatchMethod m);
+MatchMethod parse_match_method(const std::string &name);
+
+// Dense inverse search (OpenCV DISOpticalFlow) of the decoupled design, at the stage's resolution.
+struct FlowSearchOptions {
+    int finest_scale = 1;        // pyramid level where the search stops (0 = full resolution)
+    int patch_size = 8;          // [px]
+    int patch_stride = 3;        // [px], < patch_size
+    int descent_iterations = 25; // inverse-compositional steps per patch and level
+    int refine_iterations = 5;   // variational refinement per level (0 = off)
+    // Start the search from the rigid motion of the dominant (static) scene, fitted to sparse
+    // tracks and the stereo disparities: DIS's coarse levels then need not find large motion
+    // of the near background on their own. The grid step of the tracks [px], 0 = off.
+    int prior_track_step = 0;
+};
+
 enum class MatchVariant { ImageOnly, ImLidar, ImLidarWin, ImLidarWinConst1, Full };
 
 // Name as in Table I ("im-only", "im+LiDAR", "im+LiDAR+win", ...).
 const char *variant_name(MatchVariant v);
 
 struct MatchingOptions {
+    MatchMethod method = MatchMethod::PatchMatch;
+    FlowSearchOptions flow;  // decoupled design only
+
     // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least
     // min_coarsest_height px high (and up to max_levels levels in total).
     int min_coarsest_height = 40;

@@ -8,6 +8,7 @@
 #include "consistency/consistency.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/threads.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -28,15 +29,15 @@ interp::InterpolationOptions interpolation_options(const EstimatorOptions &o) {
     return io;
 }
 
-consistency::ConsistencyOptions consistency_options(const EstimatorOptions &o) {
+consistency::ConsistencyOptions consistency_options(const EstimatorOptions &o, int threads) {
     consistency::ConsistencyOptions co = o.consistency;
-    co.threads = o.threads;
+    co.threads = threads;
     return co;
 }
 
-matching::MatchingOptions matching_options(const EstimatorOptions &o) {
+matching::MatchingOptions matching_options(const EstimatorOptions &o, int threads) {
     matching::MatchingOptions mo = o.matching;
-    mo.threads = o.threads;
+    mo.threads = threads;
     if (!o.use_lidar || !mo.use_lidar) {  // the im-only row of Table I: no LiDAR rule at all
         mo.use_lidar = false;
         mo.support_window = mo.const1 = mo.const2 = false;
@@ -108,7 +109,7 @@ void EstimatorOptions::validate() const {
     require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
             ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");
     lidar_visibility.validate();
-    matching_options(*this).validate();
+    matching_options(*this, threads).validate();
 }
 
 EstimatorOptions EstimatorOptions::preset(const std::string &name) {
@@ -140,7 +141,21 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.processing_scale = 0.7;
         return o;
     }
-    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast)");
+    if (name == "realtime") {
+        // Stage 1 decoupled (stereo and flow searched apart), every stage at 0.55 of the size.
+        o.matching.method = matching::MatchMethod::Decoupled;
+        o.processing_scale = 0.55;
+        // The reduced frame is DIS's finest level: it searches down to it itself.
+        o.matching.flow.finest_scale = 0;
+        // Variational refinement smooths flow across motion boundaries, where the round-trip
+        // check then cannot see the error.
+        o.matching.flow.refine_iterations = 0;
+        o.matching.flow.prior_track_step = 12;
+        // The backward field is dense: the round trip needs no search around its target.
+        o.consistency.fb_search_radius = 0;
+        return o;
+    }
+    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast, realtime)");
 }
 
 const SceneFlowField &EstimatorResult::output() const {
@@ -173,18 +188,24 @@ SparseLidar lidar_in_use(const EstimatorOptions &o, const SparseLidar &lidar) {
 
 EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) const {
     check_frame(input);
+    // Idle OpenMP workers must not spin while OpenCV's threads (stage 1, the next frame) or other
+    // processes need the CPUs, however run() ends.
+    struct ReleaseWorkers {
+        ~ReleaseWorkers() { release_openmp_workers(); }
+    } release_at_end;
+    const int threads = threads_for_now(options_.threads);
     // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
     const FrameInput frame{input.left0, input.right0, input.left1, input.right1,
                            lidar_in_use(options_, input.lidar0), lidar_in_use(options_, input.lidar1), input.camera};
-    if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache));
+    if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache, threads));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
-    if (size.width >= W && size.height >= H) return drop_stage_fields(run_native(frame, cache));
+    if (size.width >= W && size.height >= H) return drop_stage_fields(run_native(frame, cache, threads));
     auto t = Clock::now();
     const FrameInput small = downscale_frame(frame, size);
     const double t_down = seconds_since(t);
-    EstimatorResult r = drop_stage_fields(run_native(small, cache));
+    EstimatorResult r = drop_stage_fields(run_native(small, cache, threads));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
     for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
@@ -196,7 +217,7 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     return r;
 }
 
-EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cache) const {
+EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cache, int threads) const {
     const auto t_total = Clock::now();
     EstimatorResult r;
     r.last_stage = options_.last_stage;
@@ -205,11 +226,17 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     const SparseLidar &lidar0 = options_.use_lidar ? frame.lidar0 : no_lidar0;
     const SparseLidar &lidar1 = options_.use_lidar ? frame.lidar1 : no_lidar1;
 
+    if (options_.matching.method == matching::MatchMethod::Decoupled) {
+        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r);
+        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
+        r.total_seconds = seconds_since(t_total);
+        return r;
+    }
     // Stage 1. Descriptors are computed once and shared by both directions, and released before
     // stage 2: they are ~70 % of the peak RSS, and only the next frame needs (the cache's) t1 pair.
     {
         const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
-        matching::SceneFlowMatcher matcher(mi, matching_options(stage_options_), cache ? cache->t1_ : nullptr,
+        matching::SceneFlowMatcher matcher(mi, matching_options(stage_options_, threads), cache ? cache->t1_ : nullptr,
                                            cache ? std::move(cache->spare_) : nullptr);
         // The matcher holds the previous t1 pair when it reuses it; otherwise it is dead weight
         // now. A run that throws leaves the cache empty: nothing half-computed is reused.
@@ -236,21 +263,54 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
             return r;
         }
     }
+    release_openmp_workers();  // stage 2 starts with OpenCV's SGBM
 
+    run_stages_2_to_4(frame, lidar0, lidar1, DisparityMap(), threads, r);
+    r.total_seconds = seconds_since(t_total);
+    return r;
+}
+
+DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
+                                      StreamCache *cache, int threads, EstimatorResult &r) const {
+    const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
+    const bool both = options_.last_stage != Stage::Matching;
+    matching::DecoupledResult m = matching::match_decoupled(mi, matching_options(stage_options_, threads),
+                                                            stage_options_.consistency.sgm, frame.camera, both,
+                                                            cache ? cache->stereo_t1_.get() : nullptr);
+    if (cache) {
+        cache->last_reused_ = m.reused_t0;
+        auto next = std::make_shared<matching::DecoupledStereo>();
+        next->left = frame.left1.clone();
+        next->right = frame.right1.clone();
+        next->disparity = m.sgm1;
+        cache->stereo_t1_ = std::move(next);
+    }
+    r.timings.push_back({"matching_stereo", m.seconds_stereo});
+    r.timings.push_back({"matching_forward", m.seconds_forward});
+    r.forward = std::move(m.forward);
+    if (both) {
+        r.timings.push_back({"matching_backward", m.seconds_backward});
+        r.backward = std::move(m.backward);
+    }
+    return m.sgm0;
+}
+
+void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
+                                  const DisparityMap &sgm, int threads, EstimatorResult &r) const {
     // Stages 2-3.
     auto t = Clock::now();
-    consistency::ConsistencyResult c = consistency::run_consistency(r.forward, r.backward, frame.left0,
-                                                                     frame.right0, lidar0, consistency_options(stage_options_));
+    consistency::ConsistencyResult c =
+        sgm.empty() ? consistency::run_consistency(r.forward, r.backward, frame.left0, frame.right0, lidar0,
+                                                   consistency_options(stage_options_, threads))
+                    : consistency::run_consistency(r.forward, r.backward, sgm, lidar0,
+                                                   consistency_options(stage_options_, threads));
     r.after_sgm = std::move(c.after_sgm);
     r.after_fb = std::move(c.after_fb);
     r.sparse = std::move(c.sparse);
-    r.timings.push_back({"sgm", c.seconds.sgm});
+    if (sgm.empty()) r.timings.push_back({"sgm", c.seconds.sgm});
     r.timings.push_back({"consistency", seconds_since(t) - c.seconds.sgm - c.seconds.sparsify});
     r.timings.push_back({"sparsify", c.seconds.sparsify});
-    if (options_.last_stage <= Stage::Sparse) {
-        r.total_seconds = seconds_since(t_total);
-        return r;
-    }
+    if (options_.last_stage <= Stage::Sparse) return;
 
     // Stage 4 reads only the sparse matches and the SGM disparity: fields nobody keeps are
     // released first, so that stage 4's own memory reuses theirs instead of adding to it.
@@ -259,10 +319,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
     // Stage 4.
     t = Clock::now();
-    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1).dense;
+    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads).dense;
     r.timings.push_back({"interpolation", seconds_since(t)});
-    r.total_seconds = seconds_since(t_total);
-    return r;
 }
 
 }  // namespace lidarflow::pipeline

@@ -16,6 +16,7 @@
 #include "core/maps.hpp"
 #include "interpolation/interpolator.hpp"
 #include "lidar/visibility_filter.hpp"
+#include "matching/decoupled_matcher.hpp"
 #include "matching/matching_options.hpp"
 #include "matching/scene_flow_matcher.hpp"
 
@@ -116,6 +117,7 @@ public:
     void clear() {
         t1_.reset();
         spare_.reset();
+        stereo_t1_.reset();
     }
     // Whether the last run through this cache reused the previous frame's descriptors.
     bool last_reused() const { return last_reused_; }
@@ -124,6 +126,7 @@ private:
     friend class Estimator;
     std::shared_ptr<const matching::StereoFeatures> t1_;
     std::shared_ptr<matching::StereoFeatures> spare_;  // storage for the next t1 pair
+    std::shared_ptr<const matching::DecoupledStereo> stereo_t1_;  // decoupled design: t1 disparity
     bool last_reused_ = false;
 };
 
@@ -145,7 +148,15 @@ public:
     const EstimatorOptions &options() const { return options_; }
 
 private:
-    EstimatorResult run_native(const FrameInput &frame, StreamCache *cache) const;
+    // threads: this frame's OpenMP threads (core/threads.hpp).
+    EstimatorResult run_native(const FrameInput &frame, StreamCache *cache, int threads) const;
+    // Stages 2-4 on stage 1's fields (r.forward, r.backward); `sgm` is stage 2's reference
+    // disparity, or empty to compute it here.
+    void run_stages_2_to_4(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
+                           const DisparityMap &sgm, int threads, EstimatorResult &r) const;
+    // Stage 1 of the decoupled design (matching/decoupled_matcher.hpp); returns stage 2's SGM.
+    DisparityMap run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
+                               StreamCache *cache, int threads, EstimatorResult &r) const;
     // Empties every field but output() unless options_.keep_stage_fields.
     EstimatorResult drop_stage_fields(EstimatorResult r) const;
 

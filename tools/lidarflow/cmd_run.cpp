@@ -74,7 +74,7 @@ int run(int argc, char **argv) {
                {"no-lidar", false, "image-only pipeline (ignore the LiDAR inputs)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast"},
+               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
                {"id", true, "ID   frame id of the output files (default 000000)"},

@@ -1,0 +1,21 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+// How the estimator shares the machine with other processes (docs/ARCHITECTURE.md, "Threads").
+
+namespace lidarflow {
+
+// How many of `requested` OpenMP threads a frame should use now: the CPUs this process may run
+// on, less the tasks other processes keep runnable at this moment (the kernel's count in
+// /proc/loadavg), at least 1 and at most `requested`. A team larger than the idle CPUs makes
+// every barrier wait for a descheduled thread, so a shared machine ran 2 threads slower than 1.
+// Results never depend on it (every stage is deterministic for any thread count). Without
+// /proc it returns `requested`. Thread-safe; never throws.
+int threads_for_now(int requested);
+
+// Ends the calling thread's OpenMP worker pool when it is outside any parallel region, so that
+// its idle workers sleep (they exit) instead of spin-waiting for the next region (libgomp spins
+// for milliseconds by default, taking the CPUs from OpenCV's own threads and from other
+// processes). The next parallel region starts a new pool. Thread-safe; never throws.
+void release_openmp_workers();
+
+}  // namespace lidarflow

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: MIT
+#include "matching/decoupled_matcher.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "consistency/sgm_check.hpp"
+#include "core/error.hpp"
+#include "interpolation/ego_motion.hpp"
+
+namespace lidarflow::matching {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+cv::Mat gray(const cv::Mat &m) {
+    if (m.channels() == 1) return m;
+    cv::Mat g;
+    cv::cvtColor(m, g, m.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+    return g;
+}
+
+// The dominant rigid motion t0 -> t1, fitted to sparse tracks on a grid and the stereo
+// disparities at both ends (invalid when they support none).
+interp::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0,
+                                     const DisparityMap &d1, const StereoCamera &camera, int step, uint64_t seed) {
+    std::vector<cv::Point2f> from, to;
+    for (int y = step / 2; y < g0.rows; y += step)
+        for (int x = step / 2; x < g0.cols; x += step)
+            if (disparity_valid(d0(y, x))) from.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    if (from.size() < 16) return {};
+    std::vector<uchar> ok;
+    std::vector<float> err;
+    cv::calcOpticalFlowPyrLK(g0, g1, from, to, ok, err, cv::Size(15, 15), 4);
+    std::vector<float> xs, ys, d0s, d1s, us, vs;
+    for (size_t i = 0; i < from.size(); ++i) {
+        if (!ok[i]) continue;
+        const int tx = static_cast<int>(std::lround(to[i].x)), ty = static_cast<int>(std::lround(to[i].y));
+        if (tx < 0 || ty < 0 || tx >= g0.cols || ty >= g0.rows || !disparity_valid(d1(ty, tx))) continue;
+        xs.push_back(from[i].x);
+        ys.push_back(from[i].y);
+        d0s.push_back(d0(static_cast<int>(from[i].y), static_cast<int>(from[i].x)));
+        d1s.push_back(d1(ty, tx));
+        us.push_back(to[i].x - from[i].x);
+        vs.push_back(to[i].y - from[i].y);
+    }
+    interp::EgoMotionOptions eo;
+    eo.seed = static_cast<unsigned>(seed);
+    return camera.valid() ? interp::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
+                          : interp::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
+}
+
+// The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
+// has none; empty when m is invalid.
+cv::Mat2f rigid_flow(const interp::EgoMotion &m, const DisparityMap &d) {
+    if (!m.valid) return {};
+    cv::Mat2f prior(d.size());
+    for (int y = 0; y < d.rows; ++y) {
+        float last = -1.0f;
+        for (int x = 0; x < d.cols; ++x) {
+            if (disparity_valid(d(y, x))) last = d(y, x);
+            float d1 = 0, u = 0, v = 0;
+            if (last >= 0) m.predict(static_cast<float>(x), static_cast<float>(y), last, d1, u, v);
+            prior(y, x) = cv::Vec2f(std::isfinite(u) ? u : 0.0f, std::isfinite(v) ? v : 0.0f);
+        }
+    }
+    return prior;
+}
+
+cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o,
+                               cv::Mat2f initial = cv::Mat2f()) {
+    cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+    dis->setFinestScale(o.finest_scale);
+    dis->setPatchSize(o.patch_size);
+    dis->setPatchStride(o.patch_stride);
+    dis->setGradientDescentIterations(o.descent_iterations);
+    dis->setVariationalRefinementIterations(o.refine_iterations);
+    cv::Mat2f flow = std::move(initial);  // DIS starts from a given flow of the right size
+    dis->calc(from, to, flow);
+    return flow;
+}
+
+// One direction's 4-vectors: d0 from the reference pair's disparity (the LiDAR measurement where
+// there is one), (u, v) from the flow, d1 from the other pair's disparity at the flow target.
+SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const DisparityMap &target,
+                        const SparseLidar &lidar) {
+    const int h = flow.rows, w = flow.cols;
+    SceneFlowField f = SceneFlowField::zeros(w, h);
+    DisparityMap d0 = ref.clone();
+    if (!lidar.points.empty()) {
+        const DisparityMap measured = lidar.to_map();
+        measured.copyTo(d0, measured >= 0.0f);
+    }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const cv::Vec2f m = flow(y, x);
+            if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !disparity_valid(d0(y, x))) continue;
+            const int tx = static_cast<int>(std::lround(x + m[0])), ty = static_cast<int>(std::lround(y + m[1]));
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h || !disparity_valid(target(ty, tx))) continue;
+            f.u(y, x) = m[0];
+            f.v(y, x) = m[1];
+            f.d0(y, x) = d0(y, x);
+            f.d1(y, x) = target(ty, tx);
+            f.valid(y, x) = 1;
+            f.confidence(y, x) = 1.0f;
+        }
+    return f;
+}
+
+}  // namespace
+
+bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r) const {
+    auto same = [](const cv::Mat &a, const cv::Mat &b) {
+        return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+    };
+    return !disparity.empty() && same(left, l) && same(right, r);
+}
+
+DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,
+                                const StereoCamera &camera, bool backward, const DecoupledStereo *t0_reuse) {
+    opt.validate();
+    require(!in.left0.empty() && in.left0.size() == in.right0.size() && in.left0.size() == in.left1.size() &&
+                in.left0.size() == in.right1.size(),
+            ErrorCode::SizeMismatch, "decoupled matcher: the four images must be non-empty and of one size");
+    DecoupledResult r;
+    auto t = Clock::now();
+    r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0);
+    r.sgm0 = r.reused_t0 ? t0_reuse->disparity : consistency::compute_sgm_disparity(in.left0, in.right0, sgm);
+    r.sgm1 = consistency::compute_sgm_disparity(in.left1, in.right1, sgm);
+    r.seconds_stereo = seconds_since(t);
+
+    const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
+    const SparseLidar none0{in.left0.cols, in.left0.rows, {}}, none1{in.left1.cols, in.left1.rows, {}};
+    t = Clock::now();
+    interp::EgoMotion motion;
+    if (opt.flow.prior_track_step > 0)
+        motion = track_rigid_motion(g0, g1, r.sgm0, r.sgm1, camera, opt.flow.prior_track_step, opt.random_seed);
+    r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none0);
+    r.seconds_forward = seconds_since(t);
+    if (backward) {
+        t = Clock::now();
+        r.backward =
+            assemble(dense_inverse_search(g1, g0, opt.flow, rigid_flow(motion.valid ? motion.inverse() : motion, r.sgm1)), r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none1);
+        r.seconds_backward = seconds_since(t);
+    }
+    return r;
+}
+
+}  // namespace lidarflow::matching

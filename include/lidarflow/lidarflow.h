@@ -150,10 +150,10 @@ typedef struct lf_options lf_options_t;
  *                                                 and only for seeds whose cost is at most this
  *                                                 x their neighbours' mean (0 = off; default 1)
  *   "matching.descriptor_bits"  int 8 or 4   4: descriptors packed to 64 bytes (4-bit codes
- *                                            and a contrast byte; ~150 MiB less on KITTI
- *                                            pairs, KITTI SF within the seeds' spread, the
- *                                            synthetic scenes' textureless regions ~1 point
- *                                            worse; default 8)
+ *                                            and a contrast byte): less memory, but coarser
+ *                                            costs where textures are faint, so textureless
+ *                                            regions lose accuracy (docs/experiments/
+ *                                            speed-stage1.md); default 8
  *   "matching.max_flow"         float [1, 10000]
  *   "matching.max_disparity"    float [1, 10000]
  *   "matching.const2_abs"       float [0, 10000]

@@ -19,9 +19,8 @@ namespace {
 // 4-bit levels of a full-contrast descriptor: 180 * (q / 15)^2, rounded. Why these: a third of
 // all values are 0 and the density falls steeply (median ~10, 97th percentile ~130 on KITTI
 // and on the synthetic scenes), so levels spaced on the square root put the precision where
-// the values are. Mean squared error of full-contrast values (KITTI / synthetic images, in
-// squared 8-bit units): 8.7 / 11.6; 16 even levels 38 / 79; Lloyd-Max levels fitted to the
-// images 7.5 / 8.2, which were no better in final SF (docs/ARCHITECTURE.md, "Ninth round").
+// the values are: a quarter of the squared error of even levels, and fitted (Lloyd-Max) levels
+// were no better in final SF (docs/experiments/speed-stage1.md, 3f7256f).
 constexpr uint8_t kLevels4[16] = {0, 1, 3, 7, 13, 20, 29, 39, 51, 65, 80, 97, 115, 135, 157, 180};
 
 // 8-bit value -> code of its nearest level (the lower one on a tie).

@@ -38,24 +38,14 @@ struct InterpolationOptions {
     SuperpixelOptions superpixels; // region_size ~ sqrt(superpixel area)
     float edge_gain = 3.0f;        // geodesic step cost 1 + edge_gain * edge (>= 0)
     // K geodesic nearest matches per anchor (>= 1). The hypotheses are drawn from, and scored
-    // on, these K matches: after sparsification (~6 % of the pixels hold a match) 64 covered
-    // about four superpixels, too few to outvote a wrong cluster of matches in a hole. RIC, whose
-    // interpolation the paper's builds on, supports each superpixel with 150 matches at a
-    // denser input. Measured (final SF, means over seeds; K = 64 / 128 / 192 / 256 / 384):
-    // paper protocol seeds 1-8 10.99 / 10.08 / 9.79 / 9.76 / 9.70 %, Velodyne seeds 1-4 7.84 /
-    // 6.76 / 6.49 / 6.18 / 5.95 %, image-only seeds 1-4 15.53 / 14.55 / 14.33 / 14.15 / 13.97 %,
-    // synthetic frames 0-3 x seeds 1-4 9.49 / 8.64 / 8.31 / 8.16 / 8.36 %. 256 is where the
-    // paper protocol and the synthetic scenes stop improving; it costs ~0.1 s per KITTI pair.
+    // on, these K matches; at stage 3's ~6 % density fewer cover too few superpixels to outvote
+    // a wrong cluster of matches in a hole. 256 is where the paper protocol and the synthetic
+    // scenes stop improving (docs/experiments/accuracy.md, e20ce99).
     int num_neighbors = 256;
     // Neighbour weight exp(-geodesic / distance_sigma) in scoring and sampling (> 0) [px]. On the
-    // scale of the neighbourhood's extent: 256 neighbours at ~6 % density reach ~35-40 px, where
-    // 24 px left the outer half of them under a fifth of the weight, undoing part of what the
-    // wider neighbourhood bought. Measured with 256 neighbours (final SF, seed means; 24 / 36 /
-    // 48 px): paper protocol seeds 1-8 9.76 / 9.38 / 9.29 %, Velodyne seeds 1-4 6.18 / 5.97 /
-    // 5.95 %, image-only seeds 1-4 14.15 / 13.70 / 13.35 %, synthetic frames 0-3 x seeds 1-4
-    // 8.16 / 7.95 / 8.22 %. 36, not 48: at 48 far neighbours reach across motion boundaries, and
-    // the calibration-free background model took over part of the four-motion test scene
-    // (test_interpolation_background: SF 1.12 -> 4.25 % with it, 1.06 -> 1.45 % at 36).
+    // scale of the neighbourhood's extent (256 neighbours reach ~35-40 px); not wider, because
+    // far neighbours then reach across motion boundaries (test_interpolation_background;
+    // docs/experiments/accuracy.md, efd9efb).
     float distance_sigma = 36.0f;
     float disparity_inlier = 2.0f;  // robust-cost truncation for d0, d1 residuals [px] (> 0)
     float flow_inlier = 3.0f;       // robust-cost truncation for (u, v) end-point errors [px] (> 0)
@@ -65,15 +55,10 @@ struct InterpolationOptions {
     // LiDAR: anchor threshold [px] (distance LiDAR pixel - superpixel centre), tolerance of
     // the rejection test for d0 against the measurement and for (u, v) EPE / d1 against the
     // LiDAR match, and the weight of LiDAR seeds in the robust cost.
-    // The anchor distance: ~88 points lie ~55 px apart, so at 12 px (about the reach of a 16 px
-    // superpixel's own pixels) one point anchored one superpixel, and the result hung on which
-    // surfaces the points happened to hit. Measured over placements of the paper protocol's
-    // grids (`lidarflow kitti --placements 8 --seeds 2`, docs/ARCHITECTURE.md "LiDAR
-    // placement"), final SF at 12 / 18 / 24 / 36 px: 9.59 / 9.36 / 9.35 / 9.67 % (16 placements,
-    // seed 1: 9.55 / 9.31 / 9.38 %); at the paper's placement (seeds 1-8) 8.59 -> 8.47 % at 18;
-    // demo scenes' hard regions 30.1 -> 29.5 %; Velodyne (every superpixel has points within
-    // 12 px) unchanged. 18, the plateau's near end: the further an anchor reaches, the likelier
-    // it crosses a depth edge (36 px loses; the 640x192 synthetic frames lose 0.06 points at 18).
+    // The anchor distance: ~88 points lie ~55 px apart, so a point should anchor more than the
+    // one superpixel it falls in; 18 px is the near end of the plateau measured over placements
+    // of the paper protocol's grids (the further an anchor reaches, the likelier it crosses a
+    // depth edge; docs/experiments/lidar-placement.md, 433a3f9).
     float lidar_anchor_distance = 18.0f;
     float lidar_disparity_tolerance = 1.0f;
     float lidar_match_tolerance = 2.0f;
@@ -81,9 +66,8 @@ struct InterpolationOptions {
     // Anchor the motion models (u, v, d1) on LiDAR matches too (the paper's rule). Off by
     // default: a LiDAR match's motion is an image match like any other (a real scan has no
     // t1 counterpart at all), and anchoring a superpixel on it rejects every hypothesis that
-    // disagrees with one possibly wrong match. Measured with stage-3 matches, SF mean of
-    // KITTI 000002/3: paper LiDAR 11.03 -> 10.85 %, Velodyne 10.18 -> 8.37 %; synthetic
-    // street 7.22 -> 6.97 %. The geometry (d0) anchors are unaffected.
+    // disagrees with one possibly wrong match: off was better on both KITTI protocols and the
+    // synthetic scene (docs/experiments/accuracy.md). The geometry (d0) anchors are unaffected.
     bool lidar_motion_anchors = false;
     // Pixels may take an adjacent superpixel's model when their nearest matches support it
     // clearly better (thin structures inside coarse superpixels).
@@ -95,16 +79,13 @@ struct InterpolationOptions {
     bool d1_from_change = true;
     // Fit the dominant rigid motion (ego-motion; interpolation/ego_motion.hpp) to all matches
     // and interpolate only what it does not explain; d1, u, v then follow the dense d0 into
-    // match-free regions. Falls back to d1_from_change when no dominant motion is found.
-    // Measured (bench_interpolation --sparse): exact on GT-valued matches (KITTI 000002/3 SF
-    // 18.0 -> 10.1 %); on real stage-3 matches a smaller gain, limited where the matches lie
-    // only on distant surfaces (forward translation then barely separable from rotation
-    // without the camera; see rigid_ego_motion).
+    // match-free regions. Falls back to d1_from_change when no dominant motion is found. Its
+    // gain is limited where the matches lie only on distant surfaces (forward translation then
+    // barely separable from rotation without the camera; see rigid_ego_motion).
     bool ego_motion = true;
     // With a valid camera passed to run(), fit the rigid motion instead (ego_motion.hpp,
-    // fit_rigid_ego_motion); the calibration-free model otherwise. Measured (stage-3
-    // matches, paper LiDAR, SF mean of KITTI 000002/3): 12.26 -> 11.96 %; synthetic street
-    // 10.03 -> 7.30 %.
+    // fit_rigid_ego_motion); the calibration-free model otherwise (the camera separates
+    // forward translation from rotation).
     bool rigid_ego_motion = true;
     // In the ego-motion fit, a LiDAR pixel's match is triangulated with the measured d0
     // instead of its matched one.
@@ -112,16 +93,14 @@ struct InterpolationOptions {
     // With a valid ego-motion, "no remainder" (the superpixel moves with the background) is a
     // hypothesis of the d1 and flow models, its robust cost scaled by background_preference
     // (in (0, 1]; < 1 favours it where the seeds around are ambiguous, e.g. a few outliers).
-    // Measured as above: 11.96 -> 11.80 % (KITTI), 7.30 -> 7.21 % (synthetic). Stronger
-    // preferences help KITTI more (0.3: 10.0 %) but paint independently moving objects with
-    // few matches (the synthetic textureless van) with the background motion (0.3: 10.6 %).
+    // Kept mild: stronger preferences paint independently moving objects with few matches
+    // (the synthetic textureless van) with the background motion.
     bool background_hypothesis = true;
     float background_preference = 0.9f;
     // With a valid ego-motion: matches whose point the other matches hide at t1 (at the pixel
     // the background model predicts) get the background motion, as their d1 / flow were
     // matched on the occluder: d1 when hidden in the right view and the flow is static;
     // d1 and flow when hidden in the left view and the model is the rigid one (camera given).
-    // Measured on KITTI 000002/3 (stage-3 matches, paper LiDAR): SF 11.80 -> 11.03 %.
     // occlusion_margin [px] (> 0): how much nearer the occluder must be (and >= 10 %).
     bool occlusion_reasoning = true;
     float occlusion_margin = 2.0f;
@@ -129,11 +108,7 @@ struct InterpolationOptions {
     // model, and by its own interpolated flow too, takes the background's d1 and flow. No match
     // can exist for it, so its model is extrapolated from matches that stay in the image; the
     // second condition leaves objects that the matches show staying in view (a car driven
-    // alongside) to their own model. Measured (kitti --seeds, final SF, off -> on): paper LiDAR
-    // seeds 1-8 11.50 -> 10.99 %, seeds 1-4 11.57 -> 11.05 %; Velodyne seeds 1-4 8.63 -> 7.84 %;
-    // image-only seeds 1-4 15.74 -> 15.53 %; synthetic frames 0-3 unchanged (nothing leaves).
-    // Asking only the background (not the model too) gave the same; also moving pixels the
-    // background brings to within 5 px of the border: 10.95 % (seeds 1-4), not kept.
+    // alongside) to their own model (docs/experiments/accuracy.md, b85f504).
     bool exits_follow_background = true;
     // With a valid rigid ego-motion (camera given): a match whose flow the background explains
     // (end-point residual < static_flow_tolerance) is a static point, and a static point's d1
@@ -144,10 +119,8 @@ struct InterpolationOptions {
     // by delta scales the t1 position about the principal point by delta / d1, i.e. shifts it
     // by r * delta / d1 at r px from the principal point; the rule applies only where that
     // shift, for the match's own d1 discrepancy, is at least static_d1_discrimination px (a
-    // car ahead, near the principal point, keeps its measured d1). Measured (kitti --seeds,
-    // final SF, off -> on): paper protocol seeds 1-8 9.38 -> 9.08 % (8.62 / 10.14 -> 8.37 /
-    // 9.79; D1 7.07 / 8.45 -> 6.83 / 8.20); Velodyne seeds 1-4 4.17 -> 4.06 %; image-only seeds
-    // 1-4 13.70 -> 13.57 %; synthetic 640x192 frames 0-3 x seeds 1-4 7.95 -> 7.95 %.
+    // car ahead, near the principal point, keeps its measured d1; docs/experiments/accuracy.md,
+    // 1dd4a99).
     bool static_d1_from_background = true;
     float static_flow_tolerance = 1.5f;     // [px] (> 0)
     float static_d1_discrimination = 2.0f;  // [px] (>= 0; 0 = no guard)
@@ -160,12 +133,9 @@ struct InterpolationOptions {
     // differs from the point's by more than max(3 px, lidar1_relative_tolerance x its d0)
     // (another surface). Where nothing is near (the holes where it helps most) nothing
     // contradicts it: a textureless object that moves on its own without a match or t0 point
-    // near is taken as static. A t0 measurement on the same pixel wins. Measured (kitti --seeds, final SF, off -> on): paper protocol seeds 1-4
-    // 9.07 -> 8.64 %; synthetic 640x192 frames 0-3 x seeds 1-4 7.95 -> 7.73 % (with 5000 LiDAR
-    // points 7.89 -> 7.58 %, seeds 1-2). Without the check 8.62 / 7.79 %, without the depth
-    // test 8.63 / 7.73 %; a 3 px depth test 8.81 %: the matches LiDAR corrects disagree too.
-    // Seeds 1-8: 9.08 -> 8.59 % (8.37 / 9.79 -> 7.74 / 9.43). Demo scenes 1-4 x seeds 1-3: SF
-    // 7.72 -> 7.67 %, hard regions 30.4 -> 30.1 % (scene 2's textureless moving box worse).
+    // near is taken as static. A t0 measurement on the same pixel wins. The depth test is
+    // relative because a fixed 3 px one also rejects the matches LiDAR corrects
+    // (docs/experiments/accuracy.md, 7222f65).
     bool lidar1_from_background = true;
     int lidar1_check_radius = 10;           // [px] half side of the checked window (>= 0)
     float lidar1_relative_tolerance = 0.2f; // (> 0)

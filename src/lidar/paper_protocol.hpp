@@ -61,8 +61,9 @@ struct PaperProtocolOptions {
     // Shift of both grids against the paper's origin (grid_spec), as a fraction of the step in
     // [0, 1) per axis, rounded to whole pixels. The paper fixes one placement; with ~88 points it
     // decides which surfaces get a measurement at all, and on the shared KITTI frames a shift of
-    // one pixel moves the final SF by about as much as a change of method (docs/ARCHITECTURE.md,
-    // "LiDAR placement"), so other placements tell how much a result owes to that one draw.
+    // one pixel moves the final SF by about as much as a change of method
+    // (docs/experiments/lidar-placement.md), so other placements tell how much a result owes
+    // to that one draw.
     cv::Point2d phase{0, 0};
     DewarpOptions dewarp;
 };

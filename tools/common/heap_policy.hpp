@@ -6,7 +6,7 @@
 // glibc serves blocks above its mmap threshold (at most 32 MiB, adjusted at run time) from fresh
 // mappings and trims the top of its heaps past the trim threshold, so every frame faults in and
 // zeroes ~50-100 MB of pages again; on the KVM/PVM machines measured that was a third of the
-// `bench_pipeline` system time and ~15 % of a streamed frame (docs/ARCHITECTURE.md, "Speed").
+// `bench_pipeline` system time and ~15 % of a streamed frame (docs/experiments/speed-stage1.md).
 // Keeping freed memory in the process reuses those pages for the next frame, at the price of
 // ~40-50 MiB more resident memory. The library itself never changes the allocator of the
 // process that embeds it: an application chooses, e.g. with the same values in GLIBC_TUNABLES.

@@ -18,8 +18,9 @@
 //    Error(LF_ERR_OUT_OF_MEMORY); allocations of this header throw std::bad_alloc. As in the C
 //    ABI, a call that throws leaves its object unchanged and usable.
 //  - Handles are RAII: Options and Estimator own their lf_* handle, are movable but not
-//    copyable, and free it in their destructor. A moved-from object holds no handle; calling
-//    anything but the destructor, assignment or get() on it throws Error(LF_ERR_INVALID_ARGUMENT).
+//    copyable, and free it in their destructor. A moved-from object holds no handle: the
+//    destructor, move assignment, get() and release() (null), and Estimator::has_result()
+//    (false) work on it; everything else throws Error(LF_ERR_INVALID_ARGUMENT).
 //  - Results are copies that the caller owns (std::vector, or cv::Mat with OpenCV): they stay
 //    valid after the estimator moves on or is destroyed. Only ResultViews borrows (see there).
 //  - Invalid values are NaN: where the latest result is not valid (sparse stages, see
@@ -48,7 +49,8 @@
 //    lidarflow::Options opt = lidarflow::Options::preset("fast");
 //    opt.set("threads", 4);
 //    lidarflow::Estimator est(lidarflow::Calibration::read_kitti(cam_to_cam, velo_to_cam), opt);
-//    est.push(0, left0, right0, lidarflow::LidarView::points_lidar(scan0, n0, 16));   // cv::Mat
+//    // left0 ... right1: cv::Mat (8-bit gray or BGR); scan0: N x 4 float KITTI records
+//    est.push(0, left0, right0, lidarflow::LidarView::points_lidar(scan0, n0, 16));
 //    est.push(100000, left1, right1);
 //    cv::Mat flow = est.flow();            // CV_32FC2
 //    cv::writeOpticalFlow("flow.flo", flow);
@@ -66,7 +68,16 @@
 #include <utility>
 #include <vector>
 
+// lidarflow.h is C: its inline helpers use C casts, which C++ warnings such as -Wold-style-cast
+// would report in every program that includes this header.
+#if defined(__GNUC__)
+#  pragma GCC diagnostic push
+#  pragma GCC diagnostic ignored "-Wold-style-cast"
+#endif
 #include "lidarflow/lidarflow.h"
+#if defined(__GNUC__)
+#  pragma GCC diagnostic pop
+#endif
 
 #if !defined(LIDARFLOW_USE_OPENCV)
 #  if defined(__has_include)
@@ -186,7 +197,7 @@ public:
 
     // Sets `key` to `value`, chosen by the value's C++ type: bool -> 0/1 (switches), integers
     // -> lf_options_set_int (integer, switch and float keys), float/double ->
-    // lf_options_set_float, strings (std::string, const char *, string literals) ->
+    // lf_options_set_float, strings (std::string, std::string_view, const char *) ->
     // lf_options_set_string. Returns *this, so calls chain: opt.set("threads", 4).set(...).
     // Throws Error(LF_ERR_INVALID_ARGUMENT) for an unknown key, a value of the wrong type,
     // NaN/inf or a value out of bounds (the message names the key and the accepted range);
@@ -204,8 +215,13 @@ public:
             }
         } else if constexpr (std::is_floating_point_v<T>) {
             return set_float(key, static_cast<double>(value));
+        } else if constexpr (std::is_convertible_v<const T &, const char *>) {
+            const char *text = value;
+            detail::require(text != nullptr, LF_ERR_INVALID_ARGUMENT,
+                            "lidarflow: Options::set: null string for option '" + key + "'");
+            return set_string(key, text);
         } else {
-            static_assert(std::is_convertible_v<const T &, std::string>,
+            static_assert(std::is_constructible_v<std::string, const T &>,
                           "Options::set takes bool, integers, floating point or strings");
             return set_string(key, std::string(value));
         }

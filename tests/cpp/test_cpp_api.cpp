@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "capi_scene.h"
@@ -101,6 +102,11 @@ void test_options(void **) {
     assert_string_equal(o.get_string("last_stage").c_str(), "sparse");
     o.set("last_stage", std::string("matching"));
     assert_string_equal(o.get_string("last_stage").c_str(), "matching");
+    o.set("last_stage", std::string_view("consistency"));
+    assert_string_equal(o.get_string("last_stage").c_str(), "consistency");
+    expect_error([&] { o.set("last_stage", static_cast<const char *>(nullptr)); }, LF_ERR_INVALID_ARGUMENT,
+                 "last_stage", "null string");
+    assert_string_equal(o.get_string("last_stage").c_str(), "consistency");
     o.set_int("matching.iterations", 5).set_float("processing_scale", 0.5).set_string("interpolation.sed_model", "");
     assert_int_equal(o.get_int("matching.iterations"), 5);
     assert_true(o.get_float("processing_scale") == 0.5);

@@ -9,8 +9,9 @@
 # run the full pipeline on a synthetic scene and must write exactly the result `lidarflow run`
 # writes for the same input and settings (same KITTI PNG bytes). The C++ header lidarflow.hpp
 # compiles alone and with OpenCV, and the C++ example (examples/cpp) is built with pkg-config and
-# with CMake and writes its .flo. The installed tools must start without LD_LIBRARY_PATH, and the
-# installed LCM types must compile.
+# with CMake and writes its .flo (also for KITTI 000002/000003 when LIDARFLOW_KITTI_DIR names
+# them). The installed tools must start without LD_LIBRARY_PATH, and the installed LCM types
+# must compile.
 #   install_check.sh prefix|deb BUILD SRC WORK CLI HARNESS
 set -euo pipefail
 mode="$1"; build="$2"; src="$3"; work="$4"; cli="$5"; harness="$6"
@@ -91,6 +92,13 @@ for exe in "$work/cpp_example_pc" "$work/cpp-cmake-build/lidarflow_flow"; do
         { cat "$work/cpp_example.log"; echo "$exe: no true motion or no synthetic.flo"; exit 1; }
     echo "$exe: wrote $out/synthetic.flo with the true motion"
 done
+# With the shared KITTI frames (LIDARFLOW_KITTI_DIR), the installed-tree example runs them too.
+if [ -d "${LIDARFLOW_KITTI_DIR:-}" ]; then
+    out="$work/cpp-kitti-out"
+    LD_LIBRARY_PATH="$libdir" "$work/cpp-cmake-build/lidarflow_flow" --root "$LIDARFLOW_KITTI_DIR" --threads 2 \
+        --out "$out" || { echo "C++ example on $LIDARFLOW_KITTI_DIR failed"; exit 1; }
+    [ -s "$out/000002_10.flo" ] && [ -s "$out/000003_10.flo" ] || { echo "C++ example wrote no KITTI .flo"; exit 1; }
+fi
 
 # Only the C ABI is exported.
 so="$(find "$prefix" -name 'liblidarflow.so.*' -type f | head -1)"

@@ -49,8 +49,8 @@
 //    lidarflow::Options opt = lidarflow::Options::preset("fast");
 //    opt.set("threads", 4);
 //    lidarflow::Estimator est(lidarflow::Calibration::read_kitti(cam_to_cam, velo_to_cam), opt);
-//    // left0 ... right1: cv::Mat (8-bit gray or BGR); scan0: N x 4 float KITTI records
-//    est.push(0, left0, right0, lidarflow::LidarView::points_lidar(scan0, n0, 16));
+//    // left0 ... right1: cv::Mat (8-bit gray or BGR); scan0: N x 4 CV_32F KITTI Velodyne records
+//    est.push(0, left0, right0, lidarflow::LidarView::from_mat(lidarflow::LidarKind::points_lidar, scan0));
 //    est.push(100000, left1, right1);
 //    cv::Mat flow = est.flow();            // CV_32FC2
 //    cv::writeOpticalFlow("flow.flo", flow);

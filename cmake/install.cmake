@@ -21,7 +21,8 @@ install(TARGETS lidarflow EXPORT lidarflowTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime NAMELINK_COMPONENT dev
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(FILES include/lidarflow/lidarflow.h
+# lidarflow.hpp: the header-only C++ API over lidarflow.h (nothing of it is in the library).
+install(FILES include/lidarflow/lidarflow.h include/lidarflow/lidarflow.hpp
               ${CMAKE_CURRENT_BINARY_DIR}/include/lidarflow/lidarflow_version.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lidarflow COMPONENT dev)
 install(EXPORT lidarflowTargets NAMESPACE lidarflow::

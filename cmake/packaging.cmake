@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 # Debian packages (CPack DEB), one per install component (cmake/install.cmake):
 #   liblidarflow0          runtime   the C ABI library (named for its SONAME, Debian policy 8.1)
-#   liblidarflow-dev       dev       headers, liblidarflow.so, CMake package, pkg-config file
+#   liblidarflow-dev       dev       headers (C, header-only C++), liblidarflow.so, CMake package, pkg-config file
 #   lidarflow-tools        tools     lidarflow, lidarflow-lcm-bridge
 #   lidarflow-lcm-types    lcm       .lcm definitions, generated C and C++ types
 #   python3-lidarflow      python    the pure-Python binding and lidarflow_lcm in /usr/lib/python3/dist-packages
@@ -106,7 +106,7 @@ endif()
 _lf_deb_component(runtime liblidarflow0 libs any "dense scene flow from stereo and sparse LiDAR - library"
   "This package holds the shared library with the C ABI.")
 _lf_deb_component(dev liblidarflow-dev libdevel any "dense scene flow from stereo and sparse LiDAR - development files"
-  "This package holds the C header, the CMake package (find_package(lidarflow))\nand the pkg-config file.")
+  "This package holds the C header, the header-only C++17 API (lidarflow.hpp,\nwith optional OpenCV cv::Mat support), the CMake package\n(find_package(lidarflow)) and the pkg-config file.")
 _lf_deb_component(tools lidarflow-tools science any "dense scene flow from stereo and sparse LiDAR - tools"
   "This package holds the command-line program lidarflow and the LCM bridge\nlidarflow-lcm-bridge.")
 _lf_deb_component(python python3-lidarflow python all "dense scene flow from stereo and sparse LiDAR - Python 3"

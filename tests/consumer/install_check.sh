@@ -7,8 +7,11 @@
 #           exits 77 (skipped) when dpkg-deb, dpkg-shlibdeps or cpack are missing
 # In both: consumer.c is built with pkg-config and with CMake find_package(lidarflow); both
 # run the full pipeline on a synthetic scene and must write exactly the result `lidarflow run`
-# writes for the same input and settings (same KITTI PNG bytes). The installed tools must start
-# without LD_LIBRARY_PATH, and the installed LCM types must compile.
+# writes for the same input and settings (same KITTI PNG bytes). The C++ header lidarflow.hpp
+# compiles alone and with OpenCV, and the C++ example (examples/cpp) is built with pkg-config and
+# with CMake and writes its .flo (also for KITTI 000002/000003 when LIDARFLOW_KITTI_DIR names
+# them). The installed tools must start without LD_LIBRARY_PATH, and the installed LCM types
+# must compile.
 #   install_check.sh prefix|deb BUILD SRC WORK CLI HARNESS
 set -euo pipefail
 mode="$1"; build="$2"; src="$3"; work="$4"; cli="$5"; harness="$6"
@@ -55,6 +58,47 @@ cc -std=c99 -Wall -Wextra -Werror -pedantic "$src/consumer.c" -o "$work/consumer
    $(pkg-config --cflags --libs lidarflow)
 cmake -S "$src" -B "$work/cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
 cmake --build "$work/cmake-build" >/dev/null
+
+# The C++ API (lidarflow.hpp, header-only): the installed header compiles with strict warnings
+# on its own (pkg-config's flags only) and with OpenCV (its headers as system headers, so that
+# only lidarflow.hpp's warnings count).
+cat > "$work/hpp_only.cpp" <<'CPP'
+#include <lidarflow/lidarflow.hpp>
+int main() { return lidarflow::abi_major() == LF_ABI_MAJOR && !LIDARFLOW_USE_OPENCV ? 0 : 1; }
+CPP
+strict=(-std=c++17 -Wall -Wextra -Wshadow -Wconversion -Wsign-conversion -Wold-style-cast -pedantic -Werror)
+c++ "${strict[@]}" "$work/hpp_only.cpp" -o "$work/hpp_only" $(pkg-config --cflags --libs lidarflow)
+LD_LIBRARY_PATH="$libdir" "$work/hpp_only" || { echo "lidarflow.hpp alone: wrong ABI or OpenCV detected"; exit 1; }
+cat > "$work/hpp_opencv.cpp" <<'CPP'
+#include <lidarflow/lidarflow.hpp>
+int main() { return lidarflow::ImageView::from_mat(cv::Mat(2, 3, CV_8UC3)).width == 3 ? 0 : 1; }
+CPP
+c++ "${strict[@]}" "$work/hpp_opencv.cpp" -o "$work/hpp_opencv" \
+    $(pkg-config --cflags-only-I opencv4 | sed 's/-I/-isystem /g') $(pkg-config --cflags --libs lidarflow) \
+    $(pkg-config --libs opencv4)
+LD_LIBRARY_PATH="$libdir" "$work/hpp_opencv" || { echo "lidarflow.hpp with OpenCV failed"; exit 1; }
+# The C++ example (examples/cpp: lidarflow.hpp and OpenCV) built with pkg-config and with CMake
+# find_package(lidarflow); both write the synthetic scene's flow with cv::writeOpticalFlow, read
+# it back, and find the true motion.
+c++ -std=c++17 -Wall -Wextra "$root/examples/cpp/lidarflow_flow.cpp" -o "$work/cpp_example_pc" \
+    $(pkg-config --cflags --libs lidarflow opencv4)
+cmake -S "$root/examples/cpp" -B "$work/cpp-cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build "$work/cpp-cmake-build" >/dev/null
+for exe in "$work/cpp_example_pc" "$work/cpp-cmake-build/lidarflow_flow"; do
+    out="$work/$(basename "$exe")-out"
+    LD_LIBRARY_PATH="$libdir" "$exe" --out "$out" > "$work/cpp_example.log" ||
+        { cat "$work/cpp_example.log"; echo "$exe failed"; exit 1; }
+    grep -q "mean flow u 4.00 px (truth 4)" "$work/cpp_example.log" && [ -s "$out/synthetic.flo" ] ||
+        { cat "$work/cpp_example.log"; echo "$exe: no true motion or no synthetic.flo"; exit 1; }
+    echo "$exe: wrote $out/synthetic.flo with the true motion"
+done
+# With the shared KITTI frames (LIDARFLOW_KITTI_DIR), the installed-tree example runs them too.
+if [ -d "${LIDARFLOW_KITTI_DIR:-}" ]; then
+    out="$work/cpp-kitti-out"
+    LD_LIBRARY_PATH="$libdir" "$work/cpp-cmake-build/lidarflow_flow" --root "$LIDARFLOW_KITTI_DIR" --threads 2 \
+        --out "$out" || { echo "C++ example on $LIDARFLOW_KITTI_DIR failed"; exit 1; }
+    [ -s "$out/000002_10.flo" ] && [ -s "$out/000003_10.flo" ] || { echo "C++ example wrote no KITTI .flo"; exit 1; }
+fi
 
 # Only the C ABI is exported.
 so="$(find "$prefix" -name 'liblidarflow.so.*' -type f | head -1)"
@@ -138,8 +182,9 @@ if [ "$mode" = prefix ]; then
     # Debian's python3 (with python3-numpy) first, as on a fresh bookworm machine.
     (cd "$user" && HOME="$user/home" PATH="/usr/bin:/bin:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
         > "$work/readme_install.log" 2>&1 || { cat "$work/readme_install.log"; echo "README install commands failed"; exit 1; }
-    # capi_example twice (pkg-config, CMake), python_example once: each with the true motion.
-    [ "$(grep -c "mean flow u 4.00 px (truth 4)" "$work/readme_install.log")" -eq 2 ] &&
+    # capi_example twice (pkg-config, CMake), python_example once: each with the true motion
+    # (the C++ example's line, should the README run it too, says "(C++)" and is not counted).
+    [ "$(grep "mean flow u 4.00 px (truth 4)" "$work/readme_install.log" | grep -vc "(C++)")" -eq 2 ] &&
         grep -q "mean u 4.00 px (truth 4)" "$work/readme_install.log" ||
         { cat "$work/readme_install.log"; echo "README examples did not print the true motion"; exit 1; }
     echo "README install commands: ok"

@@ -1,0 +1,457 @@
+// SPDX-License-Identifier: MIT
+// The header-only C++ API (include/lidarflow/lidarflow.hpp) against the shared library, seeing
+// only the public headers: errors (status and message), options by key and presets, a run on
+// the synthetic scene of the C suites (copies, views, 3-D, the C ABI's own copy), NaN holes of a
+// sparse stage, and, with OpenCV, cv::Mat in (gray, BGR, any stride) and out. Built twice: with
+// OpenCV (test_cpp_api) and with LIDARFLOW_USE_OPENCV=0 (test_cpp_api_no_opencv).
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "capi_scene.h"
+#include "lidarflow/lidarflow.hpp"
+
+// cmocka last: its fail() macro must not meet the standard library's or OpenCV's headers.
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+// cmocka 1.1 has no extern "C" guard of its own.
+extern "C" {
+#include <cmocka.h>
+}
+
+namespace lf = lidarflow;
+
+namespace {
+
+constexpr int W = 160, H = 64, D = 10, TU = 3, TV = 1;
+
+// Runs `call`, which must throw lf::Error with `status` and a message containing `needle`.
+template <typename F>
+void expect_error(F &&call, int32_t status, const char *needle, const char *what) {
+    try {
+        call();
+    } catch (const lf::Error &e) {
+        if (e.status() != status) fail_msg("%s: status %d (%s), expected %d", what, e.status(), e.what(), status);
+        if (std::strstr(e.what(), needle) == nullptr) fail_msg("%s: message '%s' lacks '%s'", what, e.what(), needle);
+        assert_string_equal(e.status_string(), lf_status_string(status));
+        const std::runtime_error &base = e;  // catchable as the standard type
+        assert_string_equal(base.what(), e.what());
+        return;
+    }
+    fail_msg("%s: no lidarflow::Error thrown", what);
+}
+
+struct Scene {
+    scene_t s{};
+    std::vector<float> lidar;  // (x, y, d) triples
+    Scene() {
+        if (!scene_make(&s, W, H, D, TU, TV, 7)) fail_msg("out of memory");
+        lidar.resize(3 * static_cast<std::size_t>((W / 16 + 1) * (H / 16 + 1)));
+        lidar.resize(3 * scene_lidar(&s, 16, lidar.data()));
+    }
+    ~Scene() { scene_free(&s); }
+    Scene(const Scene &) = delete;
+    Scene &operator=(const Scene &) = delete;
+    lf::Calibration calibration() const { return lf::Calibration::from_c(scene_calibration(&s)); }
+    lf::ImageView image(const uint8_t *p) const { return lf::ImageView::gray8(p, W, H); }
+};
+
+// The options of the C suites' quick runs (capi_scene.h), optionally stopping at `stage`.
+lf::Options scene_options(const char *stage = nullptr) {
+    lf::Options o;
+    o.set("matching.min_coarsest_height", 16).set("threads", 2);
+    if (stage != nullptr) o.set("last_stage", stage);
+    return o;
+}
+
+void push_pair(lf::Estimator &e, const Scene &sc) {
+    const lf::LidarView lidar = lf::LidarView::from_vector(lf::LidarKind::disparity, sc.lidar);
+    e.push(0, sc.image(sc.s.left0), sc.image(sc.s.right0), lidar);
+    e.push(100000, sc.image(sc.s.left1), sc.image(sc.s.right1), lidar);
+}
+
+bool same_bits(const std::vector<float> &a, const std::vector<float> &b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+void test_version(void **) {
+    assert_string_equal(lf::version_string().c_str(), LF_VERSION_STRING);
+    assert_int_equal(lf::version_number(), LF_VERSION_NUMBER);
+    assert_int_equal(lf::abi_major(), LF_ABI_MAJOR);
+    assert_string_equal(lf::status_string(LF_ERR_NOT_READY), lf_status_string(LF_ERR_NOT_READY));
+}
+
+void test_options(void **) {
+    lf::Options o;
+    assert_int_equal(o.get_int("threads"), 1);
+    o.set("threads", 3).set("interpolation.distance_sigma", 12.5).set("use_lidar", false);
+    assert_int_equal(o.get_int("threads"), 3);
+    assert_true(o.get_float("interpolation.distance_sigma") == 12.5);
+    assert_int_equal(o.get_int("use_lidar"), 0);
+    o.set("interpolation.distance_sigma", 20);  // an integer sets a float key
+    assert_true(o.get_float("interpolation.distance_sigma") == 20.0);
+    o.set("matching.max_flow", 300.0f).set("matching.grid_step", std::size_t{4}).set("use_lidar", 1L);
+    assert_true(o.get_float("matching.max_flow") == 300.0);
+    assert_int_equal(o.get_int("matching.grid_step"), 4);
+    assert_int_equal(o.get_int("use_lidar"), 1);
+    o.set("last_stage", "sparse");
+    assert_string_equal(o.get_string("last_stage").c_str(), "sparse");
+    o.set("last_stage", std::string("matching"));
+    assert_string_equal(o.get_string("last_stage").c_str(), "matching");
+    o.set("last_stage", std::string_view("consistency"));
+    assert_string_equal(o.get_string("last_stage").c_str(), "consistency");
+    expect_error([&] { o.set("last_stage", static_cast<const char *>(nullptr)); }, LF_ERR_INVALID_ARGUMENT,
+                 "last_stage", "null string");
+    assert_string_equal(o.get_string("last_stage").c_str(), "consistency");
+    o.set_int("matching.iterations", 5).set_float("processing_scale", 0.5).set_string("interpolation.sed_model", "");
+    assert_int_equal(o.get_int("matching.iterations"), 5);
+    assert_true(o.get_float("processing_scale") == 0.5);
+
+    // Presets: "fast" changes the stage keys and keeps "threads"; a later preset resets them.
+    o.set("preset", "fast");
+    assert_int_equal(o.get_int("threads"), 3);
+    assert_int_equal(o.get_int("matching.grid_step"), 6);
+    assert_true(o.get_float("processing_scale") == 0.7);
+    assert_int_equal(o.get_int("matching.iterations"), 3);
+    lf::Options fast = lf::Options::preset("fast");
+    assert_int_equal(fast.get_int("matching.grid_step"), 6);
+    assert_int_equal(fast.get_int("threads"), 1);
+    lf::Options balanced = lf::Options::preset("balanced");
+    assert_int_equal(balanced.get_int("matching.thin_from_level"), 1);
+    assert_int_equal(balanced.get_int("matching.backward_grid_step"), 6);
+    assert_string_equal(balanced.get_string("preset").c_str(), "balanced");
+    lf::Options defaults;
+    o.set("preset", "default");
+    assert_int_equal(o.get_int("matching.grid_step"), defaults.get_int("matching.grid_step"));
+
+    // Errors carry the status and the C ABI's message; the options stay unchanged.
+    expect_error([&] { o.set("no.such_key", 1); }, LF_ERR_INVALID_ARGUMENT, "no.such_key", "unknown key");
+    expect_error([&] { o.set("threads", 0); }, LF_ERR_INVALID_ARGUMENT, "threads", "out of range");
+    assert_int_equal(o.get_int("threads"), 3);
+    expect_error([&] { o.set("threads", "four"); }, LF_ERR_INVALID_ARGUMENT, "threads", "string for an int");
+    expect_error([&] { o.set("matching.max_flow", std::nan("")); }, LF_ERR_INVALID_ARGUMENT, "max_flow", "NaN");
+    expect_error([&] { o.set("threads", UINT64_MAX); }, LF_ERR_INVALID_ARGUMENT, "threads", "huge unsigned");
+    expect_error([&] { o.get_int("last_stage"); }, LF_ERR_INVALID_ARGUMENT, "last_stage", "int of a string key");
+    expect_error([] { lf::Options::preset("fastest"); }, LF_ERR_INVALID_ARGUMENT, "fastest", "unknown preset");
+    assert_int_equal(o.get_int("threads"), 3);
+
+    // Moves hand the handle over; a moved-from object throws and is safe to destroy.
+    lf::Options moved(std::move(o));
+    assert_int_equal(moved.get_int("threads"), 3);
+    assert_null(o.get());  // NOLINT(bugprone-use-after-move): testing the moved-from state
+    expect_error([&] { o.set("threads", 2); }, LF_ERR_INVALID_ARGUMENT, "", "moved-from options");
+    o = std::move(moved);
+    assert_int_equal(o.get_int("threads"), 3);
+    lf_options_t *raw = o.release();
+    assert_non_null(raw);
+    assert_null(o.get());
+    lf_options_destroy(raw);
+}
+
+void test_errors(void **) {
+    Scene sc;
+    // Creation: a calibration outside lidarflow.h's ranges.
+    lf::Calibration bad = sc.calibration();
+    bad.fx = 0;
+    expect_error([&] { lf::Estimator e(bad); }, LF_ERR_INVALID_ARGUMENT, "fx", "fx = 0");
+    lf::Options inconsistent;
+    inconsistent.set("matching.support_windows", 0).set("matching.const1", 1);
+    expect_error([&] { lf::Estimator e(sc.calibration(), inconsistent); }, LF_ERR_INVALID_ARGUMENT, "const1",
+                 "const1 without support windows");
+    expect_error([] { lf::Calibration::read_kitti("/nonexistent/calib_cam_to_cam.txt"); }, LF_ERR_IO,
+                 "/nonexistent/calib_cam_to_cam.txt", "missing calibration");
+
+    lf::Estimator e(sc.calibration(), scene_options("matching"));
+    assert_false(e.has_result());
+    expect_error([&] { e.result(); }, LF_ERR_NOT_READY, "", "result before a push");
+    expect_error([&] { e.info(); }, LF_ERR_NOT_READY, "", "info before a push");
+    expect_error([&] { e.points3d(); }, LF_ERR_NOT_READY, "", "points3d before a push");
+    expect_error([&] { e.views(); }, LF_ERR_NOT_READY, "", "views before a push");
+    // Sizes that disagree, timestamps that do not increase, LiDAR the calibration cannot place.
+    expect_error([&] { e.push(0, sc.image(sc.s.left0), lf::ImageView::gray8(sc.s.right0, W - 1, H)); },
+                 LF_ERR_SIZE_MISMATCH, "", "left/right sizes");
+    expect_error([&] { e.push(0, lf::ImageView::gray8(sc.s.left0, W, H, W - 1), sc.image(sc.s.right0)); },
+                 LF_ERR_SIZE_MISMATCH, "stride", "stride below a row");
+    const float point[3] = {1.0f, 0.5f, 10.0f};
+    expect_error([&] { e.push(0, sc.image(sc.s.left0), sc.image(sc.s.right0), lf::LidarView::points_lidar(point, 1)); },
+                 LF_ERR_INVALID_ARGUMENT, "lidar_to_camera", "points_lidar without extrinsics");
+    expect_error([] { lf::LidarView::from_vector(lf::LidarKind::disparity, std::vector<float>(4)); },
+                 LF_ERR_SIZE_MISMATCH, "multiple of 3", "LiDAR vector size");
+    e.push(1000, sc.image(sc.s.left0), sc.image(sc.s.right0));
+    expect_error([&] { e.push(1000, sc.image(sc.s.left1), sc.image(sc.s.right1)); }, LF_ERR_INVALID_ARGUMENT,
+                 "timestamp", "timestamp not increasing");
+    const lf::ImageView half_l = lf::ImageView::gray8(sc.s.left1, W / 2, H, W),
+                        half_r = lf::ImageView::gray8(sc.s.right1, W / 2, H, W);
+    expect_error([&] { e.push(2000, half_l, half_r); },
+                 LF_ERR_SIZE_MISMATCH, "", "size differs from the previous frame");
+    assert_false(e.has_result());  // failed pushes changed nothing: still one frame
+    e.push(2000, sc.image(sc.s.left1), sc.image(sc.s.right1));
+    assert_true(e.has_result());
+    e.reset();
+    assert_false(e.has_result());
+    expect_error([&] { e.result(); }, LF_ERR_NOT_READY, "", "result after reset");
+
+    // A moved-from estimator throws, reports no result, and is safe to destroy or reassign.
+    lf::Estimator moved(std::move(e));
+    assert_null(e.get());  // NOLINT(bugprone-use-after-move)
+    assert_false(e.has_result());
+    expect_error([&] { e.push(0, sc.image(sc.s.left0), sc.image(sc.s.right0)); }, LF_ERR_INVALID_ARGUMENT, "",
+                 "push on a moved-from estimator");
+    lf::Options moved_from;
+    lf::Options taker(std::move(moved_from));
+    expect_error([&] { lf::Estimator x(sc.calibration(), moved_from); }, LF_ERR_INVALID_ARGUMENT, "moved-from",
+                 "moved-from options");
+    e = std::move(moved);
+    assert_non_null(e.get());
+
+#if LIDARFLOW_USE_OPENCV
+    const cv::Mat gray16(H, W, CV_16UC1, cv::Scalar(0)), bgra(H, W, CV_8UC4, cv::Scalar(0));
+    expect_error([&] { e.push(0, gray16, gray16); }, LF_ERR_INVALID_ARGUMENT, "CV_16UC1", "16-bit image");
+    expect_error([&] { e.push(0, bgra, bgra); }, LF_ERR_INVALID_ARGUMENT, "CV_8UC4", "4-channel image");
+    expect_error([&] { e.push(0, cv::Mat(), cv::Mat()); }, LF_ERR_INVALID_ARGUMENT, "non-empty", "empty image");
+    expect_error([] { lf::LidarView::from_mat(lf::LidarKind::disparity, cv::Mat(5, 2, CV_32FC1)); },
+                 LF_ERR_INVALID_ARGUMENT, "columns", "2-column LiDAR Mat");
+    expect_error([] { lf::LidarView::from_mat(lf::LidarKind::disparity, cv::Mat(5, 3, CV_64FC1)); },
+                 LF_ERR_INVALID_ARGUMENT, "CV_64FC1", "double LiDAR Mat");
+    lf::Result partial;
+    partial.info.width = W;
+    partial.info.height = H;
+    expect_error([&] { partial.flow_mat(); }, LF_ERR_INVALID_ARGUMENT, "u and v", "flow of a result without u, v");
+#endif
+}
+
+void test_dense_run(void **) {
+    Scene sc;
+    lf::Estimator e(sc.calibration(), scene_options());
+    push_pair(e, sc);
+    assert_true(e.has_result());
+
+    const lf::ResultInfo info = e.info();
+    assert_int_equal(info.width, W);
+    assert_int_equal(info.height, H);
+    assert_true(info.last_stage == lf::Stage::interpolation);
+    assert_int_equal(info.t0_us, 0);
+    assert_int_equal(info.t1_us, 100000);
+    assert_true(info.total_seconds > 0);
+    assert_true(!info.timings.empty());
+    for (const lf::Timing &t : info.timings) {
+        assert_true(!t.name.empty());
+        assert_true(t.seconds >= 0);
+    }
+
+    // The copies equal the C ABI's own copy bit for bit (dense: valid everywhere, no NaN).
+    const lf::Result r = e.result();
+    scene_result_t c;
+    assert_int_equal(scene_result_fetch(e.get(), &c), LF_OK);
+    const std::size_t n = std::size_t{W} * H;
+    assert_int_equal(r.u.size(), n);
+    assert_int_equal(r.valid.size(), n);
+    assert_memory_equal(r.u.data(), c.u, n * 4);
+    assert_memory_equal(r.v.data(), c.v, n * 4);
+    assert_memory_equal(r.d0.data(), c.d0, n * 4);
+    assert_memory_equal(r.d1.data(), c.d1, n * 4);
+    assert_memory_equal(r.confidence.data(), c.confidence, n * 4);
+    assert_memory_equal(r.valid.data(), c.valid, n);
+    assert_true(scene_result_accuracy(&c, TU, TV, D) > 0.9);
+    scene_result_free(&c);
+    std::size_t good = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        assert_int_equal(r.valid[i], 1);
+        good += std::fabs(r.u[r.index(static_cast<uint32_t>(i % W), static_cast<uint32_t>(i / W))] - TU) < 1;
+    }
+    assert_true(good > 0.9 * n);
+
+    // Only the planes asked for.
+    const lf::Result only_d0 = e.result(lf::Estimator::plane_d0);
+    assert_true(same_bits(only_d0.d0, r.d0));
+    assert_true(only_d0.u.empty() && only_d0.v.empty() && only_d0.d1.empty() && only_d0.confidence.empty() &&
+                only_d0.valid.empty());
+
+    // Borrowed views: the same values, in place.
+    const lf::ResultViews v = e.views();
+    assert_int_equal(v.width, W);
+    assert_int_equal(v.height, H);
+    for (uint32_t y = 0; y < H; y += 7)
+        for (uint32_t x = 0; x < W; x += 5) {
+            assert_true(lf::ResultViews::at(v.u, x, y) == r.u[r.index(x, y)]);
+            assert_true(lf::ResultViews::at(v.d1, x, y) == r.d1[r.index(x, y)]);
+            assert_int_equal(lf::ResultViews::at_u8(v.valid, x, y), 1);
+        }
+
+    // 3-D: Z = fx * baseline / d0 on valid pixels.
+    const lf::Points3d p = e.points3d();
+    assert_int_equal(p.points.size(), 3 * n);
+    assert_int_equal(p.motion.size(), 3 * n);
+    std::size_t valid3d = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (p.valid[i] == 0) continue;
+        ++valid3d;
+        assert_true(std::fabs(p.points[3 * i + 2] - 50.0f / r.d0[i]) < 1e-3f * p.points[3 * i + 2]);
+        assert_true(std::isfinite(p.motion[3 * i]));
+    }
+    assert_true(valid3d > 0.9 * n);
+
+#if LIDARFLOW_USE_OPENCV
+    const cv::Mat flow = e.flow(), d0 = e.disparity0(), d1 = e.disparity1(), conf = e.confidence(),
+                  mask = e.valid_mask(), pts = e.points(), mot = e.motion();
+    assert_int_equal(flow.type(), CV_32FC2);
+    assert_int_equal(d0.type(), CV_32FC1);
+    assert_int_equal(d1.type(), CV_32FC1);
+    assert_int_equal(conf.type(), CV_32FC1);
+    assert_int_equal(mask.type(), CV_8UC1);
+    assert_int_equal(pts.type(), CV_32FC3);
+    assert_int_equal(mot.type(), CV_32FC3);
+    assert_true(flow.rows == H && flow.cols == W && pts.rows == H && pts.cols == W);
+    assert_int_equal(cv::countNonZero(mask == 255), W * H);
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+            const std::size_t i = r.index(x, y);
+            const cv::Vec2f f = flow.at<cv::Vec2f>(static_cast<int>(y), static_cast<int>(x));
+            assert_true(f[0] == r.u[i] && f[1] == r.v[i]);
+            assert_true(d0.at<float>(static_cast<int>(y), static_cast<int>(x)) == r.d0[i]);
+            assert_true(d1.at<float>(static_cast<int>(y), static_cast<int>(x)) == r.d1[i]);
+            assert_true(conf.at<float>(static_cast<int>(y), static_cast<int>(x)) == r.confidence[i]);
+            const cv::Vec3f q = pts.at<cv::Vec3f>(static_cast<int>(y), static_cast<int>(x));
+            assert_memory_equal(&q[0], &p.points[3 * i], 3 * sizeof(float));
+        }
+    // Copies: they outlive the estimator's next result.
+    e.reset();
+    assert_true(flow.at<cv::Vec2f>(0, 0)[0] == r.u[0]);
+#endif
+}
+
+void test_nan_holes(void **) {
+    Scene sc;
+    lf::Estimator e(sc.calibration(), scene_options("sparse"));
+    push_pair(e, sc);
+    const lf::Result r = e.result();
+    assert_true(r.info.last_stage == lf::Stage::sparse);
+    const lf::ResultViews raw = e.views();
+    const lf::Points3d p = e.points3d();
+    std::size_t holes = 0, valid = 0;
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+            const std::size_t i = r.index(x, y);
+            if (r.valid[i] != 0) {
+                ++valid;
+                assert_true(std::isfinite(r.u[i]) && std::isfinite(r.v[i]) && std::isfinite(r.d0[i]) &&
+                            std::isfinite(r.d1[i]));
+                continue;
+            }
+            ++holes;
+            assert_true(std::isnan(r.u[i]) && std::isnan(r.v[i]) && std::isnan(r.d0[i]) && std::isnan(r.d1[i]));
+            assert_true(r.confidence[i] == 0.0f);
+            // The C ABI's own values there are 0; the views show them as they are.
+            assert_true(lf::ResultViews::at(raw.u, x, y) == 0.0f && lf::ResultViews::at(raw.d0, x, y) == 0.0f);
+            assert_int_equal(p.valid[i], 0);
+            assert_true(std::isnan(p.points[3 * i]) && std::isnan(p.motion[3 * i + 2]));
+        }
+    assert_true(holes > 0);
+    assert_true(valid > 0);
+
+#if LIDARFLOW_USE_OPENCV
+    const cv::Mat flow = e.flow(), d0 = e.disparity0(), d1 = e.disparity1(), mask = e.valid_mask(), pts = e.points();
+    cv::Mat nan_u(H, W, CV_8UC1), nan_d0(H, W, CV_8UC1), nan_d1(H, W, CV_8UC1), nan_pts(H, W, CV_8UC1);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const cv::Vec2f f = flow.at<cv::Vec2f>(y, x);
+            assert_true(std::isnan(f[0]) == std::isnan(f[1]));
+            nan_u.at<uint8_t>(y, x) = std::isnan(f[0]) ? 0 : 255;
+            nan_d0.at<uint8_t>(y, x) = std::isnan(d0.at<float>(y, x)) ? 0 : 255;
+            nan_d1.at<uint8_t>(y, x) = std::isnan(d1.at<float>(y, x)) ? 0 : 255;
+            nan_pts.at<uint8_t>(y, x) = std::isnan(pts.at<cv::Vec3f>(y, x)[0]) ? 0 : 255;
+        }
+    assert_int_equal(cv::countNonZero(nan_u != mask), 0);
+    assert_int_equal(cv::countNonZero(nan_d0 != mask), 0);
+    assert_int_equal(cv::countNonZero(nan_d1 != mask), 0);
+    assert_int_equal(cv::countNonZero(mask), static_cast<int>(valid));
+    assert_int_equal(cv::countNonZero(nan_pts & ~mask), 0);  // no point where the result is a hole
+#endif
+}
+
+// Equivalent inputs give bit-identical results: strided raw buffers, LiDAR from a Mat, cv::Mat
+// ROIs and continuous Mats, BGR Mats and BGR raw buffers.
+void test_inputs(void **) {
+    Scene sc;
+    auto run = [&](auto &&push) {
+        lf::Estimator e(sc.calibration(), scene_options("matching"));
+        push(e);
+        return e.result();
+    };
+    const lf::Result ref = run([&](lf::Estimator &e) { push_pair(e, sc); });
+
+    // Raw gray buffers with a stride of W + 13 bytes.
+    const int stride = W + 13;
+    std::vector<uint8_t> l0(stride * H), r0(stride * H), l1(stride * H), r1(stride * H);
+    for (int y = 0; y < H; ++y) {
+        std::memcpy(&l0[y * stride], sc.s.left0 + y * W, W);
+        std::memcpy(&r0[y * stride], sc.s.right0 + y * W, W);
+        std::memcpy(&l1[y * stride], sc.s.left1 + y * W, W);
+        std::memcpy(&r1[y * stride], sc.s.right1 + y * W, W);
+    }
+    const lf::LidarView lidar = lf::LidarView::disparities(sc.lidar.data(), sc.lidar.size() / 3);
+    const lf::Result strided = run([&](lf::Estimator &e) {
+        e.push(0, lf::ImageView::gray8(l0.data(), W, H, stride), lf::ImageView::gray8(r0.data(), W, H, stride), lidar);
+        e.push(100000, lf::ImageView::gray8(l1.data(), W, H, stride), lf::ImageView::gray8(r1.data(), W, H, stride),
+               lidar);
+    });
+    assert_true(same_bits(strided.u, ref.u) && same_bits(strided.d1, ref.d1) && strided.valid == ref.valid);
+
+#if LIDARFLOW_USE_OPENCV
+    // ROIs of larger Mats (not continuous), LiDAR as an N x 4 Mat (KITTI-like records).
+    auto mat = [&](const uint8_t *p) { return cv::Mat(H, W, CV_8UC1, const_cast<uint8_t *>(p)); };
+    auto roi = [&](const uint8_t *p) {
+        cv::Mat big(H + 9, W + 21, CV_8UC1, cv::Scalar(77));
+        mat(p).copyTo(big(cv::Rect(11, 5, W, H)));
+        return cv::Mat(big(cv::Rect(11, 5, W, H)));
+    };
+    cv::Mat records(static_cast<int>(sc.lidar.size() / 3), 4, CV_32FC1, cv::Scalar(0.25f));
+    for (int i = 0; i < records.rows; ++i)
+        for (int k = 0; k < 3; ++k) records.at<float>(i, k) = sc.lidar[3 * static_cast<std::size_t>(i) + k];
+    const cv::Mat L0 = roi(sc.s.left0), R0 = roi(sc.s.right0), L1 = roi(sc.s.left1), R1 = roi(sc.s.right1);
+    assert_false(L0.isContinuous());
+    const lf::LidarView mat_lidar = lf::LidarView::from_mat(lf::LidarKind::disparity, records);
+    assert_int_equal(mat_lidar.stride_bytes, 16);
+    const lf::Result from_roi = run([&](lf::Estimator &e) {
+        e.push(0, L0, R0, mat_lidar);
+        e.push(100000, L1, R1, mat_lidar);
+    });
+    assert_true(same_bits(from_roi.u, ref.u) && same_bits(from_roi.v, ref.v) && same_bits(from_roi.d0, ref.d0) &&
+                from_roi.valid == ref.valid);
+
+    // BGR: an ROI of a BGR Mat and the same pixels as a packed raw BGR buffer.
+    auto bgr_roi = [&](const uint8_t *p) {
+        cv::Mat g = mat(p), planes[3] = {g, (g + 40) / 2, 255 - g}, bgr, big(H + 4, W + 6, CV_8UC3, cv::Scalar::all(0));
+        cv::merge(planes, 3, bgr);
+        bgr.copyTo(big(cv::Rect(3, 2, W, H)));
+        return cv::Mat(big(cv::Rect(3, 2, W, H)));
+    };
+    const cv::Mat B0 = bgr_roi(sc.s.left0), C0 = bgr_roi(sc.s.right0), B1 = bgr_roi(sc.s.left1),
+                  C1 = bgr_roi(sc.s.right1);
+    const lf::Result bgr = run([&](lf::Estimator &e) {
+        e.push(0, B0, C0, lidar);
+        e.push(100000, B1, C1, lidar);
+    });
+    assert_int_equal(bgr.info.width, W);
+    const cv::Mat P0 = B0.clone(), Q0 = C0.clone(), P1 = B1.clone(), Q1 = C1.clone();
+    const lf::Result bgr_raw = run([&](lf::Estimator &e) {
+        e.push(0, lf::ImageView::bgr8(P0.data, W, H), lf::ImageView::bgr8(Q0.data, W, H), lidar);
+        e.push(100000, lf::ImageView::bgr8(P1.data, W, H), lf::ImageView::bgr8(Q1.data, W, H), lidar);
+    });
+    assert_true(same_bits(bgr.u, bgr_raw.u) && same_bits(bgr.d0, bgr_raw.d0) && bgr.valid == bgr_raw.valid);
+#endif
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_version), cmocka_unit_test(test_options),  cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_dense_run), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -133,6 +133,8 @@ const OptionKey kKeys[] = {
      LF_INT_FIELD(interpolation.initial_hypotheses)},
     {"interpolation.random_hypotheses", KeyType::Int, 0, 10000, false, Extra::None,
      LF_INT_FIELD(interpolation.random_hypotheses)},
+    {"interpolation.ego_hypotheses", KeyType::Int, 1, 100000, false, Extra::None,
+     LF_INT_FIELD(interpolation.ego.hypotheses)},
     {"interpolation.edge_gain", KeyType::Float, 0, kBig, false, Extra::None, LF_FLOAT_FIELD(interpolation.edge_gain)},
     {"interpolation.distance_sigma", KeyType::Float, 0, kBig, true, Extra::None,
      LF_FLOAT_FIELD(interpolation.distance_sigma)},

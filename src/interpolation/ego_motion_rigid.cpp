@@ -81,7 +81,9 @@ struct Data {
     void errors(const Rigid &m, int i, double &e_d, double &e_f) const {
         const Prediction p = project(m, cam, x[i], y[i], d0[i]);
         e_d = std::fabs(p.d1 - d1[i]);
-        e_f = std::hypot(p.xp - x[i] - u[i], p.yp - y[i] - v[i]);
+        // sqrt, not hypot: residuals are finite and far from overflow, and this is RANSAC's inner loop.
+        const double ex = p.xp - x[i] - u[i], ey = p.yp - y[i] - v[i];
+        e_f = std::sqrt(ex * ex + ey * ey);
     }
 
     // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.

@@ -59,7 +59,7 @@ struct Seeds {
         is_hint.push_back(hint);
     }
     // How far seed i moves on its own, beyond the background motion (its flow remainder).
-    float own_flow(int i) const { return std::hypot(zu[i], zv[i]); }
+    float own_flow(int i) const { return std::sqrt(zu[i] * zu[i] + zv[i] * zv[i]); }
     // A LiDAR d0 measurement at (px, py): it replaces the d0 of a match on the same pixel (the
     // measurement is exact, the matched d0 is not) or becomes a seed of its own. False, and
     // nothing changed, when a LiDAR measurement already holds the pixel: the first one wins.

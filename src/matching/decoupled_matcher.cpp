@@ -9,6 +9,7 @@
 
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
 #include "interpolation/ego_motion.hpp"
 
 namespace lidarflow::matching {
@@ -56,19 +57,24 @@ interp::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const
 }
 
 // The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
-// has none; empty when m is invalid.
+// has none; empty when m is invalid. DIS reads an initial flow only on its coarsest level, so it
+// is predicted on a 2 px grid and resized.
 cv::Mat2f rigid_flow(const interp::EgoMotion &m, const DisparityMap &d) {
     if (!m.valid) return {};
-    cv::Mat2f prior(d.size());
-    for (int y = 0; y < d.rows; ++y) {
+    constexpr int kStep = 2;
+    cv::Mat2f coarse((d.rows + kStep - 1) / kStep, (d.cols + kStep - 1) / kStep);
+    for (int y = 0; y < d.rows; y += kStep) {
         float last = -1.0f;
         for (int x = 0; x < d.cols; ++x) {
             if (disparity_valid(d(y, x))) last = d(y, x);
+            if (x % kStep) continue;
             float d1 = 0, u = 0, v = 0;
             if (last >= 0) m.predict(static_cast<float>(x), static_cast<float>(y), last, d1, u, v);
-            prior(y, x) = cv::Vec2f(std::isfinite(u) ? u : 0.0f, std::isfinite(v) ? v : 0.0f);
+            coarse(y / kStep, x / kStep) = cv::Vec2f(std::isfinite(u) ? u : 0.0f, std::isfinite(v) ? v : 0.0f);
         }
     }
+    cv::Mat2f prior;
+    cv::resize(coarse, prior, d.size(), 0, 0, cv::INTER_LINEAR);
     return prior;
 }
 
@@ -112,6 +118,21 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
     return f;
 }
 
+// a() and b() side by side on two threads when `threads` allows (one after the other otherwise):
+// OpenCV's own parallel loops leave cores idle on images this small. Rethrows the first error.
+template <class A, class B>
+void side_by_side(int threads, A &&a, B &&b) {
+    ParallelErrors errors;
+#pragma omp parallel sections num_threads(threads >= 2 ? 2 : 1)
+    {
+#pragma omp section
+        errors.run(a);
+#pragma omp section
+        errors.run(b);
+    }
+    errors.rethrow_if_any();
+}
+
 }  // namespace
 
 bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r) const {
@@ -130,24 +151,33 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     DecoupledResult r;
     auto t = Clock::now();
     r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0);
-    r.sgm0 = r.reused_t0 ? t0_reuse->disparity : consistency::compute_sgm_disparity(in.left0, in.right0, sgm);
-    r.sgm1 = consistency::compute_sgm_disparity(in.left1, in.right1, sgm);
+    if (r.reused_t0) r.sgm0 = t0_reuse->disparity;
+    side_by_side(
+        opt.threads, [&] { r.sgm1 = consistency::compute_sgm_disparity(in.left1, in.right1, sgm); },
+        [&] {
+            if (!r.reused_t0) r.sgm0 = consistency::compute_sgm_disparity(in.left0, in.right0, sgm);
+        });
     r.seconds_stereo = seconds_since(t);
 
-    const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
-    const SparseLidar none0{in.left0.cols, in.left0.rows, {}}, none1{in.left1.cols, in.left1.rows, {}};
     t = Clock::now();
+    const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
     interp::EgoMotion motion;
     if (opt.flow.prior_track_step > 0)
         motion = track_rigid_motion(g0, g1, r.sgm0, r.sgm1, camera, opt.flow.prior_track_step, opt.random_seed);
-    r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none0);
-    r.seconds_forward = seconds_since(t);
-    if (backward) {
-        t = Clock::now();
-        r.backward =
-            assemble(dense_inverse_search(g1, g0, opt.flow, rigid_flow(motion.valid ? motion.inverse() : motion, r.sgm1)), r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none1);
-        r.seconds_backward = seconds_since(t);
-    }
+    const SparseLidar none{in.left0.cols, in.left0.rows, {}};
+    side_by_side(
+        opt.threads,
+        [&] {
+            r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1,
+                                 opt.use_lidar ? in.lidar0 : none);
+        },
+        [&] {
+            if (!backward) return;
+            const interp::EgoMotion back = motion.valid ? motion.inverse() : motion;
+            r.backward = assemble(dense_inverse_search(g1, g0, opt.flow, rigid_flow(back, r.sgm1)), r.sgm1, r.sgm0,
+                                  opt.use_lidar ? in.lidar1 : none);
+        });
+    r.seconds_flow = seconds_since(t);
     return r;
 }
 

@@ -42,6 +42,7 @@ constexpr double kMaxSeed53 = 9007199254740992.0;  // 2^53: exact as a double
 const OptionKey kKeys[] = {
     // general
     {"threads", KeyType::Int, 1, 256, false, Extra::None, LF_INT_FIELD(threads)},
+    {"adaptive_threads", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(adaptive_threads)},
     {"preset", KeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     {"use_lidar", KeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
     {"processing_scale", KeyType::Float, 0.125, 1, false, Extra::None, LF_FLOAT_FIELD(processing_scale)},

@@ -111,7 +111,9 @@ static inline lf_options_t *scene_options(int threads) {
     lf_options_t *o = NULL;
     if (lf_options_create(&o) != LF_OK) return NULL;
     if (lf_options_set_int(o, "matching.min_coarsest_height", 16) != LF_OK ||
-        lf_options_set_int(o, "threads", threads) != LF_OK) {
+        lf_options_set_int(o, "threads", threads) != LF_OK ||
+        /* the count asked for, however busy the machine: suites compare thread counts */
+        lf_options_set_int(o, "adaptive_threads", 0) != LF_OK) {
         lf_options_destroy(o);
         return NULL;
     }

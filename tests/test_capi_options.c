@@ -313,15 +313,28 @@ static void test_named_presets(void **state) {
     assert_true(get_number(o, "processing_scale") == 1.0);
     assert_true(get_number(o, "matching.thin_from_level") != get_number(fresh, "matching.thin_from_level"));
 
+    /* realtime: the decoupled stage 1 (a string key of its own), at a reduced size. */
+    assert_int_equal(lf_options_set_string(o, "preset", "realtime"), LF_OK);
+    const char *method = NULL;
+    assert_int_equal(lf_options_get_string(o, "matching.method", &method), LF_OK);
+    assert_string_equal(method, "decoupled");
+    assert_true(get_number(o, "processing_scale") < 1.0);
+    assert_int_equal(lf_options_set_string(o, "matching.method", "patchmatch"), LF_OK);
+    assert_int_equal(lf_options_get_string(o, "matching.method", &method), LF_OK);
+    assert_string_equal(method, "patchmatch");
+    assert_int_equal(lf_options_set_string(o, "matching.method", "sgm"), LF_ERR_INVALID_ARGUMENT);
+    assert_int_equal(lf_options_get_string(o, "matching.method", &method), LF_OK);
+    assert_string_equal(method, "patchmatch"); /* a refused value changes nothing */
+
     /* An estimator accepts every preset. */
-    static const char *names[] = {"default", "balanced", "fast"};
+    static const char *names[] = {"default", "balanced", "fast", "realtime"};
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     cal.fx = cal.fy = 700;
     cal.cx = 320;
     cal.cy = 240;
     cal.baseline = 0.5;
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 4; ++i) {
         assert_int_equal(lf_options_set_string(o, "preset", names[i]), LF_OK);
         lf_estimator_t *h = NULL;
         assert_int_equal(lf_create(o, &cal, &h), LF_OK);
@@ -332,7 +345,7 @@ static void test_named_presets(void **state) {
     assert_int_equal(lf_options_set_string(o, "preset", "Fast"), LF_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(lf_options_last_error(o), "balanced"));
     assert_int_equal(lf_options_get_string(o, "preset", &s), LF_OK);
-    assert_string_equal(s, "fast");
+    assert_string_equal(s, "realtime");
     lf_options_destroy(fresh);
 }
 

@@ -30,6 +30,7 @@ FrameInput frame_of(const synth::SynthScene &s) {
 EstimatorOptions small_options(int threads) {
     EstimatorOptions o;
     o.threads = threads;
+    o.adaptive_threads = false;  // the count asked for, however busy the machine
     o.matching.min_coarsest_height = 16;
     return o;
 }

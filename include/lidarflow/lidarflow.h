@@ -96,13 +96,20 @@ typedef struct lf_options lf_options_t;
  * general
  *   "threads"          int    [1, 256]   OpenMP threads of this handle (default 1); results do
  *                                        not depend on it
+ *   "adaptive_threads" 0/1               each frame uses at most the CPUs other processes leave
+ *                                        idle when it starts, at least one (default 1), so a
+ *                                        shared machine never runs it slower than one thread;
+ *                                        0 = always "threads". Idle workers sleep between stages
+ *                                        and frames either way
  *   "preset"           string "default"  resets every option except "threads" to the preset:
  *                                        "default" (reference accuracy), "balanced" (matcher
  *                                        levels below full resolution thinned: thin_from_level
  *                                        1; backward_grid_step 6, fb_search_radius 2) or
  *                                        "fast" (grid_step 6, iterations 3,
- *                                        processing_scale 0.7); set it
- *                                        first, then any key it should not decide
+ *                                        processing_scale 0.7) or "realtime" (matching.method
+ *                                        "decoupled" at processing_scale 0.55, about the time of
+ *                                        OpenCV's SGBM + DIS); set it first, then any key it
+ *                                        should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
@@ -125,6 +132,19 @@ typedef struct lf_options lf_options_t;
  *   "lidar.visibility_ratio"       float [0, 10]     (default 0.05)
  *   "lidar.visibility_margin"      float [0, 16384]  [px of disparity] (default 1)
  * stage 1: LiDAR-supported matching
+ *   "matching.method"           string "patchmatch" (the paper's joint 4-D search, default) or
+ *                                    "decoupled": d0 and d1 by semi-global stereo matching of
+ *                                    each pair, (u, v) by dense inverse search (DIS) started
+ *                                    from the tracked rigid background motion. The keys below
+ *                                    marked (decoupled) apply to it only; the others to
+ *                                    "patchmatch" only
+ *   "matching.flow_finest_scale"      int [0, 8]    (decoupled) DIS's finest pyramid level
+ *   "matching.flow_patch_size"        int [2, 32]   (decoupled) DIS patch side [px]
+ *   "matching.flow_patch_stride"      int [1, 31]   (decoupled) < flow_patch_size
+ *   "matching.flow_descent_iterations" int [1, 200] (decoupled) per patch and level
+ *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement
+ *   "matching.flow_prior_track_step"  int [0, 256]  (decoupled) grid step [px] of the tracks
+ *                                                   the rigid start flow is fitted to (0 = off)
  *   "matching.support_windows"  0/1  "matching.const1" 0/1  "matching.const2" 0/1
  *                                    windows and the two constraints (need use_lidar; const1
  *                                    and const2 need support_windows)
@@ -183,6 +203,7 @@ typedef struct lf_options lf_options_t;
  *   "interpolation.iterations"  int   [0, 1000]
  *   "interpolation.initial_hypotheses" int [1, 10000]
  *   "interpolation.random_hypotheses"  int [0, 10000]
+ *   "interpolation.ego_hypotheses"     int [1, 100000] RANSAC sets of the background motion
  *   "interpolation.edge_gain"   float [0, 10000]
  *   "interpolation.distance_sigma" float (0, 10000]  neighbour weight scale [px] (default 36)
  *   "interpolation.disparity_inlier" float (0, 10000]

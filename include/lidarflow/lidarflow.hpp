@@ -175,8 +175,8 @@ public:
         detail::check(lf_options_create(&o), [] { return lf_last_error(nullptr); });
         handle_ = o;
     }
-    // The defaults, then the preset `name` ("default", "balanced" or "fast"; see "preset" in
-    // lidarflow.h). Throws Error (LF_ERR_INVALID_ARGUMENT for an unknown preset).
+    // The defaults, then the preset `name` ("default", "balanced", "fast" or "realtime"; see
+    // "preset" in lidarflow.h). Throws Error (LF_ERR_INVALID_ARGUMENT for an unknown preset).
     static Options preset(const std::string &name) {
         Options o;
         o.set_string("preset", name);

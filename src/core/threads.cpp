@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include "core/threads.hpp"
 
+#include <dirent.h>
 #include <sched.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 
 #include <omp.h>
 
@@ -29,13 +31,36 @@ int runnable_tasks() {
     return ok ? running : 0;
 }
 
+// Runnable threads of this process now (its idle OpenCV or OpenMP workers may still be spinning:
+// they are not another process's load). 0 when unknown.
+int own_runnable_threads() {
+    DIR *dir = opendir("/proc/self/task");
+    if (!dir) return 0;
+    int running = 0;
+    char path[64], buf[512];
+    while (const dirent *e = readdir(dir)) {
+        if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
+        std::snprintf(path, sizeof(path), "/proc/self/task/%.20s/stat", e->d_name);
+        std::FILE *f = std::fopen(path, "r");
+        if (!f) continue;
+        const size_t n = std::fread(buf, 1, sizeof(buf) - 1, f);
+        std::fclose(f);
+        buf[n] = '\0';
+        // "pid (comm) S ...": the state follows the last ')' (comm may hold one).
+        const char *close = std::strrchr(buf, ')');
+        if (close && close[1] == ' ' && close[2] == 'R') ++running;
+    }
+    closedir(dir);
+    return running;
+}
+
 }  // namespace
 
 int threads_for_now(int requested) {
     if (requested <= 1) return std::max(1, requested);
     const int cpus = usable_cpus(), running = runnable_tasks();
     if (cpus <= 0 || running <= 0) return requested;
-    const int others = running - 1;  // the caller is one of them
+    const int others = std::max(0, running - std::max(1, own_runnable_threads()));  // the caller is one of ours
     return std::clamp(cpus - others, 1, requested);
 }
 

@@ -196,7 +196,7 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     struct ReleaseWorkers {
         ~ReleaseWorkers() { release_openmp_workers(); }
     } release_at_end;
-    const int threads = threads_for_now(options_.threads);
+    const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
     // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
     const FrameInput frame{input.left0, input.right0, input.left1, input.right1,
                            lidar_in_use(options_, input.lidar0), lidar_in_use(options_, input.lidar1), input.camera};

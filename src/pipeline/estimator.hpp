@@ -35,6 +35,9 @@ struct EstimatorOptions {
     bool use_lidar = true;
     Stage last_stage = Stage::Interpolation;
     int threads = 1;  // OpenMP threads for every stage (num_threads clauses; never global)
+    // Each frame uses at most the CPUs other processes leave idle at its start (at least one;
+    // core/threads.hpp). Results never depend on it; false: always `threads`.
+    bool adaptive_threads = true;
     // Every stage runs on the frame resized by this factor, in [0.125, 1]; the results are
     // brought back to the input size (pipeline/resolution.hpp). 1 = full resolution. The
     // search ranges (matching.max_flow, max_disparity, min_coarsest_height and the SGM range)

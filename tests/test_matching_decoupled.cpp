@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: MIT
+// Stage 1's decoupled design (matching/decoupled_matcher.hpp) and the realtime preset built on
+// it: what each field holds, that the tracked rigid prior acts, that a stream reuses the newer
+// pair's disparity without changing a result, that every preset is independent of the thread
+// count, and the machine-sharing rules of core/threads.hpp.
+#include <cstring>
+#include <thread>
+#include <vector>
+
+#include <sched.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "consistency/sgm_check.hpp"
+#include "core/threads.hpp"
+#include "eval/metrics.hpp"
+#include "matching/decoupled_matcher.hpp"
+#include "pipeline/estimator.hpp"
+#include "synth/scene.hpp"
+#include "test_support.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::pipeline;
+
+namespace {
+
+synth::SynthScene scene(int width = 320, int height = 96, uint64_t seed = 5) {
+    synth::SynthConfig c;
+    c.width = width;
+    c.height = height;
+    c.seed = seed;
+    c.threads = 2;
+    return synth::render(c);
+}
+
+FrameInput frame_of(const synth::SynthScene &s) {
+    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+}
+
+bool same_mat(const cv::Mat &a, const cv::Mat &b) {
+    if (a.size() != b.size() || a.type() != b.type()) return false;
+    for (int y = 0; y < a.rows; ++y)
+        if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
+    return true;
+}
+
+bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
+    return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&
+           same_mat(a.valid, b.valid) && same_mat(a.confidence, b.confidence);
+}
+
+double sf_outliers(const synth::SynthScene &s, const SceneFlowField &f) {
+    long n = 0, bad = 0;
+    for (int y = 0; y < f.height(); ++y)
+        for (int x = 0; x < f.width(); ++x) {
+            if (s.disp0_occ(y, x) < 0 || s.disp1_occ(y, x) < 0 || !s.flow_occ.valid(y, x)) continue;
+            ++n;
+            bad += (eval::disparity_outlier(s.disp0_occ(y, x), f.d0(y, x)) ||
+                    eval::disparity_outlier(s.disp1_occ(y, x), f.d1(y, x)) ||
+                    eval::flow_outlier(s.flow_occ.u(y, x), s.flow_occ.v(y, x), f.u(y, x), f.v(y, x)))
+                       ? 1
+                       : 0;
+        }
+    return n ? 100.0 * bad / n : 100.0;
+}
+
+matching::MatchingOptions decoupled_options() {
+    matching::MatchingOptions o = EstimatorOptions::preset("realtime").matching;
+    o.threads = 2;
+    return o;
+}
+
+// d0 is the SGM disparity of the t0 pair (the LiDAR measurement on its pixels), d1 the SGM
+// disparity of the t1 pair at the flow target; the backward field holds the same roles at t1.
+void fields_hold_stereo_and_flow(void **) {
+    const synth::SynthScene s = scene();
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    const consistency::SgmOptions sgm;
+    const matching::DecoupledResult r = matching::match_decoupled(in, decoupled_options(), sgm, s.camera, true);
+    assert_true(same_mat(r.sgm0, consistency::compute_sgm_disparity(s.left0, s.right0, sgm)));
+    assert_true(same_mat(r.sgm1, consistency::compute_sgm_disparity(s.left1, s.right1, sgm)));
+    const DisparityMap lidar0 = s.lidar0.to_map();
+    int valid = 0;
+    for (int y = 0; y < s.left0.rows; ++y)
+        for (int x = 0; x < s.left0.cols; ++x) {
+            if (!r.forward.valid(y, x)) continue;
+            ++valid;
+            const float d0 = disparity_valid(lidar0(y, x)) ? lidar0(y, x) : r.sgm0(y, x);
+            assert_float_equal(r.forward.d0(y, x), d0, 0);
+            const int tx = static_cast<int>(std::lround(x + r.forward.u(y, x)));
+            const int ty = static_cast<int>(std::lround(y + r.forward.v(y, x)));
+            assert_float_equal(r.forward.d1(y, x), r.sgm1(ty, tx), 0);
+        }
+    assert_true(valid > s.left0.rows * s.left0.cols / 2);  // most pixels get a 4-vector
+    assert_int_equal(r.backward.width(), s.left0.cols);
+    assert_true(cv::countNonZero(r.backward.valid) > s.left0.rows * s.left0.cols / 2);
+    // Without the backward direction nothing of it is computed.
+    const matching::DecoupledResult f = matching::match_decoupled(in, decoupled_options(), sgm, s.camera, false);
+    assert_true(f.backward.u.empty());
+    assert_true(same_field(f.forward, r.forward));
+}
+
+// The rigid prior changes where DIS starts (so the option acts); off, the result still holds.
+void rigid_prior_acts(void **) {
+    const synth::SynthScene s = scene(640, 192, 2);
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    matching::MatchingOptions with = decoupled_options(), without = with;
+    assert_true(with.flow.prior_track_step > 0);
+    without.flow.prior_track_step = 0;
+    const consistency::SgmOptions sgm;
+    const auto a = matching::match_decoupled(in, with, sgm, s.camera, false);
+    const auto b = matching::match_decoupled(in, without, sgm, s.camera, false);
+    assert_false(same_field(a.forward, b.forward));
+    // An unknown camera uses the calibration-free model: still a result.
+    const auto c = matching::match_decoupled(in, with, sgm, StereoCamera(), false);
+    assert_true(cv::countNonZero(c.forward.valid) > 0);
+}
+
+// Bad inputs are errors, not crashes.
+void bad_inputs_are_refused(void **) {
+    const synth::SynthScene s = scene();
+    const consistency::SgmOptions sgm;
+    const matching::MatchInput small{s.left0, s.right0, s.left1(cv::Rect(0, 0, 100, 50)).clone(), s.right1,
+                                     s.lidar0, s.lidar1};
+    assert_true(test::throws_code(ErrorCode::SizeMismatch, [&] {
+        matching::match_decoupled(small, decoupled_options(), sgm, s.camera, true);
+    }));
+    matching::MatchingOptions bad = decoupled_options();
+    bad.flow.patch_stride = bad.flow.patch_size;
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    assert_true(test::throws_code(ErrorCode::InvalidArgument,
+                                  [&] { matching::match_decoupled(in, bad, sgm, s.camera, true); }));
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { matching::parse_match_method("sgm"); }));
+    assert_int_equal(static_cast<int>(matching::parse_match_method("decoupled")),
+                     static_cast<int>(matching::MatchMethod::Decoupled));
+}
+
+// realtime beats its own image-only run on the synthetic street and stays within a bound.
+void realtime_is_accurate(void **) {
+    double lidar = 0, image = 0;
+    for (uint64_t seed : {1, 2}) {
+        const synth::SynthScene s = scene(640, 192, seed);
+        EstimatorOptions o = EstimatorOptions::preset("realtime");
+        o.threads = 2;
+        const double with = sf_outliers(s, Estimator(o).run(frame_of(s)).dense);
+        o.use_lidar = false;
+        const double without = sf_outliers(s, Estimator(o).run(frame_of(s)).dense);
+        std::printf("realtime, scene %d: SF %.2f %% with LiDAR, %.2f %% image-only\n", static_cast<int>(seed), with,
+                    without);
+        lidar += with / 2;
+        image += without / 2;
+    }
+    assert_true(lidar < image);
+    assert_true(lidar < 12.0);
+}
+
+// Every preset gives the same fields with 1, 2 and 3 threads.
+void presets_do_not_depend_on_threads(void **) {
+    const synth::SynthScene s = scene();
+    const FrameInput in = frame_of(s);
+    for (const char *name : {"realtime", "fast", "balanced"}) {
+        EstimatorOptions o = EstimatorOptions::preset(name);
+        o.matching.min_coarsest_height = 16;
+        o.adaptive_threads = false;  // the count asked for, however busy the machine
+        o.threads = 1;
+        const EstimatorResult one = Estimator(o).run(in);
+        for (int threads : {2, 3}) {
+            o.threads = threads;
+            const EstimatorResult many = Estimator(o).run(in);
+            assert_true(same_field(one.forward, many.forward));
+            assert_true(same_field(one.backward, many.backward));
+            assert_true(same_field(one.after_fb, many.after_fb));
+            assert_true(same_field(one.dense, many.dense));
+        }
+    }
+}
+
+// A stream hands the t1 disparity to the next frame: reused, and the result is a lone run's.
+void stream_reuses_the_newer_disparity(void **) {
+    const synth::SynthScene a = scene(320, 96, 5);
+    FrameInput first = frame_of(a), second = frame_of(a);
+    std::swap(second.left0, second.left1);
+    std::swap(second.right0, second.right1);
+    std::swap(second.lidar0, second.lidar1);
+    EstimatorOptions o = EstimatorOptions::preset("realtime");
+    o.threads = 2;
+    const Estimator e(o);
+    StreamCache cache;
+    e.run(first, &cache);
+    assert_false(cache.last_reused());
+    const EstimatorResult streamed = e.run(second, &cache);
+    assert_true(cache.last_reused());
+    assert_true(same_field(streamed.dense, e.run(second).dense));
+    // A frame that does not continue the stream is computed afresh.
+    const synth::SynthScene b = scene(320, 96, 6);
+    const EstimatorResult other = e.run(frame_of(b), &cache);
+    assert_false(cache.last_reused());
+    assert_true(same_field(other.dense, e.run(frame_of(b)).dense));
+}
+
+// With every CPU kept busy by other processes, a frame runs on one thread; the process's own
+// busy threads (OpenCV's or OpenMP's workers) do not count against it.
+void threads_follow_the_idle_cpus(void **) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    assert_int_equal(sched_getaffinity(0, sizeof(set), &set), 0);
+    const int cpus = CPU_COUNT(&set);
+    assert_int_equal(threads_for_now(1), 1);
+    assert_int_equal(threads_for_now(0), 1);
+    const int now = threads_for_now(cpus);
+    assert_true(now >= 1 && now <= cpus);
+    std::vector<pid_t> busy;
+    for (int i = 0; i < cpus; ++i) {
+        const pid_t pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0)
+            for (;;) {  // spins until killed
+            }
+        busy.push_back(pid);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const int loaded = threads_for_now(cpus);
+    for (pid_t pid : busy) kill(pid, SIGKILL);
+    for (pid_t pid : busy) waitpid(pid, nullptr, 0);
+    std::printf("%d CPUs: %d thread(s) now, %d with every CPU busy in other processes\n", cpus, now, loaded);
+    assert_int_equal(loaded, 1);
+    // Releasing the OpenMP pool is harmless outside a region and refused inside one.
+    release_openmp_workers();
+    int inside = 0;
+#pragma omp parallel num_threads(2) reduction(+ : inside)
+    {
+        release_openmp_workers();
+        inside += 1;
+    }
+    assert_true(inside >= 1);
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(fields_hold_stereo_and_flow),   cmocka_unit_test(rigid_prior_acts),
+        cmocka_unit_test(bad_inputs_are_refused),        cmocka_unit_test(realtime_is_accurate),
+        cmocka_unit_test(presets_do_not_depend_on_threads), cmocka_unit_test(stream_reuses_the_newer_disparity),
+        cmocka_unit_test(threads_follow_the_idle_cpus),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -295,12 +295,16 @@ static void test_named_presets(void **state) {
     assert_int_equal(lf_options_get_string(o, "preset", &s), LF_OK);
     assert_string_equal(s, "fast");
     assert_true(get_number(o, "threads") == 4.0);
-    assert_true(get_number(o, "matching.grid_step") == 6.0);
-    assert_true(get_number(o, "matching.iterations") == 3.0);
+    const char *m = NULL;
+    assert_int_equal(lf_options_get_string(o, "matching.method", &m), LF_OK);
+    assert_string_equal(m, "decoupled");
+    assert_true(get_number(o, "matching.flow_patch_size") == 6.0);
+    assert_true(get_number(o, "matching.flow_patch_stride") == 2.0);
+    assert_true(get_number(o, "matching.flow_prior_track_step") == 12.0);
     assert_true(get_number(o, "matching.min_coarsest_height") == get_number(fresh, "matching.min_coarsest_height"));
-    assert_true(fabs(get_number(o, "processing_scale") - 0.7) < 1e-12);
+    assert_true(fabs(get_number(o, "processing_scale") - 0.65) < 1e-12);
     assert_true(get_number(o, "matching.thin_from_level") == get_number(fresh, "matching.thin_from_level"));
-    assert_true(get_number(o, "matching.grid_step") != get_number(fresh, "matching.grid_step"));
+    assert_true(get_number(o, "matching.flow_patch_size") != get_number(fresh, "matching.flow_patch_size"));
 
     assert_int_equal(lf_options_set_int(o, "matching.iterations", 5), LF_OK); /* after the preset */
     assert_true(get_number(o, "matching.iterations") == 5.0);

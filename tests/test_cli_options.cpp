@@ -94,7 +94,7 @@ void test_set_takes_named_presets(void **) {
     assert_true(contains(r.output, "unknown preset 'turbo'"));
     capi::OptionValues v;
     capi::set_option_string(v, *capi::find_option_key("preset"), "fast");
-    assert_int_equal(v.estimator.matching.grid_step, 6);
+    assert_int_equal(v.estimator.matching.flow.patch_size, 6);
     assert_true(v.preset == "fast");
 }
 

@@ -179,10 +179,14 @@ void presets(void **) {
     assert_int_equal(d.matching.grid_step, plain.matching.grid_step);
     assert_int_equal(d.matching.iterations, plain.matching.iterations);
     const pipeline::EstimatorOptions f = pipeline::EstimatorOptions::preset("fast");
-    assert_true(f.matching.grid_step > d.matching.grid_step);
-    assert_true(f.matching.iterations < d.matching.iterations);
+    assert_true(f.matching.method == matching::MatchMethod::Decoupled);
+    assert_true(d.matching.method == matching::MatchMethod::PatchMatch);
     f.validate();
     assert_true(f.processing_scale < 1.0);
+    const pipeline::EstimatorOptions r = pipeline::EstimatorOptions::preset("realtime");
+    r.validate();
+    assert_true(r.matching.method == matching::MatchMethod::Decoupled);
+    assert_true(r.processing_scale < f.processing_scale);
     const pipeline::EstimatorOptions b = pipeline::EstimatorOptions::preset("balanced");
     b.validate();
     assert_true(b.matching.thin_from_level < d.matching.thin_from_level);

@@ -102,19 +102,20 @@ typedef struct lf_options lf_options_t;
  *                                        0 = always "threads". Idle workers sleep between stages
  *                                        and frames either way
  *   "preset"           string "default"  resets every option except "threads" to the preset:
- *                                        "default" (reference accuracy), "balanced" (matcher
- *                                        levels below full resolution thinned: thin_from_level
- *                                        1; backward_grid_step 6, fb_search_radius 2) or
- *                                        "fast" (grid_step 6, iterations 3,
- *                                        processing_scale 0.7) or "realtime" (matching.method
- *                                        "decoupled" at processing_scale 0.55, about the time of
- *                                        OpenCV's SGBM + DIS); set it first, then any key it
- *                                        should not decide
+ *                                        "default" (reference accuracy, the paper's matcher),
+ *                                        "balanced" (matcher levels below full resolution
+ *                                        thinned: thin_from_level 1; backward_grid_step 6,
+ *                                        fb_search_radius 2), "fast" (matching.method
+ *                                        "decoupled" at processing_scale 0.65, DIS patches 6 /
+ *                                        stride 2) or "realtime" ("decoupled" at 0.55, stage 4
+ *                                        with 20 px superpixels and 128 neighbours: about 1.5x
+ *                                        the time of OpenCV's SGBM + DIS); set it first, then
+ *                                        any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
- *                                        (default 1; the "fast" preset uses 0.7)
+ *                                        (default 1; "fast" 0.65, "realtime" 0.55)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and

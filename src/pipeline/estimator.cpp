@@ -122,29 +122,9 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.consistency.fb_search_radius = 2;
         return o;
     }
-    if (name == "fast") {
-        // Measured on the shared KITTI frames: the seed grid dominates both time and accuracy.
-        // The pyramid keeps the default's depth (4 levels on KITTI): fast once stopped at a
-        // coarsest level >= 80 px high (3 levels), which lost the near, fast-moving parts of a
-        // frame (000003, d0 >= 40 px: SF 18.4 against 11.6 % at the default preset). With the
-        // fourth level, seeds 1-8: 10.44 -> 10.05 %; the 640x192 synthetic frames 9.54 -> 8.79 %
-        // (seeds 1-4); the demo scenes 1-8 x 3 seeds 11.50 -> 10.78 % (hard regions 36.4 ->
-        // 31.3 %), for ~4 % more time per pair. A fifth level (coarsest >= 20 px) was no better.
-        o.matching.grid_step = 6;
-        // Seeds 1-6: SF 15.21 % in 0.48 s; without thinning 14.77 % in 0.60 s; at 3/4 size
-        // 14.74 % (seeds 1-3) in 0.58 s. With 256 interpolation neighbours (stage 4's default
-        // since) 11.71 %. Spending that headroom on time (2 iterations at 0.6: 12.80 %, 0.58 ->
-        // 0.41 s per KITTI pair) broke small frames: the 640x192 synthetic scenes went 9.27 ->
-        // 14.70 % (seeds 1-2; one frame of the 0.7 / 2-iteration variant failed outright), so
-        // fast keeps 3 iterations at 0.7.
-        o.matching.iterations = 3;
-        o.processing_scale = 0.7;
-        return o;
-    }
-    if (name == "realtime") {
-        // Stage 1 decoupled (stereo and flow searched apart), every stage at 0.55 of the size.
+    if (name == "fast" || name == "realtime") {
+        // Stage 1 decoupled (stereo and flow searched apart) on the reduced frame.
         o.matching.method = matching::MatchMethod::Decoupled;
-        o.processing_scale = 0.55;
         // The reduced frame is DIS's finest level: it searches down to it itself.
         o.matching.flow.finest_scale = 0;
         // Variational refinement smooths flow across motion boundaries, where the round-trip
@@ -153,9 +133,15 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.matching.flow.prior_track_step = 12;
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
-        // Stage 4 with fewer, larger superpixels and neighbours: ~15 % of the frame's time.
-        o.interpolation.superpixels.region_size = 20;
-        o.interpolation.num_neighbors = 128;
+        if (name == "fast") {  // denser DIS patches on a larger frame
+            o.processing_scale = 0.65;
+            o.matching.flow.patch_size = 6;
+            o.matching.flow.patch_stride = 2;
+        } else {  // every stage at 0.55; stage 4 with fewer, larger superpixels and neighbours
+            o.processing_scale = 0.55;
+            o.interpolation.superpixels.region_size = 20;
+            o.interpolation.num_neighbors = 128;
+        }
         return o;
     }
     throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast, realtime)");

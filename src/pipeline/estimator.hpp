@@ -63,11 +63,13 @@ struct EstimatorOptions {
 
     // Named speed/accuracy trade-offs (everything else at its default; the README's preset
     // table has the measured curve):
-    //  "default"  the reference settings;
+    //  "default"  the reference settings (the paper's PatchMatch stage 1);
     //  "balanced" every matcher level below full resolution thinned (thin_from_level 1), the
     //             backward direction on a 6 px grid (round-trip search radius 2);
-    //  "fast"     6 px seed grid, 3 iterations, at 0.7 resolution
-    //             (plain processing_scale 0.5 was both slower and worse).
+    //  "fast"     the decoupled stage 1 (SGM + DIS from the rigid prior) at 0.65 size, DIS
+    //             patches of 6 px every 2 px;
+    //  "realtime" the decoupled stage 1 at 0.55 size, stage 4 with 20 px superpixels and 128
+    //             neighbours.
     // Throws Error(InvalidArgument) for another name.
     static EstimatorOptions preset(const std::string &name);
 };

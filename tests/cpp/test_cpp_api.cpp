@@ -114,11 +114,11 @@ void test_options(void **) {
     // Presets: "fast" changes the stage keys and keeps "threads"; a later preset resets them.
     o.set("preset", "fast");
     assert_int_equal(o.get_int("threads"), 3);
-    assert_int_equal(o.get_int("matching.grid_step"), 6);
-    assert_true(o.get_float("processing_scale") == 0.7);
-    assert_int_equal(o.get_int("matching.iterations"), 3);
+    assert_string_equal(o.get_string("matching.method").c_str(), "decoupled");
+    assert_true(o.get_float("processing_scale") == 0.65);
+    assert_int_equal(o.get_int("matching.flow_patch_size"), 6);
     lf::Options fast = lf::Options::preset("fast");
-    assert_int_equal(fast.get_int("matching.grid_step"), 6);
+    assert_int_equal(fast.get_int("matching.flow_patch_stride"), 2);
     assert_int_equal(fast.get_int("threads"), 1);
     lf::Options balanced = lf::Options::preset("balanced");
     assert_int_equal(balanced.get_int("matching.thin_from_level"), 1);

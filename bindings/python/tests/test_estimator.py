@@ -217,7 +217,7 @@ class BadInput(unittest.TestCase):
 
 class Presets(unittest.TestCase):
     def test_named_presets_reach_the_library(self):
-        # "fast" works at 0.7 resolution with a coarser grid: it needs more than 160x64 pixels.
+        # "fast" works at 0.65 resolution: it needs more than 160x64 pixels.
         w, h = 320, 160
         scene, lidar = make_scene(width=w, height=h), grid_lidar(10, width=w, height=h)
         with lidarflow.Estimator(options={"preset": "default"}, **CAL) as est:

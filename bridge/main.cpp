@@ -76,6 +76,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
         return 1;
     }
     const Counters &c = r.counters;
+    for (const std::string &line : r.notes) std::fprintf(stderr, "lidarflow-lcm-bridge: note: %s\n", line.c_str());
     for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
     if (r.stereo_not_replayed)
         std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "replay.hpp"
 
-#include <lcm/eventlog.h>
-
 #include <algorithm>
 #include <cinttypes>
 #include <cstdarg>
@@ -13,16 +11,14 @@
 namespace lidarflow::bridge {
 namespace {
 
-struct EventDeleter {
-    void operator()(lcm_eventlog_event_t *e) const { lcm_eventlog_free_event(e); }
-};
-using EventPtr = std::unique_ptr<lcm_eventlog_event_t, EventDeleter>;
+using EventPtr = std::unique_ptr<LogEvent>;
 
 // Events in log order, read lazily: the look-ahead for late LiDAR sweeps reads only as far as
-// the wait reaches, so a long log is never held in memory.
+// the wait reaches, so a long log is never held in memory. The data of events on channels the
+// bridge does not take is not read at all.
 class LogReader {
 public:
-    explicit LogReader(lcm_eventlog_t *log) : log_(log) {}
+    LogReader(EventLogReader *log, const BridgeConfig &config) : log_(log), config_(config) {}
     // The i-th pending event (0 = next), reading as needed; nullptr past the end.
     struct Pending {
         EventPtr event;
@@ -30,25 +26,30 @@ public:
     };
     Pending *peek(size_t i) {
         while (pending_.size() <= i && !eof_) {
-            lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(log_);
-            if (!e) {
+            EventPtr e(new LogEvent);
+            if (!log_->next(e.get(), &LogReader::wanted, this)) {
                 eof_ = true;
                 break;
             }
-            pending_.push_back({EventPtr(e), false});
+            pending_.push_back({std::move(e), false});
         }
         return i < pending_.size() ? &pending_[i] : nullptr;
     }
     void pop() { pending_.pop_front(); }
 
 private:
-    lcm_eventlog_t *log_;
+    static bool wanted(const std::string &channel, void *self) {
+        const BridgeConfig &c = static_cast<LogReader *>(self)->config_;
+        return channel == c.stereo_channel || channel == c.lidar_channel || channel == c.calibration_channel;
+    }
+    EventLogReader *log_;
+    const BridgeConfig &config_;
     std::deque<Pending> pending_;
     bool eof_ = false;
 };
 
 struct Output {
-    lcm_eventlog_t *log = nullptr;
+    EventLogWriter *log = nullptr;
     int64_t now = 0;  // log clock: timestamp of the input event being handled
     int64_t flows = 0, status = 0, failures = 0;
     std::string flow_channel;
@@ -56,13 +57,7 @@ struct Output {
 
 void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
     auto *out = static_cast<Output *>(user);
-    lcm_eventlog_event_t e{};
-    e.timestamp = out->now;
-    e.channellen = static_cast<int32_t>(std::char_traits<char>::length(channel));
-    e.datalen = static_cast<int32_t>(rbuf->data_size);
-    e.channel = const_cast<char *>(channel);
-    e.data = rbuf->data;
-    if (lcm_eventlog_write_event(out->log, &e) != 0) {
+    if (!out->log->write(out->now, channel, rbuf->data, rbuf->data_size)) {
         ++out->failures;
         return;
     }
@@ -93,21 +88,15 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     config.status_period_s = 0;  // driven on the log's clock below
     config.lidar_wait_ms = 0;    // the look-ahead replaces the wait, deterministically
 
-    lcm_eventlog_t *in = lcm_eventlog_create(in_path.c_str(), "r");
-    if (!in) return "cannot read the log " + in_path;
+    EventLogReader in;
+    if (!in.open(in_path)) return "cannot read the log " + in.error();
+    EventLogWriter writer;
     Output out;
     out.flow_channel = config.flow_channel;
-    out.log = lcm_eventlog_create(out_path.c_str(), "w");
-    if (!out.log) {
-        lcm_eventlog_destroy(in);
-        return "cannot write the log " + out_path;
-    }
+    out.log = &writer;
+    if (!writer.open(out_path)) return "cannot write the log " + writer.error();
     lcm_t *lcm = lcm_create("memq://");
-    if (!lcm) {
-        lcm_eventlog_destroy(in);
-        lcm_eventlog_destroy(out.log);
-        return "cannot create an in-process LCM (memq://)";
-    }
+    if (!lcm) return "cannot create an in-process LCM (memq://)";
     std::string error;
     {
         std::unique_ptr<Bridge> bridge = Bridge::create(config, lcm, &error);
@@ -132,11 +121,10 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     return true;
             }
         };
-        auto feed = [&](const lcm_eventlog_event_t &e) {
-            const std::string channel(e.channel, static_cast<size_t>(e.channellen));
+        auto feed = [&](const LogEvent &e) {
             const int64_t target = handled() + 1;
-            if (lcm_publish(lcm, channel.c_str(), e.data, static_cast<unsigned>(e.datalen)) != 0) {
-                error = printf_string("handing event %" PRId64 " to the bridge failed", e.eventnum);
+            if (lcm_publish(lcm, e.channel.c_str(), e.data.data(), static_cast<unsigned>(e.data.size())) != 0) {
+                error = printf_string("handing event %" PRId64 " to the bridge failed", e.event_number);
                 return false;
             }
             if (!settle(target)) {
@@ -145,7 +133,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             }
             return true;
         };
-        LogReader reader(in);
+        LogReader reader(&in, config);
         double next_status = -1;
         while (error.empty()) {
             LogReader::Pending *p = reader.peek(0);
@@ -153,15 +141,15 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             if (stop && *stop) {
                 for (size_t i = 0; (p = reader.peek(i)); ++i)
                     report->stereo_not_replayed +=
-                        !p->fed && config.stereo_channel == std::string(p->event->channel, p->event->channellen);
+                        !p->fed && config.stereo_channel == p->event->channel;
                 break;
             }
             EventPtr event = std::move(p->event);
             const bool fed_early = p->fed;
             reader.pop();
             ++report->events;
-            const std::string channel(event->channel, static_cast<size_t>(event->channellen));
-            out.now = std::max(out.now, event->timestamp);
+            const std::string &channel = event->channel;
+            out.now = std::max(out.now, event->utime);
             if (channel == config.lidar_channel) {
                 ++report->lidar_events;
                 if (!fed_early) feed(*event);
@@ -174,8 +162,8 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 // waits for them; hand them over first.
                 for (size_t i = 0; error.empty(); ++i) {
                     LogReader::Pending *q = reader.peek(i);
-                    if (!q || q->event->timestamp > event->timestamp + lidar_wait_us) break;
-                    if (!q->fed && config.lidar_channel == std::string(q->event->channel, q->event->channellen)) {
+                    if (!q || q->event->utime > event->utime + lidar_wait_us) break;
+                    if (!q->fed && config.lidar_channel == q->event->channel) {
                         feed(*q->event);
                         q->fed = true;
                     }
@@ -184,12 +172,12 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 if (!feed(*event)) break;
                 const Counters after = bridge->counters();
                 StereoMessage m;
-                const bool decodable = decode_stereo(event->data, static_cast<size_t>(event->datalen), m).empty();
+                const bool decodable = decode_stereo(event->data.data(), event->data.size(), m).empty();
                 const std::string which =
                     decodable ? printf_string("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
                                     ", log event %" PRId64 ")",
-                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->eventnum)
-                              : printf_string("stereo log event %" PRId64, event->eventnum);
+                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->event_number)
+                              : printf_string("stereo log event %" PRId64, event->event_number);
                 if (after.dropped() > before.dropped()) {
                     // last_error is this frame's only for the reasons that set it.
                     const bool own_error = after.dropped_malformed > before.dropped_malformed ||
@@ -227,8 +215,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             if (s) lcm_unsubscribe(lcm, s);
     }
     lcm_destroy(lcm);
-    lcm_eventlog_destroy(in);
-    lcm_eventlog_destroy(out.log);
+    for (const EventLogReader::Problem &p : in.problems()) report->lost.push_back("log: " + p.text);
+    if (!in.torn_tail().empty()) report->notes.push_back("log: " + in.torn_tail());
+    if (!writer.close() && error.empty()) error = "writing " + out_path + " failed: " + writer.error();
     report->flows_written = out.flows;
     report->status_written = out.status;
     if (error.empty() && out.failures) error = printf_string("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());

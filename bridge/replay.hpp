@@ -2,6 +2,10 @@
 #pragma once
 // Offline replay: an LCM log in, a result log out, at the estimator's pace.
 //
+// The log is read by EventLogReader (log_reader.hpp), which checks every header against the
+// file and reads the same events as lidarflow_lcm's LogReader; corruption is reported in
+// ReplayReport::lost, never silently ended on.
+//
 // The log's input events are handed one at a time to an ordinary Bridge over an in-process
 // memq:// LCM, and the next one only once the bridge has handled it, the worker is idle and its
 // outputs are written. So no frame can go stale, and every decision (pairing, calibration in
@@ -14,6 +18,7 @@
 #include <vector>
 
 #include "bridge_core.hpp"
+#include "log_reader.hpp"
 
 namespace lidarflow::bridge {
 
@@ -23,9 +28,13 @@ struct ReplayReport {
     int64_t other_events = 0;   // on channels the bridge does not take (left out)
     int64_t flows_written = 0, status_written = 0;
     int64_t stereo_not_replayed = 0;  // left when interrupted
-    // One line per stereo frame that did not reach the estimator, or frames missing from the
-    // log (gaps in frame_number); empty when every frame was processed.
+    // One line per stereo frame that did not reach the estimator, frames missing from the log
+    // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
+    // sync word, reading stopped: frames there are unaccounted for); empty when every frame was
+    // processed.
     std::vector<std::string> lost;
+    // Things worth telling that cost no frame (a torn tail: the last write cut short).
+    std::vector<std::string> notes;
     Counters counters;          // the bridge's final counters
 };
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cinttypes>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <deque>
@@ -63,6 +64,14 @@ void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
     }
     if (out->flow_channel == channel) ++out->flows;
     else ++out->status;
+}
+
+constexpr double kClockJumpUs = 86400e6;  // a day
+constexpr int64_t kMaxNotesPerKind = 10;
+
+// a > b + d without overflow (log times may sit anywhere in int64).
+bool later_than(int64_t a, int64_t b, int64_t d) {
+    return static_cast<__int128>(a) > static_cast<__int128>(b) + d;
 }
 
 const char *drop_reason(const Counters &a, const Counters &b) {
@@ -135,6 +144,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
         };
         LogReader reader(&in, config);
         double next_status = -1;
+        int64_t last_utime = 0;
         while (error.empty()) {
             LogReader::Pending *p = reader.peek(0);
             if (!p) break;
@@ -149,6 +159,18 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             reader.pop();
             ++report->events;
             const std::string &channel = event->channel;
+            // A log clock that jumps by more than a day (a bad timestamp, a clock reset) is
+            // worth a line: results and status are stamped with it.
+            if (report->events > 1 && std::fabs(static_cast<double>(event->utime) - static_cast<double>(last_utime)) >
+                                          kClockJumpUs) {
+                if (++report->clock_jumps <= kMaxNotesPerKind)
+                    report->notes.push_back(printf_string(
+                        "log time jumps by %+.6g s at log event %" PRId64 " on %s (offset %" PRId64 ")%s",
+                        (static_cast<double>(event->utime) - static_cast<double>(last_utime)) / 1e6,
+                        event->event_number, channel.c_str(), event->offset,
+                        report->clock_jumps == kMaxNotesPerKind ? "; further jumps only counted" : ""));
+            }
+            last_utime = event->utime;
             out.now = std::max(out.now, event->utime);
             if (channel == config.lidar_channel) {
                 ++report->lidar_events;
@@ -162,7 +184,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 // waits for them; hand them over first.
                 for (size_t i = 0; error.empty(); ++i) {
                     LogReader::Pending *q = reader.peek(i);
-                    if (!q || q->event->utime > event->utime + lidar_wait_us) break;
+                    if (!q || later_than(q->event->utime, event->utime, lidar_wait_us)) break;
                     if (!q->fed && config.lidar_channel == q->event->channel) {
                         feed(*q->event);
                         q->fed = true;
@@ -193,10 +215,14 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 ++report->other_events;
             }
             if (status_period_s > 0 && error.empty()) {
-                if (next_status < 0) next_status = static_cast<double>(out.now) + 1e6 * status_period_s;
-                if (static_cast<double>(out.now) >= next_status) {
+                // Computed, not counted up period by period: one event stamped years ahead
+                // (or at INT64_MAX) costs one status, not hours of loop.
+                const double period = 1e6 * status_period_s, now = static_cast<double>(out.now);
+                if (next_status < 0) next_status = now + period;
+                if (now >= next_status) {
                     bridge->publish_status_now();
-                    while (next_status <= static_cast<double>(out.now)) next_status += 1e6 * status_period_s;
+                    next_status += period * (std::floor((now - next_status) / period) + 1);
+                    if (!(next_status > now)) next_status = now + period;  // rounding at 2^63
                     settle(handled());
                 }
             }
@@ -217,6 +243,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     lcm_destroy(lcm);
     for (const EventLogReader::Problem &p : in.problems()) report->lost.push_back("log: " + p.text);
     if (!in.torn_tail().empty()) report->notes.push_back("log: " + in.torn_tail());
+    if (report->clock_jumps > kMaxNotesPerKind)
+        report->notes.push_back(printf_string("log time jumps by more than a day %" PRId64 " times in all",
+                                              report->clock_jumps));
     if (!writer.close() && error.empty()) error = "writing " + out_path + " failed: " + writer.error();
     report->flows_written = out.flows;
     report->status_written = out.status;

@@ -28,6 +28,7 @@ struct ReplayReport {
     int64_t other_events = 0;   // on channels the bridge does not take (left out)
     int64_t flows_written = 0, status_written = 0;
     int64_t stereo_not_replayed = 0;  // left when interrupted
+    int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
     // One line per stereo frame that did not reach the estimator, frames missing from the log
     // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
     // sync word, reading stopped: frames there are unaccounted for); empty when every frame was

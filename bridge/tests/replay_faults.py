@@ -160,6 +160,22 @@ class ReplayFaults(unittest.TestCase):
         rest = HEADER.pack(0xEDA1DA01, number, utime, clen, dlen + 100) + rest[HEADER.size:]
         self.check_corrupt("long.log", first + rest, 3)
 
+    # Log times far apart: status times are computed (not counted up period by period, which
+    # took hours for a jump to 2^63 - 1), and the jumps are reported.
+    def test_huge_log_times(self):
+        events = good_events(2) + [("OTHER", b"x", 10 ** 17), ("OTHER", b"y", 2 ** 63 - 1),
+                                   (STEREO, stereo(2), 2 ** 63 - 1)]
+        log = self.write("times.log", events_bytes(events))
+        started = time.monotonic()
+        rc, err = self.replay(log, "--status-period", "0.5", "--lidar-wait-ms", "30", timeout=60)
+        self.assertLess(time.monotonic() - started, 30)
+        self.assertEqual(rc, 0)
+        self.assertEqual(self.summary(err), (3, 3))
+        self.assertEqual(len(re.findall(r"note: log time jumps by \+", err)), 2, err)
+        with ll.LogReader(self.out) as out:
+            status = [e for e in out if e.channel == ll.CHANNELS["status"]]
+        self.assertLessEqual(len(status), 6)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

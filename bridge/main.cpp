@@ -78,7 +78,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
     const Counters &c = r.counters;
     for (const std::string &line : r.notes) std::fprintf(stderr, "lidarflow-lcm-bridge: note: %s\n", line.c_str());
     for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
-    if (r.stereo_not_replayed)
+    if (r.interrupted)
         std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",
                      (long long)r.stereo_not_replayed);
     std::fprintf(stderr,
@@ -91,7 +91,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
                  (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
                  (long long)r.flows_written, (long long)r.status_written);
-    return r.lost.empty() && r.stereo_not_replayed == 0 ? 0 : 3;
+    return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
 // Every option of kUsage; the parser (tools/common, shared with the CLI) suggests the nearest

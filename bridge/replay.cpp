@@ -37,6 +37,18 @@ public:
         return i < pending_.size() ? &pending_[i] : nullptr;
     }
     void pop() { pending_.pop_front(); }
+    // Events on `channel` not yet handed over: the pending ones, then the rest of the log (read
+    // header by header, data left out).
+    int64_t count_rest(const std::string &channel) {
+        int64_t n = 0;
+        for (const Pending &p : pending_) n += !p.fed && p.event->channel == channel;
+        pending_.clear();
+        LogEvent e;
+        while (!eof_ && log_->next(&e, [](const std::string &, void *) { return false; }, nullptr))
+            n += e.channel == channel;
+        eof_ = true;
+        return n;
+    }
 
 private:
     static bool wanted(const std::string &channel, void *self) {
@@ -119,11 +131,25 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             const Counters c = bridge->counters();
             return c.stereo_received + c.lidar_received + c.calibration_received;
         };
+        bool interrupted = false;
         // Until the bridge has taken `target` input messages, its worker is idle and every
-        // output it published is in the log.
+        // output it published is in the log. False (error or `interrupted` set) when an output
+        // could not be written (it never will be: waiting for it would never end), LCM failed,
+        // or `stop` was set.
         auto settle = [&](int64_t target) {
             for (;;) {
-                if (bridge->run_once(10) != 0) return false;
+                if (bridge->run_once(10) != 0) {
+                    error = "LCM receive failed";
+                    return false;
+                }
+                if (out.failures) {
+                    error = "cannot write " + out_path + ": " + writer.error();
+                    return false;
+                }
+                if (stop && *stop) {
+                    interrupted = true;
+                    return false;
+                }
                 const Counters c = bridge->counters();
                 if (handled() >= target && bridge->idle() && out.flows == c.results_published &&
                     out.status == c.status_published)
@@ -136,22 +162,16 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 error = printf_string("handing event %" PRId64 " to the bridge failed", e.event_number);
                 return false;
             }
-            if (!settle(target)) {
-                error = "LCM receive failed";
-                return false;
-            }
-            return true;
+            return settle(target);
         };
         LogReader reader(&in, config);
         double next_status = -1;
         int64_t last_utime = 0;
-        while (error.empty()) {
+        while (error.empty() && !interrupted) {
             LogReader::Pending *p = reader.peek(0);
             if (!p) break;
             if (stop && *stop) {
-                for (size_t i = 0; (p = reader.peek(i)); ++i)
-                    report->stereo_not_replayed +=
-                        !p->fed && config.stereo_channel == p->event->channel;
+                interrupted = true;
                 break;
             }
             EventPtr event = std::move(p->event);
@@ -186,9 +206,13 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     LogReader::Pending *q = reader.peek(i);
                     if (!q || later_than(q->event->utime, event->utime, lidar_wait_us)) break;
                     if (!q->fed && config.lidar_channel == q->event->channel) {
-                        feed(*q->event);
+                        if (!feed(*q->event)) break;
                         q->fed = true;
                     }
+                }
+                if (!error.empty() || interrupted) {
+                    report->stereo_not_replayed += interrupted;
+                    break;
                 }
                 const Counters before = bridge->counters();
                 if (!feed(*event)) break;
@@ -227,6 +251,8 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 }
             }
         }
+        // Interrupted: the stereo frames not handed over, counted without reading their data.
+        if (interrupted) report->stereo_not_replayed += reader.count_rest(config.stereo_channel);
         if (bridge) {
             bridge->stop();  // publishes what is left and the final status
             // run_once() is done after stop(); deliver the memq queue to the writers directly.
@@ -236,7 +262,11 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 lcm_handle_timeout(lcm, 10);
             }
             report->counters = bridge->counters();
+            if (report->counters.dropped_shutdown)
+                report->lost.push_back(printf_string("%" PRId64 " stereo frame(s) still queued when the replay stopped",
+                                                     report->counters.dropped_shutdown));
         }
+        report->interrupted = interrupted;
         for (lcm_subscription_t *s : subs)
             if (s) lcm_unsubscribe(lcm, s);
     }

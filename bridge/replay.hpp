@@ -27,6 +27,7 @@ struct ReplayReport {
     int64_t stereo_events = 0, lidar_events = 0, calibration_events = 0;
     int64_t other_events = 0;   // on channels the bridge does not take (left out)
     int64_t flows_written = 0, status_written = 0;
+    bool interrupted = false;         // `stop` was set
     int64_t stereo_not_replayed = 0;  // left when interrupted
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
     // One line per stereo frame that did not reach the estimator, frames missing from the log
@@ -43,8 +44,10 @@ struct ReplayReport {
 // `config` (channels, calibration, estimator options, ...; its lcm URL is irrelevant).
 // status_period_s counts log time here. A LiDAR sweep logged up to config.lidar_wait_ms after
 // a stereo frame is handed over before that frame (as the live bridge would wait for it).
-// `stop` (optional) is polled between events, e.g. set by SIGINT. Returns "" when the replay
-// ran to the end (frames may still be lost: see report->lost), else the reason it could not.
+// `stop` (optional) is polled between events and while waiting for the bridge, e.g. set by
+// SIGINT. Returns "" when the replay ran to the end or was interrupted (frames may still be
+// lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot
+// be read or an output that cannot be written (the first failed write ends the replay).
 std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
                        ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr);
 

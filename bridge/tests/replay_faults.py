@@ -176,6 +176,37 @@ class ReplayFaults(unittest.TestCase):
             status = [e for e in out if e.channel == ll.CHANNELS["status"]]
         self.assertLessEqual(len(status), 6)
 
+    # An output that cannot be written: exit 1 at the first failed write (it used to wait for
+    # the write forever, deaf to SIGINT).
+    def test_full_disk(self):
+        if not os.path.exists("/dev/full"):
+            self.skipTest("no /dev/full")
+        log = self.write("in.log", events_bytes(good_events(3)))
+        rc, err = self.replay(log, out="/dev/full", timeout=60)
+        self.assertEqual(rc, 1)
+        self.assertRegex(err, r"cannot write /dev/full: No space left on device")
+        rc, err = self.replay(log, out=os.path.join(self.tmp.name, "no", "such", "dir.log"))
+        self.assertEqual(rc, 1)
+
+    def test_sigint_and_sigterm(self):
+        log = self.write("long.log", events_bytes(good_events(300)))
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            args = [BRIDGE, "--replay", log, "--out", self.out] + OPTIONS
+            p = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
+            time.sleep(1.0)
+            sent = time.monotonic()
+            p.send_signal(sig)
+            _, err = p.communicate(timeout=30)
+            self.assertLess(time.monotonic() - sent, 5, sig)
+            self.assertEqual(p.returncode, 3, err)
+            m = re.search(r"LOST: interrupted, (\d+) stereo frame\(s\) not replayed", err)
+            self.assertIsNotNone(m, err)
+            processed = self.summary(err)[1]
+            self.assertGreater(int(m.group(1)), 0)
+            self.assertEqual(processed + int(m.group(1)), 300, err)
+            with ll.LogReader(self.out, strict=True) as out:  # whole events only
+                self.assertGreater(sum(1 for _ in out), 0)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

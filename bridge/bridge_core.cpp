@@ -590,6 +590,13 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     // replacing it then costs nothing, while a pair in progress would be lost.
     const double *sweep_T = sweep && sweep->in_lidar_frame ? sweep->lidar_to_camera : nullptr;
     const bool new_camera = !estimator_ || !same_calibration(estimator_calibration_, frame.calibration);
+    if (new_camera && estimator_has_frame_) {
+        // The pair (previous frame, this one) cannot be computed across a camera change.
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.pairs_lost_calibration_change;
+        log("stereo frame %" PRId64 ": the calibration changed since frame %" PRId64 ", their pair is lost", m.utime,
+            prev_utime_);
+    }
     if (new_camera || (sweep_T && !estimator_has_frame_ && !carries_transform(estimator_calibration_, sweep_T))) {
         lf_calibration_t cal = frame.calibration;
         const double *T = sweep_T ? sweep_T

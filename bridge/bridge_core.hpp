@@ -88,6 +88,10 @@ struct Counters {
     // LiDAR-frame sweeps whose transform the estimator did not carry (it changed within a
     // pair): moved by the bridge, one float cast (wire.hpp, LidarSweep). Not in status_t.
     int64_t lidar_moved_by_bridge = 0;
+    // Frame pairs not computed because the calibration changed between their two frames (the
+    // estimator starts over with the new camera). Pairs, not stereo messages: not part of the
+    // accounting identity. Not in status_t (a new field would change the type's fingerprint).
+    int64_t pairs_lost_calibration_change = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
     int32_t lidar_buffered = 0;

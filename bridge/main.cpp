@@ -85,12 +85,12 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
                  "lidarflow-lcm-bridge: replayed %s -> %s in %.1f s: %lld events (stereo %lld, lidar %lld, "
                  "calibration %lld, other channels %lld, left out); stereo processed %lld, dropped %lld, missing "
                  "from the log %lld; lidar malformed %lld, rejected %lld; calibration malformed %lld; %lld results, "
-                 "%lld status messages written\n",
+                 "%lld status messages written; pairs lost to a calibration change %lld\n",
                  in.c_str(), out.c_str(), seconds, (long long)r.events, (long long)r.stereo_events,
                  (long long)r.lidar_events, (long long)r.calibration_events, (long long)r.other_events,
                  (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
-                 (long long)r.flows_written, (long long)r.status_written);
+                 (long long)r.flows_written, (long long)r.status_written, (long long)c.pairs_lost_calibration_change);
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
@@ -294,13 +294,13 @@ int main(int argc, char **argv) {
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
                      "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
-                     "shards dead %d, their pairs lost %lld\n",
+                     "shards dead %d, their pairs lost %lld; pairs lost to a calibration change %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown, (long long)c.dropped_unpaired,
                      (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
-                     c.shards_dead, (long long)c.pairs_lost_dead_shard);
+                     c.shards_dead, (long long)c.pairs_lost_dead_shard, (long long)c.pairs_lost_calibration_change);
     }
     lcm_destroy(lcm);
     return rc;

@@ -231,6 +231,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     report->lost.push_back(printf_string("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
                                                own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
                 }
+                if (after.pairs_lost_calibration_change > before.pairs_lost_calibration_change)
+                    report->lost.push_back(printf_string("%s: no result, the calibration changed since the frame before",
+                                                         which.c_str()));
                 if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
                     report->lost.push_back(
                         printf_string("%" PRId64 " frame(s) missing from the log before %s",

@@ -207,6 +207,23 @@ class ReplayFaults(unittest.TestCase):
             with ll.LogReader(self.out, strict=True) as out:  # whole events only
                 self.assertGreater(sum(1 for _ in out), 0)
 
+    # A calibration that changes before every frame: no pair can be computed; each one lost is
+    # counted and listed (it used to be exit 0 with 0 results and no word).
+    def test_calibration_change_breaks_pairs(self):
+        events = []
+        for i in range(3):
+            events += [(CALIB, calibration(100.0 if i % 2 == 0 else 100.5), 1000000 + 100000 * i - 1),
+                       (STEREO, stereo(i), 1000000 + 100000 * i)]
+        log = self.write("calib.log", events_bytes(events))
+        rc, err = self.replay(log)
+        self.assertEqual(rc, 3)
+        self.assertEqual(self.summary(err), (3, 3))
+        for frame_number in (1, 2):
+            self.assertRegex(err, r"LOST: stereo frame utime \d+ \(sequence 0, frame_number %d, log event \d+\): no "
+                                  r"result, the calibration changed" % frame_number)
+        self.assertIn("0 results", err)
+        self.assertIn("pairs lost to a calibration change 2", err)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -183,13 +183,62 @@ Bridge::~Bridge() {
 }
 
 void Bridge::log(const char *format, ...) {
-    if (!config_.log) return;
-    char line[1024];
     va_list ap;
     va_start(ap, format);
-    std::vsnprintf(line, sizeof line, format, ap);
+    vlog(true, format, ap);
     va_end(ap);
-    std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+}
+
+void Bridge::log_each(const char *format, ...) {
+    va_list ap;
+    va_start(ap, format);
+    vlog(false, format, ap);
+    va_end(ap);
+}
+
+void Bridge::vlog(bool limited, const char *format, va_list ap) {
+    if (!config_.log) return;
+    char line[1024];
+    std::vsnprintf(line, sizeof line, format, ap);
+    if (!limited) {
+        std::lock_guard<std::mutex> lock(log_mutex_);
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+        std::fflush(config_.log);
+        return;
+    }
+    // Rate limit per kind of line (its format): a flood of bad messages must not become a flood
+    // of lines. Up to kLogBurst lines per kLogWindowS seconds; the rest are counted, and the
+    // count is told with the next line of that kind or at stop().
+    std::lock_guard<std::mutex> lock(log_mutex_);
+    LogLimit &l = log_limits_[format];
+    const double now = monotonic_seconds();
+    if (now - l.window_start >= kLogWindowS) {
+        l.window_start = now;
+        l.in_window = 0;
+    }
+    if (++l.in_window > kLogBurst) {
+        ++l.suppressed;
+        l.last = line;
+        return;
+    }
+    if (l.suppressed)
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s (%" PRId64 " more like it not shown)\n", line, l.suppressed);
+    else
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+    l.suppressed = 0;
+    std::fflush(config_.log);
+}
+
+void Bridge::flush_log_limits() {
+    if (!config_.log) return;
+    std::lock_guard<std::mutex> lock(log_mutex_);
+    for (auto &kv : log_limits_) {
+        LogLimit &l = kv.second;
+        if (!l.suppressed) continue;
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %" PRId64 " more line(s) like this one not shown, the last: %s\n",
+                     l.suppressed, l.last.c_str());
+        l.suppressed = 0;
+    }
     std::fflush(config_.log);
 }
 
@@ -721,8 +770,8 @@ void Bridge::flush_outbox() {
         counters_.latency_max_ms = std::max(counters_.latency_max_ms, latency_ms);
         counters_.compute_last_ms = 1000.0 * o.compute_seconds;
         counters_.compute_mean_ms = compute_sum_ms_ / n;
-        if (config_.verbose)
-            log("published scene flow (%zu bytes), latency %.1f ms, estimator %.1f ms", o.bytes.size(), latency_ms,
+        if (config_.verbose)  // asked for: a line per result, never held back
+            log_each("published scene flow (%zu bytes), latency %.1f ms, estimator %.1f ms", o.bytes.size(), latency_ms,
                 1000.0 * o.compute_seconds);
     }
 }
@@ -828,6 +877,7 @@ void Bridge::stop() {
     }
     flush_outbox();
     publish_status();
+    flush_log_limits();
 }
 
 Counters Bridge::counters() const {

@@ -16,9 +16,11 @@
 #include <lcm/lcm.h>
 
 #include <condition_variable>
+#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -160,11 +162,25 @@ private:
     std::shared_ptr<const LidarSweep> find_lidar_locked(int64_t utime) const;
     void flush_outbox();
     void publish_status();
-    void log(const char *format, ...) __attribute__((format(printf, 2, 3)));
+    void log(const char *format, ...) __attribute__((format(printf, 2, 3)));       // rate-limited
+    void log_each(const char *format, ...) __attribute__((format(printf, 2, 3)));  // not limited
+    void vlog(bool limited, const char *format, va_list ap);
+    void flush_log_limits();  // tells the lines the rate limit held back
     void wake();
 
     BridgeConfig config_;
     lcm_t *lcm_;
+    // log(): per format, lines in the current window and those not shown.
+    static constexpr int kLogBurst = 10;
+    static constexpr double kLogWindowS = 10.0;
+    struct LogLimit {
+        double window_start = -1e300;
+        int in_window = 0;
+        int64_t suppressed = 0;
+        std::string last;
+    };
+    std::mutex log_mutex_;
+    std::map<const char *, LogLimit> log_limits_;
     lf_options_t *options_ = nullptr;
     std::vector<lcm_subscription_t *> subscriptions_;
     int wake_fd_ = -1;

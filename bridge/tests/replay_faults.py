@@ -224,6 +224,16 @@ class ReplayFaults(unittest.TestCase):
         self.assertIn("0 results", err)
         self.assertIn("pairs lost to a calibration change 2", err)
 
+    # A flood of bad messages is not a flood of lines: 10 per kind and 10 s, then a count.
+    def test_log_lines_rate_limited(self):
+        events = [(CALIB, b"junk %d" % i, i) for i in range(200)] + good_events(2)
+        log = self.write("flood.log", events_bytes(events))
+        rc, err = self.replay(log)
+        self.assertEqual(rc, 0)
+        self.assertEqual(len(re.findall(r"malformed message on LIDARFLOW_CALIB", err)), 11, err)
+        self.assertIn("190 more line(s) like this one not shown, the last: malformed message on LIDARFLOW_CALIB", err)
+        self.assertIn("calibration malformed 200", err)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -32,8 +32,10 @@ def random_message(cls, rng, n=None):
                            pixel_format=fmt, size=size, left=rng.bytes(size), right=rng.bytes(size))
     if cls is ll.lidar_t:
         n = int(rng.integers(0, 7)) if n is None else n
+        transform = rng.normal(size=16)
+        transform[12:] = [0, 0, 0, 1]  # a rigid transform's last row, as the bridge requires
         return ll.lidar_t(utime=int(rng.integers(0, 2**62)), frame=int(rng.integers(1, 4)),
-                          lidar_to_camera=rng.normal(size=16), num_points=n,
+                          lidar_to_camera=transform, num_points=n,
                           x=rng.normal(size=n).astype(np.float32), y=rng.normal(size=n).astype(np.float32),
                           z=rng.normal(size=n).astype(np.float32))
     if cls is ll.calibration_t:
@@ -140,9 +142,13 @@ class RoundTrip(unittest.TestCase):
                 self.assertEqual(ll.decode(raw).encode(), raw)
 
     def test_defaults_encode(self):
-        # An empty calibration is consistent (width 0 = any size); an empty status too.
-        for cls in (ll.calibration_t, ll.status_t):
-            self.assertEqual(cls.decode(cls().encode()), cls())
+        # An empty status is consistent; an empty calibration is not a camera (fx 0), which the
+        # bridge refuses, but it round-trips unchecked.
+        self.assertEqual(ll.status_t.decode(ll.status_t().encode()), ll.status_t())
+        with self.assertRaisesRegex(ll.MessageError, "fx, fy, baseline must be > 0"):
+            ll.calibration_t().encode()
+        cal = ll.calibration_t()
+        self.assertEqual(ll.calibration_t.decode(cal.encode(check=False), check=False), cal)
 
     def test_unknown_field_refused(self):
         with self.assertRaises(TypeError):
@@ -245,7 +251,7 @@ class Malformed(unittest.TestCase):
         with self.assertRaisesRegex(ll.MessageError, "unknown frame 0"):
             ll.lidar_t.decode(self.with_field(lidar, "frame", 0))
         with self.assertRaisesRegex(ll.MessageError, "image size -1x0"):
-            ll.calibration_t.decode(self.with_field(ll.calibration_t(), "width", -1))
+            ll.calibration_t.decode(self.with_field(ll.calibration_message(100, 100, 50, 20, 0.5), "width", -1))
         raw = bytearray(ll.status_t(last_error="abc").encode())
         raw[-1] = ord("x")
         with self.assertRaisesRegex(ll.MessageError, "not NUL-terminated"):
@@ -379,6 +385,34 @@ class Builders(unittest.TestCase):
         np.testing.assert_array_equal(left, [[0, 1, 2], [5, 6, 7]])
         np.testing.assert_array_equal(right, [[10, 11, 12], [15, 16, 17]])
         self.assertIsNone(order)
+
+    def test_decoders_refuse_what_the_bridge_refuses(self):
+        # bridge/wire.cpp's checks and the C ABI's camera ranges (the bridge probes lf_create).
+        cal = ll.calibration_message(100, 100, 50, 20, 0.5)
+        for field, value, reason in (("fx", float("nan"), "fx = nan is not finite"),
+                                     ("cy", float("inf"), "cy = inf is not finite"),
+                                     ("baseline", -0.5, "baseline must be > 0"), ("fy", 0.0, "must be > 0"),
+                                     ("fx", 1e200, r"fx = 1e\+200 px is outside \[1, 1e\+06\]"),
+                                     ("baseline", 1e-300, "baseline = 1e-300 m is outside")):
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=field):
+                ll.calibration_t.decode(Malformed.with_field(cal, field, value))
+        pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)
+        nan_point = ll.lidar_message(pts, utime=1, frame="camera")
+        nan_point.y[1] = np.nan
+        with self.assertRaisesRegex(ll.MessageError, "point 1 is not finite"):
+            ll.lidar_t.decode(nan_point.encode(check=False))
+        t = np.eye(4)
+        for k, v, reason in ((3, np.inf, r"lidar_to_camera\[3\] is not finite"),
+                             (0, np.nan, r"lidar_to_camera\[0\] is not finite"), (14, 1.0, "last row"),
+                             (0, 1e300, "point 0 is out of float range")):
+            bad = ll.lidar_message(pts, utime=1, frame="lidar", lidar_to_camera=t.copy())
+            bad.lidar_to_camera[k] = v
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=reason):
+                ll.lidar_t.decode(bad.encode(check=False))
+        # The transform is not used (nor checked, as in the bridge) for the other frames.
+        unused = ll.lidar_message(pts, utime=1, frame="camera")
+        unused.lidar_to_camera[3] = np.inf
+        self.assertEqual(ll.lidar_t.decode(unused.encode()).frame, ll.lidar_t.FRAME_CAMERA)
 
     def test_lidar(self):
         pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)

@@ -62,6 +62,21 @@ def _lcm_hash(fields):
     return ((v << 1) & mask) + (v >> 63)
 
 
+class _Float32NaN(float):
+    """A NaN decoded from a scalar float (float32) field, with its 4 bytes: Python floats are
+    doubles, and converting a float32 signalling NaN to one and back quiets it (sets the quiet
+    bit), which would change the bytes of a decode/encode round trip. encode() writes `raw`."""
+    __slots__ = ("raw",)
+
+    def __new__(cls, raw):
+        self = super().__new__(cls, struct.unpack(">f", raw)[0])
+        self.raw = raw
+        return self
+
+    def __repr__(self):
+        return "nan(0x%s)" % self.raw.hex()
+
+
 class _Reader:
     """Bounds-checked cursor over a message: a read past the end is a MessageError, never a
     short result."""
@@ -152,7 +167,10 @@ class _Message:
                         raise MessageError("%s.%s holds a NUL byte" % (self.TYPE_NAME, name))
                     out.append(struct.pack(">i", len(raw) + 1) + raw + b"\0")
                 elif dim is None:
-                    out.append(struct.pack(">" + _PRIMITIVES[typ][0], value))
+                    if type(value) is _Float32NaN and typ == "float":
+                        out.append(value.raw)  # its exact bits (a signalling NaN stays one)
+                    else:
+                        out.append(struct.pack(">" + _PRIMITIVES[typ][0], value))
                 else:
                     n = dim if isinstance(dim, int) else getattr(self, dim)
                     if typ == "byte":
@@ -205,7 +223,10 @@ class _Message:
                 continue
             code, be = _PRIMITIVES[typ]
             if dim is None:
-                (value,) = struct.unpack(">" + code, r.take(struct.calcsize(code), name))
+                raw = r.take(struct.calcsize(code), name)
+                (value,) = struct.unpack(">" + code, raw)
+                if typ == "float" and value != value:
+                    value = _Float32NaN(raw)
                 if name in cls._LENGTH_FIELDS and value < 0:
                     raise MessageError("%s: negative length %s = %d" % (cls.TYPE_NAME, name, value))
                 setattr(msg, name, value)

@@ -80,6 +80,10 @@ void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
 
 constexpr double kClockJumpUs = 86400e6;  // a day
 constexpr int64_t kMaxNotesPerKind = 10;
+// LiDAR look-ahead bounds besides --lidar-wait-ms of log time: the live bridge keeps at most
+// --lidar-buffer (<= 1000) sweeps, so reading further ahead could not change a pairing.
+constexpr size_t kLookaheadEvents = 4096;
+constexpr size_t kLookaheadBytes = size_t(64) << 20;
 
 // a > b + d without overflow (log times may sit anywhere in int64).
 bool later_than(int64_t a, int64_t b, int64_t d) {
@@ -201,15 +205,37 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             } else if (channel == config.stereo_channel) {
                 ++report->stereo_events;
                 // Sweeps logged shortly after the frame reach the live bridge while the frame
-                // waits for them; hand them over first.
+                // waits for them; hand them over first. The wait is bounded as the live one is:
+                // by log time (a frame stamped ahead of the log's clock waits from the log time
+                // of the event after it, not until its own stamp comes round) and by the bytes
+                // and events read ahead. A frame whose look-ahead hit a bound is counted.
+                int64_t window = event->utime;
+                const char *cut = nullptr;
+                size_t ahead_bytes = 0;
                 for (size_t i = 0; error.empty(); ++i) {
                     LogReader::Pending *q = reader.peek(i);
-                    if (!q || later_than(q->event->utime, event->utime, lidar_wait_us)) break;
+                    if (!q) break;
+                    if (i == 0 && later_than(event->utime, q->event->utime, lidar_wait_us)) {
+                        window = q->event->utime;
+                        cut = "the frame's log time is ahead of the events after it";
+                    }
+                    if (later_than(q->event->utime, window, lidar_wait_us)) break;
+                    ahead_bytes += q->event->data.size() + q->event->channel.size();
+                    if (i >= kLookaheadEvents || ahead_bytes > kLookaheadBytes) {
+                        cut = "the look-ahead reached its bound of events or bytes";
+                        break;
+                    }
                     if (!q->fed && config.lidar_channel == q->event->channel) {
                         if (!feed(*q->event)) break;
                         q->fed = true;
                     }
                 }
+                report->lookahead_peak_bytes = std::max(report->lookahead_peak_bytes, static_cast<int64_t>(ahead_bytes));
+                if (cut && ++report->lookahead_cut <= kMaxNotesPerKind)
+                    report->notes.push_back(printf_string(
+                        "stereo log event %" PRId64 " (log time %" PRId64 "): LiDAR look-ahead stopped, %s%s",
+                        event->event_number, event->utime, cut,
+                        report->lookahead_cut == kMaxNotesPerKind ? "; further such frames only counted" : ""));
                 if (!error.empty() || interrupted) {
                     report->stereo_not_replayed += interrupted;
                     break;
@@ -276,6 +302,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     lcm_destroy(lcm);
     for (const EventLogReader::Problem &p : in.problems()) report->lost.push_back("log: " + p.text);
     if (!in.torn_tail().empty()) report->notes.push_back("log: " + in.torn_tail());
+    if (report->lookahead_cut > kMaxNotesPerKind)
+        report->notes.push_back(printf_string("LiDAR look-ahead stopped at a bound for %" PRId64 " frames in all",
+                                              report->lookahead_cut));
     if (report->clock_jumps > kMaxNotesPerKind)
         report->notes.push_back(printf_string("log time jumps by more than a day %" PRId64 " times in all",
                                               report->clock_jumps));

@@ -29,6 +29,8 @@ struct ReplayReport {
     int64_t flows_written = 0, status_written = 0;
     bool interrupted = false;         // `stop` was set
     int64_t stereo_not_replayed = 0;  // left when interrupted
+    int64_t lookahead_cut = 0;        // stereo frames whose LiDAR look-ahead stopped at a bound (notes)
+    int64_t lookahead_peak_bytes = 0; // the most data read ahead for one frame
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
     // One line per stereo frame that did not reach the estimator, frames missing from the log
     // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
@@ -43,7 +45,8 @@ struct ReplayReport {
 // Replays `in_path` into `out_path` (created or truncated) through a bridge configured by
 // `config` (channels, calibration, estimator options, ...; its lcm URL is irrelevant).
 // status_period_s counts log time here. A LiDAR sweep logged up to config.lidar_wait_ms after
-// a stereo frame is handed over before that frame (as the live bridge would wait for it).
+// a stereo frame is handed over before that frame (as the live bridge would wait for it); the
+// look-ahead is bounded in log time from the event after the frame, in events and in bytes.
 // `stop` (optional) is polled between events and while waiting for the bridge, e.g. set by
 // SIGINT. Returns "" when the replay ran to the end or was interrupted (frames may still be
 // lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot

@@ -234,6 +234,21 @@ class ReplayFaults(unittest.TestCase):
         self.assertIn("190 more line(s) like this one not shown, the last: malformed message on LIDARFLOW_CALIB", err)
         self.assertIn("calibration malformed 200", err)
 
+    # A frame stamped far ahead of the log's clock: the LiDAR look-ahead stops after
+    # --lidar-wait-ms of log time from the event after it (it used to read the rest of the log
+    # into memory, every event's log time being before the frame's), and the frame is counted.
+    def test_lookahead_bounded_for_a_frame_stamped_ahead(self):
+        sweep = ll.lidar_message(np.array([[10, 10, 6], [50, 20, 6]], np.float32), utime=0).encode()
+        events = good_events(2) + [(STEREO, stereo(2), 10 ** 15)]
+        events += [(LIDAR, sweep, 1200000 + 10000 * i) for i in range(40)]
+        log = self.write("ahead.log", events_bytes(events))
+        rc, err = self.replay(log, "--lidar-wait-ms", "30")
+        self.assertEqual(rc, 0)
+        self.assertRegex(err, r"note: stereo log event 3 \(log time 1000000000000000\): LiDAR look-ahead stopped, "
+                              r"the frame's log time is ahead of the events after it")
+        self.assertIn("lidar 40,", err)
+        self.assertEqual(self.summary(err), (3, 3))
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -39,8 +39,9 @@ bool EventLogReader::open(const std::string &path) {
         return false;
     }
     struct stat st;
-    if (fstat(fileno(f_), &st) != 0 || S_ISDIR(st.st_mode)) {
-        error_ = path + ": not a file";
+    if (fstat(fileno(f_), &st) != 0 || !S_ISREG(st.st_mode)) {
+        // Every header is checked against the file's size, and skipping to a sync word seeks.
+        error_ = path + ": not a regular file (a log is read with its size known; copy a pipe to a file first)";
         return false;
     }
     return true;

@@ -187,6 +187,9 @@ class ReplayFaults(unittest.TestCase):
         self.assertRegex(err, r"cannot write /dev/full: No space left on device")
         rc, err = self.replay(log, out=os.path.join(self.tmp.name, "no", "such", "dir.log"))
         self.assertEqual(rc, 1)
+        rc, err = self.replay(self.tmp.name)  # a directory is no log
+        self.assertEqual(rc, 1)
+        self.assertIn("not a regular file", err)
 
     def test_sigint_and_sigterm(self):
         log = self.write("long.log", events_bytes(good_events(300)))

@@ -9,9 +9,13 @@
 #include <cerrno>
 #include <chrono>
 #include <cinttypes>
+#include <cmath>
 #include <cstdarg>
 #include <cstdlib>
 #include <cstring>
+
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
 
 #include "lidarflow_status_t.h"
 
@@ -115,7 +119,12 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
             return nullptr;
         }
     }
+    if (!config.shard_key.empty() && (config.shard_count < 2 || config.shard_key.size() < 16)) {
+        *error = "a shard key needs --shard K/N with N > 1, and at least 16 bytes";
+        return nullptr;
+    }
     std::unique_ptr<Bridge> b(new Bridge(config, lcm));
+    if (b->config_.shard_auth_channel.empty()) b->config_.shard_auth_channel = config.status_channel + "_MAC";
     if (lf_options_create(&b->options_) != LF_OK) {
         *error = std::string("estimator options: ") + lf_last_error(nullptr);
         return nullptr;
@@ -156,6 +165,7 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
         channels.push_back({&config.status_channel, &Bridge::on_status});
         channels.push_back({&config.flow_channel, &Bridge::on_flow});
+        if (!config.shard_key.empty()) channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});
     }
     for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
@@ -183,13 +193,62 @@ Bridge::~Bridge() {
 }
 
 void Bridge::log(const char *format, ...) {
-    if (!config_.log) return;
-    char line[1024];
     va_list ap;
     va_start(ap, format);
-    std::vsnprintf(line, sizeof line, format, ap);
+    vlog(true, format, ap);
     va_end(ap);
-    std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+}
+
+void Bridge::log_each(const char *format, ...) {
+    va_list ap;
+    va_start(ap, format);
+    vlog(false, format, ap);
+    va_end(ap);
+}
+
+void Bridge::vlog(bool limited, const char *format, va_list ap) {
+    if (!config_.log) return;
+    char line[1024];
+    std::vsnprintf(line, sizeof line, format, ap);
+    if (!limited) {
+        std::lock_guard<std::mutex> lock(log_mutex_);
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+        std::fflush(config_.log);
+        return;
+    }
+    // Rate limit per kind of line (its format): a flood of bad messages must not become a flood
+    // of lines. Up to kLogBurst lines per kLogWindowS seconds; the rest are counted, and the
+    // count is told with the next line of that kind or at stop().
+    std::lock_guard<std::mutex> lock(log_mutex_);
+    LogLimit &l = log_limits_[format];
+    const double now = monotonic_seconds();
+    if (now - l.window_start >= kLogWindowS) {
+        l.window_start = now;
+        l.in_window = 0;
+    }
+    if (++l.in_window > kLogBurst) {
+        ++l.suppressed;
+        l.last = line;
+        return;
+    }
+    if (l.suppressed)
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s (%" PRId64 " more like it not shown)\n", line, l.suppressed);
+    else
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %s\n", line);
+    l.suppressed = 0;
+    std::fflush(config_.log);
+}
+
+void Bridge::flush_log_limits() {
+    if (!config_.log) return;
+    std::lock_guard<std::mutex> lock(log_mutex_);
+    for (auto &kv : log_limits_) {
+        LogLimit &l = kv.second;
+        if (!l.suppressed) continue;
+        std::fprintf(config_.log, "lidarflow-lcm-bridge: %" PRId64 " more line(s) like this one not shown, the last: %s\n",
+                     l.suppressed, l.last.c_str());
+        l.suppressed = 0;
+    }
     std::fflush(config_.log);
 }
 
@@ -214,6 +273,13 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     StatusMessage status;
     if (!decode_status(rbuf->data, rbuf->data_size, status).empty()) return;  // not ours to judge
     const lidarflow_status_t &f = status.fields;
+    // Computed before the lock: a MAC costs a pass over the message.
+    const bool ours = f.shard_count == b->config_.shard_count && f.shard_index >= 0 && f.shard_index < f.shard_count &&
+                      f.shard_index != b->config_.shard_index;
+    std::vector<uint8_t> mac;
+    if (ours && !b->config_.shard_key.empty())
+        mac = shard_mac_message(b->config_.shard_key, f.shard_index, f.shard_count, b->config_.status_channel,
+                                rbuf->data, rbuf->data_size);
     std::lock_guard<std::mutex> lock(b->mutex_);
     if (f.shard_count != b->config_.shard_count || f.shard_index < 0 || f.shard_index >= f.shard_count) {
         if (!b->warned_foreign_split_)
@@ -223,14 +289,53 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
         return;
     }
     if (f.shard_index == b->config_.shard_index) return;  // our own, looped back
-    ShardWatch &w = b->shards_[static_cast<size_t>(f.shard_index)];
-    w.last_heartbeat = monotonic_seconds();
+    if (b->config_.shard_key.empty()) {
+        b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+        return;
+    }
+    const double now = monotonic_seconds();
+    for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
+        if (it->mac == mac) {
+            b->received_macs_.erase(it);
+            b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+            return;
+        }
+    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.uptime_seconds, std::move(mac), now});
+    b->expire_macs_locked(now);
+}
+
+// A status that counts (authenticated with --shard-key): the shard is alive.
+void Bridge::apply_status_locked(int32_t shard, int64_t utime, double uptime_s) {
+    ShardWatch &w = shards_[static_cast<size_t>(shard)];
+    if (!config_.shard_key.empty()) {
+        // A genuine status recorded and sent again must not keep a dead shard alive.
+        if (w.have_status_utime && utime <= w.status_utime) {
+            ++counters_.shard_messages_refused;
+            log("a status of shard %d/%d with a MAC but not newer than its last (utime %" PRId64 " <= %" PRId64
+                "): a replay, ignored", shard, config_.shard_count, utime, w.status_utime);
+            return;
+        }
+        w.have_status_utime = true;
+        w.status_utime = utime;
+    }
+    const double now = monotonic_seconds();
+    // Its process's start on its own clock: two processes claiming one index differ there.
+    const double start_us = static_cast<double>(utime) - 1e6 * uptime_s;
+    if (w.have_instance && !w.dead && now - w.last_heartbeat <= shard_timeout_ &&
+        std::fabs(start_us - w.instance_start_us) > 1e6) {
+        ++counters_.shard_index_conflicts;
+        log("shard %d/%d: statuses of two processes (started %.1f s apart): is the index claimed twice?", shard,
+            config_.shard_count, std::fabs(start_us - w.instance_start_us) / 1e6);
+    }
+    w.have_instance = true;
+    w.instance_start_us = start_us;
+    w.last_heartbeat = now;
     if (w.dead) {
         // A restarted shard starts from nothing: what it had is already counted.
         w.dead = false;
         w.pending.clear();
-        --b->counters_.shards_dead;
-        b->log("shard %d/%d is back (status received)", f.shard_index, f.shard_count);
+        --counters_.shards_dead;
+        log("shard %d/%d is back (status received)", shard, config_.shard_count);
     }
 }
 
@@ -238,11 +343,124 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     auto *b = static_cast<Bridge *>(self);
     int64_t utime = 0;
     if (!scene_flow_utime(rbuf->data, rbuf->data_size, &utime)) return;
-    std::lock_guard<std::mutex> lock(b->mutex_);
-    for (ShardWatch &w : b->shards_) {
-        const auto it = std::find(w.pending.begin(), w.pending.end(), utime);
-        if (it != w.pending.end()) w.pending.erase(it);
+    std::unique_lock<std::mutex> lock(b->mutex_);
+    if (b->config_.shard_key.empty()) {
+        for (size_t k = 0; k < b->shards_.size(); ++k) b->apply_flow_locked(static_cast<int32_t>(k), utime);
+        return;
     }
+    // Only the shard that owns the pair settles it: the MAC must be that shard's.
+    int32_t owner = -1;
+    for (size_t k = 0; k < b->shards_.size() && owner < 0; ++k) {
+        const std::deque<int64_t> &p = b->shards_[k].pending;
+        if (std::find(p.begin(), p.end(), utime) != p.end()) owner = static_cast<int32_t>(k);
+    }
+    if (owner < 0) return;  // settles nothing
+    lock.unlock();
+    std::vector<uint8_t> mac = shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count,
+                                                 b->config_.flow_channel, rbuf->data, rbuf->data_size);
+    lock.lock();
+    const double now = monotonic_seconds();
+    for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
+        if (it->mac == mac) {
+            b->received_macs_.erase(it);
+            b->apply_flow_locked(owner, utime);
+            return;
+        }
+    b->awaiting_mac_.push_back({false, owner, utime, 0, std::move(mac), now});
+    b->expire_macs_locked(now);
+}
+
+void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
+    std::deque<int64_t> &p = shards_[static_cast<size_t>(shard)].pending;
+    const auto it = std::find(p.begin(), p.end(), utime);
+    if (it != p.end()) p.erase(it);
+}
+
+void Bridge::on_mac(const lcm_recv_buf_t *rbuf, const char *, void *self) {
+    auto *b = static_cast<Bridge *>(self);
+    const auto *d = static_cast<const uint8_t *>(rbuf->data);
+    if (rbuf->data_size != 48 || std::memcmp(d, "LFMAC\x01\0\0", 8) != 0) return;  // not a MAC message
+    std::vector<uint8_t> mac(d, d + rbuf->data_size);
+    std::lock_guard<std::mutex> lock(b->mutex_);
+    const double now = monotonic_seconds();
+    for (auto it = b->awaiting_mac_.begin(); it != b->awaiting_mac_.end(); ++it)
+        if (it->mac == mac) {
+            const AwaitingMac m = std::move(*it);
+            b->awaiting_mac_.erase(it);
+            if (m.status) b->apply_status_locked(m.shard, m.utime, m.uptime_s);
+            else b->apply_flow_locked(m.shard, m.utime);
+            return;
+        }
+    b->received_macs_.push_back({std::move(mac), now});
+    b->expire_macs_locked(now);
+}
+
+// Messages whose MAC did not come within a second (or a wrong one did) are refused; MACs
+// without their message are forgotten. Both lists are bounded.
+void Bridge::expire_macs_locked(double now) {
+    constexpr double kMacWaitS = 1.0;
+    constexpr size_t kMaxWaiting = 1024;
+    while (!awaiting_mac_.empty() &&
+           (now - awaiting_mac_.front().arrival > kMacWaitS || awaiting_mac_.size() > kMaxWaiting)) {
+        const AwaitingMac &m = awaiting_mac_.front();
+        ++counters_.shard_messages_refused;
+        log("a %s claiming shard %d/%d (utime %" PRId64 ") has no valid MAC (--shard-key): ignored",
+            m.status ? "status" : "result", m.shard, config_.shard_count, m.utime);
+        awaiting_mac_.pop_front();
+    }
+    while (!received_macs_.empty() &&
+           (now - received_macs_.front().arrival > kMacWaitS || received_macs_.size() > kMaxWaiting))
+        received_macs_.pop_front();
+}
+
+void Bridge::publish_mac(const std::string &channel, const void *payload, size_t size) {
+    if (config_.shard_key.empty() || config_.shard_count < 2) return;
+    const std::vector<uint8_t> m =
+        shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
+    if (m.empty() || lcm_publish(lcm_, config_.shard_auth_channel.c_str(), m.data(), static_cast<unsigned>(m.size())) != 0)
+        log("publishing the MAC of a message on %s failed", channel.c_str());
+}
+
+std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, int32_t count, const std::string &channel,
+                                       const void *payload, size_t size) {
+    static const char kDomain[] = "lidarflow shard mac v1";  // with its NUL
+    std::vector<uint8_t> in;
+    in.reserve(sizeof kDomain + 8 + channel.size() + 1 + size);
+    in.insert(in.end(), kDomain, kDomain + sizeof kDomain);
+    uint8_t head[8];
+    for (int i = 0; i < 4; ++i) {
+        head[i] = static_cast<uint8_t>(static_cast<uint32_t>(index) >> (24 - 8 * i));
+        head[4 + i] = static_cast<uint8_t>(static_cast<uint32_t>(count) >> (24 - 8 * i));
+    }
+    in.insert(in.end(), head, head + 8);
+    in.insert(in.end(), channel.begin(), channel.end());
+    in.push_back(0);
+    const auto *p = static_cast<const uint8_t *>(payload);
+    in.insert(in.end(), p, p + size);
+    std::vector<uint8_t> out(48);
+    std::memcpy(out.data(), "LFMAC\x01\0\0", 8);
+    std::memcpy(out.data() + 8, head, 8);
+    unsigned int len = 0;
+    if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), in.data(), in.size(), out.data() + 16, &len) ||
+        len != 32)
+        return {};
+    return out;
+}
+
+std::string read_shard_key(const std::string &path, std::string *key) {
+    std::FILE *f = std::fopen(path.c_str(), "rb");
+    if (!f) return path + ": " + std::strerror(errno);
+    std::string k;
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0 && k.size() < (1u << 20)) k.append(buf, n);
+    const bool bad = std::ferror(f);
+    std::fclose(f);
+    if (bad) return path + ": read error";
+    while (!k.empty() && (k.back() == '\n' || k.back() == '\r')) k.pop_back();  // `openssl rand -hex 32 >FILE`
+    if (k.size() < 16) return path + ": a shard key needs at least 16 bytes";
+    *key = std::move(k);
+    return "";
 }
 
 // Whether this shard counts the pairs of dead shard `shard`: it is the first live one after it.
@@ -280,6 +498,7 @@ void Bridge::note_pair_locked(int64_t index, int32_t sequence, int64_t utime) {
 void Bridge::check_shards() {
     const double now = monotonic_seconds();
     std::lock_guard<std::mutex> lock(mutex_);
+    expire_macs_locked(now);
     for (size_t k = 0; k < shards_.size(); ++k) {
         ShardWatch &w = shards_[k];
         if (static_cast<int>(k) == config_.shard_index || w.dead || now - w.last_heartbeat <= shard_timeout_) continue;
@@ -590,6 +809,13 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     // replacing it then costs nothing, while a pair in progress would be lost.
     const double *sweep_T = sweep && sweep->in_lidar_frame ? sweep->lidar_to_camera : nullptr;
     const bool new_camera = !estimator_ || !same_calibration(estimator_calibration_, frame.calibration);
+    if (new_camera && estimator_has_frame_) {
+        // The pair (previous frame, this one) cannot be computed across a camera change.
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.pairs_lost_calibration_change;
+        log("stereo frame %" PRId64 ": the calibration changed since frame %" PRId64 ", their pair is lost", m.utime,
+            prev_utime_);
+    }
     if (new_camera || (sweep_T && !estimator_has_frame_ && !carries_transform(estimator_calibration_, sweep_T))) {
         lf_calibration_t cal = frame.calibration;
         const double *T = sweep_T ? sweep_T
@@ -698,6 +924,7 @@ void Bridge::flush_outbox() {
     for (const Outgoing &o : out) {
         const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
                                    static_cast<unsigned>(o.bytes.size()));
+        if (rc == 0) publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size());
         const double latency_ms = 1000.0 * (monotonic_seconds() - o.received_seconds);
         std::lock_guard<std::mutex> lock(mutex_);
         if (rc != 0) {
@@ -714,8 +941,8 @@ void Bridge::flush_outbox() {
         counters_.latency_max_ms = std::max(counters_.latency_max_ms, latency_ms);
         counters_.compute_last_ms = 1000.0 * o.compute_seconds;
         counters_.compute_mean_ms = compute_sum_ms_ / n;
-        if (config_.verbose)
-            log("published scene flow (%zu bytes), latency %.1f ms, estimator %.1f ms", o.bytes.size(), latency_ms,
+        if (config_.verbose)  // asked for: a line per result, never held back
+            log_each("published scene flow (%zu bytes), latency %.1f ms, estimator %.1f ms", o.bytes.size(), latency_ms,
                 1000.0 * o.compute_seconds);
     }
 }
@@ -759,10 +986,13 @@ void Bridge::publish_status() {
     s.compute_mean_ms = static_cast<float>(c.compute_mean_ms);
     std::string last_error = c.last_error;
     s.last_error = &last_error[0];
-    if (lidarflow_status_t_publish(lcm_, config_.status_channel.c_str(), &s) != 0) {
+    std::vector<uint8_t> bytes(static_cast<size_t>(lidarflow_status_t_encoded_size(&s)));
+    if (lidarflow_status_t_encode(bytes.data(), 0, static_cast<int>(bytes.size()), &s) != static_cast<int>(bytes.size()) ||
+        lcm_publish(lcm_, config_.status_channel.c_str(), bytes.data(), static_cast<unsigned>(bytes.size())) != 0) {
         log("publishing the status on %s failed", config_.status_channel.c_str());
         return;
     }
+    publish_mac(config_.status_channel, bytes.data(), bytes.size());
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.status_published;
 }
@@ -821,6 +1051,7 @@ void Bridge::stop() {
     }
     flush_outbox();
     publish_status();
+    flush_log_limits();
 }
 
 Counters Bridge::counters() const {

@@ -16,9 +16,11 @@
 #include <lcm/lcm.h>
 
 #include <condition_variable>
+#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -64,6 +66,13 @@ struct BridgeConfig {
     // and its pairs counted as lost (see status_t.lcm); < 0: 3 status periods; 0: no watch.
     // Needs status_period_s > 0 (the shards' heartbeats).
     double shard_timeout_s = -1;
+    // --shard-key: a key shared by the shards (raw bytes, >= 16). Each shard then follows every
+    // status_t and scene_flow_t it publishes with a MAC message (shard_mac_message) on
+    // shard_auth_channel, and its watch takes another shard's status, and a result as settling
+    // a pair, only with a valid MAC from the shard that owns it. "" = no key: the watch trusts
+    // anyone on the bus (see docs/LCM.md).
+    std::string shard_key;
+    std::string shard_auth_channel;  // "" = status_channel + "_MAC"
     FlowEncoding encoding = FlowEncoding::Int16;
     int step = 1;                        // flow subsampling
     double status_period_s = 1.0;        // <= 0: status only at shutdown
@@ -84,10 +93,20 @@ struct Counters {
     int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
     int32_t shards_dead = 0;               // --shard: other shards without a recent status
     int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
+    // --shard watch: statuses and results of other shards ignored for want of a valid MAC (with
+    // --shard-key: none within a second, a wrong one, or a replayed status), and statuses that
+    // showed one shard index held by two processes (their start times differ while both are
+    // heard). Not in status_t.
+    int64_t shard_messages_refused = 0;
+    int64_t shard_index_conflicts = 0;
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
     // LiDAR-frame sweeps whose transform the estimator did not carry (it changed within a
     // pair): moved by the bridge, one float cast (wire.hpp, LidarSweep). Not in status_t.
     int64_t lidar_moved_by_bridge = 0;
+    // Frame pairs not computed because the calibration changed between their two frames (the
+    // estimator starts over with the new camera). Pairs, not stereo messages: not part of the
+    // accounting identity. Not in status_t (a new field would change the type's fingerprint).
+    int64_t pairs_lost_calibration_change = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
     int32_t lidar_buffered = 0;
@@ -156,11 +175,25 @@ private:
     std::shared_ptr<const LidarSweep> find_lidar_locked(int64_t utime) const;
     void flush_outbox();
     void publish_status();
-    void log(const char *format, ...) __attribute__((format(printf, 2, 3)));
+    void log(const char *format, ...) __attribute__((format(printf, 2, 3)));       // rate-limited
+    void log_each(const char *format, ...) __attribute__((format(printf, 2, 3)));  // not limited
+    void vlog(bool limited, const char *format, va_list ap);
+    void flush_log_limits();  // tells the lines the rate limit held back
     void wake();
 
     BridgeConfig config_;
     lcm_t *lcm_;
+    // log(): per format, lines in the current window and those not shown.
+    static constexpr int kLogBurst = 10;
+    static constexpr double kLogWindowS = 10.0;
+    struct LogLimit {
+        double window_start = -1e300;
+        int in_window = 0;
+        int64_t suppressed = 0;
+        std::string last;
+    };
+    std::mutex log_mutex_;
+    std::map<const char *, LogLimit> log_limits_;
     lf_options_t *options_ = nullptr;
     std::vector<lcm_subscription_t *> subscriptions_;
     int wake_fd_ = -1;
@@ -195,7 +228,31 @@ private:
         double last_heartbeat = 0;
         bool dead = false;
         std::deque<int64_t> pending;
+        bool have_instance = false;   // the start time (utime - uptime) of its latest status
+        double instance_start_us = 0;
+        bool have_status_utime = false;  // --shard-key: the latest authenticated status's utime
+        int64_t status_utime = 0;
     };
+    // --shard-key: messages waiting for their MAC, and MACs waiting for their message.
+    struct AwaitingMac {
+        bool status;                  // else a result
+        int32_t shard;
+        int64_t utime;                // status_t.utime, or the result's t1 utime
+        double uptime_s;
+        std::vector<uint8_t> mac;     // the expected MAC message
+        double arrival;
+    };
+    std::deque<AwaitingMac> awaiting_mac_;
+    struct ReceivedMac {
+        std::vector<uint8_t> mac;
+        double arrival;
+    };
+    std::deque<ReceivedMac> received_macs_;
+    static void on_mac(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
+    void apply_status_locked(int32_t shard, int64_t utime, double uptime_s);
+    void apply_flow_locked(int32_t shard, int64_t utime);
+    void expire_macs_locked(double now);
+    void publish_mac(const std::string &channel, const void *payload, size_t size);
     double shard_timeout_ = 0;
     std::vector<ShardWatch> shards_;
     bool watch_have_prev_ = false;    // the previous decodable frame, to know which pairs exist
@@ -226,5 +283,13 @@ private:
 
 // Monotonic clock [s].
 double monotonic_seconds();
+
+// The MAC message that follows a shard's `payload` on `channel` with --shard-key: 8 bytes
+// "LFMAC\x01\0\0", shard index and count (int32, big-endian), and HMAC-SHA256(key, "lidarflow
+// shard mac v1\0" index count channel "\0" payload) (32 bytes). Empty when libcrypto fails.
+std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, int32_t count,
+                                       const std::string &channel, const void *payload, size_t size);
+// Reads a --shard-key file into *key; "" or what is wrong (missing, shorter than 16 bytes).
+std::string read_shard_key(const std::string &path, std::string *key);
 
 }  // namespace lidarflow::bridge

@@ -52,6 +52,9 @@ const char *kUsage =
     "                           order); the queue default becomes 2 (a pair)\n"
     "  --shard-timeout S        with --shard: a shard with no status for S seconds is taken for dead\n"
     "                           and its pairs counted as lost (default 3 status periods; 0 = off)\n"
+    "  --shard-key FILE         with --shard: a key shared by the shards (>= 16 bytes, e.g. `openssl rand\n"
+    "                           -hex 32`): statuses and results carry an HMAC-SHA256 (on STATUS_CHANNEL_MAC),\n"
+    "                           and the shard watch ignores (and counts) those without a valid one\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result\n"
     "  --replay IN.log --out OUT.log\n"
@@ -76,21 +79,22 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
         return 1;
     }
     const Counters &c = r.counters;
+    for (const std::string &line : r.notes) std::fprintf(stderr, "lidarflow-lcm-bridge: note: %s\n", line.c_str());
     for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
-    if (r.stereo_not_replayed)
+    if (r.interrupted)
         std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",
                      (long long)r.stereo_not_replayed);
     std::fprintf(stderr,
                  "lidarflow-lcm-bridge: replayed %s -> %s in %.1f s: %lld events (stereo %lld, lidar %lld, "
                  "calibration %lld, other channels %lld, left out); stereo processed %lld, dropped %lld, missing "
                  "from the log %lld; lidar malformed %lld, rejected %lld; calibration malformed %lld; %lld results, "
-                 "%lld status messages written\n",
+                 "%lld status messages written; pairs lost to a calibration change %lld\n",
                  in.c_str(), out.c_str(), seconds, (long long)r.events, (long long)r.stereo_events,
                  (long long)r.lidar_events, (long long)r.calibration_events, (long long)r.other_events,
                  (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
-                 (long long)r.flows_written, (long long)r.status_written);
-    return r.lost.empty() && r.stereo_not_replayed == 0 ? 0 : 3;
+                 (long long)r.flows_written, (long long)r.status_written, (long long)c.pairs_lost_calibration_change);
+    return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
 // Every option of kUsage; the parser (tools/common, shared with the CLI) suggests the nearest
@@ -100,7 +104,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     for (const char *name : {"lcm-url", "stereo-channel", "left-channel", "right-channel", "pair-wait-ms",
                              "pair-buffer", "lidar-channel", "calib-channel", "flow-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
-                             "lidar-buffer", "queue", "shard", "shard-timeout", "encoding", "step", "option", "status-period", "replay",
+                             "lidar-buffer", "queue", "shard", "shard-timeout", "shard-key", "encoding", "step", "option", "status-period", "replay",
                              "out"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
@@ -170,6 +174,17 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
         config->shard_count = n;
     }
     if (args.has("shard-timeout")) config->shard_timeout_s = args.number_in("shard-timeout", 0, 0, 3600);
+    if (args.has("shard-key")) {
+        const std::string err = read_shard_key(args.str("shard-key", ""), &config->shard_key);
+        if (!err.empty()) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --shard-key %s\n", err.c_str());
+            return false;
+        }
+        if (config->shard_count < 2) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --shard-key needs --shard K/N with N > 1\n");
+            return false;
+        }
+    }
     config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
     config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);
     if (config->shard_timeout_s > 0 && (config->shard_count < 2 || config->status_period_s <= 0)) {
@@ -293,13 +308,15 @@ int main(int argc, char **argv) {
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
                      "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
-                     "shards dead %d, their pairs lost %lld\n",
+                     "shards dead %d, their pairs lost %lld; pairs lost to a calibration change %lld; shard messages "
+                     "refused (no valid MAC) %lld, shard index conflicts %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown, (long long)c.dropped_unpaired,
                      (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
-                     c.shards_dead, (long long)c.pairs_lost_dead_shard);
+                     c.shards_dead, (long long)c.pairs_lost_dead_shard, (long long)c.pairs_lost_calibration_change,
+                     (long long)c.shard_messages_refused, (long long)c.shard_index_conflicts);
     }
     lcm_destroy(lcm);
     return rc;

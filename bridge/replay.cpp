@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "replay.hpp"
 
-#include <lcm/eventlog.h>
-
 #include <algorithm>
 #include <cinttypes>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <deque>
@@ -13,16 +12,14 @@
 namespace lidarflow::bridge {
 namespace {
 
-struct EventDeleter {
-    void operator()(lcm_eventlog_event_t *e) const { lcm_eventlog_free_event(e); }
-};
-using EventPtr = std::unique_ptr<lcm_eventlog_event_t, EventDeleter>;
+using EventPtr = std::unique_ptr<LogEvent>;
 
 // Events in log order, read lazily: the look-ahead for late LiDAR sweeps reads only as far as
-// the wait reaches, so a long log is never held in memory.
+// the wait reaches, so a long log is never held in memory. The data of events on channels the
+// bridge does not take is not read at all.
 class LogReader {
 public:
-    explicit LogReader(lcm_eventlog_t *log) : log_(log) {}
+    LogReader(EventLogReader *log, const BridgeConfig &config) : log_(log), config_(config) {}
     // The i-th pending event (0 = next), reading as needed; nullptr past the end.
     struct Pending {
         EventPtr event;
@@ -30,25 +27,42 @@ public:
     };
     Pending *peek(size_t i) {
         while (pending_.size() <= i && !eof_) {
-            lcm_eventlog_event_t *e = lcm_eventlog_read_next_event(log_);
-            if (!e) {
+            EventPtr e(new LogEvent);
+            if (!log_->next(e.get(), &LogReader::wanted, this)) {
                 eof_ = true;
                 break;
             }
-            pending_.push_back({EventPtr(e), false});
+            pending_.push_back({std::move(e), false});
         }
         return i < pending_.size() ? &pending_[i] : nullptr;
     }
     void pop() { pending_.pop_front(); }
+    // Events on `channel` not yet handed over: the pending ones, then the rest of the log (read
+    // header by header, data left out).
+    int64_t count_rest(const std::string &channel) {
+        int64_t n = 0;
+        for (const Pending &p : pending_) n += !p.fed && p.event->channel == channel;
+        pending_.clear();
+        LogEvent e;
+        while (!eof_ && log_->next(&e, [](const std::string &, void *) { return false; }, nullptr))
+            n += e.channel == channel;
+        eof_ = true;
+        return n;
+    }
 
 private:
-    lcm_eventlog_t *log_;
+    static bool wanted(const std::string &channel, void *self) {
+        const BridgeConfig &c = static_cast<LogReader *>(self)->config_;
+        return channel == c.stereo_channel || channel == c.lidar_channel || channel == c.calibration_channel;
+    }
+    EventLogReader *log_;
+    const BridgeConfig &config_;
     std::deque<Pending> pending_;
     bool eof_ = false;
 };
 
 struct Output {
-    lcm_eventlog_t *log = nullptr;
+    EventLogWriter *log = nullptr;
     int64_t now = 0;  // log clock: timestamp of the input event being handled
     int64_t flows = 0, status = 0, failures = 0;
     std::string flow_channel;
@@ -56,18 +70,24 @@ struct Output {
 
 void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
     auto *out = static_cast<Output *>(user);
-    lcm_eventlog_event_t e{};
-    e.timestamp = out->now;
-    e.channellen = static_cast<int32_t>(std::char_traits<char>::length(channel));
-    e.datalen = static_cast<int32_t>(rbuf->data_size);
-    e.channel = const_cast<char *>(channel);
-    e.data = rbuf->data;
-    if (lcm_eventlog_write_event(out->log, &e) != 0) {
+    if (!out->log->write(out->now, channel, rbuf->data, rbuf->data_size)) {
         ++out->failures;
         return;
     }
     if (out->flow_channel == channel) ++out->flows;
     else ++out->status;
+}
+
+constexpr double kClockJumpUs = 86400e6;  // a day
+constexpr int64_t kMaxNotesPerKind = 10;
+// LiDAR look-ahead bounds besides --lidar-wait-ms of log time: the live bridge keeps at most
+// --lidar-buffer (<= 1000) sweeps, so reading further ahead could not change a pairing.
+constexpr size_t kLookaheadEvents = 4096;
+constexpr size_t kLookaheadBytes = size_t(64) << 20;
+
+// a > b + d without overflow (log times may sit anywhere in int64).
+bool later_than(int64_t a, int64_t b, int64_t d) {
+    return static_cast<__int128>(a) > static_cast<__int128>(b) + d;
 }
 
 const char *drop_reason(const Counters &a, const Counters &b) {
@@ -93,21 +113,15 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     config.status_period_s = 0;  // driven on the log's clock below
     config.lidar_wait_ms = 0;    // the look-ahead replaces the wait, deterministically
 
-    lcm_eventlog_t *in = lcm_eventlog_create(in_path.c_str(), "r");
-    if (!in) return "cannot read the log " + in_path;
+    EventLogReader in;
+    if (!in.open(in_path)) return "cannot read the log " + in.error();
+    EventLogWriter writer;
     Output out;
     out.flow_channel = config.flow_channel;
-    out.log = lcm_eventlog_create(out_path.c_str(), "w");
-    if (!out.log) {
-        lcm_eventlog_destroy(in);
-        return "cannot write the log " + out_path;
-    }
+    out.log = &writer;
+    if (!writer.open(out_path)) return "cannot write the log " + writer.error();
     lcm_t *lcm = lcm_create("memq://");
-    if (!lcm) {
-        lcm_eventlog_destroy(in);
-        lcm_eventlog_destroy(out.log);
-        return "cannot create an in-process LCM (memq://)";
-    }
+    if (!lcm) return "cannot create an in-process LCM (memq://)";
     std::string error;
     {
         std::unique_ptr<Bridge> bridge = Bridge::create(config, lcm, &error);
@@ -121,47 +135,67 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             const Counters c = bridge->counters();
             return c.stereo_received + c.lidar_received + c.calibration_received;
         };
+        bool interrupted = false;
         // Until the bridge has taken `target` input messages, its worker is idle and every
-        // output it published is in the log.
+        // output it published is in the log. False (error or `interrupted` set) when an output
+        // could not be written (it never will be: waiting for it would never end), LCM failed,
+        // or `stop` was set.
         auto settle = [&](int64_t target) {
             for (;;) {
-                if (bridge->run_once(10) != 0) return false;
+                if (bridge->run_once(10) != 0) {
+                    error = "LCM receive failed";
+                    return false;
+                }
+                if (out.failures) {
+                    error = "cannot write " + out_path + ": " + writer.error();
+                    return false;
+                }
+                if (stop && *stop) {
+                    interrupted = true;
+                    return false;
+                }
                 const Counters c = bridge->counters();
                 if (handled() >= target && bridge->idle() && out.flows == c.results_published &&
                     out.status == c.status_published)
                     return true;
             }
         };
-        auto feed = [&](const lcm_eventlog_event_t &e) {
-            const std::string channel(e.channel, static_cast<size_t>(e.channellen));
+        auto feed = [&](const LogEvent &e) {
             const int64_t target = handled() + 1;
-            if (lcm_publish(lcm, channel.c_str(), e.data, static_cast<unsigned>(e.datalen)) != 0) {
-                error = printf_string("handing event %" PRId64 " to the bridge failed", e.eventnum);
+            if (lcm_publish(lcm, e.channel.c_str(), e.data.data(), static_cast<unsigned>(e.data.size())) != 0) {
+                error = printf_string("handing event %" PRId64 " to the bridge failed", e.event_number);
                 return false;
             }
-            if (!settle(target)) {
-                error = "LCM receive failed";
-                return false;
-            }
-            return true;
+            return settle(target);
         };
-        LogReader reader(in);
+        LogReader reader(&in, config);
         double next_status = -1;
-        while (error.empty()) {
+        int64_t last_utime = 0;
+        while (error.empty() && !interrupted) {
             LogReader::Pending *p = reader.peek(0);
             if (!p) break;
             if (stop && *stop) {
-                for (size_t i = 0; (p = reader.peek(i)); ++i)
-                    report->stereo_not_replayed +=
-                        !p->fed && config.stereo_channel == std::string(p->event->channel, p->event->channellen);
+                interrupted = true;
                 break;
             }
             EventPtr event = std::move(p->event);
             const bool fed_early = p->fed;
             reader.pop();
             ++report->events;
-            const std::string channel(event->channel, static_cast<size_t>(event->channellen));
-            out.now = std::max(out.now, event->timestamp);
+            const std::string &channel = event->channel;
+            // A log clock that jumps by more than a day (a bad timestamp, a clock reset) is
+            // worth a line: results and status are stamped with it.
+            if (report->events > 1 && std::fabs(static_cast<double>(event->utime) - static_cast<double>(last_utime)) >
+                                          kClockJumpUs) {
+                if (++report->clock_jumps <= kMaxNotesPerKind)
+                    report->notes.push_back(printf_string(
+                        "log time jumps by %+.6g s at log event %" PRId64 " on %s (offset %" PRId64 ")%s",
+                        (static_cast<double>(event->utime) - static_cast<double>(last_utime)) / 1e6,
+                        event->event_number, channel.c_str(), event->offset,
+                        report->clock_jumps == kMaxNotesPerKind ? "; further jumps only counted" : ""));
+            }
+            last_utime = event->utime;
+            out.now = std::max(out.now, event->utime);
             if (channel == config.lidar_channel) {
                 ++report->lidar_events;
                 if (!fed_early) feed(*event);
@@ -171,25 +205,51 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             } else if (channel == config.stereo_channel) {
                 ++report->stereo_events;
                 // Sweeps logged shortly after the frame reach the live bridge while the frame
-                // waits for them; hand them over first.
+                // waits for them; hand them over first. The wait is bounded as the live one is:
+                // by log time (a frame stamped ahead of the log's clock waits from the log time
+                // of the event after it, not until its own stamp comes round) and by the bytes
+                // and events read ahead. A frame whose look-ahead hit a bound is counted.
+                int64_t window = event->utime;
+                const char *cut = nullptr;
+                size_t ahead_bytes = 0;
                 for (size_t i = 0; error.empty(); ++i) {
                     LogReader::Pending *q = reader.peek(i);
-                    if (!q || q->event->timestamp > event->timestamp + lidar_wait_us) break;
-                    if (!q->fed && config.lidar_channel == std::string(q->event->channel, q->event->channellen)) {
-                        feed(*q->event);
+                    if (!q) break;
+                    if (i == 0 && later_than(event->utime, q->event->utime, lidar_wait_us)) {
+                        window = q->event->utime;
+                        cut = "the frame's log time is ahead of the events after it";
+                    }
+                    if (later_than(q->event->utime, window, lidar_wait_us)) break;
+                    ahead_bytes += q->event->data.size() + q->event->channel.size();
+                    if (i >= kLookaheadEvents || ahead_bytes > kLookaheadBytes) {
+                        cut = "the look-ahead reached its bound of events or bytes";
+                        break;
+                    }
+                    if (!q->fed && config.lidar_channel == q->event->channel) {
+                        if (!feed(*q->event)) break;
                         q->fed = true;
                     }
+                }
+                report->lookahead_peak_bytes = std::max(report->lookahead_peak_bytes, static_cast<int64_t>(ahead_bytes));
+                if (cut && ++report->lookahead_cut <= kMaxNotesPerKind)
+                    report->notes.push_back(printf_string(
+                        "stereo log event %" PRId64 " (log time %" PRId64 "): LiDAR look-ahead stopped, %s%s",
+                        event->event_number, event->utime, cut,
+                        report->lookahead_cut == kMaxNotesPerKind ? "; further such frames only counted" : ""));
+                if (!error.empty() || interrupted) {
+                    report->stereo_not_replayed += interrupted;
+                    break;
                 }
                 const Counters before = bridge->counters();
                 if (!feed(*event)) break;
                 const Counters after = bridge->counters();
                 StereoMessage m;
-                const bool decodable = decode_stereo(event->data, static_cast<size_t>(event->datalen), m).empty();
+                const bool decodable = decode_stereo(event->data.data(), event->data.size(), m).empty();
                 const std::string which =
                     decodable ? printf_string("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
                                     ", log event %" PRId64 ")",
-                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->eventnum)
-                              : printf_string("stereo log event %" PRId64, event->eventnum);
+                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->event_number)
+                              : printf_string("stereo log event %" PRId64, event->event_number);
                 if (after.dropped() > before.dropped()) {
                     // last_error is this frame's only for the reasons that set it.
                     const bool own_error = after.dropped_malformed > before.dropped_malformed ||
@@ -197,6 +257,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     report->lost.push_back(printf_string("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
                                                own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
                 }
+                if (after.pairs_lost_calibration_change > before.pairs_lost_calibration_change)
+                    report->lost.push_back(printf_string("%s: no result, the calibration changed since the frame before",
+                                                         which.c_str()));
                 if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
                     report->lost.push_back(
                         printf_string("%" PRId64 " frame(s) missing from the log before %s",
@@ -205,14 +268,20 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 ++report->other_events;
             }
             if (status_period_s > 0 && error.empty()) {
-                if (next_status < 0) next_status = static_cast<double>(out.now) + 1e6 * status_period_s;
-                if (static_cast<double>(out.now) >= next_status) {
+                // Computed, not counted up period by period: one event stamped years ahead
+                // (or at INT64_MAX) costs one status, not hours of loop.
+                const double period = 1e6 * status_period_s, now = static_cast<double>(out.now);
+                if (next_status < 0) next_status = now + period;
+                if (now >= next_status) {
                     bridge->publish_status_now();
-                    while (next_status <= static_cast<double>(out.now)) next_status += 1e6 * status_period_s;
+                    next_status += period * (std::floor((now - next_status) / period) + 1);
+                    if (!(next_status > now)) next_status = now + period;  // rounding at 2^63
                     settle(handled());
                 }
             }
         }
+        // Interrupted: the stereo frames not handed over, counted without reading their data.
+        if (interrupted) report->stereo_not_replayed += reader.count_rest(config.stereo_channel);
         if (bridge) {
             bridge->stop();  // publishes what is left and the final status
             // run_once() is done after stop(); deliver the memq queue to the writers directly.
@@ -222,13 +291,24 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 lcm_handle_timeout(lcm, 10);
             }
             report->counters = bridge->counters();
+            if (report->counters.dropped_shutdown)
+                report->lost.push_back(printf_string("%" PRId64 " stereo frame(s) still queued when the replay stopped",
+                                                     report->counters.dropped_shutdown));
         }
+        report->interrupted = interrupted;
         for (lcm_subscription_t *s : subs)
             if (s) lcm_unsubscribe(lcm, s);
     }
     lcm_destroy(lcm);
-    lcm_eventlog_destroy(in);
-    lcm_eventlog_destroy(out.log);
+    for (const EventLogReader::Problem &p : in.problems()) report->lost.push_back("log: " + p.text);
+    if (!in.torn_tail().empty()) report->notes.push_back("log: " + in.torn_tail());
+    if (report->lookahead_cut > kMaxNotesPerKind)
+        report->notes.push_back(printf_string("LiDAR look-ahead stopped at a bound for %" PRId64 " frames in all",
+                                              report->lookahead_cut));
+    if (report->clock_jumps > kMaxNotesPerKind)
+        report->notes.push_back(printf_string("log time jumps by more than a day %" PRId64 " times in all",
+                                              report->clock_jumps));
+    if (!writer.close() && error.empty()) error = "writing " + out_path + " failed: " + writer.error();
     report->flows_written = out.flows;
     report->status_written = out.status;
     if (error.empty() && out.failures) error = printf_string("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());

@@ -2,6 +2,10 @@
 #pragma once
 // Offline replay: an LCM log in, a result log out, at the estimator's pace.
 //
+// The log is read by EventLogReader (log_reader.hpp), which checks every header against the
+// file and reads the same events as lidarflow_lcm's LogReader; corruption is reported in
+// ReplayReport::lost, never silently ended on.
+//
 // The log's input events are handed one at a time to an ordinary Bridge over an in-process
 // memq:// LCM, and the next one only once the bridge has handled it, the worker is idle and its
 // outputs are written. So no frame can go stale, and every decision (pairing, calibration in
@@ -14,6 +18,7 @@
 #include <vector>
 
 #include "bridge_core.hpp"
+#include "log_reader.hpp"
 
 namespace lidarflow::bridge {
 
@@ -22,19 +27,30 @@ struct ReplayReport {
     int64_t stereo_events = 0, lidar_events = 0, calibration_events = 0;
     int64_t other_events = 0;   // on channels the bridge does not take (left out)
     int64_t flows_written = 0, status_written = 0;
+    bool interrupted = false;         // `stop` was set
     int64_t stereo_not_replayed = 0;  // left when interrupted
-    // One line per stereo frame that did not reach the estimator, or frames missing from the
-    // log (gaps in frame_number); empty when every frame was processed.
+    int64_t lookahead_cut = 0;        // stereo frames whose LiDAR look-ahead stopped at a bound (notes)
+    int64_t lookahead_peak_bytes = 0; // the most data read ahead for one frame
+    int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
+    // One line per stereo frame that did not reach the estimator, frames missing from the log
+    // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
+    // sync word, reading stopped: frames there are unaccounted for); empty when every frame was
+    // processed.
     std::vector<std::string> lost;
+    // Things worth telling that cost no frame (a torn tail: the last write cut short).
+    std::vector<std::string> notes;
     Counters counters;          // the bridge's final counters
 };
 
 // Replays `in_path` into `out_path` (created or truncated) through a bridge configured by
 // `config` (channels, calibration, estimator options, ...; its lcm URL is irrelevant).
 // status_period_s counts log time here. A LiDAR sweep logged up to config.lidar_wait_ms after
-// a stereo frame is handed over before that frame (as the live bridge would wait for it).
-// `stop` (optional) is polled between events, e.g. set by SIGINT. Returns "" when the replay
-// ran to the end (frames may still be lost: see report->lost), else the reason it could not.
+// a stereo frame is handed over before that frame (as the live bridge would wait for it); the
+// look-ahead is bounded in log time from the event after the frame, in events and in bytes.
+// `stop` (optional) is polled between events and while waiting for the bridge, e.g. set by
+// SIGINT. Returns "" when the replay ran to the end or was interrupted (frames may still be
+// lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot
+// be read or an output that cannot be written (the first failed write ends the replay).
 std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
                        ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr);
 

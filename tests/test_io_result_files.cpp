@@ -209,6 +209,17 @@ void test_point_cloud(void **) {
     const std::string ply = slurp(dir / "c.ply");
     std::ofstream(dir / "short.ply", std::ios::binary) << ply.substr(0, ply.size() - 1);
     test::expect_error([&] { io::read_ply((dir / "short.ply").string()); }, ErrorCode::Format);
+    // A vertex count whose size (27 bytes a point) wraps modulo 2^64 to the body's 1 byte: 27 is
+    // odd, so 9564978408590137875 * 27 = 1 (mod 2^64). A count error, not an allocation failure.
+    const std::string head = ply.substr(0, ply.find("end_header\n") + 11);
+    const size_t at = head.find("element vertex ") + 15;
+    std::string wrap = head.substr(0, at) + "9564978408590137875" + head.substr(head.find('\n', at)) + "x";
+    std::ofstream(dir / "wrap.ply", std::ios::binary) << wrap;
+    const std::string msg = test::error_message_of([&] { io::read_ply((dir / "wrap.ply").string()); });
+    assert_non_null(std::strstr(msg.c_str(), "vertex count 9564978408590137875 needs more than the file's 1 bytes"));
+    test::expect_error([&] { io::read_ply((dir / "wrap.ply").string()); }, ErrorCode::Format);
+    std::ofstream(dir / "neg.ply", std::ios::binary) << head.substr(0, at) + "-1" + head.substr(head.find('\n', at));
+    test::expect_error([&] { io::read_ply((dir / "neg.ply").string()); }, ErrorCode::Format);
     test::expect_error([&] { io::scene_points(f, StereoCamera{}, image); }, ErrorCode::InvalidArgument);
     test::expect_error([&] { io::scene_points(f, cam, cv::Mat(4, 7, CV_8UC3)); }, ErrorCode::SizeMismatch);
 }

@@ -44,6 +44,12 @@ expect 2 '--shard-timeout needs --shard K/N with N > 1' --shard-timeout 2
 expect 2 '--shard-timeout needs --shard K/N with N > 1 and a --status-period > 0' --shard 0/2 --shard-timeout 2 --status-period 0
 expect 2 '--shard-timeout expects a number in \[0, 3600\]' --shard 0/2 --shard-timeout -1
 expect 2 '--replay and --out go together' --replay in.log --out out.log --lcm-url udpm://
+expect 2 '--shard-key /nonexistent/key: No such file' --shard 0/2 --shard-key /nonexistent/key
+short_key="$(mktemp)" && printf 'short\n' >"$short_key"
+expect 2 'a shard key needs at least 16 bytes' --shard 0/2 --shard-key "$short_key"
+printf '0123456789abcdef0123\n' >"$short_key"
+expect 2 '--shard-key needs --shard K/N with N > 1' --shard-key "$short_key"
+rm -f "$short_key"
 expect 0 '^usage: lidarflow-lcm-bridge' --help
 expect 0 '^lidarflow-lcm-bridge [0-9]' --queue 0 --version
 

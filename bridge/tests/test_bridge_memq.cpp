@@ -516,6 +516,134 @@ void test_dead_shards(void **) {
     assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped() + c.skipped_other_shard);
 }
 
+// A status of shard k/n with the given utime and uptime, followed by its MAC message under
+// `key` when one is given ("" = none).
+std::vector<uint8_t> keyed_status(Rig &rig, int32_t k, int32_t n, int64_t utime, double uptime, const std::string &key) {
+    lidarflow_status_t st;
+    std::memset(&st, 0, sizeof st);
+    st.utime = utime;
+    st.uptime_seconds = uptime;
+    st.shard_index = k;
+    st.shard_count = n;
+    char empty[] = "";
+    st.last_error = empty;
+    std::vector<uint8_t> b(static_cast<size_t>(lidarflow_status_t_encoded_size(&st)));
+    assert_int_equal(lidarflow_status_t_encode(b.data(), 0, (int)b.size(), &st), (int)b.size());
+    assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS", b.data(), (unsigned)b.size()), 0);
+    if (!key.empty()) {
+        const std::vector<uint8_t> mac = shard_mac_message(key, k, n, "LIDARFLOW_STATUS", b.data(), b.size());
+        assert_int_equal(mac.size(), 48);
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
+    }
+    return b;
+}
+
+// A result naming pair t1 `utime` (only utime is read), with the MAC of shard `mac_shard`
+// under `key` (none when key is "").
+void keyed_flow(Rig &rig, int64_t utime, const std::string &key, int32_t mac_shard) {
+    lidarflow_scene_flow_t flow;
+    std::memset(&flow, 0, sizeof flow);
+    flow.utime = utime;
+    flow.step = 1;
+    uint8_t no_bytes[1] = {0};
+    flow.u = flow.v = flow.d0 = flow.d1 = flow.valid = no_bytes;
+    std::vector<uint8_t> b(static_cast<size_t>(lidarflow_scene_flow_t_encoded_size(&flow)));
+    assert_int_equal(lidarflow_scene_flow_t_encode(b.data(), 0, (int)b.size(), &flow), (int)b.size());
+    assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_FLOW", b.data(), (unsigned)b.size()), 0);
+    if (!key.empty()) {
+        const std::vector<uint8_t> mac = shard_mac_message(key, mac_shard, 3, "LIDARFLOW_FLOW", b.data(), b.size());
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
+    }
+}
+
+// --shard 0/3 with --shard-key: a forger without the key cannot keep a dead shard alive (its
+// statuses have no MAC, a recorded genuine one is not newer), and results settle a pair only
+// with the MAC of the shard that owns it; what fails is counted. The bridge's own status and
+// results carry a valid MAC.
+void test_keyed_shards(void **) {
+    const std::string key = "0123456789abcdef-shared";
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 0.6;  // heartbeats every ~50 ms: room for a loaded machine
+    config.shard_key = key;
+    Rig rig(config);  // no calibration: the frames are dropped, the pairs still watched
+    std::vector<std::vector<uint8_t>> macs;
+    lcm_subscription_t *mac_sub = lcm_subscribe(rig.lcm, "LIDARFLOW_STATUS_MAC", &Rig::record, &macs);
+    int64_t clock = 1000000;
+    std::vector<uint8_t> last2;
+    auto heartbeats = [&](bool shard2_alive) {
+        clock += 1000;
+        keyed_status(rig, 1, 3, clock, 1.0, key);
+        if (shard2_alive) last2 = keyed_status(rig, 2, 3, clock, 1.0, key);
+    };
+    for (int64_t n = 0; n <= 5; ++n) {  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
+        heartbeats(true);
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    }
+    keyed_flow(rig, 2000, "", 2);   // shard 2's pair 1 -> 2 without a MAC: not settled
+    keyed_flow(rig, 5000, key, 1);  // shard 2's pair 4 -> 5 with shard 1's MAC: not settled
+    keyed_flow(rig, 4000, key, 1);  // shard 1's pair 3 -> 4 with its own MAC: settled
+    // Shard 2 dies; a forger sends its status without a MAC, with one under another key, and the
+    // last genuine status with its MAC again.
+    const double end = monotonic_seconds() + 1.0;
+    while (monotonic_seconds() < end) {
+        heartbeats(false);
+        keyed_status(rig, 2, 3, clock, 1.0, "");
+        keyed_status(rig, 2, 3, clock, 1.0, "another key, 16+ bytes");
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS", last2.data(), (unsigned)last2.size()), 0);
+        const std::vector<uint8_t> mac = shard_mac_message(key, 2, 3, "LIDARFLOW_STATUS", last2.data(), last2.size());
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
+        for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    }
+    const double wait_end = monotonic_seconds() + 1.2;  // the last forgeries' MAC wait runs out
+    while (monotonic_seconds() < wait_end) {
+        heartbeats(false);
+        for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+    }
+    const Counters c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);            // shard 2; shard 1 lives on its keyed statuses
+    assert_int_equal(c.pairs_lost_dead_shard, 2);  // 1 -> 2 and 4 -> 5: neither forged result counted
+    assert_true(c.shard_messages_refused >= 10);
+    assert_int_equal(c.shard_index_conflicts, 0);
+    // What this bridge published carries a valid MAC.
+    rig.bridge->stop();
+    while (lcm_handle_timeout(rig.lcm, 50) > 0) {
+    }
+    lcm_unsubscribe(rig.lcm, mac_sub);
+    int own = 0;
+    for (const auto &b : rig.statuses) {
+        StatusMessage st;
+        if (!decode_status(b.data(), b.size(), st).empty() || st.fields.shard_index != 0) continue;
+        const std::vector<uint8_t> want = shard_mac_message(key, 0, 3, "LIDARFLOW_STATUS", b.data(), b.size());
+        own += std::find(macs.begin(), macs.end(), want) != macs.end();
+    }
+    assert_true(own >= 5);
+}
+
+// Without a key: statuses of one shard index from two processes (different start times, both
+// heard) are counted as a conflict.
+void test_shard_index_claimed_twice(void **) {
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 1;
+    Rig rig(config, true);
+    for (int i = 0; i < 4; ++i) {
+        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 5.0 + 0.1 * i, "");  // started at 5 s
+        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 1.0 + 0.1 * i, "");  // started at 9 s
+        keyed_status(rig, 2, 3, 10000000 + 100000 * i, 3.0 + 0.1 * i, "");  // one process
+        for (int k = 0; k < 5; ++k) rig.bridge->run_once(5);
+    }
+    const Counters c = rig.bridge->counters();
+    assert_int_equal(c.shard_index_conflicts, 7);
+    assert_int_equal(c.shards_dead, 0);
+    assert_int_equal(c.shard_messages_refused, 0);
+}
+
 // A gray bot_core.image_t of the scene (a camera per channel).
 std::vector<uint8_t> image_bytes(const uint8_t *pixels, int64_t utime) {
     bot_core_image_t m;
@@ -1039,6 +1167,8 @@ int main(void) {
         cmocka_unit_test(test_points_in_lidar_frame),
         cmocka_unit_test(test_lidar_transform_change_within_pair),
         cmocka_unit_test(test_dead_shards),
+        cmocka_unit_test(test_keyed_shards),
+        cmocka_unit_test(test_shard_index_claimed_twice),
         cmocka_unit_test(test_left_right_channels),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "io/point_cloud.hpp"
 
+#include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -100,9 +102,17 @@ std::vector<CloudPoint> read_ply(const std::string &path) {
     const size_t v = header.find("element vertex ");
     require(v != std::string::npos, ErrorCode::Format, path + ": no vertex element");
     char *stop = nullptr;
-    const unsigned long long n = std::strtoull(header.c_str() + v + 15, &stop, 10);
-    require(*stop == '\n', ErrorCode::Format, path + ": bad vertex count");
+    const char *count = header.c_str() + v + 15;
+    errno = 0;
+    const unsigned long long n = std::strtoull(count, &stop, 10);
+    require(stop != count && *stop == '\n' && *count >= '0' && *count <= '9' && errno == 0, ErrorCode::Format,
+            path + ": bad vertex count");
     const size_t body = end + end_marker.size();
+    // Divided, not multiplied: a count whose size wraps modulo 2^64 could match any file size.
+    require(n <= (data.size() - body) / kRecordBytes, ErrorCode::Format,
+            path + ": vertex count " + std::to_string(n) + " needs more than the file's " +
+                std::to_string(data.size() - body) + " bytes of vertices (" + std::to_string(kRecordBytes) +
+                " per point)");
     require(data.size() - body == n * kRecordBytes, ErrorCode::Format,
             path + ": " + std::to_string(data.size() - body) + " bytes of vertices, the header announces " +
                 std::to_string(n) + " points");

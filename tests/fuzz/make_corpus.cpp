@@ -19,7 +19,9 @@
 #include "core/maps.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_png.hpp"
+#include "io/point_cloud.hpp"
 #include "io/velodyne.hpp"
+#include "log_reader.hpp"
 #include "wire.hpp"
 
 namespace {
@@ -150,6 +152,33 @@ void lcm_seeds() {
     c = bridge::calibration_message(cal, 3000, 0, 0);
     save("fuzz_lcm_calibration", "any_size", encode(c, lidarflow_calibration_t_encoded_size, lidarflow_calibration_t_encode));
 
+    // An LCM log as --replay reads it (bridge/log_reader): a calibration and a small stereo
+    // frame, then the same with a torn tail.
+    {
+        lidarflow_stereo_t m{};
+        uint8_t px[6] = {1, 2, 3, 4, 5, 6};
+        m.utime = 5000;
+        m.frame_number = 1;
+        m.width = 3;
+        m.height = 2;
+        m.row_stride = 3;
+        m.pixel_format = LIDARFLOW_STEREO_T_PIXEL_GRAY8;
+        m.size = 6;
+        m.left = m.right = px;
+        const std::vector<uint8_t> stereo = encode(m, lidarflow_stereo_t_encoded_size, lidarflow_stereo_t_encode);
+        const std::vector<uint8_t> calib = encode(c, lidarflow_calibration_t_encoded_size, lidarflow_calibration_t_encode);
+        const fs::path tmp = fs::temp_directory_path() / "lidarflow_make_corpus.log";
+        bridge::EventLogWriter w;
+        require(w.open(tmp.string()) && w.write(3000, "LIDARFLOW_CALIB", calib.data(), calib.size()) &&
+                    w.write(5000, "LIDARFLOW_STEREO", stereo.data(), stereo.size()) && w.close(),
+                ErrorCode::Io, "cannot write " + tmp.string());
+        std::vector<uint8_t> log = file_bytes(tmp);
+        fs::remove(tmp);
+        save("fuzz_lcm_eventlog", "calibration_and_stereo", log);
+        log.resize(log.size() - 5);
+        save("fuzz_lcm_eventlog", "torn_tail", log);
+    }
+
     // scene_flow_t: what the bridge publishes (encode_flow + encode_scene_flow) for a 5x3 result.
     const uint32_t W = 5, H = 3;
     std::vector<float> planes[4];
@@ -205,6 +234,15 @@ void lcm_seeds() {
         save("fuzz_lcm_status", i == 0 ? "no_error" : "with_error",
              encode(s, lidarflow_status_t_encoded_size, lidarflow_status_t_encode));
     }
+}
+
+// The PLY point cloud `lidarflow run --ply` writes and `viz --points` reads: two points.
+void ply_seeds() {
+    const fs::path tmp = fs::temp_directory_path() / "lidarflow_make_corpus.ply";
+    io::write_ply(tmp.string(), {{cv::Vec3f(1, 2, 10), cv::Vec3f(0.1f, 0, -0.5f), cv::Vec3b(200, 0, 30)},
+                                 {cv::Vec3f(-3, 0.5f, 25), cv::Vec3f(0, 0, 0), cv::Vec3b(0, 255, 7)}});
+    save("fuzz_io_ply", "two_points", file_bytes(tmp));
+    fs::remove(tmp);
 }
 
 void kitti_seeds() {
@@ -467,6 +505,7 @@ int main(int argc, char **argv) {
         }
         lcm_seeds();
         kitti_seeds();
+        ply_seeds();
         capi_seeds();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "make_corpus: %s\n", e.what());

@@ -22,8 +22,19 @@ class LidarflowError(RuntimeError):
 _LIDAR_KINDS = {"disparity": _lib.LIDAR_DISPARITY, "camera": _lib.LIDAR_POINTS_CAMERA,
                 "lidar": _lib.LIDAR_POINTS_LIDAR}
 _COLOUR_FORMATS = {"rgb": _lib.PIXEL_RGB8, "bgr": _lib.PIXEL_BGR8}
+MAX_IMAGE_SIDE = 16384  # lf_push_frame refuses larger sides (lidarflow.h)
+_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
 _RESULT_PLANES = (("u", np.float32), ("v", np.float32), ("d0", np.float32), ("d1", np.float32),
                   ("valid", np.uint8), ("confidence", np.float32))
+
+
+def _int64(what, value):
+    """value as an int that fits the C ABI's int64_t; ValueError otherwise (ctypes would wrap it
+    silently: 2**64 + 5 would reach the library as 5)."""
+    v = int(value)
+    if not _INT64_MIN <= v <= _INT64_MAX:
+        raise ValueError("%s = %d is outside int64 [-2**63, 2**63 - 1]" % (what, v))
+    return v
 
 
 def _image_view(name, a, colour_order):
@@ -44,6 +55,10 @@ def _image_view(name, a, colour_order):
         raise ValueError("%s must have shape (H, W) or (H, W, 3), got %s" % (name, a.shape))
     if a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError("%s is empty (shape %s)" % (name, a.shape))
+    # Checked here: lf_image_t's uint32 sides would wrap a width of 2**32 + 64 to 64.
+    if a.shape[0] > MAX_IMAGE_SIDE or a.shape[1] > MAX_IMAGE_SIDE:
+        raise ValueError("%s is %d x %d px (width x height): each side must be at most %d"
+                         % (name, a.shape[1], a.shape[0], MAX_IMAGE_SIDE))
     # Rows may be padded (any positive row stride); the pixels of a row must be packed.
     packed = a.strides[1] == channels and (a.ndim == 2 or a.strides[2] == 1)
     if not packed or a.strides[0] < a.shape[1] * channels:
@@ -75,6 +90,8 @@ def _lidar_view(lidar, kind):
     if lidar.shape[0] > 0 and (lidar.strides[1] != 4 or lidar.strides[0] < 12):
         raise ValueError("lidar entries must hold 3 packed float32 (strides (S >= 12, 4)), got strides %s"
                          % (lidar.strides,))
+    if lidar.shape[0] > 0xFFFFFFFF:
+        raise ValueError("lidar has %d entries, at most 2**32 - 1" % lidar.shape[0])
     stride = lidar.strides[0] if lidar.shape[0] > 0 else 12
     return _lib.Lidar(_LIDAR_KINDS[kind], lidar.shape[0], lidar.ctypes.data if lidar.shape[0] else None, stride)
 
@@ -178,11 +195,16 @@ class Estimator:
         if left.shape != right.shape:
             raise ValueError("left and right differ in shape: %s and %s" % (left.shape, right.shape))
         lv = None if lidar is None else _lidar_view(lidar, lidar_kind)
-        if timestamp is None:
-            timestamp = 0 if self._last_timestamp is None else self._last_timestamp + 1
-        timestamp = int(timestamp)
+        if timestamp is not None:
+            timestamp = _int64("timestamp", timestamp)
         with self._busy:
             h = self._h()
+            # The default under the lock: two threads pushing with timestamp=None must not
+            # both read the same previous timestamp.
+            if timestamp is None:
+                timestamp = 0 if self._last_timestamp is None else self._last_timestamp + 1
+                if timestamp > _INT64_MAX:
+                    raise ValueError("timestamp: the previous frame's is 2**63 - 1, there is no later one")
             _check(lib.lf_push_frame(h, timestamp, ctypes.byref(li), ctypes.byref(ri),
                                      ctypes.byref(lv) if lv is not None else None), h)
             self._last_timestamp = timestamp
@@ -282,7 +304,7 @@ def _set_option(opt, key, value):
     if isinstance(value, str):
         st = lib.lf_options_set_string(opt, k, value.encode())
     elif isinstance(value, (bool, int, np.integer)):
-        st = lib.lf_options_set_int(opt, k, int(value))
+        st = lib.lf_options_set_int(opt, k, _int64("option %r" % key, value))
     elif isinstance(value, (float, np.floating)):
         st = lib.lf_options_set_float(opt, k, float(value))
     else:

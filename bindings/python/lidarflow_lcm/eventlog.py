@@ -2,10 +2,12 @@
 """LCM event logs (what lcm-logger writes and lcm-logplayer plays), in pure Python.
 
 Each event: sync word 0xEDA1DA01, int64 event number, int64 utime [us], int32 channel length,
-int32 data length, the channel name, the data; all big-endian. The reader follows liblcm's
-(lcm_eventlog_read_next_event): it skips bytes that are not a sync word up to the next one, and
-a log cut mid-write ends at its last whole event. Unlike liblcm it says so: each such place is
-a line in `problems` and a LogWarning, or a LogFormatError with strict=True.
+int32 data length, the channel name, the data; all big-endian. The reader skips bytes that are
+not a sync word up to the next one, stops at a header with impossible lengths, and ends a log
+cut mid-write at its last whole event; each such place is a line in `problems` and a LogWarning,
+or a LogFormatError with strict=True. (liblcm 1.3.1's lcm_eventlog_read_next_event instead stops
+silently at garbage after an event, dropping that event too.) lidarflow-lcm-bridge --replay
+reads logs by the same rules (bridge/log_reader.cpp), so both see the same events.
 """
 import collections
 import struct
@@ -41,7 +43,7 @@ class LogReader:
                 ...
 
     channels: None (all), a channel name, or an iterable of names: other events are skipped
-    (their data is not read into memory). strict=False (default) reads like liblcm and records
+    (their data is not read into memory). strict=False (default) reads past what it can and records
     each irregularity in `problems` (and warns once per log); strict=True raises LogFormatError
     at the first one instead. `path` may also be a binary file object.
     """
@@ -112,7 +114,7 @@ class LogReader:
                 return
             _, number, utime, channel_len, data_len = _HEADER.unpack(head)
             if not 0 < channel_len <= MAX_CHANNEL_BYTES or data_len < 0:
-                # liblcm stops reading here too; nothing after it can be trusted.
+                # liblcm stops reading here too; nothing after it can be trusted (so does the bridge).
                 self._problem("event at offset %d has channel length %d (1..%d) and data length %d (>= 0): "
                               "reading stops" % (offset, channel_len, MAX_CHANNEL_BYTES, data_len))
                 return

@@ -62,6 +62,21 @@ def _lcm_hash(fields):
     return ((v << 1) & mask) + (v >> 63)
 
 
+class _Float32NaN(float):
+    """A NaN decoded from a scalar float (float32) field, with its 4 bytes: Python floats are
+    doubles, and converting a float32 signalling NaN to one and back quiets it (sets the quiet
+    bit), which would change the bytes of a decode/encode round trip. encode() writes `raw`."""
+    __slots__ = ("raw",)
+
+    def __new__(cls, raw):
+        self = super().__new__(cls, struct.unpack(">f", raw)[0])
+        self.raw = raw
+        return self
+
+    def __repr__(self):
+        return "nan(0x%s)" % self.raw.hex()
+
+
 class _Reader:
     """Bounds-checked cursor over a message: a read past the end is a MessageError, never a
     short result."""
@@ -152,7 +167,10 @@ class _Message:
                         raise MessageError("%s.%s holds a NUL byte" % (self.TYPE_NAME, name))
                     out.append(struct.pack(">i", len(raw) + 1) + raw + b"\0")
                 elif dim is None:
-                    out.append(struct.pack(">" + _PRIMITIVES[typ][0], value))
+                    if type(value) is _Float32NaN and typ == "float":
+                        out.append(value.raw)  # its exact bits (a signalling NaN stays one)
+                    else:
+                        out.append(struct.pack(">" + _PRIMITIVES[typ][0], value))
                 else:
                     n = dim if isinstance(dim, int) else getattr(self, dim)
                     if typ == "byte":
@@ -205,7 +223,10 @@ class _Message:
                 continue
             code, be = _PRIMITIVES[typ]
             if dim is None:
-                (value,) = struct.unpack(">" + code, r.take(struct.calcsize(code), name))
+                raw = r.take(struct.calcsize(code), name)
+                (value,) = struct.unpack(">" + code, raw)
+                if typ == "float" and value != value:
+                    value = _Float32NaN(raw)
                 if name in cls._LENGTH_FIELDS and value < 0:
                     raise MessageError("%s: negative length %s = %d" % (cls.TYPE_NAME, name, value))
                 setattr(msg, name, value)
@@ -267,8 +288,38 @@ class lidar_t(_Message):
     FRAME_CAMERA, FRAME_LIDAR, FRAME_DISPARITY = 1, 2, 3
 
     def check(self):
+        # bridge/wire.cpp decode_lidar, in its order.
+        t = self.TYPE_NAME
         if self.frame not in (self.FRAME_CAMERA, self.FRAME_LIDAR, self.FRAME_DISPARITY):
-            _fail(self.TYPE_NAME, "unknown frame %d (1 camera, 2 lidar, 3 disparity)", self.frame)
+            _fail(t, "unknown frame %d (1 camera, 2 lidar, 3 disparity)", self.frame)
+        T = None
+        if self.frame == self.FRAME_LIDAR:
+            T = np.asarray(self.lidar_to_camera, np.float64).ravel()
+            if T.size == 16:  # else encode() names the length mismatch
+                bad = np.flatnonzero(~np.isfinite(T))
+                if bad.size:
+                    _fail(t, "lidar_to_camera[%d] is not finite", bad[0])
+                if not np.array_equal(T[12:], [0, 0, 0, 1]):
+                    _fail(t, "lidar_to_camera's last row is %g %g %g %g, not 0 0 0 1", *T[12:])
+            else:
+                T = None
+        xyz = [np.asarray(getattr(self, k)) for k in ("x", "y", "z")]
+        n = min(a.size for a in xyz) if all(a.ndim == 1 for a in xyz) else 0
+        if n == 0:
+            return
+        p = np.stack([a[:n].astype(np.float64) for a in xyz], axis=1)
+        bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
+        if bad.size:
+            _fail(t, "point %d is not finite", bad[0])
+        if T is not None:
+            T = T.reshape(4, 4)
+            with np.errstate(over="ignore", invalid="ignore"):
+                # In the bridge's order: T[r,0]*x + T[r,1]*y + T[r,2]*z + T[r,3], in double.
+                cam = np.stack([T[r, 0] * p[:, 0] + T[r, 1] * p[:, 1] + T[r, 2] * p[:, 2] + T[r, 3]
+                                for r in range(3)], axis=1)
+            bad = np.flatnonzero(~np.all(np.abs(cam) <= float(np.finfo(np.float32).max), axis=1))
+            if bad.size:
+                _fail(t, "point %d is out of float range after lidar_to_camera", bad[0])
 
 
 class calibration_t(_Message):
@@ -279,9 +330,27 @@ class calibration_t(_Message):
                ("baseline", "double", None))
     __slots__ = tuple(f[0] for f in _FIELDS)
 
+    # The C ABI's camera ranges (src/core/limits.hpp), which the bridge applies by creating an
+    # estimator with the calibration before taking it.
+    FOCAL_RANGE, PRINCIPAL_POINT_MAX, BASELINE_RANGE = (1.0, 1e6), 1e6, (1e-4, 1e4)
+
     def check(self):
+        # bridge/wire.cpp decode_calibration, then the C ABI's ranges, as the bridge checks them.
+        t = self.TYPE_NAME
+        values = [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy), ("baseline", self.baseline)]
+        for name, v in values:
+            if not math.isfinite(v):
+                _fail(t, "%s = %r is not finite", name, v)
+        if not (self.fx > 0 and self.fy > 0 and self.baseline > 0):
+            _fail(t, "fx, fy, baseline must be > 0 (got %g, %g, %g)", self.fx, self.fy, self.baseline)
         if not (0 <= self.width <= 16384 and 0 <= self.height <= 16384):
-            _fail(self.TYPE_NAME, "image size %dx%d (each side 0..16384, 0 = any)", self.width, self.height)
+            _fail(t, "image size %dx%d (each side 0..16384, 0 = any)", self.width, self.height)
+        (flo, fhi), pmax, (blo, bhi) = self.FOCAL_RANGE, self.PRINCIPAL_POINT_MAX, self.BASELINE_RANGE
+        for name, v, lo, hi, unit in (("fx", self.fx, flo, fhi, "px"), ("fy", self.fy, flo, fhi, "px"),
+                                      ("cx", self.cx, -pmax, pmax, "px"), ("cy", self.cy, -pmax, pmax, "px"),
+                                      ("baseline", self.baseline, blo, bhi, "m")):
+            if not lo <= v <= hi:
+                _fail(t, "%s = %g %s is outside [%g, %g]", name, v, unit, lo, hi)
 
 
 class scene_flow_t(_Message):

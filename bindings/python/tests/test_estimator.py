@@ -170,6 +170,26 @@ class BadInput(unittest.TestCase):
         self.assertValueError("lidar_kind", push, l, r, lid, lidar_kind="points")
         self.assertFalse(self.est.has_result)
 
+    def test_integers_out_of_range_are_refused_before_ctypes(self):
+        # ctypes would wrap them: a width of 2**32 + 64 to 64, threads 2**64 + 2 to 2, a
+        # timestamp 2**64 + 5 to 5.
+        buf = np.zeros(256, np.uint8)
+        wide = np.lib.stride_tricks.as_strided(buf, shape=(1, 2 ** 32 + 64), strides=(2 ** 32 + 64, 1))
+        self.assertValueError("each side must be at most 16384", self.est.push, wide, wide)
+        tall = np.zeros((16385, 2), np.uint8)
+        self.assertValueError("2 x 16385 px", self.est.push, tall, tall)
+        l, r = self.scene[0], self.scene[1]
+        self.assertValueError("timestamp = 18446744073709551621 is outside int64", self.est.push, l, r,
+                              timestamp=2 ** 64 + 5)
+        self.assertValueError("outside int64", self.est.push, l, r, timestamp=-2 ** 63 - 1)
+        self.assertFalse(self.est.has_result)
+        for threads in (2 ** 64 + 2, 2 ** 70, np.uint64(2 ** 63)):
+            with self.assertRaises(ValueError) as cm:
+                lidarflow.Estimator(options={"threads": threads}, **CAL)
+            self.assertIn("option 'threads' = %d is outside int64" % int(threads), str(cm.exception))
+        self.assertFalse(self.est.push(l, r, timestamp=2 ** 63 - 1))
+        self.assertValueError("no later one", self.est.push, l, r)
+
     def test_library_errors_leave_the_estimator_usable(self):
         l, r = self.scene[0], self.scene[1]
         lid = grid_lidar(10)
@@ -323,6 +343,27 @@ class Threads(unittest.TestCase):
         for k in range(len(cases)):
             self.assertTrue(same(parallel[k], serial[k]), "case %d differs" % k)
         self.assertFalse(same(serial[0], serial[1]))  # the cases are distinct
+
+    def test_default_timestamps_from_two_threads(self):
+        # timestamp=None is the previous frame's + 1, taken under the Estimator's lock: no push
+        # may be refused as "not after the previous frame's".
+        scene = make_scene()
+        errors = []
+        with lidarflow.Estimator(options=dict(FAST, threads=1), **CAL) as est:
+            def work(k):
+                for i in range(10):
+                    try:
+                        est.push(scene[2 * ((i + k) % 2)], scene[2 * ((i + k) % 2) + 1])
+                    except Exception as e:
+                        errors.append(e)
+
+            threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            self.assertEqual(errors, [])
+            self.assertEqual(est.info()["t1_us"], 19)
 
 
 if __name__ == "__main__":

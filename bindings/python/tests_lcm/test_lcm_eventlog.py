@@ -97,7 +97,7 @@ class Damaged(unittest.TestCase):
         got, problems, _ = self.read(self.raw)
         self.assertEqual((len(got), problems), (5, []))
 
-    def test_garbage_between_events_is_skipped_as_liblcm_does(self):
+    def test_garbage_between_events_is_skipped(self):
         raw = self.raw[:self.last] + b"\x01garbage\xed\xa1" + self.raw[self.last:]
         got, problems, _ = self.read(raw)
         self.assertEqual(len(got), 5)

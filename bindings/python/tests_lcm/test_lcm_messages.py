@@ -32,8 +32,10 @@ def random_message(cls, rng, n=None):
                            pixel_format=fmt, size=size, left=rng.bytes(size), right=rng.bytes(size))
     if cls is ll.lidar_t:
         n = int(rng.integers(0, 7)) if n is None else n
+        transform = rng.normal(size=16)
+        transform[12:] = [0, 0, 0, 1]  # a rigid transform's last row, as the bridge requires
         return ll.lidar_t(utime=int(rng.integers(0, 2**62)), frame=int(rng.integers(1, 4)),
-                          lidar_to_camera=rng.normal(size=16), num_points=n,
+                          lidar_to_camera=transform, num_points=n,
                           x=rng.normal(size=n).astype(np.float32), y=rng.normal(size=n).astype(np.float32),
                           z=rng.normal(size=n).astype(np.float32))
     if cls is ll.calibration_t:
@@ -139,10 +141,44 @@ class RoundTrip(unittest.TestCase):
                 self.assertEqual(cls.decode(raw), m)
                 self.assertEqual(ll.decode(raw).encode(), raw)
 
+    def test_signalling_nans_round_trip_exactly(self):
+        # Python floats are doubles: a float32 signalling NaN converted to one and back comes
+        # back quiet (another bit pattern). Scalar float fields keep their bytes.
+        flow = random_message(ll.scene_flow_t, np.random.default_rng(5))
+        flow.encoding, flow.scale = ll.scene_flow_t.ENCODING_FLOAT32, 1.0
+        flow.plane_size = flow.width * flow.height * 4
+        for k in ("u", "v", "d0", "d1"):
+            setattr(flow, k, bytes(flow.plane_size))
+        status = ll.status_t()
+        for msg, fields in ((flow, (("scale", "7f800001"), ("compute_seconds", "ffa00005"))),
+                            (status, (("latency_mean_ms", "7f800123"), ("compute_last_ms", "ff800001"),
+                                      ("uptime_seconds", "7ff0000000000001")))):
+            # The NaN bit patterns put on the wire directly.
+            raw = bytearray(msg.encode())
+            offset = 8
+            for name, typ, dim in type(msg)._FIELDS:
+                size = messages.struct.calcsize(messages._PRIMITIVES[typ][0]) if dim is None and typ != "string" else None
+                for field, bits in fields:
+                    if name == field:
+                        raw[offset:offset + size] = bytes.fromhex(bits)
+                if size is None:
+                    break  # the fields set here all come before the first array or string
+                offset += size
+            raw = bytes(raw)
+            decoded = type(msg).decode(raw)
+            for field, _ in fields:
+                self.assertTrue(math.isnan(getattr(decoded, field)), field)
+            self.assertEqual(decoded.encode(), raw, type(msg).TYPE_NAME)
+            self.assertEqual(type(msg).decode(decoded.encode()), decoded)
+
     def test_defaults_encode(self):
-        # An empty calibration is consistent (width 0 = any size); an empty status too.
-        for cls in (ll.calibration_t, ll.status_t):
-            self.assertEqual(cls.decode(cls().encode()), cls())
+        # An empty status is consistent; an empty calibration is not a camera (fx 0), which the
+        # bridge refuses, but it round-trips unchecked.
+        self.assertEqual(ll.status_t.decode(ll.status_t().encode()), ll.status_t())
+        with self.assertRaisesRegex(ll.MessageError, "fx, fy, baseline must be > 0"):
+            ll.calibration_t().encode()
+        cal = ll.calibration_t()
+        self.assertEqual(ll.calibration_t.decode(cal.encode(check=False), check=False), cal)
 
     def test_unknown_field_refused(self):
         with self.assertRaises(TypeError):
@@ -245,7 +281,7 @@ class Malformed(unittest.TestCase):
         with self.assertRaisesRegex(ll.MessageError, "unknown frame 0"):
             ll.lidar_t.decode(self.with_field(lidar, "frame", 0))
         with self.assertRaisesRegex(ll.MessageError, "image size -1x0"):
-            ll.calibration_t.decode(self.with_field(ll.calibration_t(), "width", -1))
+            ll.calibration_t.decode(self.with_field(ll.calibration_message(100, 100, 50, 20, 0.5), "width", -1))
         raw = bytearray(ll.status_t(last_error="abc").encode())
         raw[-1] = ord("x")
         with self.assertRaisesRegex(ll.MessageError, "not NUL-terminated"):
@@ -379,6 +415,34 @@ class Builders(unittest.TestCase):
         np.testing.assert_array_equal(left, [[0, 1, 2], [5, 6, 7]])
         np.testing.assert_array_equal(right, [[10, 11, 12], [15, 16, 17]])
         self.assertIsNone(order)
+
+    def test_decoders_refuse_what_the_bridge_refuses(self):
+        # bridge/wire.cpp's checks and the C ABI's camera ranges (the bridge probes lf_create).
+        cal = ll.calibration_message(100, 100, 50, 20, 0.5)
+        for field, value, reason in (("fx", float("nan"), "fx = nan is not finite"),
+                                     ("cy", float("inf"), "cy = inf is not finite"),
+                                     ("baseline", -0.5, "baseline must be > 0"), ("fy", 0.0, "must be > 0"),
+                                     ("fx", 1e200, r"fx = 1e\+200 px is outside \[1, 1e\+06\]"),
+                                     ("baseline", 1e-300, "baseline = 1e-300 m is outside")):
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=field):
+                ll.calibration_t.decode(Malformed.with_field(cal, field, value))
+        pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)
+        nan_point = ll.lidar_message(pts, utime=1, frame="camera")
+        nan_point.y[1] = np.nan
+        with self.assertRaisesRegex(ll.MessageError, "point 1 is not finite"):
+            ll.lidar_t.decode(nan_point.encode(check=False))
+        t = np.eye(4)
+        for k, v, reason in ((3, np.inf, r"lidar_to_camera\[3\] is not finite"),
+                             (0, np.nan, r"lidar_to_camera\[0\] is not finite"), (14, 1.0, "last row"),
+                             (0, 1e300, "point 0 is out of float range")):
+            bad = ll.lidar_message(pts, utime=1, frame="lidar", lidar_to_camera=t.copy())
+            bad.lidar_to_camera[k] = v
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=reason):
+                ll.lidar_t.decode(bad.encode(check=False))
+        # The transform is not used (nor checked, as in the bridge) for the other frames.
+        unused = ll.lidar_message(pts, utime=1, frame="camera")
+        unused.lidar_to_camera[3] = np.inf
+        self.assertEqual(ll.lidar_t.decode(unused.encode()).frame, ll.lidar_t.FRAME_CAMERA)
 
     def test_lidar(self):
         pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)

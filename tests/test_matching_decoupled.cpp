@@ -18,6 +18,7 @@
 #include "matching/decoupled_matcher.hpp"
 #include "pipeline/estimator.hpp"
 #include "synth/scene.hpp"
+#include "synth_fields.hpp"
 #include "test_support.hpp"
 
 using namespace lidarflow;
@@ -38,32 +39,9 @@ FrameInput frame_of(const synth::SynthScene &s) {
     return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
 }
 
-bool same_mat(const cv::Mat &a, const cv::Mat &b) {
-    if (a.size() != b.size() || a.type() != b.type()) return false;
-    for (int y = 0; y < a.rows; ++y)
-        if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
-    return true;
-}
-
-bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
-    return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&
-           same_mat(a.valid, b.valid) && same_mat(a.confidence, b.confidence);
-}
-
-double sf_outliers(const synth::SynthScene &s, const SceneFlowField &f) {
-    long n = 0, bad = 0;
-    for (int y = 0; y < f.height(); ++y)
-        for (int x = 0; x < f.width(); ++x) {
-            if (s.disp0_occ(y, x) < 0 || s.disp1_occ(y, x) < 0 || !s.flow_occ.valid(y, x)) continue;
-            ++n;
-            bad += (eval::disparity_outlier(s.disp0_occ(y, x), f.d0(y, x)) ||
-                    eval::disparity_outlier(s.disp1_occ(y, x), f.d1(y, x)) ||
-                    eval::flow_outlier(s.flow_occ.u(y, x), s.flow_occ.v(y, x), f.u(y, x), f.v(y, x)))
-                       ? 1
-                       : 0;
-        }
-    return n ? 100.0 * bad / n : 100.0;
-}
+using test::same_field;
+using test::same_mat;
+using test::sf_outliers;
 
 matching::MatchingOptions decoupled_options() {
     matching::MatchingOptions o = EstimatorOptions::preset("realtime").matching;

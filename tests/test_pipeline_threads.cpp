@@ -7,6 +7,7 @@
 #include "eval/metrics.hpp"
 #include "pipeline/estimator.hpp"
 #include "synth/scene.hpp"
+#include "synth_fields.hpp"
 #include "test_support.hpp"
 
 using namespace lidarflow;
@@ -35,32 +36,8 @@ EstimatorOptions small_options(int threads) {
     return o;
 }
 
-bool same_mat(const cv::Mat &a, const cv::Mat &b) {
-    if (a.size() != b.size() || a.type() != b.type()) return false;
-    for (int y = 0; y < a.rows; ++y)
-        if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
-    return true;
-}
-
-bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
-    return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&
-           same_mat(a.valid, b.valid) && same_mat(a.confidence, b.confidence);
-}
-
-double sf_outliers(const synth::SynthScene &s, const SceneFlowField &f) {
-    long n = 0, bad = 0;
-    for (int y = 0; y < f.height(); ++y)
-        for (int x = 0; x < f.width(); ++x) {
-            if (s.disp0_occ(y, x) < 0 || s.disp1_occ(y, x) < 0 || !s.flow_occ.valid(y, x)) continue;
-            ++n;
-            bad += (eval::disparity_outlier(s.disp0_occ(y, x), f.d0(y, x)) ||
-                    eval::disparity_outlier(s.disp1_occ(y, x), f.d1(y, x)) ||
-                    eval::flow_outlier(s.flow_occ.u(y, x), s.flow_occ.v(y, x), f.u(y, x), f.v(y, x)))
-                       ? 1
-                       : 0;
-        }
-    return n ? 100.0 * bad / n : 100.0;
-}
+using test::same_field;
+using test::sf_outliers;
 
 void thread_count_does_not_change_results(void **) {
     const synth::SynthScene s = scene();

@@ -28,8 +28,8 @@ struct DecoupledResult {
     DisparityMap sgm0;        // SGM disparity of (I_l^0, I_r^0), invalid < 0
     DisparityMap sgm1;        // SGM disparity of (I_l^1, I_r^1), invalid < 0
     bool reused_t0 = false;   // sgm0 came from the caller's t0_reuse
-    double seconds_stereo = 0;  // both pairs' SGM (side by side)
-    double seconds_flow = 0;    // rigid prior, then both directions' DIS (side by side)
+    double seconds_stereo = 0;  // both pairs' SGM
+    double seconds_flow = 0;    // rigid prior, then both directions' DIS
 };
 
 // What a stream may hand from one frame to the next: the newer pair's SGM disparity (frame k's
@@ -43,8 +43,7 @@ struct DecoupledStereo {
 // Runs the decoupled stage 1 on the images of `in` (all one size, 8-bit gray or BGR). `sgm` are
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
 // pixel-identical to (left0, right0), supplies the t0 disparity. Throws lidarflow::Error for bad
-// inputs. Deterministic for any opt.threads: independent searches run side by side on up to two
-// OpenMP threads, each parallel inside through OpenCV's own thread pool.
+// inputs. Deterministic; OpenCV's own thread pool does the parallel work.
 // `camera` (all zero = unknown) is the rig at the images' resolution.
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,
                                 const consistency::SgmOptions &sgm, const StereoCamera &camera, bool backward,

@@ -181,6 +181,36 @@ void test_formats_and_points(void **) {
     }
     expect_contains(r, "wrote     " + ply.string() + ": " + std::to_string(cloud.size()) + " points");
 
+    // viz reads every format run wrote: the same picture from each, and error maps against the
+    // KITTI PNGs of the same result.
+    cv::Mat first;
+    for (const char *ext : {"png", "flo", "pfm", "npy"}) {
+        const fs::path pic = s.dir / (std::string("flow_") + ext + ".png");
+        const Result v = run("viz --flow " + q(out / "flow" / (std::string("000005_10.") + ext)) + " --max 20 --out " +
+                                 q(pic),
+                             s.dir);
+        if (v.code != 0) fail_msg("viz --flow .%s failed: %s", ext, v.output.c_str());
+        const cv::Mat m = io::read_image(pic.string());
+        if (first.empty()) first = m;
+        assert_true(m.size() == first.size());
+        // The PNG is quantised to 1/64 px: a colour step or two at most.
+        assert_true(cv::norm(m, first, cv::NORM_INF) <= 8);
+    }
+    for (const char *ext : {"pfm", "npy"}) {
+        const std::string d = q(out / "disp_0" / (std::string("000005_10.") + ext));
+        Result v = run("viz --disp " + d + " --out " + q(s.dir / "d.png"), s.dir);
+        if (v.code != 0) fail_msg("viz --disp .%s failed: %s", ext, v.output.c_str());
+        v = run("viz --disp " + d + " --gt " + q(o.est_disp0("000005")) + " --out " + q(s.dir / "de.png"), s.dir);
+        if (v.code != 0) fail_msg("viz --disp .%s --gt failed: %s", ext, v.output.c_str());
+    }
+    {
+        // A corrupt float file is a clear error, not a crash.
+        std::ofstream(s.dir / "bad.pfm", std::ios::binary) << "PF\n16000 16000\n-1.0\n0123";
+        const Result v = run("viz --flow " + q(s.dir / "bad.pfm") + " --out " + q(s.dir / "bad.png"), s.dir);
+        assert_int_equal(v.code, 1);
+        expect_contains(v, "bytes of data, the header announces");
+    }
+
     // The bird's-eye view of it.
     const Result v = run("viz --points " + q(ply) + " --out " + q(s.dir / "bev.png") + " --range 40", s.dir);
     if (v.code != 0) fail_msg("viz --points failed: %s", v.output.c_str());

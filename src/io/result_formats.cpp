@@ -14,7 +14,9 @@
 
 #include "core/closest_name.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "io/kitti_layout.hpp"
+#include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "io/read_file.hpp"
 
@@ -79,7 +81,30 @@ void read_floats(const std::string &data, size_t offset, cv::Mat &m, bool little
     }
 }
 
-// Parses "H, W" or "H, W, 3" of a .npy shape tuple.
+// Checks, before anything is allocated, that a header's size is accepted (kMaxImageSide per side)
+// and that the file holds exactly the bytes it announces: a corrupt or hostile header is a
+// Format error, never a huge allocation.
+void check_payload(const std::string &path, long w, long h, int channels, size_t bytes_per_value,
+                   size_t payload) {
+    require(w > 0 && h > 0, ErrorCode::Format,
+            path + ": bad size " + std::to_string(w) + "x" + std::to_string(h) + " in the header");
+    require(w <= kMaxImageSide && h <= kMaxImageSide, ErrorCode::Format,
+            path + ": the header announces " + std::to_string(w) + "x" + std::to_string(h) + ", larger than " +
+                std::to_string(kMaxImageSide) + " px per side");
+    const size_t expected = static_cast<size_t>(w) * static_cast<size_t>(h) * static_cast<size_t>(channels) *
+                            bytes_per_value;
+    require(payload == expected, ErrorCode::Format,
+            path + ": " + std::to_string(payload) + " bytes of data, the header announces " + std::to_string(expected) +
+                " (" + std::to_string(w) + "x" + std::to_string(h) + "x" + std::to_string(channels) + ")");
+}
+
+std::string lower_extension(const std::string &path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char &c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+// Parses "H, W" or "H, W, C" of a .npy shape tuple.
 std::vector<long> parse_shape(const std::string &tuple) {
     std::vector<long> dims;
     std::stringstream ss(tuple);
@@ -177,8 +202,8 @@ cv::Mat read_pfm(const std::string &path) {
     const bool h_ok = !hs.empty() && *end == '\0';
     const double scale = std::strtod(ss.c_str(), &end);
     const bool s_ok = !ss.empty() && *end == '\0' && std::isfinite(scale) && scale != 0;
-    require(w_ok && h_ok && s_ok && w > 0 && h > 0 && w <= 65536 && h <= 65536, ErrorCode::Format,
-            path + ": bad PFM header '" + ws + " " + hs + " " + ss + "'");
+    require(w_ok && h_ok && s_ok, ErrorCode::Format, path + ": bad PFM header '" + ws + " " + hs + " " + ss + "'");
+    check_payload(path, w, h, magic == "PF" ? 3 : 1, 4, data.size() - pos);
     cv::Mat m(static_cast<int>(h), static_cast<int>(w), magic == "PF" ? CV_32FC3 : CV_32FC1);
     read_floats(data, pos, m, scale < 0, true, path);
     return m;
@@ -230,10 +255,11 @@ cv::Mat read_npy(const std::string &path) {
     const size_t close = header.find(')', s);
     require(header[s] == '(' && close != std::string::npos, ErrorCode::Format, path + ": bad .npy shape");
     const std::vector<long> dims = parse_shape(header.substr(s + 1, close - s - 1));
-    const bool ok = (dims.size() == 2 || (dims.size() == 3 && dims[2] == 3)) && dims[0] > 0 && dims[1] > 0 &&
-                    dims[0] <= 65536 && dims[1] <= 65536;
-    require(ok, ErrorCode::Format, path + ": expected shape (H, W) or (H, W, 3)");
-    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), dims.size() == 3 ? CV_32FC3 : CV_32FC1);
+    const bool ok = dims.size() == 2 || (dims.size() == 3 && (dims[2] == 2 || dims[2] == 3));
+    require(ok, ErrorCode::Format, path + ": expected shape (H, W), (H, W, 2) or (H, W, 3)");
+    const int channels = dims.size() == 3 ? static_cast<int>(dims[2]) : 1;
+    check_payload(path, dims[1], dims[0], channels, 4, data.size() - 10 - len);
+    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), CV_32FC(channels));
     read_floats(data, 10 + len, m, true, false, path);
     return m;
 }
@@ -254,19 +280,72 @@ void write_flo(const std::string &path, const FlowField &flow) {
 }
 
 FlowField read_flo(const std::string &path) {
-    require(std::ifstream(path).good(), ErrorCode::Io, "cannot open " + path);
-    const cv::Mat uv = cv::readOpticalFlow(path);
-    require(!uv.empty() && uv.type() == CV_32FC2, ErrorCode::Format, path + ": not a readable .flo file");
-    FlowField f = FlowField::zeros(uv.cols, uv.rows);
-    for (int y = 0; y < uv.rows; ++y)
-        for (int x = 0; x < uv.cols; ++x) {
-            const cv::Vec2f p = uv.at<cv::Vec2f>(y, x);
-            const bool ok = std::fabs(p[0]) <= kFloUnknownThreshold && std::fabs(p[1]) <= kFloUnknownThreshold;
-            f.u(y, x) = ok ? p[0] : 0.0f;
-            f.v(y, x) = ok ? p[1] : 0.0f;
+    // Read here rather than by cv::readOpticalFlow, which allocates whatever size the header
+    // claims before it finds the data missing.
+    const std::string data = read_file(path);
+    require(data.size() >= 12 && data.compare(0, 4, "PIEH") == 0, ErrorCode::Format,
+            path + ": not a .flo file (no PIEH tag)");
+    auto le32 = [&](size_t at) {
+        uint32_t u = 0;
+        for (int k = 0; k < 4; ++k) u |= static_cast<uint32_t>(static_cast<unsigned char>(data[at + k])) << (8 * k);
+        return static_cast<int32_t>(u);
+    };
+    const long w = le32(4), h = le32(8);
+    check_payload(path, w, h, 2, 4, data.size() - 12);
+    FlowField f = FlowField::zeros(static_cast<int>(w), static_cast<int>(h));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const char *p = data.data() + 12 + 8 * (static_cast<size_t>(y) * static_cast<size_t>(w) + x);
+            const float u = get32(p, true), v = get32(p + 4, true);
+            const bool ok = std::fabs(u) <= kFloUnknownThreshold && std::fabs(v) <= kFloUnknownThreshold;
+            f.u(y, x) = ok ? u : 0.0f;
+            f.v(y, x) = ok ? v : 0.0f;
             f.valid(y, x) = ok ? 1 : 0;
         }
     return f;
+}
+
+DisparityMap read_disparity_file(const std::string &path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".pfm" || ext == ".npy") {
+        const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.type() == CV_32FC1, ErrorCode::Format,
+                path + ": a disparity map has one channel, this file has " + std::to_string(m.channels()));
+        DisparityMap d(m.rows, m.cols);
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = 0; x < m.cols; ++x) {
+                const float v = m.at<float>(y, x);
+                d(y, x) = std::isfinite(v) && disparity_valid(v) ? v : kInvalidDisparity;
+            }
+        return d;
+    }
+    require(ext == ".png", ErrorCode::Format,
+            path + ": unknown disparity file type '" + ext + "' (.png KITTI, .pfm, .npy)");
+    return read_disparity_png(path);
+}
+
+FlowField read_flow_file(const std::string &path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".flo") return read_flo(path);
+    if (ext == ".pfm" || ext == ".npy") {
+        const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.channels() >= 2, ErrorCode::Format,
+                path + ": flow has (u, v) or (u, v, valid) per pixel, this file has one channel");
+        FlowField f = FlowField::zeros(m.cols, m.rows);
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = 0; x < m.cols; ++x) {
+                const float *p = m.ptr<float>(y) + static_cast<size_t>(x) * m.channels();
+                const bool ok = std::isfinite(p[0]) && std::isfinite(p[1]) && (m.channels() == 2 || p[2] != 0.0f);
+                if (!ok) continue;
+                f.u(y, x) = p[0];
+                f.v(y, x) = p[1];
+                f.valid(y, x) = 1;
+            }
+        return f;
+    }
+    require(ext == ".png", ErrorCode::Format,
+            path + ": unknown flow file type '" + ext + "' (.png KITTI, .flo, .pfm, .npy)");
+    return read_flow_png(path);
 }
 
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,

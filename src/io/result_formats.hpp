@@ -35,15 +35,24 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
 // CV_32FC1 or CV_32FC3 maps. Writers create missing parent folders and throw Error: Io when the
 // file cannot be written, InvalidArgument for an empty map or another type. Readers throw Io
 // when the file cannot be read and Format for anything but the float32 layouts above (a
-// big-endian PFM is accepted).
+// big-endian PFM is accepted; read_npy also takes (H, W, 2)), for a side larger than
+// kMaxImageSide, or for a file whose size differs from what its header announces: checked
+// before anything is allocated.
 void write_pfm(const std::string &path, const cv::Mat &map);
 cv::Mat read_pfm(const std::string &path);
 void write_npy(const std::string &path, const cv::Mat &map);
 cv::Mat read_npy(const std::string &path);
 
-// .flo through OpenCV; unknown flow (|u| or |v| > 1e9) reads back as valid = 0.
+// .flo as OpenCV's writeOpticalFlow writes it; unknown flow (|u| or |v| > 1e9) reads back as
+// valid = 0. read_flo checks the header and the file size like the readers above.
 void write_flo(const std::string &path, const FlowField &flow);
 FlowField read_flo(const std::string &path);
+
+// Any file `write_results` writes, by its extension (case-insensitive): a disparity map from
+// .png (KITTI), .pfm or .npy (one channel; NaN = invalid); a flow field from .png (KITTI),
+// .flo, .pfm or .npy ((u, v, valid) or (u, v), NaN = invalid). Format for another extension.
+DisparityMap read_disparity_file(const std::string &path);
+FlowField read_flow_file(const std::string &path);
 
 // The float maps written for a field: disparity with NaN holes, flow as (u, v, valid).
 cv::Mat1f disparity_with_nan(const DisparityMap &disp);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// lidarflow viz: colour-codes a KITTI disparity or flow PNG (with its legend, optionally over
-// the camera image), draws its KITTI error map against ground truth, or draws a bird's-eye view
-// of the point cloud `run --points` writes.
+// lidarflow viz: colour-codes a disparity or flow map in any format `run --format` writes (with
+// its legend, optionally over the camera image), draws its KITTI error map against ground truth,
+// or draws a bird's-eye view of the point cloud `run --points` writes.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
+#include "io/result_formats.hpp"
 #include "viz/birds_eye.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
@@ -42,10 +43,10 @@ int birds_eye(const Args &args, const std::string &out) {
 
 int run_viz(int argc, char **argv) {
     Args args("viz", argc, argv,
-              {{"disp", true, "FILE  KITTI disparity PNG (uint16, d*256)"},
-               {"flow", true, "FILE  KITTI flow PNG (3 x uint16)"},
+              {{"disp", true, "FILE  disparity map: KITTI PNG (uint16, d*256), .pfm or .npy (float, NaN = none)"},
+               {"flow", true, "FILE  flow: KITTI PNG (3 x uint16), .flo, .pfm or .npy (u, v[, valid])"},
                {"points", true, "PLY  point cloud of `run --points`: draw a bird's-eye view of the motion"},
-               {"gt", true, "FILE  ground truth (occ) of the same kind: draw the error map instead"},
+               {"gt", true, "FILE  ground truth (occ) of the same kind, any of those formats: draw the error map instead"},
                {"gt-noc", true, "FILE  non-occluded ground truth: occluded-only pixels drawn darker"},
                {"image", true, "PNG  camera image (left, t0): draw the colours over it"},
                {"out", true, "PNG  output picture (BGR, 8-bit)"},
@@ -75,11 +76,11 @@ int run_viz(int argc, char **argv) {
     cv::Mat1b valid;  // where the picture shows the result (for --image)
     std::string what;
     if (disp) {
-        const DisparityMap est = io::read_disparity_png(args.str("disp", ""));
+        const DisparityMap est = io::read_disparity_file(args.str("disp", ""));
         valid = est >= 0.0f;
         if (error_map) {
-            const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_png(args.str("gt-noc", "")) : DisparityMap();
-            picture = viz::disparity_error_image(est, io::read_disparity_png(args.str("gt", "")), noc);
+            const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_file(args.str("gt-noc", "")) : DisparityMap();
+            picture = viz::disparity_error_image(est, io::read_disparity_file(args.str("gt", "")), noc);
             what = "disparity error map (log colours, 1.0 = KITTI outlier threshold)";
         } else {
             const double scale = viz::disparity_color_scale(est, static_cast<float>(max));
@@ -95,12 +96,12 @@ int run_viz(int argc, char **argv) {
         if (legend && !error_map)
             picture = viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
     } else {
-        const FlowField est = io::read_flow_png(args.str("flow", ""));
+        const FlowField est = io::read_flow_file(args.str("flow", ""));
         valid = est.valid != 0;
         viz::FlowColorOptions o;
         if (error_map) {
-            const FlowField noc = args.has("gt-noc") ? io::read_flow_png(args.str("gt-noc", "")) : FlowField();
-            picture = viz::flow_error_image(est, io::read_flow_png(args.str("gt", "")), noc);
+            const FlowField noc = args.has("gt-noc") ? io::read_flow_file(args.str("gt-noc", "")) : FlowField();
+            picture = viz::flow_error_image(est, io::read_flow_file(args.str("gt", "")), noc);
             what = "flow error map (log colours, 1.0 = KITTI outlier threshold)";
         } else {
             const std::string style = args.str("style", "kitti");

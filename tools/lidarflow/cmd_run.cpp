@@ -12,6 +12,7 @@
 #include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
+#include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
@@ -61,10 +62,10 @@ std::vector<io::ResultFormat> parse_formats(const std::vector<std::string> &name
 
 int run(int argc, char **argv) {
     Args args("run", argc, argv,
-              {{"left0", true, "PNG  rectified left image at t0 (reference)"},
-               {"right0", true, "PNG  rectified right image at t0"},
-               {"left1", true, "PNG  rectified left image at t1"},
-               {"right1", true, "PNG  rectified right image at t1"},
+              {{"left0", true, "IMG  rectified left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
+               {"right0", true, "IMG  rectified right image at t0"},
+               {"left1", true, "IMG  rectified left image at t1"},
+               {"right1", true, "IMG  rectified right image at t1"},
                {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; needed by --velo0/1 and --points)"},
                {"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 as a KITTI disparity PNG"},
                {"lidar1", true, "PNG  sparse LiDAR D_l^1 in left1 as a KITTI disparity PNG"},
@@ -110,10 +111,10 @@ int run(int argc, char **argv) {
 
     std::fprintf(stderr, "run: reading the images\n");
     pipeline::FrameInput in;
-    in.left0 = io::read_image(args.required("left0"));
-    in.right0 = io::read_image(args.required("right0"));
-    in.left1 = io::read_image(args.required("left1"));
-    in.right1 = io::read_image(args.required("right1"));
+    in.left0 = io::read_any_image(args.required("left0"));
+    in.right0 = io::read_any_image(args.required("right0"));
+    in.left1 = io::read_any_image(args.required("left1"));
+    in.right1 = io::read_any_image(args.required("right1"));
     const cv::Size size = in.left0.size();
     for (const cv::Mat *m : {&in.right0, &in.left1, &in.right1})
         require(m->size() == size, ErrorCode::SizeMismatch, "run: the four images must have the same size");

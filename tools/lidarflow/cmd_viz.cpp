@@ -9,6 +9,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/image_file.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
 #include "io/result_formats.hpp"
@@ -48,7 +49,7 @@ int run_viz(int argc, char **argv) {
                {"points", true, "PLY  point cloud of `run --points`: draw a bird's-eye view of the motion"},
                {"gt", true, "FILE  ground truth (occ) of the same kind, any of those formats: draw the error map instead"},
                {"gt-noc", true, "FILE  non-occluded ground truth: occluded-only pixels drawn darker"},
-               {"image", true, "PNG  camera image (left, t0): draw the colours over it"},
+               {"image", true, "IMG  camera image (left, t0; PNG, JPEG, BMP, PGM/PPM): draw the colours over it"},
                {"out", true, "PNG  output picture (BGR, 8-bit)"},
                {"max", true, "V  colour scale: max disparity / flow [px] / speed [m per frame] (default: the data's)"},
                {"range", true, "M  --points: metres shown ahead (default: the data's)"},
@@ -88,7 +89,7 @@ int run_viz(int argc, char **argv) {
             what = "disparity colour map, scale 0.." + std::to_string(static_cast<int>(std::ceil(scale))) + " px";
         }
         if (args.has("image")) {
-            const cv::Mat image = io::read_image(args.str("image", ""));
+            const cv::Mat image = io::read_any_image(args.str("image", ""));
             require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";
@@ -113,7 +114,7 @@ int run_viz(int argc, char **argv) {
             what = "flow colour (" + style + " wheel)";
         }
         if (args.has("image")) {
-            const cv::Mat image = io::read_image(args.str("image", ""));
+            const cv::Mat image = io::read_any_image(args.str("image", ""));
             require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";

@@ -24,6 +24,7 @@
 #include "pipeline/estimator.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/flow_color.hpp"
+#include "viz/legend.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -146,9 +147,20 @@ int run(int argc, char **argv) {
         for (const std::string &file : io::write_results(out, id, f, fmt))  // flo and pfm share the disparities
             if (std::find(written.begin(), written.end(), file) == written.end()) written.push_back(file);
     }
-    io::write_image(out + "/viz/" + id + "_flow.png", viz::flow_to_color(io::field_flow(f)));
-    io::write_image(out + "/viz/" + id + "_disp0.png", viz::disparity_to_color(io::field_disparity0(f)));
-    io::write_image(out + "/viz/" + id + "_disp1.png", viz::disparity_to_color(io::field_disparity1(f)));
+    // Pictures with their legends, as `viz` draws them; both disparity maps on one scale.
+    {
+        const FlowField flow = io::field_flow(f);
+        const DisparityMap d0 = io::field_disparity0(f), d1 = io::field_disparity1(f);
+        const viz::FlowColorOptions fo;
+        io::write_image(out + "/viz/" + id + "_flow.png",
+                        viz::with_flow_legend(viz::flow_to_color(flow, fo), viz::flow_color_scale(flow, fo), fo.style));
+        const double scale = std::max(viz::disparity_color_scale(d0), viz::disparity_color_scale(d1));
+        const auto fscale = static_cast<float>(scale);
+        io::write_image(out + "/viz/" + id + "_disp0.png",
+                        viz::with_disparity_legend(viz::disparity_to_color(d0, fscale), scale));
+        io::write_image(out + "/viz/" + id + "_disp1.png",
+                        viz::with_disparity_legend(viz::disparity_to_color(d1, fscale), scale));
+    }
     size_t cloud = 0;
     if (args.has("points")) {
         const std::vector<io::CloudPoint> pts = io::scene_points(f, in.camera, in.left0);

@@ -54,7 +54,7 @@ int run_viz(int argc, char **argv) {
                {"max", true, "V  colour scale: max disparity / flow [px] / speed [m per frame] (default: the data's)"},
                {"range", true, "M  --points: metres shown ahead (default: the data's)"},
                {"style", true, "kitti|middlebury  flow colour wheel (default kitti)"},
-               {"no-legend", false, "no colour bar / wheel strip: the picture keeps the map's size"}});
+               {"no-legend", false, "no colour bar / wheel / error scale strip: the picture keeps the map's size"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -71,7 +71,7 @@ int run_viz(int argc, char **argv) {
     require(!args.has("style") || flow, ErrorCode::InvalidArgument, "viz: --style applies to --flow");
     const double max = args.number("max", 0);
     require(max >= 0, ErrorCode::InvalidArgument, "viz: --max must be >= 0 (0 = automatic)");
-    const bool legend = !args.flag("no-legend") && !error_map;
+    const bool legend = !args.flag("no-legend");
 
     cv::Mat picture;
     cv::Mat1b valid;  // where the picture shows the result (for --image)
@@ -82,7 +82,7 @@ int run_viz(int argc, char **argv) {
         if (error_map) {
             const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_file(args.str("gt-noc", "")) : DisparityMap();
             picture = viz::disparity_error_image(est, io::read_disparity_file(args.str("gt", "")), noc);
-            what = "disparity error map (log colours, 1.0 = KITTI outlier threshold)";
+            what = "disparity error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const double scale = viz::disparity_color_scale(est, static_cast<float>(max));
             picture = viz::disparity_to_color(est, static_cast<float>(scale));
@@ -94,8 +94,9 @@ int run_viz(int argc, char **argv) {
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";
         }
-        if (legend && !error_map)
-            picture = viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
+        if (legend)
+            picture = error_map ? viz::with_error_legend(picture)
+                                : viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
     } else {
         const FlowField est = io::read_flow_file(args.str("flow", ""));
         valid = est.valid != 0;
@@ -103,7 +104,7 @@ int run_viz(int argc, char **argv) {
         if (error_map) {
             const FlowField noc = args.has("gt-noc") ? io::read_flow_file(args.str("gt-noc", "")) : FlowField();
             picture = viz::flow_error_image(est, io::read_flow_file(args.str("gt", "")), noc);
-            what = "flow error map (log colours, 1.0 = KITTI outlier threshold)";
+            what = "flow error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const std::string style = args.str("style", "kitti");
             require(style == "kitti" || style == "middlebury", ErrorCode::InvalidArgument,
@@ -119,7 +120,9 @@ int run_viz(int argc, char **argv) {
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";
         }
-        if (legend) picture = viz::with_flow_legend(picture, viz::flow_color_scale(est, o), o.style);
+        if (legend)
+            picture = error_map ? viz::with_error_legend(picture)
+                                : viz::with_flow_legend(picture, viz::flow_color_scale(est, o), o.style);
     }
     io::write_image(out, picture);
     std::printf("wrote %s: %s%s, %dx%d\n", out.c_str(), what.c_str(), legend ? " with legend" : "", picture.cols,

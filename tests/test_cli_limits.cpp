@@ -82,7 +82,7 @@ void run_checks_its_id_and_output_folder_first(void **) {
     const fs::path root = synth_frame(dir);
     std::ofstream(dir / "file") << "x";
     expect_failure(run(run_args(root) + " --out " + q(dir / "out") + " --id ../../x", dir), 2,
-                   "frame id '../../x' is not a KITTI frame id");
+                   "output name '../../x' must be");
     assert_false(fs::exists(dir / "out" / "flow"));
     // Before: the estimation ran, then writing disp_0/ failed ("cannot create folder ...").
     expect_failure(run(run_args(root) + " --out " + q(dir / "file" / "out"), dir), 1, "cannot create output folder");

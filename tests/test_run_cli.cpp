@@ -20,6 +20,7 @@
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
 #include "io/result_formats.hpp"
+#include <opencv2/imgcodecs.hpp>
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
 #include <stdarg.h>
@@ -248,6 +249,46 @@ void test_bad_arguments(void **) {
     assert_false(fs::exists(s.dir / "o" / "flow"));
 }
 
+// Output names: --id, else left0's file stem (KITTI's ID_10 kept for 6-digit ids); any 8-bit
+// image OpenCV reads (here JPEG) is an input; run's pictures carry their colour bars.
+void test_output_names_and_jpeg_inputs(void **) {
+    const Scene s = make_scene("cli_run_names");
+    const std::string rest = " --right0 " + q(s.k.right("000000", 0)) + " --left1 " + q(s.k.left("000000", 1)) +
+                             " --right1 " + q(s.k.right("000000", 1)) + " --stage matching";
+    const fs::path jpg = s.dir / "cam0 left.jpg";
+    assert_true(cv::imwrite(jpg.string(), io::read_image(s.k.left("000000", 0))));
+    const fs::path out = s.dir / "o";
+    Result r = run("run --left0 " + q(jpg) + rest + " --format kitti,npy --out " + q(out), s.dir);
+    if (r.code != 0) fail_msg("run with a JPEG left0 failed: %s", r.output.c_str());
+    for (const char *f : {"flow/cam0_left.png", "disp_0/cam0_left.png", "disp_1/cam0_left.npy", "flow/cam0_left.npy"})
+        if (!fs::exists(out / f)) fail_msg("no %s: %s", f, r.output.c_str());
+    expect_contains(r, "wrote     " + (out / "flow" / "cam0_left.png").string());
+    // The pictures: the map on top, its legend below (disparity: a colour bar; flow: the wheel).
+    for (const char *pic : {"cam0_left_disp0.png", "cam0_left_disp1.png", "cam0_left_flow.png"}) {
+        const cv::Mat m = io::read_image((out / "viz" / pic).string());
+        assert_true(m.rows > 96 + 30 && m.cols >= 320);
+    }
+    // A 6-digit stem (or id) keeps KITTI's names; another --id is used as given.
+    const fs::path six = s.dir / "000123.png";
+    fs::copy_file(s.k.left("000000", 0), six);
+    r = run("run --left0 " + q(six) + rest + " --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "000123_10.png") && fs::exists(out / "viz" / "000123_disp0.png"));
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --id 000007 --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "000007_10.png"));
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --id drive_b.t3 --format flo --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "drive_b.t3.flo") && fs::exists(out / "disp_0" / "drive_b.t3.pfm"));
+    // A KITTI image name gives the frame id (image_2/000000_10.png -> 000000_10.png).
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --out " + q(s.dir / "k"), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(s.dir / "k" / "flow" / "000000_10.png"));
+    expect_failure("run --left0 " + q(jpg) + rest + " --id a/b --out " + q(out), s.dir, 2, "output name 'a/b'");
+    const Result h = run("run --help", s.dir);
+    expect_contains(h, "6 digits write ID_10.EXT");
+}
+
 }  // namespace
 
 int main() {
@@ -260,6 +301,7 @@ int main() {
         cmocka_unit_test(test_velodyne_inputs),
         cmocka_unit_test(test_formats_and_points),
         cmocka_unit_test(test_bad_arguments),
+        cmocka_unit_test(test_output_names_and_jpeg_inputs),
     };
     return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
 }

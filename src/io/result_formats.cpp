@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "io/result_formats.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -15,7 +16,6 @@
 #include "core/closest_name.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
-#include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "io/read_file.hpp"
@@ -348,20 +348,50 @@ FlowField read_flow_file(const std::string &path) {
     return read_flow_png(path);
 }
 
+void check_output_name(const std::string &name) {
+    bool ok = !name.empty() && name.size() <= 128 && name != "." && name != "..";
+    for (char c : name)
+        ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.');
+    require(ok, ErrorCode::InvalidArgument,
+            "output name '" + name + "' must be 1 to 128 of A-Z a-z 0-9 _ - . (and not . or ..)");
+}
+
+std::string result_file_stem(const std::string &name) {
+    check_output_name(name);
+    const bool kitti_id = name.size() == 6 && std::all_of(name.begin(), name.end(), [](char c) {
+                              return c >= '0' && c <= '9';
+                          });
+    return kitti_id ? name + "_10" : name;
+}
+
+std::string output_name_from_path(const std::string &path) {
+    std::string stem = std::filesystem::path(path).stem().string();
+    // A KITTI image name (000002_10.png): the frame id, so the results keep KITTI's names.
+    const bool kitti_image = stem.size() == 9 && stem.compare(6, 3, "_10") == 0 &&
+                             std::all_of(stem.begin(), stem.begin() + 6, [](char c) { return c >= '0' && c <= '9'; });
+    if (kitti_image) stem.resize(6);
+    for (char &c : stem)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) c = '_';
+    if (stem.size() > 128) stem.resize(128);
+    if (stem.empty() || stem == "." || stem == "..") stem = "result";
+    return stem;
+}
+
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
                                        ResultFormat format) {
     require(!f.u.empty(), ErrorCode::InvalidArgument, "write_results: empty scene-flow field");
-    const KittiLayout k{out_root};
+    const std::string stem = result_file_stem(id);
+    auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
     if (format == ResultFormat::Kitti) {
-        write_submission(out_root, id, f);
-        return {k.est_disp0(id), k.est_disp1(id), k.est_flow(id)};
+        const std::string d0 = path("disp_0", "png"), d1 = path("disp_1", "png"), fl = path("flow", "png");
+        write_disparity_png(d0, field_disparity0(f));
+        write_disparity_png(d1, field_disparity1(f));
+        write_flow_png(fl, field_flow(f));
+        return {d0, d1, fl};
     }
-    // Same names as the KITTI layout, another extension.
-    auto with_ext = [](std::string png, const char *ext) { return png.substr(0, png.size() - 3) + ext; };
     const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
     const char *flow_ext = result_format_name(format);
-    const std::string d0 = with_ext(k.est_disp0(id), disp_ext), d1 = with_ext(k.est_disp1(id), disp_ext),
-                      fl = with_ext(k.est_flow(id), flow_ext);
+    const std::string d0 = path("disp_0", disp_ext), d1 = path("disp_1", disp_ext), fl = path("flow", flow_ext);
     const auto write_map = format == ResultFormat::Npy ? write_npy : write_pfm;
     write_map(d0, disparity_with_nan(field_disparity0(f)));
     write_map(d1, disparity_with_nan(field_disparity1(f)));

@@ -25,8 +25,17 @@ enum class ResultFormat { Kitti, Flo, Pfm, Npy };
 const char *result_format_name(ResultFormat f);
 ResultFormat parse_result_format(const std::string &name);
 
-// Writes OUT/disp_0/ID_10.EXT, OUT/disp_1/ID_10.EXT and OUT/flow/ID_10.EXT (creating the
-// folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
+// Output names. A KITTI frame id (6 digits) names files ID_10.EXT as KITTI does; any other name
+// (1 to 128 of A-Z a-z 0-9 _ - ., not . or ..) names them NAME.EXT. check_output_name throws
+// Error(InvalidArgument) for another name; result_file_stem checks, then gives "ID_10" or NAME.
+void check_output_name(const std::string &name);
+std::string result_file_stem(const std::string &name);
+// The output name for an input image: its file stem, the frame id for a KITTI image name
+// (image_2/000002_10.png -> 000002), characters outside the set above replaced by '_'.
+std::string output_name_from_path(const std::string &path);
+
+// Writes OUT/disp_0/STEM.EXT, OUT/disp_1/STEM.EXT and OUT/flow/STEM.EXT (STEM =
+// result_file_stem(id); creating the folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
 // flo: the flow as .flo and, since .flo has no one-channel form, the disparities as .pfm.
 // Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,

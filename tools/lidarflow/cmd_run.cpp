@@ -79,16 +79,17 @@ int run(int argc, char **argv) {
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
-               {"id", true, "ID   frame id of the output files (default 000000)"},
+               {"id", true, "NAME output file name (default: left0's, 000002_10.png -> 000002); 6 digits write ID_10.EXT as KITTI does, other names NAME.EXT"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"points", true, "PLY  also write the 3-D points at t0 with their motion and colour"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
     }
-    const std::string out = args.required("out"), id = args.str("id", "000000");
+    const std::string out = args.required("out");
+    const std::string id = args.has("id") ? args.str("id", "") : io::output_name_from_path(args.required("left0"));
     // Both name output files: checked before minutes of estimation, not after.
-    io::KittiLayout::check_id(id);
+    io::check_output_name(id);
     io::prepare_output_folder(out);
     const std::vector<io::ResultFormat> formats =
         parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"});

@@ -123,7 +123,10 @@ void test_velodyne_inputs(void **) {
     if (r.code != 0) fail_msg("kitti --lidar velodyne failed: %s", r.output.c_str());
     expect_contains(r, "LiDAR 12 + 0 points");
     expect_contains(r, "no scan at t1 (velodyne/ID_11.bin) for 000000");
-    expect_contains(r, "[1/1] 000000: loading");  // piped progress lines
+    expect_contains(r, "[1/1] 000000: loading  (elapsed ");  // piped progress lines
+    expect_contains(r, ", ETA ");
+    expect_contains(r, "kitti: done in ");
+    assert_true(r.output.find('\r') == std::string::npos);  // plain lines when piped
     fs::copy_file(t1, s.k.velodyne_t1("000000"));
     r = run(kitti, s.dir);
     assert_int_equal(r.code, 0);
@@ -289,6 +292,44 @@ void test_output_names_and_jpeg_inputs(void **) {
     expect_contains(h, "6 digits write ID_10.EXT");
 }
 
+// --quiet and --verbose on every sub-command.
+void test_quiet_and_verbose(void **) {
+    const Scene s = make_scene("cli_run_quiet");
+    for (const char *cmd : {"demo", "run", "kitti", "synth", "sample-lidar", "eval", "viz", "options"}) {
+        const Result h = run(std::string(cmd) + " --help", s.dir);
+        assert_int_equal(h.code, 0);
+        expect_contains(h, "--quiet");
+        expect_contains(h, "--verbose");
+        const Result bad = run(std::string(cmd) + " --quiet --verbose", s.dir);
+        assert_int_equal(bad.code, 2);
+        expect_contains(bad, "--quiet and --verbose exclude each other");
+    }
+    const std::string base = "run" + s.images + " --stage matching --out " + q(s.dir / "o");
+    Result r = run(base + " --quiet", s.dir);
+    assert_int_equal(r.code, 0);
+    if (!r.output.empty()) fail_msg("run --quiet said: %s", r.output.c_str());
+    assert_true(fs::exists(s.dir / "o" / "flow" / "000000_10.png"));
+    // Errors still come through.
+    r = run(base + " --quiet --format npz", s.dir);
+    assert_int_equal(r.code, 2);
+    expect_contains(r, "did you mean 'npy'");
+    r = run(base + " --verbose", s.dir);
+    assert_int_equal(r.code, 0);
+    expect_contains(r, "run: preset default");
+    expect_contains(r, "run: inputs read in ");
+    expect_contains(r, "lidarflow run: finished in ");
+    const std::string kitti = "kitti --root " + q(s.root) + " --stage matching --no-viz --lidar none";
+    r = run(kitti + " --quiet", s.dir);
+    assert_int_equal(r.code, 0);
+    if (!r.output.empty()) fail_msg("kitti --quiet said: %s", r.output.c_str());
+    r = run(kitti + " --verbose", s.dir);
+    assert_int_equal(r.code, 0);
+    expect_contains(r, "kitti:   000000: loading took ");
+    r = run("synth --quiet --out " + q(s.dir / "k2") + " --width 160 --height 64", s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(r.output.empty());
+}
+
 }  // namespace
 
 int main() {
@@ -302,6 +343,7 @@ int main() {
         cmocka_unit_test(test_formats_and_points),
         cmocka_unit_test(test_bad_arguments),
         cmocka_unit_test(test_output_names_and_jpeg_inputs),
+        cmocka_unit_test(test_quiet_and_verbose),
     };
     return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
 }

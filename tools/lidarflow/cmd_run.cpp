@@ -9,6 +9,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "log.hpp"
 #include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
@@ -44,7 +45,7 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
                          const cv::Size &size, const char *what) {
     const io::VelodyneScan scan = io::read_velodyne_bin(path);
     SparseLidar l = lidar::sample_velodyne_protocol(scan, calib, velo_to_cam, size).d0;
-    std::fprintf(stderr, "run: %s %s: %zu points, %zu in the image%s\n", what, path.c_str(), scan.points.size(),
+    note("run: %s %s: %zu points, %zu in the image%s\n", what, path.c_str(), scan.points.size(),
                  l.points.size(),
                  scan.dropped_nonfinite ? (", " + std::to_string(scan.dropped_nonfinite) + " non-finite dropped").c_str()
                                         : "");
@@ -111,7 +112,11 @@ int run(int argc, char **argv) {
     apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
 
-    std::fprintf(stderr, "run: reading the images\n");
+    detail("run: preset %s, %d thread(s), up to stage %s, LiDAR %s, output name %s\n",
+           args.str("preset", "default").c_str(), opt.threads, pipeline::stage_name(opt.last_stage),
+           opt.use_lidar ? "used" : "ignored", id.c_str());
+    note("run: reading the images\n");
+    const Stopwatch reading;
     pipeline::FrameInput in;
     in.left0 = io::read_any_image(args.required("left0"));
     in.right0 = io::read_any_image(args.required("right0"));
@@ -137,12 +142,13 @@ int run(int argc, char **argv) {
         }
     }
 
-    std::fprintf(stderr, "run: estimating (%dx%d, up to stage %s)\n", size.width, size.height,
-                 pipeline::stage_name(opt.last_stage));
+    detail("run: inputs read in %s\n", format_duration(reading.seconds()).c_str());
+    note("run: estimating (%dx%d, up to stage %s)\n", size.width, size.height, pipeline::stage_name(opt.last_stage));
     const pipeline::EstimatorResult r = estimator.run(in);
     const SceneFlowField &f = r.output();
 
-    std::fprintf(stderr, "run: writing %s\n", out.c_str());
+    note("run: writing %s\n", out.c_str());
+    const Stopwatch writing;
     std::vector<std::string> written;
     for (io::ResultFormat fmt : formats) {
         for (const std::string &file : io::write_results(out, id, f, fmt))  // flo and pfm share the disparities
@@ -162,6 +168,7 @@ int run(int argc, char **argv) {
         io::write_image(out + "/viz/" + id + "_disp1.png",
                         viz::with_disparity_legend(viz::disparity_to_color(d1, fscale), scale));
     }
+    detail("run: results and pictures written in %s\n", format_duration(writing.seconds()).c_str());
     size_t cloud = 0;
     if (args.has("points")) {
         const std::vector<io::CloudPoint> pts = io::scene_points(f, in.camera, in.left0);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The CLI's input boundary (issue 13 items 1, 4, 7, 8), end to end: oversized images (65535x2
-// PNGs crashed `lidarflow run` inside SGM), files that are not PNGs, calibrations whose derived
+// PNGs crashed `lidarflow run` inside SGM), files in no image format it reads, calibrations whose derived
 // baseline overflows (exit 0 before), frame ids that would leave the layout, and output folders
 // that cannot be written: each a clear message and a non-zero exit, found before any estimation.
 #include <sys/wait.h>
@@ -49,18 +49,20 @@ std::string run_args(const fs::path &root) {
            q(k.left("000000", 1)) + " --right1 " + q(k.right("000000", 1));
 }
 
-void run_refuses_oversized_and_non_png_images(void **) {
+void run_refuses_oversized_and_unknown_images(void **) {
     const fs::path dir = test::scratch_dir("cli_limits_images");
     const fs::path wide = dir / "wide.png";
     assert_true(cv::imwrite(wide.string(), cv::Mat(2, 65535, CV_8UC1, cv::Scalar(9))));
     const std::string four = " --left0 " + q(wide) + " --right0 " + q(wide) + " --left1 " + q(wide) + " --right1 " + q(wide);
     expect_failure(run("run" + four + " --out " + q(dir / "out"), dir), 2, "is 65535x2, larger than 16384 px per side");
 
-    const fs::path bmp = dir / "image.bmp", fake = dir / "image.png";
-    assert_true(cv::imwrite(bmp.string(), cv::Mat(64, 160, CV_8UC1, cv::Scalar(9))));
-    fs::rename(bmp, fake);
+    // A format outside PNG, JPEG, BMP and PNM (here a GIF's signature) never reaches a decoder,
+    // whatever its name.
+    const fs::path fake = dir / "image.png";
+    std::ofstream(fake, std::ios::binary) << "GIF89a" << std::string(64, '\0');
     const std::string fakes = " --left0 " + q(fake) + " --right0 " + q(fake) + " --left1 " + q(fake) + " --right1 " + q(fake);
-    expect_failure(run("run" + fakes + " --out " + q(dir / "out"), dir), 1, "not a PNG file (no PNG signature)");
+    expect_failure(run("run" + fakes + " --out " + q(dir / "out"), dir), 1,
+                   "not an image file this reads (PNG, JPEG, BMP, PGM/PPM; by signature)");
 }
 
 void run_refuses_a_calibration_whose_baseline_overflows(void **) {
@@ -80,7 +82,7 @@ void run_checks_its_id_and_output_folder_first(void **) {
     const fs::path root = synth_frame(dir);
     std::ofstream(dir / "file") << "x";
     expect_failure(run(run_args(root) + " --out " + q(dir / "out") + " --id ../../x", dir), 2,
-                   "frame id '../../x' is not a KITTI frame id");
+                   "output name '../../x' must be");
     assert_false(fs::exists(dir / "out" / "flow"));
     // Before: the estimation ran, then writing disp_0/ failed ("cannot create folder ...").
     expect_failure(run(run_args(root) + " --out " + q(dir / "file" / "out"), dir), 1, "cannot create output folder");
@@ -106,7 +108,7 @@ void kitti_commands_check_ids_and_output_folder_first(void **) {
 
 int main() {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(run_refuses_oversized_and_non_png_images),
+        cmocka_unit_test(run_refuses_oversized_and_unknown_images),
         cmocka_unit_test(run_refuses_a_calibration_whose_baseline_overflows),
         cmocka_unit_test(run_checks_its_id_and_output_folder_first),
         cmocka_unit_test(kitti_commands_check_ids_and_output_folder_first),

@@ -16,6 +16,7 @@
 #include "consistency/sgm_check.hpp"
 #include "core/limits.hpp"
 #include "io/calib.hpp"
+#include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/output_folder.hpp"
@@ -223,6 +224,67 @@ void oversized_pngs_are_refused_from_their_header(void **) {
     assert_int_equal(io::read_disparity_png(small.string()).cols, 4);
 }
 
+// read_any_image (lidarflow run, viz --image): PNG, JPEG, BMP and PGM/PPM told by signature,
+// their size read from the header before decoding, the same limits as PNG.
+void camera_images_in_other_formats_are_read_with_the_same_checks(void **) {
+    const fs::path dir = test::scratch_dir("input_limits_any_image");
+    const cv::Mat img = noise(16, 8, 9);
+    cv::Mat bgr;
+    cv::merge(std::vector<cv::Mat>{img, 255 - img, img / 2}, bgr);
+    for (const cv::Mat &m : {img, bgr})
+        for (const char *ext : {".png", ".bmp", ".pgm", ".ppm", ".jpg"}) {
+            if (m.channels() == 3 && std::string(ext) == ".pgm") continue;
+            if (m.channels() == 1 && std::string(ext) == ".ppm") continue;
+            // Saved under a misleading name: the signature decides.
+            const fs::path real = dir / (std::string("image") + ext), named = dir / (std::string(ext + 1) + "_as.dat");
+            if (!cv::imwrite(real.string(), m)) continue;  // an OpenCV built without this codec
+            fs::rename(real, named);
+            const cv::Mat back = io::read_any_image(named.string());
+            assert_true(back.size() == m.size() && back.channels() == m.channels() && back.depth() == CV_8U);
+            if (std::string(ext) == ".jpg")  // lossy, and the image is noise: on average close
+                assert_true(cv::norm(back, m, cv::NORM_L1) / static_cast<double>(m.total() * m.channels()) < 48);
+            else
+                assert_true(cv::norm(back, m, cv::NORM_INF) == 0);
+        }
+    // Sizes from the header: a JPEG whose frame header claims 60000 x 60000, a BMP claiming a
+    // negative width and a PGM claiming 100000 px are refused before any decoding.
+    assert_true(cv::imwrite((dir / "small.jpg").string(), bgr));
+    std::string jpg;
+    {
+        std::ifstream in(dir / "small.jpg", std::ios::binary);
+        jpg.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const size_t sof = jpg.find("\xFF\xC0");
+    assert_true(sof != std::string::npos);
+    jpg[sof + 5] = jpg[sof + 7] = static_cast<char>(0xEA);  // height, width = 0xEA60 = 60000
+    jpg[sof + 6] = jpg[sof + 8] = static_cast<char>(0x60);
+    writes(dir / "huge.jpg", jpg);
+    expect_in(message_of([&] { io::read_any_image((dir / "huge.jpg").string()); }, ErrorCode::InvalidArgument),
+              "is 60000x60000, larger than 16384 px per side");
+    assert_true(cv::imwrite((dir / "small.bmp").string(), img));
+    std::string bmp;
+    {
+        std::ifstream in(dir / "small.bmp", std::ios::binary);
+        bmp.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    std::memset(&bmp[18], 0xff, 4);  // width -1
+    writes(dir / "negative.bmp", bmp);
+    expect_in(message_of([&] { io::read_any_image((dir / "negative.bmp").string()); }, ErrorCode::Format),
+              "corrupt BMP");
+    writes(dir / "huge.pgm", "P5\n# a comment\n100000 2\n255\n" + std::string(20, 'x'));
+    expect_in(message_of([&] { io::read_any_image((dir / "huge.pgm").string()); }, ErrorCode::InvalidArgument),
+              "is 100000x2");
+    writes(dir / "truncated.jpg", jpg.substr(0, 4));
+    expect_error([&] { io::read_any_image((dir / "truncated.jpg").string()); }, ErrorCode::Format);
+    writes(dir / "text.png", "hello, not an image");
+    expect_in(message_of([&] { io::read_any_image((dir / "text.png").string()); }, ErrorCode::Format),
+              "not an image file this reads");
+    expect_error([&] { io::read_any_image((dir / "missing.jpg").string()); }, ErrorCode::Io);
+    // 16-bit and 4-channel images are not camera images here.
+    assert_true(cv::imwrite((dir / "deep.png").string(), cv::Mat(4, 4, CV_16UC1, cv::Scalar(300))));
+    expect_in(message_of([&] { io::read_any_image((dir / "deep.png").string()); }, ErrorCode::Format), "8-bit");
+}
+
 // --- item 8: frame ids and output folders ------------------------------------------------
 
 void frame_ids_that_are_not_six_digits_never_reach_a_path(void **) {
@@ -274,6 +336,7 @@ int main() {
         cmocka_unit_test(calibration_files_with_overflowing_cameras_are_refused),
         cmocka_unit_test(non_png_files_are_refused_before_decoding),
         cmocka_unit_test(oversized_pngs_are_refused_from_their_header),
+        cmocka_unit_test(camera_images_in_other_formats_are_read_with_the_same_checks),
         cmocka_unit_test(frame_ids_that_are_not_six_digits_never_reach_a_path),
         cmocka_unit_test(output_folders_are_proven_writable),
     };

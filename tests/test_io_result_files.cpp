@@ -177,6 +177,87 @@ void test_broken_files(void **) {
     assert_true(io::parse_result_format("npy") == io::ResultFormat::Npy);
 }
 
+// Headers that announce more than the file holds, or sides beyond the limit, are Format errors
+// found before anything is allocated (a 65536 x 65536 x 3 float map would be 48 GiB).
+void test_headers_checked_before_allocation(void **) {
+    const fs::path dir = test::scratch_dir("io_result_headers");
+    std::ofstream(dir / "huge.pfm", std::ios::binary) << "PF\n65536 65536\n-1.0\n" << std::string(48, '\0');
+    std::ofstream(dir / "wide.pfm", std::ios::binary) << "Pf\n20000 1\n-1.0\n" << std::string(80000, '\0');
+    std::string npy = "{'descr': '<f4', 'fortran_order': False, 'shape': (65536, 65536, 3), }";
+    npy.resize(117, ' ');
+    npy.push_back('\n');
+    std::ofstream(dir / "huge.npy", std::ios::binary)
+        << std::string("\x93NUMPY\x01\x00\x76\x00", 10) << npy << std::string(48, '\0');
+    for (const char *name : {"huge.pfm", "wide.pfm"})
+        test::expect_error([&] { io::read_pfm((dir / name).string()); }, ErrorCode::Format);
+    test::expect_error([&] { io::read_npy((dir / "huge.npy").string()); }, ErrorCode::Format);
+    // .flo: tag, width, height (int32 little-endian), then u, v per pixel.
+    auto flo = [&](const char *name, int32_t w, int32_t h, size_t payload) {
+        std::string b = "PIEH";
+        for (int32_t v : {w, h})
+            for (int k = 0; k < 4; ++k) b.push_back(static_cast<char>((static_cast<uint32_t>(v) >> (8 * k)) & 0xff));
+        b += std::string(payload, '\0');
+        std::ofstream(dir / name, std::ios::binary) << b;
+    };
+    flo("huge.flo", 100000, 100000, 64);
+    flo("negative.flo", -3, 2, 48);
+    flo("short.flo", 3, 2, 47);
+    flo("ok.flo", 3, 2, 48);
+    for (const char *name : {"huge.flo", "negative.flo", "short.flo"})
+        test::expect_error([&] { io::read_flo((dir / name).string()); }, ErrorCode::Format);
+    const FlowField ok = io::read_flo((dir / "ok.flo").string());
+    assert_true(ok.width() == 3 && ok.height() == 2 && cv::countNonZero(ok.valid) == 6);
+}
+
+// read_disparity_file / read_flow_file read every file write_results writes, by extension, and
+// give the field back with the same holes.
+void test_any_format_readers(void **) {
+    const fs::path dir = test::scratch_dir("io_result_any");
+    const SceneFlowField f = sample_field();
+    for (io::ResultFormat fmt : {io::ResultFormat::Kitti, io::ResultFormat::Flo, io::ResultFormat::Pfm,
+                                 io::ResultFormat::Npy}) {
+        const std::vector<std::string> files = io::write_results(dir.string(), "000000", f, fmt);
+        const DisparityMap d0 = io::read_disparity_file(files[0]);
+        const FlowField fl = io::read_flow_file(files[2]);
+        const double tol = fmt == io::ResultFormat::Kitti ? 1.0 / 64 + 1e-4 : 0.0;
+        for (int y = 0; y < f.height(); ++y)
+            for (int x = 0; x < f.width(); ++x) {
+                const bool v = f.valid(y, x) != 0;
+                assert_int_equal(disparity_valid(d0(y, x)), v);
+                assert_int_equal(fl.valid(y, x), v);
+                if (!v) continue;
+                assert_true(std::fabs(d0(y, x) - f.d0(y, x)) <= tol);
+                assert_true(std::fabs(fl.u(y, x) - f.u(y, x)) <= tol && std::fabs(fl.v(y, x) - f.v(y, x)) <= tol);
+            }
+    }
+    // (H, W, 2) flow: NaN marks the holes.
+    cv::Mat2f uv(2, 3, cv::Vec2f(1.5f, -2.0f));
+    uv(1, 2) = cv::Vec2f(std::nanf(""), std::nanf(""));
+    {
+        // write_npy takes 1 or 3 channels: build the two-channel file from a 3-channel one.
+        cv::Mat3f uvw(2, 3, cv::Vec3f(1.5f, -2.0f, 0.0f));
+        io::write_npy((dir / "uv3.npy").string(), uvw);
+        std::string b = slurp(dir / "uv3.npy");
+        b.replace(b.find("(2, 3, 3)"), 9, "(2, 3, 2)");
+        const size_t data = b.size() - 2 * 3 * 3 * 4;
+        std::string payload;
+        for (int i = 0; i < 6; ++i) {
+            const cv::Vec2f p = uv(i / 3, i % 3);
+            payload.append(reinterpret_cast<const char *>(&p[0]), 4).append(reinterpret_cast<const char *>(&p[1]), 4);
+        }
+        b = b.substr(0, data) + payload;
+        std::ofstream(dir / "uv2.npy", std::ios::binary) << b;
+    }
+    const FlowField two = io::read_flow_file((dir / "uv2.npy").string());
+    assert_int_equal(cv::countNonZero(two.valid), 5);
+    assert_true(two.u(0, 0) == 1.5f && two.v(1, 1) == -2.0f && two.valid(1, 2) == 0);
+    // Wrong kinds and unknown extensions are Format errors naming what is read.
+    const std::string flow_npy = (dir / "flow" / "000000_10.npy").string();
+    test::expect_error([&] { io::read_disparity_file(flow_npy); }, ErrorCode::Format);
+    test::expect_error([&] { io::read_flow_file((dir / "disp_0" / "000000_10.npy").string()); }, ErrorCode::Format);
+    test::expect_error([&] { io::read_flow_file((dir / "x.tiff").string()); }, ErrorCode::Format);
+}
+
 void test_point_cloud(void **) {
     const fs::path dir = test::scratch_dir("io_point_cloud");
     const SceneFlowField f = sample_field();
@@ -231,6 +312,8 @@ int main() {
         cmocka_unit_test(test_round_trips),
         cmocka_unit_test(test_bytes_on_disk),
         cmocka_unit_test(test_broken_files),
+        cmocka_unit_test(test_headers_checked_before_allocation),
+        cmocka_unit_test(test_any_format_readers),
         cmocka_unit_test(test_point_cloud),
     };
     return cmocka_run_group_tests_name("io_result_files", tests, nullptr, nullptr);

@@ -20,6 +20,7 @@
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
 #include "io/result_formats.hpp"
+#include <opencv2/imgcodecs.hpp>
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
 #include <stdarg.h>
@@ -122,7 +123,10 @@ void test_velodyne_inputs(void **) {
     if (r.code != 0) fail_msg("kitti --lidar velodyne failed: %s", r.output.c_str());
     expect_contains(r, "LiDAR 12 + 0 points");
     expect_contains(r, "no scan at t1 (velodyne/ID_11.bin) for 000000");
-    expect_contains(r, "[1/1] 000000: loading");  // piped progress lines
+    expect_contains(r, "[1/1] 000000: loading  (elapsed ");  // piped progress lines
+    expect_contains(r, ", ETA ");
+    expect_contains(r, "kitti: done in ");
+    assert_true(r.output.find('\r') == std::string::npos);  // plain lines when piped
     fs::copy_file(t1, s.k.velodyne_t1("000000"));
     r = run(kitti, s.dir);
     assert_int_equal(r.code, 0);
@@ -181,6 +185,36 @@ void test_formats_and_points(void **) {
     }
     expect_contains(r, "wrote     " + ply.string() + ": " + std::to_string(cloud.size()) + " points");
 
+    // viz reads every format run wrote: the same picture from each, and error maps against the
+    // KITTI PNGs of the same result.
+    cv::Mat first;
+    for (const char *ext : {"png", "flo", "pfm", "npy"}) {
+        const fs::path pic = s.dir / (std::string("flow_") + ext + ".png");
+        const Result v = run("viz --flow " + q(out / "flow" / (std::string("000005_10.") + ext)) + " --max 20 --out " +
+                                 q(pic),
+                             s.dir);
+        if (v.code != 0) fail_msg("viz --flow .%s failed: %s", ext, v.output.c_str());
+        const cv::Mat m = io::read_image(pic.string());
+        if (first.empty()) first = m;
+        assert_true(m.size() == first.size());
+        // The PNG is quantised to 1/64 px: a colour step or two at most.
+        assert_true(cv::norm(m, first, cv::NORM_INF) <= 8);
+    }
+    for (const char *ext : {"pfm", "npy"}) {
+        const std::string d = q(out / "disp_0" / (std::string("000005_10.") + ext));
+        Result v = run("viz --disp " + d + " --out " + q(s.dir / "d.png"), s.dir);
+        if (v.code != 0) fail_msg("viz --disp .%s failed: %s", ext, v.output.c_str());
+        v = run("viz --disp " + d + " --gt " + q(o.est_disp0("000005")) + " --out " + q(s.dir / "de.png"), s.dir);
+        if (v.code != 0) fail_msg("viz --disp .%s --gt failed: %s", ext, v.output.c_str());
+    }
+    {
+        // A corrupt float file is a clear error, not a crash.
+        std::ofstream(s.dir / "bad.pfm", std::ios::binary) << "PF\n16000 16000\n-1.0\n0123";
+        const Result v = run("viz --flow " + q(s.dir / "bad.pfm") + " --out " + q(s.dir / "bad.png"), s.dir);
+        assert_int_equal(v.code, 1);
+        expect_contains(v, "bytes of data, the header announces");
+    }
+
     // The bird's-eye view of it.
     const Result v = run("viz --points " + q(ply) + " --out " + q(s.dir / "bev.png") + " --range 40", s.dir);
     if (v.code != 0) fail_msg("viz --points failed: %s", v.output.c_str());
@@ -218,6 +252,84 @@ void test_bad_arguments(void **) {
     assert_false(fs::exists(s.dir / "o" / "flow"));
 }
 
+// Output names: --id, else left0's file stem (KITTI's ID_10 kept for 6-digit ids); any 8-bit
+// image OpenCV reads (here JPEG) is an input; run's pictures carry their colour bars.
+void test_output_names_and_jpeg_inputs(void **) {
+    const Scene s = make_scene("cli_run_names");
+    const std::string rest = " --right0 " + q(s.k.right("000000", 0)) + " --left1 " + q(s.k.left("000000", 1)) +
+                             " --right1 " + q(s.k.right("000000", 1)) + " --stage matching";
+    const fs::path jpg = s.dir / "cam0 left.jpg";
+    assert_true(cv::imwrite(jpg.string(), io::read_image(s.k.left("000000", 0))));
+    const fs::path out = s.dir / "o";
+    Result r = run("run --left0 " + q(jpg) + rest + " --format kitti,npy --out " + q(out), s.dir);
+    if (r.code != 0) fail_msg("run with a JPEG left0 failed: %s", r.output.c_str());
+    for (const char *f : {"flow/cam0_left.png", "disp_0/cam0_left.png", "disp_1/cam0_left.npy", "flow/cam0_left.npy"})
+        if (!fs::exists(out / f)) fail_msg("no %s: %s", f, r.output.c_str());
+    expect_contains(r, "wrote     " + (out / "flow" / "cam0_left.png").string());
+    // The pictures: the map on top, its legend below (disparity: a colour bar; flow: the wheel).
+    for (const char *pic : {"cam0_left_disp0.png", "cam0_left_disp1.png", "cam0_left_flow.png"}) {
+        const cv::Mat m = io::read_image((out / "viz" / pic).string());
+        assert_true(m.rows > 96 + 30 && m.cols >= 320);
+    }
+    // A 6-digit stem (or id) keeps KITTI's names; another --id is used as given.
+    const fs::path six = s.dir / "000123.png";
+    fs::copy_file(s.k.left("000000", 0), six);
+    r = run("run --left0 " + q(six) + rest + " --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "000123_10.png") && fs::exists(out / "viz" / "000123_disp0.png"));
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --id 000007 --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "000007_10.png"));
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --id drive_b.t3 --format flo --out " + q(out), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(out / "flow" / "drive_b.t3.flo") && fs::exists(out / "disp_0" / "drive_b.t3.pfm"));
+    // A KITTI image name gives the frame id (image_2/000000_10.png -> 000000_10.png).
+    r = run("run --left0 " + q(s.k.left("000000", 0)) + rest + " --out " + q(s.dir / "k"), s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(fs::exists(s.dir / "k" / "flow" / "000000_10.png"));
+    expect_failure("run --left0 " + q(jpg) + rest + " --id a/b --out " + q(out), s.dir, 2, "output name 'a/b'");
+    const Result h = run("run --help", s.dir);
+    expect_contains(h, "6 digits write ID_10.EXT");
+}
+
+// --quiet and --verbose on every sub-command.
+void test_quiet_and_verbose(void **) {
+    const Scene s = make_scene("cli_run_quiet");
+    for (const char *cmd : {"demo", "run", "kitti", "synth", "sample-lidar", "eval", "viz", "options"}) {
+        const Result h = run(std::string(cmd) + " --help", s.dir);
+        assert_int_equal(h.code, 0);
+        expect_contains(h, "--quiet");
+        expect_contains(h, "--verbose");
+        const Result bad = run(std::string(cmd) + " --quiet --verbose", s.dir);
+        assert_int_equal(bad.code, 2);
+        expect_contains(bad, "--quiet and --verbose exclude each other");
+    }
+    const std::string base = "run" + s.images + " --stage matching --out " + q(s.dir / "o");
+    Result r = run(base + " --quiet", s.dir);
+    assert_int_equal(r.code, 0);
+    if (!r.output.empty()) fail_msg("run --quiet said: %s", r.output.c_str());
+    assert_true(fs::exists(s.dir / "o" / "flow" / "000000_10.png"));
+    // Errors still come through.
+    r = run(base + " --quiet --format npz", s.dir);
+    assert_int_equal(r.code, 2);
+    expect_contains(r, "did you mean 'npy'");
+    r = run(base + " --verbose", s.dir);
+    assert_int_equal(r.code, 0);
+    expect_contains(r, "run: preset default");
+    expect_contains(r, "run: inputs read in ");
+    expect_contains(r, "lidarflow run: finished in ");
+    const std::string kitti = "kitti --root " + q(s.root) + " --stage matching --no-viz --lidar none";
+    r = run(kitti + " --quiet", s.dir);
+    assert_int_equal(r.code, 0);
+    if (!r.output.empty()) fail_msg("kitti --quiet said: %s", r.output.c_str());
+    r = run(kitti + " --verbose", s.dir);
+    assert_int_equal(r.code, 0);
+    expect_contains(r, "kitti:   000000: loading took ");
+    r = run("synth --quiet --out " + q(s.dir / "k2") + " --width 160 --height 64", s.dir);
+    assert_int_equal(r.code, 0);
+    assert_true(r.output.empty());
+}
+
 }  // namespace
 
 int main() {
@@ -230,6 +342,8 @@ int main() {
         cmocka_unit_test(test_velodyne_inputs),
         cmocka_unit_test(test_formats_and_points),
         cmocka_unit_test(test_bad_arguments),
+        cmocka_unit_test(test_output_names_and_jpeg_inputs),
+        cmocka_unit_test(test_quiet_and_verbose),
     };
     return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
 }

@@ -78,7 +78,10 @@ void test_demo_writes_layout_and_pictures(void **) {
         assert_int_equal(cv::countNonZero(d0 >= 0), 640 * 192);  // the final stage is dense
         for (const char *pic : {"flow", "disp0", "disp0_error", "flow_error"}) {
             const fs::path p = dir / "out" / "viz" / (std::string("000000_") + run_name + "_" + pic + ".png");
-            assert_int_equal(io::read_image(p.string()).cols, 640);
+            const cv::Mat m = io::read_image(p.string());
+            assert_int_equal(m.cols, 640);
+            // Error maps carry the log scale's legend below the map.
+            if (std::string(pic).find("_error") != std::string::npos) assert_true(m.rows > 192 + 40);
         }
         assert_true(r.output.find(std::string("  ") + run_name + " ") != std::string::npos);
     }
@@ -154,8 +157,15 @@ void test_viz_pictures_and_error_maps(void **) {
     m = io::read_image((dir / "e.png").string());
     const cv::Vec3b lowest = viz::log_error_color(0), black(0, 0, 0);
     const FlowField gt = io::read_flow_png(k.gt_flow("000000"));
-    for (int y = 0; y < m.rows; ++y)
-        for (int x = 0; x < m.cols; ++x) assert_true(m.at<cv::Vec3b>(y, x) == (gt.valid(y, x) ? lowest : black));
+    // The map on top, its legend (the log scale) below.
+    assert_true(m.rows > gt.height() + 40 && m.cols >= gt.width());
+    for (int y = 0; y < gt.height(); ++y)
+        for (int x = 0; x < gt.width(); ++x) assert_true(m.at<cv::Vec3b>(y, x) == (gt.valid(y, x) ? lowest : black));
+    r = run("viz --flow " + q(k.gt_flow("000000")) + " --gt " + q(k.gt_flow("000000")) + " --no-legend --out " +
+                q(dir / "en.png"),
+            dir);
+    assert_int_equal(r.code, 0);
+    assert_true(io::read_image((dir / "en.png").string()).size() == cv::Size(320, 96));
     r = run("viz --disp " + q(k.gt_disp1("000000", false)) + " --gt " + q(k.gt_disp1("000000", true)) +
                 " --gt-noc " + q(k.gt_disp1("000000", false)) + " --out " + q(dir / "e1.png"),
             dir);

@@ -9,6 +9,7 @@
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
 #include "viz/flow_color.hpp"
+#include "viz/legend.hpp"
 #include "viz/overlay.hpp"
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
@@ -221,6 +222,56 @@ void test_overlays_and_tiles(void **) {
     assert_true(throws_code(ErrorCode::InvalidArgument, [&] { viz::tile({}, 2); }));
 }
 
+// Colour-bar ticks at multiples of 1, 2 or 5 x 10^k, at most 5 steps over the range.
+void test_round_ticks(void **) {
+    auto same = [](const std::vector<double> &a, std::initializer_list<double> b) {
+        if (a.size() != b.size()) return false;
+        size_t i = 0;
+        for (double v : b)
+            if (std::fabs(a[i++] - v) > 1e-9) return false;
+        return true;
+    };
+    assert_true(same(viz::round_ticks(0, 88.8), {0, 20, 40, 60, 80}));  // was 0, 22.2, 44.4, ...
+    assert_true(same(viz::round_ticks(0, 17.3), {0, 5, 10, 15}));
+    assert_true(same(viz::round_ticks(0, 100), {0, 20, 40, 60, 80, 100}));
+    assert_true(same(viz::round_ticks(0, 1), {0, 0.2, 0.4, 0.6, 0.8, 1.0}));
+    assert_true(same(viz::round_ticks(0, 0.37), {0, 0.1, 0.2, 0.3}));
+    assert_true(same(viz::round_ticks(-3, 7), {-2, 0, 2, 4, 6}));
+    assert_true(same(viz::round_ticks(0, 255), {0, 100, 200}));  // 50 would cut it into 5.1 steps
+    assert_true(std::fabs(viz::round_tick_step(0, 4000) - 1000) < 1e-9);
+    assert_true(throws_code(ErrorCode::InvalidArgument, [] { viz::round_ticks(1, 1); }));
+    assert_true(throws_code(ErrorCode::InvalidArgument, [] { viz::round_ticks(0, std::nan("")); }));
+}
+
+// The error maps' legend: the picture unchanged on top, below it all ten bands of the log scale
+// and the threshold drawn in white between band 4 (below 1) and band 5 (from 1 on).
+void test_error_legend(void **) {
+    const cv::Mat map(40, 120, CV_8UC3, cv::Scalar(1, 2, 3));
+    const cv::Mat l = viz::with_error_legend(map);
+    assert_true(l.rows > 40 + 40 && l.cols >= 400);
+    assert_int_equal(cv::norm(l(cv::Rect(0, 0, 120, 40)), map, cv::NORM_INF), 0);
+    const cv::Mat strip = l(cv::Rect(0, 40, l.cols, l.rows - 40));
+    const double lower[10] = {0, 1.0 / 16, 1.0 / 8, 1.0 / 4, 1.0 / 2, 1, 2, 4, 8, 16};
+    int first_x[10];
+    for (int k = 0; k < 10; ++k) {
+        const cv::Vec3b c = viz::log_error_color(lower[k]);
+        first_x[k] = -1;
+        for (int x = 0; x < strip.cols && first_x[k] < 0; ++x)
+            for (int y = 0; y < strip.rows; ++y)
+                if (strip.at<cv::Vec3b>(y, x) == c) {
+                    first_x[k] = x;
+                    break;
+                }
+        if (first_x[k] < 0) fail_msg("band %d's colour is not in the legend", k);
+        if (k > 0) assert_true(first_x[k] > first_x[k - 1]);  // left to right
+    }
+    bool white = false;
+    for (int x = first_x[4]; x < first_x[5] + 3; ++x)
+        for (int y = 0; y < strip.rows; ++y) white = white || strip.at<cv::Vec3b>(y, x) == cv::Vec3b(255, 255, 255);
+    assert_true(white);
+    assert_true(throws_code(ErrorCode::InvalidArgument, [] { viz::with_error_legend(cv::Mat()); }));
+}
+
 }  // namespace
 
 int main() {
@@ -232,6 +283,8 @@ int main() {
         cmocka_unit_test(test_error_image_bands),
         cmocka_unit_test(test_flow_error_image),
         cmocka_unit_test(test_overlays_and_tiles),
+        cmocka_unit_test(test_round_ticks),
+        cmocka_unit_test(test_error_legend),
     };
     return cmocka_run_group_tests_name("viz_colors", tests, nullptr, nullptr);
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "io/result_formats.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -14,7 +15,8 @@
 
 #include "core/closest_name.hpp"
 #include "core/error.hpp"
-#include "io/kitti_layout.hpp"
+#include "core/limits.hpp"
+#include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "io/read_file.hpp"
 
@@ -79,7 +81,30 @@ void read_floats(const std::string &data, size_t offset, cv::Mat &m, bool little
     }
 }
 
-// Parses "H, W" or "H, W, 3" of a .npy shape tuple.
+// Checks, before anything is allocated, that a header's size is accepted (kMaxImageSide per side)
+// and that the file holds exactly the bytes it announces: a corrupt or hostile header is a
+// Format error, never a huge allocation.
+void check_payload(const std::string &path, long w, long h, int channels, size_t bytes_per_value,
+                   size_t payload) {
+    require(w > 0 && h > 0, ErrorCode::Format,
+            path + ": bad size " + std::to_string(w) + "x" + std::to_string(h) + " in the header");
+    require(w <= kMaxImageSide && h <= kMaxImageSide, ErrorCode::Format,
+            path + ": the header announces " + std::to_string(w) + "x" + std::to_string(h) + ", larger than " +
+                std::to_string(kMaxImageSide) + " px per side");
+    const size_t expected = static_cast<size_t>(w) * static_cast<size_t>(h) * static_cast<size_t>(channels) *
+                            bytes_per_value;
+    require(payload == expected, ErrorCode::Format,
+            path + ": " + std::to_string(payload) + " bytes of data, the header announces " + std::to_string(expected) +
+                " (" + std::to_string(w) + "x" + std::to_string(h) + "x" + std::to_string(channels) + ")");
+}
+
+std::string lower_extension(const std::string &path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char &c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+// Parses "H, W" or "H, W, C" of a .npy shape tuple.
 std::vector<long> parse_shape(const std::string &tuple) {
     std::vector<long> dims;
     std::stringstream ss(tuple);
@@ -177,8 +202,8 @@ cv::Mat read_pfm(const std::string &path) {
     const bool h_ok = !hs.empty() && *end == '\0';
     const double scale = std::strtod(ss.c_str(), &end);
     const bool s_ok = !ss.empty() && *end == '\0' && std::isfinite(scale) && scale != 0;
-    require(w_ok && h_ok && s_ok && w > 0 && h > 0 && w <= 65536 && h <= 65536, ErrorCode::Format,
-            path + ": bad PFM header '" + ws + " " + hs + " " + ss + "'");
+    require(w_ok && h_ok && s_ok, ErrorCode::Format, path + ": bad PFM header '" + ws + " " + hs + " " + ss + "'");
+    check_payload(path, w, h, magic == "PF" ? 3 : 1, 4, data.size() - pos);
     cv::Mat m(static_cast<int>(h), static_cast<int>(w), magic == "PF" ? CV_32FC3 : CV_32FC1);
     read_floats(data, pos, m, scale < 0, true, path);
     return m;
@@ -230,10 +255,11 @@ cv::Mat read_npy(const std::string &path) {
     const size_t close = header.find(')', s);
     require(header[s] == '(' && close != std::string::npos, ErrorCode::Format, path + ": bad .npy shape");
     const std::vector<long> dims = parse_shape(header.substr(s + 1, close - s - 1));
-    const bool ok = (dims.size() == 2 || (dims.size() == 3 && dims[2] == 3)) && dims[0] > 0 && dims[1] > 0 &&
-                    dims[0] <= 65536 && dims[1] <= 65536;
-    require(ok, ErrorCode::Format, path + ": expected shape (H, W) or (H, W, 3)");
-    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), dims.size() == 3 ? CV_32FC3 : CV_32FC1);
+    const bool ok = dims.size() == 2 || (dims.size() == 3 && (dims[2] == 2 || dims[2] == 3));
+    require(ok, ErrorCode::Format, path + ": expected shape (H, W), (H, W, 2) or (H, W, 3)");
+    const int channels = dims.size() == 3 ? static_cast<int>(dims[2]) : 1;
+    check_payload(path, dims[1], dims[0], channels, 4, data.size() - 10 - len);
+    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), CV_32FC(channels));
     read_floats(data, 10 + len, m, true, false, path);
     return m;
 }
@@ -254,35 +280,118 @@ void write_flo(const std::string &path, const FlowField &flow) {
 }
 
 FlowField read_flo(const std::string &path) {
-    require(std::ifstream(path).good(), ErrorCode::Io, "cannot open " + path);
-    const cv::Mat uv = cv::readOpticalFlow(path);
-    require(!uv.empty() && uv.type() == CV_32FC2, ErrorCode::Format, path + ": not a readable .flo file");
-    FlowField f = FlowField::zeros(uv.cols, uv.rows);
-    for (int y = 0; y < uv.rows; ++y)
-        for (int x = 0; x < uv.cols; ++x) {
-            const cv::Vec2f p = uv.at<cv::Vec2f>(y, x);
-            const bool ok = std::fabs(p[0]) <= kFloUnknownThreshold && std::fabs(p[1]) <= kFloUnknownThreshold;
-            f.u(y, x) = ok ? p[0] : 0.0f;
-            f.v(y, x) = ok ? p[1] : 0.0f;
+    // Read here rather than by cv::readOpticalFlow, which allocates whatever size the header
+    // claims before it finds the data missing.
+    const std::string data = read_file(path);
+    require(data.size() >= 12 && data.compare(0, 4, "PIEH") == 0, ErrorCode::Format,
+            path + ": not a .flo file (no PIEH tag)");
+    auto le32 = [&](size_t at) {
+        uint32_t u = 0;
+        for (int k = 0; k < 4; ++k) u |= static_cast<uint32_t>(static_cast<unsigned char>(data[at + k])) << (8 * k);
+        return static_cast<int32_t>(u);
+    };
+    const long w = le32(4), h = le32(8);
+    check_payload(path, w, h, 2, 4, data.size() - 12);
+    FlowField f = FlowField::zeros(static_cast<int>(w), static_cast<int>(h));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const char *p = data.data() + 12 + 8 * (static_cast<size_t>(y) * static_cast<size_t>(w) + x);
+            const float u = get32(p, true), v = get32(p + 4, true);
+            const bool ok = std::fabs(u) <= kFloUnknownThreshold && std::fabs(v) <= kFloUnknownThreshold;
+            f.u(y, x) = ok ? u : 0.0f;
+            f.v(y, x) = ok ? v : 0.0f;
             f.valid(y, x) = ok ? 1 : 0;
         }
     return f;
 }
 
+DisparityMap read_disparity_file(const std::string &path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".pfm" || ext == ".npy") {
+        const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.type() == CV_32FC1, ErrorCode::Format,
+                path + ": a disparity map has one channel, this file has " + std::to_string(m.channels()));
+        DisparityMap d(m.rows, m.cols);
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = 0; x < m.cols; ++x) {
+                const float v = m.at<float>(y, x);
+                d(y, x) = std::isfinite(v) && disparity_valid(v) ? v : kInvalidDisparity;
+            }
+        return d;
+    }
+    require(ext == ".png", ErrorCode::Format,
+            path + ": unknown disparity file type '" + ext + "' (.png KITTI, .pfm, .npy)");
+    return read_disparity_png(path);
+}
+
+FlowField read_flow_file(const std::string &path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".flo") return read_flo(path);
+    if (ext == ".pfm" || ext == ".npy") {
+        const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.channels() >= 2, ErrorCode::Format,
+                path + ": flow has (u, v) or (u, v, valid) per pixel, this file has one channel");
+        FlowField f = FlowField::zeros(m.cols, m.rows);
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = 0; x < m.cols; ++x) {
+                const float *p = m.ptr<float>(y) + static_cast<size_t>(x) * m.channels();
+                const bool ok = std::isfinite(p[0]) && std::isfinite(p[1]) && (m.channels() == 2 || p[2] != 0.0f);
+                if (!ok) continue;
+                f.u(y, x) = p[0];
+                f.v(y, x) = p[1];
+                f.valid(y, x) = 1;
+            }
+        return f;
+    }
+    require(ext == ".png", ErrorCode::Format,
+            path + ": unknown flow file type '" + ext + "' (.png KITTI, .flo, .pfm, .npy)");
+    return read_flow_png(path);
+}
+
+void check_output_name(const std::string &name) {
+    bool ok = !name.empty() && name.size() <= 128 && name != "." && name != "..";
+    for (char c : name)
+        ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.');
+    require(ok, ErrorCode::InvalidArgument,
+            "output name '" + name + "' must be 1 to 128 of A-Z a-z 0-9 _ - . (and not . or ..)");
+}
+
+std::string result_file_stem(const std::string &name) {
+    check_output_name(name);
+    const bool kitti_id = name.size() == 6 && std::all_of(name.begin(), name.end(), [](char c) {
+                              return c >= '0' && c <= '9';
+                          });
+    return kitti_id ? name + "_10" : name;
+}
+
+std::string output_name_from_path(const std::string &path) {
+    std::string stem = std::filesystem::path(path).stem().string();
+    // A KITTI image name (000002_10.png): the frame id, so the results keep KITTI's names.
+    const bool kitti_image = stem.size() == 9 && stem.compare(6, 3, "_10") == 0 &&
+                             std::all_of(stem.begin(), stem.begin() + 6, [](char c) { return c >= '0' && c <= '9'; });
+    if (kitti_image) stem.resize(6);
+    for (char &c : stem)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) c = '_';
+    if (stem.size() > 128) stem.resize(128);
+    if (stem.empty() || stem == "." || stem == "..") stem = "result";
+    return stem;
+}
+
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
                                        ResultFormat format) {
     require(!f.u.empty(), ErrorCode::InvalidArgument, "write_results: empty scene-flow field");
-    const KittiLayout k{out_root};
+    const std::string stem = result_file_stem(id);
+    auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
     if (format == ResultFormat::Kitti) {
-        write_submission(out_root, id, f);
-        return {k.est_disp0(id), k.est_disp1(id), k.est_flow(id)};
+        const std::string d0 = path("disp_0", "png"), d1 = path("disp_1", "png"), fl = path("flow", "png");
+        write_disparity_png(d0, field_disparity0(f));
+        write_disparity_png(d1, field_disparity1(f));
+        write_flow_png(fl, field_flow(f));
+        return {d0, d1, fl};
     }
-    // Same names as the KITTI layout, another extension.
-    auto with_ext = [](std::string png, const char *ext) { return png.substr(0, png.size() - 3) + ext; };
     const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
     const char *flow_ext = result_format_name(format);
-    const std::string d0 = with_ext(k.est_disp0(id), disp_ext), d1 = with_ext(k.est_disp1(id), disp_ext),
-                      fl = with_ext(k.est_flow(id), flow_ext);
+    const std::string d0 = path("disp_0", disp_ext), d1 = path("disp_1", disp_ext), fl = path("flow", flow_ext);
     const auto write_map = format == ResultFormat::Npy ? write_npy : write_pfm;
     write_map(d0, disparity_with_nan(field_disparity0(f)));
     write_map(d1, disparity_with_nan(field_disparity1(f)));

@@ -25,8 +25,17 @@ enum class ResultFormat { Kitti, Flo, Pfm, Npy };
 const char *result_format_name(ResultFormat f);
 ResultFormat parse_result_format(const std::string &name);
 
-// Writes OUT/disp_0/ID_10.EXT, OUT/disp_1/ID_10.EXT and OUT/flow/ID_10.EXT (creating the
-// folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
+// Output names. A KITTI frame id (6 digits) names files ID_10.EXT as KITTI does; any other name
+// (1 to 128 of A-Z a-z 0-9 _ - ., not . or ..) names them NAME.EXT. check_output_name throws
+// Error(InvalidArgument) for another name; result_file_stem checks, then gives "ID_10" or NAME.
+void check_output_name(const std::string &name);
+std::string result_file_stem(const std::string &name);
+// The output name for an input image: its file stem, the frame id for a KITTI image name
+// (image_2/000002_10.png -> 000002), characters outside the set above replaced by '_'.
+std::string output_name_from_path(const std::string &path);
+
+// Writes OUT/disp_0/STEM.EXT, OUT/disp_1/STEM.EXT and OUT/flow/STEM.EXT (STEM =
+// result_file_stem(id); creating the folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
 // flo: the flow as .flo and, since .flo has no one-channel form, the disparities as .pfm.
 // Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
@@ -35,15 +44,24 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
 // CV_32FC1 or CV_32FC3 maps. Writers create missing parent folders and throw Error: Io when the
 // file cannot be written, InvalidArgument for an empty map or another type. Readers throw Io
 // when the file cannot be read and Format for anything but the float32 layouts above (a
-// big-endian PFM is accepted).
+// big-endian PFM is accepted; read_npy also takes (H, W, 2)), for a side larger than
+// kMaxImageSide, or for a file whose size differs from what its header announces: checked
+// before anything is allocated.
 void write_pfm(const std::string &path, const cv::Mat &map);
 cv::Mat read_pfm(const std::string &path);
 void write_npy(const std::string &path, const cv::Mat &map);
 cv::Mat read_npy(const std::string &path);
 
-// .flo through OpenCV; unknown flow (|u| or |v| > 1e9) reads back as valid = 0.
+// .flo as OpenCV's writeOpticalFlow writes it; unknown flow (|u| or |v| > 1e9) reads back as
+// valid = 0. read_flo checks the header and the file size like the readers above.
 void write_flo(const std::string &path, const FlowField &flow);
 FlowField read_flo(const std::string &path);
+
+// Any file `write_results` writes, by its extension (case-insensitive): a disparity map from
+// .png (KITTI), .pfm or .npy (one channel; NaN = invalid); a flow field from .png (KITTI),
+// .flo, .pfm or .npy ((u, v, valid) or (u, v), NaN = invalid). Format for another extension.
+DisparityMap read_disparity_file(const std::string &path);
+FlowField read_flow_file(const std::string &path);
 
 // The float maps written for a field: disparity with NaN holes, flow as (u, v, valid).
 cv::Mat1f disparity_with_nan(const DisparityMap &disp);

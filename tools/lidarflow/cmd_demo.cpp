@@ -21,6 +21,7 @@
 #include "synth_args.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
+#include "viz/legend.hpp"
 #include "viz/flow_color.hpp"
 #include "viz/overlay.hpp"
 
@@ -139,9 +140,10 @@ int run_demo(int argc, char **argv) {
         const std::string vdir = out + "/viz/" + id + "_" + r.name;
         io::write_image(vdir + "_flow.png", viz::flow_to_color(io::field_flow(f)));
         io::write_image(vdir + "_disp0.png", viz::disparity_to_color(io::field_disparity0(f), scale));
-        io::write_image(vdir + "_disp0_error.png",
-                        viz::disparity_error_image(io::field_disparity0(f), s.disp0_occ, s.disp0_noc));
-        io::write_image(vdir + "_flow_error.png", viz::flow_error_image(io::field_flow(f), s.flow_occ, s.flow_noc));
+        io::write_image(vdir + "_disp0_error.png", viz::with_error_legend(viz::disparity_error_image(
+                                                       io::field_disparity0(f), s.disp0_occ, s.disp0_noc)));
+        io::write_image(vdir + "_flow_error.png",
+                        viz::with_error_legend(viz::flow_error_image(io::field_flow(f), s.flow_occ, s.flow_noc)));
         runs.push_back(std::move(r));
     }
 

@@ -9,6 +9,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "log.hpp"
 #include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
@@ -116,16 +117,42 @@ int run_kitti_command(int argc, char **argv) {
     require(placements == 1 || o.lidar.protocol == pipeline::LidarProtocol::Paper, ErrorCode::InvalidArgument,
             "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
 
-    const bool tty = isatty(fileno(stderr));
-    // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one line per step, so a
-    // long run still shows where it is without control characters in the log.
-    const auto progress = [tty](size_t i, size_t n, const std::string &what) {
+    const bool tty = isatty(fileno(stderr)) && verbosity() != Verbosity::Quiet;
+    // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one plain line per step,
+    // so a long run still shows where it is without control characters in the log. Each line
+    // has the time elapsed and, once a frame is done, the time left (frames of every seed and
+    // placement together).
+    const size_t runs = static_cast<size_t>(seeds) * static_cast<size_t>(placements);
+    size_t run_index = 0;
+    const Stopwatch clock;
+    double step_start = 0;
+    std::string step;
+    const auto progress = [&](size_t i, size_t n, const std::string &what) {
+        const double now = clock.seconds();
+        if (!step.empty()) detail("kitti:   %s took %s\n", step.c_str(), format_duration(now - step_start).c_str());
+        step = what;
+        step_start = now;
+        const size_t done = run_index * n + i, total = runs * n;
+        const std::string eta = done ? format_duration(now / static_cast<double>(done) * static_cast<double>(total - done))
+                                     : std::string("--");
+        const std::string counter = runs > 1 ? "[run " + std::to_string(run_index + 1) + "/" + std::to_string(runs) + ", " : "[";
         if (tty)
-            std::fprintf(stderr, "\r\033[K[%zu/%zu] %s", i + 1, n, what.c_str());
+            note("\r\033[K%s%zu/%zu] %s  (elapsed %s, ETA %s)", counter.c_str(), i + 1, n, what.c_str(),
+                 format_duration(now).c_str(), eta.c_str());
         else
-            std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, n, what.c_str());
+            note("%s%zu/%zu] %s  (elapsed %s, ETA %s)\n", counter.c_str(), i + 1, n, what.c_str(),
+                 format_duration(now).c_str(), eta.c_str());
     };
+    const auto finish_run = [&]() {
+        if (!step.empty()) detail("kitti:   %s took %s\n", step.c_str(), format_duration(clock.seconds() - step_start).c_str());
+        step.clear();
+        ++run_index;
+    };
+    detail("kitti: LiDAR %s, preset %s, %d thread(s), up to stage %s, %d seed(s) x %d placement(s)\n",
+           pipeline::protocol_name(o.lidar.protocol), args.str("preset", "default").c_str(), o.estimator.threads,
+           pipeline::stage_name(o.estimator.last_stage), seeds, placements);
     const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
+    finish_run();
     // Further seeds and placements: scored only (the first seed's run at the paper's placement
     // is the one written to --out).
     std::vector<pipeline::KittiRunReport> more;
@@ -138,8 +165,10 @@ int run_kitti_command(int argc, char **argv) {
             ok.estimator.matching.random_seed = o.estimator.matching.random_seed + static_cast<uint64_t>(k);
             ok.estimator.interpolation.random_seed = o.estimator.interpolation.random_seed + static_cast<unsigned>(k);
             more.push_back(pipeline::run_kitti(ok, progress));
+            finish_run();
         }
     if (tty) std::fprintf(stderr, "\r\033[K");
+    note("kitti: done in %s\n", format_duration(clock.seconds()).c_str());
 
     std::printf("lidarflow kitti: %zu frame(s), LiDAR %s, stage %s, %d thread(s)\n", rep.timings.size(),
                 pipeline::protocol_name(o.lidar.protocol), pipeline::stage_name(o.estimator.last_stage),

@@ -9,9 +9,11 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "log.hpp"
 #include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
+#include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
@@ -23,6 +25,7 @@
 #include "pipeline/estimator.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/flow_color.hpp"
+#include "viz/legend.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -42,7 +45,7 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
                          const cv::Size &size, const char *what) {
     const io::VelodyneScan scan = io::read_velodyne_bin(path);
     SparseLidar l = lidar::sample_velodyne_protocol(scan, calib, velo_to_cam, size).d0;
-    std::fprintf(stderr, "run: %s %s: %zu points, %zu in the image%s\n", what, path.c_str(), scan.points.size(),
+    note("run: %s %s: %zu points, %zu in the image%s\n", what, path.c_str(), scan.points.size(),
                  l.points.size(),
                  scan.dropped_nonfinite ? (", " + std::to_string(scan.dropped_nonfinite) + " non-finite dropped").c_str()
                                         : "");
@@ -61,10 +64,10 @@ std::vector<io::ResultFormat> parse_formats(const std::vector<std::string> &name
 
 int run(int argc, char **argv) {
     Args args("run", argc, argv,
-              {{"left0", true, "PNG  rectified left image at t0 (reference)"},
-               {"right0", true, "PNG  rectified right image at t0"},
-               {"left1", true, "PNG  rectified left image at t1"},
-               {"right1", true, "PNG  rectified right image at t1"},
+              {{"left0", true, "IMG  rectified left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
+               {"right0", true, "IMG  rectified right image at t0"},
+               {"left1", true, "IMG  rectified left image at t1"},
+               {"right1", true, "IMG  rectified right image at t1"},
                {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; needed by --velo0/1 and --points)"},
                {"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 as a KITTI disparity PNG"},
                {"lidar1", true, "PNG  sparse LiDAR D_l^1 in left1 as a KITTI disparity PNG"},
@@ -77,16 +80,17 @@ int run(int argc, char **argv) {
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
-               {"id", true, "ID   frame id of the output files (default 000000)"},
+               {"id", true, "NAME output file name (default: left0's, 000002_10.png -> 000002); 6 digits write ID_10.EXT as KITTI does, other names NAME.EXT"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"points", true, "PLY  also write the 3-D points at t0 with their motion and colour"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
     }
-    const std::string out = args.required("out"), id = args.str("id", "000000");
+    const std::string out = args.required("out");
+    const std::string id = args.has("id") ? args.str("id", "") : io::output_name_from_path(args.required("left0"));
     // Both name output files: checked before minutes of estimation, not after.
-    io::KittiLayout::check_id(id);
+    io::check_output_name(id);
     io::prepare_output_folder(out);
     const std::vector<io::ResultFormat> formats =
         parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"});
@@ -108,12 +112,16 @@ int run(int argc, char **argv) {
     apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
 
-    std::fprintf(stderr, "run: reading the images\n");
+    detail("run: preset %s, %d thread(s), up to stage %s, LiDAR %s, output name %s\n",
+           args.str("preset", "default").c_str(), opt.threads, pipeline::stage_name(opt.last_stage),
+           opt.use_lidar ? "used" : "ignored", id.c_str());
+    note("run: reading the images\n");
+    const Stopwatch reading;
     pipeline::FrameInput in;
-    in.left0 = io::read_image(args.required("left0"));
-    in.right0 = io::read_image(args.required("right0"));
-    in.left1 = io::read_image(args.required("left1"));
-    in.right1 = io::read_image(args.required("right1"));
+    in.left0 = io::read_any_image(args.required("left0"));
+    in.right0 = io::read_any_image(args.required("right0"));
+    in.left1 = io::read_any_image(args.required("left1"));
+    in.right1 = io::read_any_image(args.required("right1"));
     const cv::Size size = in.left0.size();
     for (const cv::Mat *m : {&in.right0, &in.left1, &in.right1})
         require(m->size() == size, ErrorCode::SizeMismatch, "run: the four images must have the same size");
@@ -134,20 +142,33 @@ int run(int argc, char **argv) {
         }
     }
 
-    std::fprintf(stderr, "run: estimating (%dx%d, up to stage %s)\n", size.width, size.height,
-                 pipeline::stage_name(opt.last_stage));
+    detail("run: inputs read in %s\n", format_duration(reading.seconds()).c_str());
+    note("run: estimating (%dx%d, up to stage %s)\n", size.width, size.height, pipeline::stage_name(opt.last_stage));
     const pipeline::EstimatorResult r = estimator.run(in);
     const SceneFlowField &f = r.output();
 
-    std::fprintf(stderr, "run: writing %s\n", out.c_str());
+    note("run: writing %s\n", out.c_str());
+    const Stopwatch writing;
     std::vector<std::string> written;
     for (io::ResultFormat fmt : formats) {
         for (const std::string &file : io::write_results(out, id, f, fmt))  // flo and pfm share the disparities
             if (std::find(written.begin(), written.end(), file) == written.end()) written.push_back(file);
     }
-    io::write_image(out + "/viz/" + id + "_flow.png", viz::flow_to_color(io::field_flow(f)));
-    io::write_image(out + "/viz/" + id + "_disp0.png", viz::disparity_to_color(io::field_disparity0(f)));
-    io::write_image(out + "/viz/" + id + "_disp1.png", viz::disparity_to_color(io::field_disparity1(f)));
+    // Pictures with their legends, as `viz` draws them; both disparity maps on one scale.
+    {
+        const FlowField flow = io::field_flow(f);
+        const DisparityMap d0 = io::field_disparity0(f), d1 = io::field_disparity1(f);
+        const viz::FlowColorOptions fo;
+        io::write_image(out + "/viz/" + id + "_flow.png",
+                        viz::with_flow_legend(viz::flow_to_color(flow, fo), viz::flow_color_scale(flow, fo), fo.style));
+        const double scale = std::max(viz::disparity_color_scale(d0), viz::disparity_color_scale(d1));
+        const auto fscale = static_cast<float>(scale);
+        io::write_image(out + "/viz/" + id + "_disp0.png",
+                        viz::with_disparity_legend(viz::disparity_to_color(d0, fscale), scale));
+        io::write_image(out + "/viz/" + id + "_disp1.png",
+                        viz::with_disparity_legend(viz::disparity_to_color(d1, fscale), scale));
+    }
+    detail("run: results and pictures written in %s\n", format_duration(writing.seconds()).c_str());
     size_t cloud = 0;
     if (args.has("points")) {
         const std::vector<io::CloudPoint> pts = io::scene_points(f, in.camera, in.left0);

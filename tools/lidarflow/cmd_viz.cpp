@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// lidarflow viz: colour-codes a KITTI disparity or flow PNG (with its legend, optionally over
-// the camera image), draws its KITTI error map against ground truth, or draws a bird's-eye view
-// of the point cloud `run --points` writes.
+// lidarflow viz: colour-codes a disparity or flow map in any format `run --format` writes (with
+// its legend, optionally over the camera image), draws its KITTI error map against ground truth,
+// or draws a bird's-eye view of the point cloud `run --points` writes.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -9,8 +9,10 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/image_file.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
+#include "io/result_formats.hpp"
 #include "viz/birds_eye.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
@@ -42,17 +44,17 @@ int birds_eye(const Args &args, const std::string &out) {
 
 int run_viz(int argc, char **argv) {
     Args args("viz", argc, argv,
-              {{"disp", true, "FILE  KITTI disparity PNG (uint16, d*256)"},
-               {"flow", true, "FILE  KITTI flow PNG (3 x uint16)"},
+              {{"disp", true, "FILE  disparity map: KITTI PNG (uint16, d*256), .pfm or .npy (float, NaN = none)"},
+               {"flow", true, "FILE  flow: KITTI PNG (3 x uint16), .flo, .pfm or .npy (u, v[, valid])"},
                {"points", true, "PLY  point cloud of `run --points`: draw a bird's-eye view of the motion"},
-               {"gt", true, "FILE  ground truth (occ) of the same kind: draw the error map instead"},
+               {"gt", true, "FILE  ground truth (occ) of the same kind, any of those formats: draw the error map instead"},
                {"gt-noc", true, "FILE  non-occluded ground truth: occluded-only pixels drawn darker"},
-               {"image", true, "PNG  camera image (left, t0): draw the colours over it"},
+               {"image", true, "IMG  camera image (left, t0; PNG, JPEG, BMP, PGM/PPM): draw the colours over it"},
                {"out", true, "PNG  output picture (BGR, 8-bit)"},
                {"max", true, "V  colour scale: max disparity / flow [px] / speed [m per frame] (default: the data's)"},
                {"range", true, "M  --points: metres shown ahead (default: the data's)"},
                {"style", true, "kitti|middlebury  flow colour wheel (default kitti)"},
-               {"no-legend", false, "no colour bar / wheel strip: the picture keeps the map's size"}});
+               {"no-legend", false, "no colour bar / wheel / error scale strip: the picture keeps the map's size"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -69,39 +71,40 @@ int run_viz(int argc, char **argv) {
     require(!args.has("style") || flow, ErrorCode::InvalidArgument, "viz: --style applies to --flow");
     const double max = args.number("max", 0);
     require(max >= 0, ErrorCode::InvalidArgument, "viz: --max must be >= 0 (0 = automatic)");
-    const bool legend = !args.flag("no-legend") && !error_map;
+    const bool legend = !args.flag("no-legend");
 
     cv::Mat picture;
     cv::Mat1b valid;  // where the picture shows the result (for --image)
     std::string what;
     if (disp) {
-        const DisparityMap est = io::read_disparity_png(args.str("disp", ""));
+        const DisparityMap est = io::read_disparity_file(args.str("disp", ""));
         valid = est >= 0.0f;
         if (error_map) {
-            const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_png(args.str("gt-noc", "")) : DisparityMap();
-            picture = viz::disparity_error_image(est, io::read_disparity_png(args.str("gt", "")), noc);
-            what = "disparity error map (log colours, 1.0 = KITTI outlier threshold)";
+            const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_file(args.str("gt-noc", "")) : DisparityMap();
+            picture = viz::disparity_error_image(est, io::read_disparity_file(args.str("gt", "")), noc);
+            what = "disparity error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const double scale = viz::disparity_color_scale(est, static_cast<float>(max));
             picture = viz::disparity_to_color(est, static_cast<float>(scale));
             what = "disparity colour map, scale 0.." + std::to_string(static_cast<int>(std::ceil(scale))) + " px";
         }
         if (args.has("image")) {
-            const cv::Mat image = io::read_image(args.str("image", ""));
+            const cv::Mat image = io::read_any_image(args.str("image", ""));
             require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";
         }
-        if (legend && !error_map)
-            picture = viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
+        if (legend)
+            picture = error_map ? viz::with_error_legend(picture)
+                                : viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
     } else {
-        const FlowField est = io::read_flow_png(args.str("flow", ""));
+        const FlowField est = io::read_flow_file(args.str("flow", ""));
         valid = est.valid != 0;
         viz::FlowColorOptions o;
         if (error_map) {
-            const FlowField noc = args.has("gt-noc") ? io::read_flow_png(args.str("gt-noc", "")) : FlowField();
-            picture = viz::flow_error_image(est, io::read_flow_png(args.str("gt", "")), noc);
-            what = "flow error map (log colours, 1.0 = KITTI outlier threshold)";
+            const FlowField noc = args.has("gt-noc") ? io::read_flow_file(args.str("gt-noc", "")) : FlowField();
+            picture = viz::flow_error_image(est, io::read_flow_file(args.str("gt", "")), noc);
+            what = "flow error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const std::string style = args.str("style", "kitti");
             require(style == "kitti" || style == "middlebury", ErrorCode::InvalidArgument,
@@ -112,12 +115,14 @@ int run_viz(int argc, char **argv) {
             what = "flow colour (" + style + " wheel)";
         }
         if (args.has("image")) {
-            const cv::Mat image = io::read_image(args.str("image", ""));
+            const cv::Mat image = io::read_any_image(args.str("image", ""));
             require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
             picture = viz::blend_over(image, picture, valid, 0.6);
             what += " over the image";
         }
-        if (legend) picture = viz::with_flow_legend(picture, viz::flow_color_scale(est, o), o.style);
+        if (legend)
+            picture = error_map ? viz::with_error_legend(picture)
+                                : viz::with_flow_legend(picture, viz::flow_color_scale(est, o), o.style);
     }
     io::write_image(out, picture);
     std::printf("wrote %s: %s%s, %dx%d\n", out.c_str(), what.c_str(), legend ? " with legend" : "", picture.cols,

@@ -4,10 +4,16 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "heap_policy.hpp"
+#include "log.hpp"
 #include "core/error.hpp"
 #include "lidarflow/lidarflow.h"
 
@@ -31,6 +37,34 @@ void print_usage(FILE *f) {
     for (const Command &c : cmds) std::fprintf(f, "  %-14s %s\n", c.name, c.summary);
 }
 
+// Takes --quiet and --verbose off argv (after the sub-command's name) and sets the level; both
+// at once is a usage error. Returns the new argc.
+int take_verbosity_flags(int argc, char **argv, bool *help) {
+    bool quiet = false, verbose = false;
+    int n = 2;
+    for (int i = 2; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--help" || a == "-h") *help = true;
+        if (a == "--quiet") {
+            quiet = true;
+        } else if (a == "--verbose") {
+            verbose = true;
+        } else {
+            argv[n++] = argv[i];
+        }
+    }
+    argv[n] = nullptr;
+    if (quiet && verbose) throw lidarflow::cli::UsageError("--quiet and --verbose exclude each other");
+    lidarflow::cli::set_verbosity(quiet     ? lidarflow::cli::Verbosity::Quiet
+                                  : verbose ? lidarflow::cli::Verbosity::Verbose
+                                            : lidarflow::cli::Verbosity::Normal);
+    return n;
+}
+
+constexpr const char *kVerbosityHelp =
+    "  --quiet               only errors (on stderr); nothing else on stdout or stderr\n"
+    "  --verbose             more detail on stderr: settings, per-step timings\n";
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -47,7 +81,27 @@ int main(int argc, char **argv) {
     for (const Command &c : lidarflow::cli::command_registry()) {
         if (std::strcmp(argv[1], c.name) != 0) continue;
         try {
-            return c.run(argc - 1, argv + 1);
+            bool help = false;
+            argc = take_verbosity_flags(argc, argv, &help);
+            if (lidarflow::cli::verbosity() == lidarflow::cli::Verbosity::Quiet && !help) {
+                // Reports go to stdout: with --quiet, nowhere. Errors still reach stderr.
+                std::fflush(stdout);
+                const int null = open("/dev/null", O_WRONLY);
+                if (null >= 0) {
+                    dup2(null, STDOUT_FILENO);
+                    close(null);
+                }
+            }
+            const lidarflow::cli::Stopwatch clock;
+            const int rc = c.run(argc - 1, argv + 1);
+            if (help) {
+                std::printf("%s", kVerbosityHelp);
+            } else {
+                std::fflush(stdout);
+                lidarflow::cli::detail("lidarflow %s: finished in %s (exit %d)\n", c.name,
+                                       lidarflow::cli::format_duration(clock.seconds()).c_str(), rc);
+            }
+            return rc;
         } catch (const lidarflow::cli::UsageError &e) {
             std::fprintf(stderr, "lidarflow %s: error: %s\n", c.name, e.what());
             return 2;

@@ -9,10 +9,10 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/kitti_runner.hpp"
+#include "pipeline/option_assignments.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -103,7 +103,7 @@ int run_kitti_command(int argc, char **argv) {
         o.estimator.matching.random_seed = static_cast<uint64_t>(seed);
         o.estimator.interpolation.random_seed = static_cast<unsigned>(seed);
     }
-    apply_option_assignments(o.estimator, args.list("set"));
+    pipeline::apply_option_assignments(o.estimator, args.list("set"));
     o.ablation = args.flag("ablation");
     o.out = args.str("out", "");
     o.write_viz = !args.flag("no-viz");

@@ -40,9 +40,9 @@
 #include "io/kitti_layout.hpp"
 #include "io/kitti_submission.hpp"
 #include <opencv2/imgproc.hpp>
+#include "eval/kitti_runner.hpp"
 #include "io/kitti_png.hpp"
 #include "eval/kitti_eval.hpp"
-#include "pipeline/kitti_runner.hpp"
 
 using namespace lidarflow;
 
@@ -359,9 +359,9 @@ int main(int argc, char **argv) try {
     }
     const std::string sparse_dir = arg(argc, argv, "--sparse", "");
     const bool values_gt = arg(argc, argv, "--values", "real") == "gt";
-    pipeline::LidarInputOptions lio;
-    lio.protocol = pipeline::parse_protocol(arg(argc, argv, "--lidar", "paper"));
-    lio.points = std::stoi(arg(argc, argv, "--points", lio.protocol == pipeline::LidarProtocol::Velodyne ? "0" : "88"));
+    eval::LidarInputOptions lio;
+    lio.protocol = eval::parse_protocol(arg(argc, argv, "--lidar", "paper"));
+    lio.points = std::stoi(arg(argc, argv, "--points", lio.protocol == eval::LidarProtocol::Velodyne ? "0" : "88"));
     std::vector<Input> inputs;
     for (size_t i = 0; i < frames.size(); ++i) {
         if (sparse_dir.empty())
@@ -370,7 +370,7 @@ int main(int argc, char **argv) try {
             inputs.back().camera = io::read_calib_cam_to_cam(kitti.calib_cam_to_cam(frames[i].id)).camera;
         }
         else {
-            const pipeline::KittiFrame kf = pipeline::load_kitti_frame(root, frames[i].id, lio);
+            const eval::KittiFrame kf = eval::load_kitti_frame(root, frames[i].id, lio);
             inputs.push_back(sparse_input(sparse_dir, frames[i], kf.input.lidar0, values_gt));
             inputs.back().camera = kf.input.camera;
             inputs.back().lidar1 = kf.input.lidar1;

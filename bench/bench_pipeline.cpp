@@ -32,10 +32,10 @@
 #include "bench_util.hpp"
 #include "heap_policy.hpp"
 #include "eval/kitti_eval.hpp"
+#include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
 #include "io/kitti_layout.hpp"
 #include "pipeline/estimator.hpp"
-#include "pipeline/kitti_runner.hpp"
 #include "pipeline/option_assignments.hpp"
 #include "synth/scene.hpp"
 
@@ -142,7 +142,7 @@ std::vector<Case> load_cases(const Args &a) {
     if (a.kitti && !a.root.empty()) {
         const std::vector<std::string> ids = a.ids.empty() ? io::KittiLayout{a.root}.frame_ids() : a.ids;
         for (const std::string &id : ids) {
-            pipeline::KittiFrame f = pipeline::load_kitti_frame(a.root, id, {});
+            eval::KittiFrame f = eval::load_kitti_frame(a.root, id, {});
             cases.push_back({"kitti " + id, std::move(f.input), eval::load_ground_truth(a.root, id)});
         }
     }

@@ -269,7 +269,7 @@ double peak_rss_mib() {
 }
 
 // "key=value,key=value" onto the options; unknown keys are an error.
-void apply_overrides(const std::string &list, interp::InterpolationOptions &o) {
+void apply_overrides(const std::string &list, interpolation::InterpolationOptions &o) {
     std::stringstream ss(list);
     for (std::string kv; std::getline(ss, kv, ',');) {
         const size_t eq = kv.find('=');
@@ -385,10 +385,10 @@ int main(int argc, char **argv) try {
 
     struct Variant {
         std::string name;
-        interp::InterpolationOptions o;
+        interpolation::InterpolationOptions o;
     };
     std::vector<Variant> variants;
-    interp::InterpolationOptions base;
+    interpolation::InterpolationOptions base;
     base.num_threads = threads;
     apply_overrides(arg(argc, argv, "--set", ""), base);
     variants.push_back({"default (multi-scale edges, Interp+LiDAR)", base});
@@ -399,7 +399,7 @@ int main(int argc, char **argv) try {
     }
     if (all_variants) {
         auto o = base;
-        o.edges.method = interp::EdgeMethod::Gradient;
+        o.edges.method = interpolation::EdgeMethod::Gradient;
         variants.push_back({"single-scale gradient edges", o});
         o = base;
         o.edges.bilateral_prefilter = false;
@@ -413,7 +413,7 @@ int main(int argc, char **argv) try {
     }
 
     for (const Variant &v : variants) {
-        const interp::RobustInterpolator ri(v.o);
+        const interpolation::RobustInterpolator ri(v.o);
         Rates all, noc;
         double mean_sf = 0, mean_sf_noc = 0;
         double secs = 0, cpu = 0;
@@ -421,8 +421,8 @@ int main(int argc, char **argv) try {
         for (size_t i = 0; i < frames.size(); ++i) {
             const double c0 = cpu_seconds();
             const auto t0 = std::chrono::steady_clock::now();
-            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
-                                                      inputs[i].camera, inputs[i].lidar1);
+            const interpolation::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
+                                                             inputs[i].camera, inputs[i].lidar1);
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             secs += s;
             cpu += cpu_seconds() - c0;

@@ -195,7 +195,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     EstimatorOptions image_opt = main_opt;
     image_opt.use_lidar = false;
     const bool image_rows = o.ablation && main_opt.use_lidar;
-    interp::InterpolationOptions interp_only = main_opt.interpolation;
+    interpolation::InterpolationOptions interp_only = main_opt.interpolation;
     interp_only.use_lidar = false;
     interp_only.num_threads = main_opt.threads;
 
@@ -261,7 +261,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         if (main_opt.use_lidar) {
             if (progress) progress(i, ids.size(), id + ": interp-only");
             const SceneFlowField dense_only =
-                interp::RobustInterpolator(interp_only)
+                interpolation::RobustInterpolator(interp_only)
                     .run(r.sparse, frame.input.lidar0, frame.input.left0, DisparityMap(), frame.input.camera)
                     .dense;
             table.add("Interpolation", "Spars+LiDAR & Interp-only", FillMode::Filled, gt, dense_only, seeds, id);

@@ -20,7 +20,7 @@
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/piecewise_model.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -891,4 +891,4 @@ SceneFlowField interpolate_scene_flow(const SceneFlowField &matches, const Spars
     return RobustInterpolator(options).run(matches, lidar0, image).dense;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

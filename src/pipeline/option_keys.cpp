@@ -280,9 +280,9 @@ void set_option_string(OptionValues &values, const OptionKey &k, const std::stri
     } else if (is_key(k, "matching.method")) {
         values.estimator.matching.method = matching::parse_match_method(v);
     } else {  // interpolation.sed_model
-        interp::EdgeMapOptions &e = values.estimator.interpolation.edges;
+        interpolation::EdgeMapOptions &e = values.estimator.interpolation.edges;
         e.sed_model_path = v;
-        e.method = v.empty() ? interp::EdgeMapOptions{}.method : interp::EdgeMethod::StructuredForest;
+        e.method = v.empty() ? interpolation::EdgeMapOptions{}.method : interpolation::EdgeMethod::StructuredForest;
     }
 }
 

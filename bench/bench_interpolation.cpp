@@ -40,9 +40,9 @@
 #include "io/kitti_layout.hpp"
 #include "io/kitti_submission.hpp"
 #include <opencv2/imgproc.hpp>
+#include "eval/kitti_runner.hpp"
 #include "io/kitti_png.hpp"
 #include "eval/kitti_eval.hpp"
-#include "pipeline/kitti_runner.hpp"
 
 using namespace lidarflow;
 
@@ -269,7 +269,7 @@ double peak_rss_mib() {
 }
 
 // "key=value,key=value" onto the options; unknown keys are an error.
-void apply_overrides(const std::string &list, interp::InterpolationOptions &o) {
+void apply_overrides(const std::string &list, interpolation::InterpolationOptions &o) {
     std::stringstream ss(list);
     for (std::string kv; std::getline(ss, kv, ',');) {
         const size_t eq = kv.find('=');
@@ -359,9 +359,9 @@ int main(int argc, char **argv) try {
     }
     const std::string sparse_dir = arg(argc, argv, "--sparse", "");
     const bool values_gt = arg(argc, argv, "--values", "real") == "gt";
-    pipeline::LidarInputOptions lio;
-    lio.protocol = pipeline::parse_protocol(arg(argc, argv, "--lidar", "paper"));
-    lio.points = std::stoi(arg(argc, argv, "--points", lio.protocol == pipeline::LidarProtocol::Velodyne ? "0" : "88"));
+    eval::LidarInputOptions lio;
+    lio.protocol = eval::parse_protocol(arg(argc, argv, "--lidar", "paper"));
+    lio.points = std::stoi(arg(argc, argv, "--points", lio.protocol == eval::LidarProtocol::Velodyne ? "0" : "88"));
     std::vector<Input> inputs;
     for (size_t i = 0; i < frames.size(); ++i) {
         if (sparse_dir.empty())
@@ -370,7 +370,7 @@ int main(int argc, char **argv) try {
             inputs.back().camera = io::read_calib_cam_to_cam(kitti.calib_cam_to_cam(frames[i].id)).camera;
         }
         else {
-            const pipeline::KittiFrame kf = pipeline::load_kitti_frame(root, frames[i].id, lio);
+            const eval::KittiFrame kf = eval::load_kitti_frame(root, frames[i].id, lio);
             inputs.push_back(sparse_input(sparse_dir, frames[i], kf.input.lidar0, values_gt));
             inputs.back().camera = kf.input.camera;
             inputs.back().lidar1 = kf.input.lidar1;
@@ -385,10 +385,10 @@ int main(int argc, char **argv) try {
 
     struct Variant {
         std::string name;
-        interp::InterpolationOptions o;
+        interpolation::InterpolationOptions o;
     };
     std::vector<Variant> variants;
-    interp::InterpolationOptions base;
+    interpolation::InterpolationOptions base;
     base.num_threads = threads;
     apply_overrides(arg(argc, argv, "--set", ""), base);
     variants.push_back({"default (multi-scale edges, Interp+LiDAR)", base});
@@ -399,7 +399,7 @@ int main(int argc, char **argv) try {
     }
     if (all_variants) {
         auto o = base;
-        o.edges.method = interp::EdgeMethod::Gradient;
+        o.edges.method = interpolation::EdgeMethod::Gradient;
         variants.push_back({"single-scale gradient edges", o});
         o = base;
         o.edges.bilateral_prefilter = false;
@@ -413,7 +413,7 @@ int main(int argc, char **argv) try {
     }
 
     for (const Variant &v : variants) {
-        const interp::RobustInterpolator ri(v.o);
+        const interpolation::RobustInterpolator ri(v.o);
         Rates all, noc;
         double mean_sf = 0, mean_sf_noc = 0;
         double secs = 0, cpu = 0;
@@ -421,8 +421,8 @@ int main(int argc, char **argv) try {
         for (size_t i = 0; i < frames.size(); ++i) {
             const double c0 = cpu_seconds();
             const auto t0 = std::chrono::steady_clock::now();
-            const interp::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
-                                                      inputs[i].camera, inputs[i].lidar1);
+            const interpolation::InterpolationResult r = ri.run(inputs[i].matches, inputs[i].lidar, frames[i].image, inputs[i].hint,
+                                                             inputs[i].camera, inputs[i].lidar1);
             const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             secs += s;
             cpu += cpu_seconds() - c0;

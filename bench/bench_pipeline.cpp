@@ -31,12 +31,12 @@
 #include "args.hpp"
 #include "bench_util.hpp"
 #include "heap_policy.hpp"
-#include "option_assignments.hpp"
 #include "eval/kitti_eval.hpp"
+#include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
 #include "io/kitti_layout.hpp"
 #include "pipeline/estimator.hpp"
-#include "pipeline/kitti_runner.hpp"
+#include "pipeline/option_assignments.hpp"
 #include "synth/scene.hpp"
 
 using namespace lidarflow;
@@ -142,7 +142,7 @@ std::vector<Case> load_cases(const Args &a) {
     if (a.kitti && !a.root.empty()) {
         const std::vector<std::string> ids = a.ids.empty() ? io::KittiLayout{a.root}.frame_ids() : a.ids;
         for (const std::string &id : ids) {
-            pipeline::KittiFrame f = pipeline::load_kitti_frame(a.root, id, {});
+            eval::KittiFrame f = eval::load_kitti_frame(a.root, id, {});
             cases.push_back({"kitti " + id, std::move(f.input), eval::load_ground_truth(a.root, id)});
         }
     }
@@ -173,7 +173,7 @@ int run_bench(int argc, char **argv) {
     const std::vector<Case> cases = load_cases(a);
     if (cases.empty()) usage("nothing to measure (no KITTI root and --no-synth)");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(a.preset);
-    cli::apply_option_assignments(opt, a.assignments);
+    pipeline::apply_option_assignments(opt, a.assignments);
     opt.threads = a.threads;
     opt.keep_stage_fields = false;  // as the C ABI: only the dense result is read
     const pipeline::Estimator estimator(opt);

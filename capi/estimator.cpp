@@ -12,6 +12,7 @@
 using lidarflow::ErrorCode;
 using lidarflow::require;
 using namespace lidarflow::capi;
+using lidarflow::pipeline::OptionValues;
 
 namespace {
 

@@ -10,11 +10,11 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
-#include "option_keys.hpp"
 #include "pipeline/estimator.hpp"
+#include "pipeline/option_keys.hpp"
 
 struct lf_options {
-    lidarflow::capi::OptionValues values;
+    lidarflow::pipeline::OptionValues values;
     std::string error;  // lf_options_last_error
 };
 

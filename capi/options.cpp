@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// lf_options_*: the key/value settings object of the C ABI (keys in option_keys.cpp).
+// lf_options_*: the key/value settings object of the C ABI (keys in src/pipeline/option_keys.cpp).
 #include <new>
 
 #include "core/closest_name.hpp"
@@ -9,6 +9,7 @@
 using lidarflow::ErrorCode;
 using lidarflow::require;
 using namespace lidarflow::capi;
+using namespace lidarflow::pipeline;
 
 namespace {
 

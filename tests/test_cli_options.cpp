@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/closest_name.hpp"
-#include "option_keys.hpp"
+#include "pipeline/option_keys.hpp"
 
 // cmocka.h after every C++ header, wrapped (its 1.1.5 header has no extern "C").
 #include <setjmp.h>
@@ -45,7 +45,7 @@ void test_closest_name(void **) {
 void test_options_lists_every_key_with_its_default(void **) {
     const Run r = run_cli("options");
     assert_int_equal(r.code, 0);
-    const std::vector<capi::OptionKeyDescription> keys = capi::describe_option_keys();
+    const std::vector<pipeline::OptionKeyDescription> keys = pipeline::describe_option_keys();
     assert_true(keys.size() > 50);
     std::istringstream lines(r.output);
     std::string line;
@@ -54,11 +54,11 @@ void test_options_lists_every_key_with_its_default(void **) {
         std::istringstream cols(line);
         std::string name;
         cols >> name;
-        const capi::OptionKey *k = capi::find_option_key(name);
+        const pipeline::OptionKey *k = pipeline::find_option_key(name);
         if (!k) continue;
         ++rows;
         // The last column is the default; the row names the type and bounds too.
-        for (const capi::OptionKeyDescription &d : keys) {
+        for (const pipeline::OptionKeyDescription &d : keys) {
             if (d.name != name) continue;
             assert_true(line.size() >= d.defaults.size() &&
                         line.compare(line.size() - d.defaults.size(), std::string::npos, d.defaults) == 0);
@@ -92,8 +92,8 @@ void test_set_takes_named_presets(void **) {
     Run r = run_cli("demo --set preset=turbo --out /nonexistent/dir");
     assert_int_equal(r.code, 2);
     assert_true(contains(r.output, "unknown preset 'turbo'"));
-    capi::OptionValues v;
-    capi::set_option_string(v, *capi::find_option_key("preset"), "fast");
+    pipeline::OptionValues v;
+    pipeline::set_option_string(v, *pipeline::find_option_key("preset"), "fast");
     assert_int_equal(v.estimator.matching.flow.patch_size, 6);
     assert_true(v.preset == "fast");
 }

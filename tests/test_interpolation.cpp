@@ -39,9 +39,9 @@ void print_rates(const char *what, const test::OutlierRates &r) {
 void reproduces_piecewise_planar_scene(void **) {
     const test::PlanarScene s = test::make_planar_scene();
     const SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.05, 11);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.use_lidar = false;
-    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    const interpolation::InterpolationResult r = interpolation::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
     assert_true(all_finite_and_valid(r.dense));
     const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
     print_rates("planar scene", rate);
@@ -92,19 +92,19 @@ void lidar_anchors_are_honoured(void **) {
     assert_int_equal(lidar.points[odd].y, 100);
     lidar.points[odd].disparity += 5.0f;
 
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.keep_lidar_values = true;
-    const interp::InterpolationResult exact = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult exact = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     for (const LidarPoint &p : lidar.points) assert_float_equal(exact.dense.d0(p.y, p.x), p.disparity, 1e-6);
     assert_true(exact.lidar_anchored_geometry >= static_cast<int>(lidar.points.size()));
 
     o.keep_lidar_values = false;
-    const interp::InterpolationResult model = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult model = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     for (const LidarPoint &p : lidar.points)
         assert_true(std::fabs(model.dense.d0(p.y, p.x) - p.disparity) <= o.lidar_disparity_tolerance + 1e-4f);
 
     o.use_lidar = false;
-    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult off = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     const LidarPoint &p = lidar.points[odd];
     std::printf("contradicting LiDAR: on %.3f, off %.3f, truth %.3f, LiDAR %.3f\n", model.dense.d0(p.y, p.x),
                 off.dense.d0(p.y, p.x), s.truth.d0(p.y, p.x), p.disparity);
@@ -137,17 +137,17 @@ void lidar_fixes_coherently_wrong_superpixel(void **) {
     m.d1(cy, cx) = s.truth.d1(cy, cx);
     m.valid(cy, cx) = 1;
 
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.keep_lidar_values = false;
     // The scenario needs a neighbourhood the wrong matches dominate: with the default 256
     // neighbours the right matches around outvote them even without LiDAR.
     o.num_neighbors = 64;
     // Default: only geometry is anchored; the LiDAR point still fixes d0 of its superpixel.
-    const interp::InterpolationResult geo_only = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult geo_only = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     o.lidar_motion_anchors = true;  // the paper's rule: the LiDAR match anchors motion as well
-    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult on = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     o.use_lidar = false;
-    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(m, lidar, s.image);
+    const interpolation::InterpolationResult off = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
     const cv::Mat1b mask = on.superpixels == on.superpixels(cy, cx);
     const test::OutlierRates ron = outlier_rates(on.dense, s.truth, mask);
     const test::OutlierRates roff = outlier_rates(off.dense, s.truth, mask);
@@ -169,8 +169,8 @@ void works_with_very_few_matches(void **) {
     const SceneFlowField m = test::sample_matches(s.truth, 0.001, 0.0, 14);
     const int n = cv::countNonZero(m.valid);
     assert_true(n >= 30 && n <= 80);
-    interp::InterpolationOptions o;
-    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    interpolation::InterpolationOptions o;
+    const interpolation::InterpolationResult r = interpolation::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
     assert_true(all_finite_and_valid(r.dense));
     const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
     std::printf("%d matches: ", n);
@@ -181,7 +181,7 @@ void works_with_very_few_matches(void **) {
     SceneFlowField one = SceneFlowField::zeros(s.truth.width(), s.truth.height());
     one.u(50, 50) = 1.5f, one.v(50, 50) = -2.0f, one.d0(50, 50) = 12.0f, one.d1(50, 50) = 11.0f;
     one.valid(50, 50) = 1;
-    const SceneFlowField d = interp::interpolate_scene_flow(one, SparseLidar{}, s.image, o);
+    const SceneFlowField d = interpolation::interpolate_scene_flow(one, SparseLidar{}, s.image, o);
     assert_true(all_finite_and_valid(d));
     for (int y = 0; y < d.height(); y += 7)
         for (int x = 0; x < d.width(); x += 7) {
@@ -200,9 +200,9 @@ void handles_collinear_and_tiny_inputs(void **) {
         m.d0(100, x) = s.truth.d0(100, x), m.d1(100, x) = s.truth.d1(100, x);
         m.valid(100, x) = 1;
     }
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.use_lidar = false;
-    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    const interpolation::InterpolationResult r = interpolation::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
     assert_true(all_finite_and_valid(r.dense));
     int good = 0, total = 0;
     for (int x = 0; x < m.width(); ++x) {
@@ -214,7 +214,7 @@ void handles_collinear_and_tiny_inputs(void **) {
     SceneFlowField two = SceneFlowField::zeros(m.width(), m.height());
     two.valid(10, 10) = two.valid(150, 300) = 1;
     two.d0(10, 10) = 5, two.d0(150, 300) = 30;
-    const SceneFlowField d = interp::interpolate_scene_flow(two, SparseLidar{}, s.image, o);
+    const SceneFlowField d = interpolation::interpolate_scene_flow(two, SparseLidar{}, s.image, o);
     assert_true(all_finite_and_valid(d));
 }
 
@@ -222,9 +222,9 @@ void handles_collinear_and_tiny_inputs(void **) {
 void works_with_dense_matches(void **) {
     const test::PlanarScene s = test::make_planar_scene();
     const SceneFlowField m = test::sample_matches(s.truth, 1.0, 0.02, 15);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.num_threads = 2;
-    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
+    const interpolation::InterpolationResult r = interpolation::RobustInterpolator(o).run(m, SparseLidar{}, s.image);
     assert_true(all_finite_and_valid(r.dense));
     const test::OutlierRates rate = outlier_rates(r.dense, s.truth);
     print_rates("dense matches", rate);
@@ -243,11 +243,11 @@ void deterministic_for_any_thread_count(void **) {
     const test::PlanarScene s = test::make_planar_scene();
     SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.1, 16);
     const SparseLidar lidar = lidar_grid(s.truth, m, 50);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.num_threads = 1;
-    const interp::RobustInterpolator one(o);
+    const interpolation::RobustInterpolator one(o);
     o.num_threads = 3;
-    const interp::RobustInterpolator three(o);
+    const interpolation::RobustInterpolator three(o);
     const SceneFlowField a = one.run(m, lidar, s.image).dense;
     const SceneFlowField b = three.run(m, lidar, s.image).dense;
     const SceneFlowField c = one.run(m, lidar, s.image).dense;
@@ -258,7 +258,7 @@ void deterministic_for_any_thread_count(void **) {
 void rejects_invalid_input(void **) {
     const test::PlanarScene s = test::make_planar_scene(64, 32);
     const SceneFlowField good = test::sample_matches(s.truth, 0.2, 0.0, 17);
-    const interp::RobustInterpolator ri{interp::InterpolationOptions{}};
+    const interpolation::RobustInterpolator ri{interpolation::InterpolationOptions{}};
     const SparseLidar none;
     ri.run(good, none, s.image);  // the baseline call succeeds
 
@@ -309,11 +309,11 @@ void rejects_invalid_input(void **) {
     expect_error([&] { ri.run(good, lidar, s.image); }, ErrorCode::SizeMismatch);
 
     auto with = [](auto edit) {
-        interp::InterpolationOptions o;
+        interpolation::InterpolationOptions o;
         edit(o);
-        return [o] { interp::RobustInterpolator{o}; };
+        return [o] { interpolation::RobustInterpolator{o}; };
     };
-    using O = interp::InterpolationOptions;
+    using O = interpolation::InterpolationOptions;
     expect_error(with([](O &o) { o.num_neighbors = 0; }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.distance_sigma = std::nanf(""); }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.edge_gain = -1; }), ErrorCode::InvalidArgument);
@@ -327,12 +327,12 @@ void rejects_invalid_input(void **) {
 // format error; both when the interpolator is built, not on the first frame.
 void sed_model_errors(void **) {
     const auto dir = test::scratch_dir("interpolation_sed");
-    interp::InterpolationOptions o;
-    o.edges.method = interp::EdgeMethod::StructuredForest;
+    interpolation::InterpolationOptions o;
+    o.edges.method = interpolation::EdgeMethod::StructuredForest;
     o.edges.sed_model_path = (dir / "missing.yml.gz").string();
-    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Io);
+    expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Io);
     o.edges.sed_model_path = "";
-    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::InvalidArgument);
+    expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::InvalidArgument);
 
     const auto garbage = dir / "garbage.yml";
     std::FILE *f = std::fopen(garbage.string().c_str(), "w");
@@ -340,7 +340,7 @@ void sed_model_errors(void **) {
     std::fputs("this is { not : a model ]\n", f);
     std::fclose(f);
     o.edges.sed_model_path = garbage.string();
-    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Format);
+    expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Format);
 
     const auto yaml = dir / "other.yml";
     f = std::fopen(yaml.string().c_str(), "w");
@@ -348,23 +348,23 @@ void sed_model_errors(void **) {
     std::fputs("%YAML:1.0\n---\nthrs: [ 1, 2 ]\n", f);
     std::fclose(f);
     o.edges.sed_model_path = yaml.string();
-    expect_error([&] { interp::RobustInterpolator{o}; }, ErrorCode::Format);
+    expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Format);
 
     // Built-in edge maps: soft, in [0, 1], high on the scene's region boundaries.
     const test::PlanarScene s = test::make_planar_scene();
-    for (auto method : {interp::EdgeMethod::Gradient, interp::EdgeMethod::MultiScaleGradient}) {
-        interp::EdgeMapOptions eo;
+    for (auto method : {interpolation::EdgeMethod::Gradient, interpolation::EdgeMethod::MultiScaleGradient}) {
+        interpolation::EdgeMapOptions eo;
         eo.method = method;
-        const cv::Mat1f e = interp::compute_edge_map(s.image, eo);
+        const cv::Mat1f e = interpolation::compute_edge_map(s.image, eo);
         double lo, hi;
         cv::minMaxLoc(e, &lo, &hi);
         assert_true(lo >= 0.0 && hi <= 1.0);
         assert_true(e(60, 20) > 0.5f);   // background / ground boundary
         assert_true(e(30, 20) < 0.3f);   // inside the background
     }
-    interp::EdgeMapOptions sed_without_model;
-    sed_without_model.method = interp::EdgeMethod::StructuredForest;
-    expect_error([&] { interp::compute_edge_map(s.image, sed_without_model); }, ErrorCode::InvalidArgument);
+    interpolation::EdgeMapOptions sed_without_model;
+    sed_without_model.method = interpolation::EdgeMethod::StructuredForest;
+    expect_error([&] { interpolation::compute_edge_map(s.image, sed_without_model); }, ErrorCode::InvalidArgument);
 }
 
 }  // namespace

@@ -66,7 +66,7 @@ Truth make_points(const Rig &r, int n, uint64_t seed) {
 void ego_motion_exact_matches(void **) {
     const Rig rig;
     const Truth fit = make_points(rig, 2000, 1), held = make_points(rig, 500, 2);
-    const interp::EgoMotion m = interp::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const interpolation::EgoMotion m = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_true(m.valid);
     assert_true(m.inliers >= 1990);
     double e_d1, e_fl;
@@ -92,7 +92,7 @@ void ego_motion_robust_to_outliers(void **) {
         fit.d1[i] = std::max(1.0f, fit.d1[i] + off());
         ++bad;
     }
-    const interp::EgoMotion m = interp::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const interpolation::EgoMotion m = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_true(m.valid);
     const int good = static_cast<int>(fit.x.size()) - bad;
     assert_true(m.inliers >= good - 20 && m.inliers <= good + bad / 10);
@@ -103,7 +103,7 @@ void ego_motion_robust_to_outliers(void **) {
     assert_true(e_d1 < 0.2);
     assert_true(e_fl < 0.5);
     // Deterministic for a fixed seed.
-    const interp::EgoMotion again = interp::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const interpolation::EgoMotion again = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_int_equal(again.inliers, m.inliers);
     for (int k = 0; k < 4; ++k) assert_true(again.a[k] == m.a[k] && again.bx[k] == m.bx[k] && again.by[k] == m.by[k]);
 }
@@ -111,7 +111,7 @@ void ego_motion_robust_to_outliers(void **) {
 void ego_motion_needs_support(void **) {
     const Rig rig;
     const Truth few = make_points(rig, 20, 6);  // fewer than min_inliers
-    assert_false(interp::fit_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}).valid);
+    assert_false(interpolation::fit_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}).valid);
     // Pure noise has no dominant motion.
     test::TestRng rng(7);
     Truth noise = make_points(rig, 1000, 8);
@@ -120,7 +120,7 @@ void ego_motion_needs_support(void **) {
         noise.v[i] = static_cast<float>(80 * rng.uniform() - 40);
         noise.d1[i] = static_cast<float>(1 + 100 * rng.uniform());
     }
-    const interp::EgoMotion m = interp::fit_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {});
+    const interpolation::EgoMotion m = interpolation::fit_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {});
     assert_false(m.valid);
     float d1, u, v;
     m.predict(10, 20, 30, d1, u, v);  // invalid model: static, no change
@@ -130,12 +130,12 @@ void ego_motion_needs_support(void **) {
 void ego_motion_not_worse_on_planar_scene(void **) {
     const test::PlanarScene s = test::make_planar_scene();
     const SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.05, 31);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.use_lidar = false;
     o.ego_motion = false;
-    const test::OutlierRates off = test::outlier_rates(interp::RobustInterpolator(o).run(m, {}, s.image).dense, s.truth);
+    const test::OutlierRates off = test::outlier_rates(interpolation::RobustInterpolator(o).run(m, {}, s.image).dense, s.truth);
     o.ego_motion = true;
-    const test::OutlierRates on = test::outlier_rates(interp::RobustInterpolator(o).run(m, {}, s.image).dense, s.truth);
+    const test::OutlierRates on = test::outlier_rates(interpolation::RobustInterpolator(o).run(m, {}, s.image).dense, s.truth);
     std::printf("planar scene: ego-motion off SF %.2f (EPE d0 %.3f fl %.3f), on SF %.2f (EPE d0 %.3f fl %.3f)\n",
                 off.sf, off.epe_d0, off.epe_fl, on.sf, on.epe_d0, on.epe_fl);
     // This scene is not rigid (four independent affine motions): the background model then
@@ -193,14 +193,14 @@ void geometry_hint_fills_holes(void **) {
     cv::Mat1b ground_hole = c.hole.clone();
     for (int y = 0; y < c.hole.rows; ++y)
         for (int x = 0; x < c.hole.cols; ++x) ground_hole(y, x) = c.hole(y, x) && c.s.region(y, x) == 1 ? 255 : 0;
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     // A hole the neighbourhood cannot see across: with the default 256 neighbours the matches
     // beyond it already bring d0 EPE to 1.01 px without the hint (0.73 with it).
     o.num_neighbors = 64;
     o.use_geometry_hint = false;
-    const interp::InterpolationResult no = interp::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
+    const interpolation::InterpolationResult no = interpolation::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
     o.use_geometry_hint = true;
-    const interp::InterpolationResult yes = interp::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
+    const interpolation::InterpolationResult yes = interpolation::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
     const test::OutlierRates a = test::outlier_rates(no.dense, c.s.truth, ground_hole);
     const test::OutlierRates b = test::outlier_rates(yes.dense, c.s.truth, ground_hole);
     std::printf("hole: %d hint seeds; d0 EPE without %.3f, with %.3f\n", yes.hint_seeds, a.epe_d0, b.epe_d0);
@@ -210,7 +210,7 @@ void geometry_hint_fills_holes(void **) {
     // LiDAR is still honoured exactly.
     for (const LidarPoint &p : c.lidar.points) assert_float_equal(yes.dense.d0(p.y, p.x), p.disparity, 1e-6);
     // Without LiDAR nothing vouches for the hint: it is not used.
-    const interp::InterpolationResult alone = interp::RobustInterpolator(o).run(c.matches, {}, c.s.image, hint);
+    const interpolation::InterpolationResult alone = interpolation::RobustInterpolator(o).run(c.matches, {}, c.s.image, hint);
     assert_int_equal(alone.hint_seeds, 0);
 }
 
@@ -218,18 +218,18 @@ void geometry_hint_rejected_by_lidar(void **) {
     HoleCase c = hole_case();
     DisparityMap hint = bumped_truth(c);
     hint += 4.0f;  // a biased hint everywhere: every LiDAR pixel disagrees with it
-    interp::InterpolationOptions o;
-    const interp::InterpolationResult r = interp::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
+    interpolation::InterpolationOptions o;
+    const interpolation::InterpolationResult r = interpolation::RobustInterpolator(o).run(c.matches, c.lidar, c.s.image, hint);
     assert_int_equal(r.hint_seeds, 0);
 }
 
 void rejects_bad_background_options(void **) {
-    using O = interp::InterpolationOptions;
+    using O = interpolation::InterpolationOptions;
     const float nan = std::nanf("");
     auto bad = [](void (*edit)(O &)) {
         O o;
         edit(o);
-        expect_error([&] { interp::RobustInterpolator ri(o); }, ErrorCode::InvalidArgument);
+        expect_error([&] { interpolation::RobustInterpolator ri(o); }, ErrorCode::InvalidArgument);
     };
     bad([](O &o) { o.ego.hypotheses = 0; });
     bad([](O &o) { o.ego.disparity_inlier = 0; });
@@ -247,7 +247,7 @@ void rejects_bad_background_options(void **) {
     // Bad hint maps.
     const test::PlanarScene s = test::make_planar_scene(64, 32);
     const SceneFlowField m = test::sample_matches(s.truth, 0.2, 0.0, 17);
-    const interp::RobustInterpolator ri{O{}};
+    const interpolation::RobustInterpolator ri{O{}};
     expect_error([&] { ri.run(m, {}, s.image, DisparityMap(16, 16, 1.0f)); }, ErrorCode::SizeMismatch);
     DisparityMap h(32, 64, 1.0f);
     h(3, 5) = nan;
@@ -293,12 +293,12 @@ void exits_follow_the_background(void **) {
             matches.valid(y, x) = 1;
         }
     const cv::Mat image = test::make_planar_scene(W, H).image;  // texture for the superpixels
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.use_lidar = false;
     o.exits_follow_background = false;
-    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(matches, {}, image, {}, cam);
+    const interpolation::InterpolationResult off = interpolation::RobustInterpolator(o).run(matches, {}, image, {}, cam);
     o.exits_follow_background = true;
-    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(matches, {}, image, {}, cam);
+    const interpolation::InterpolationResult on = interpolation::RobustInterpolator(o).run(matches, {}, image, {}, cam);
     assert_true(on.ego.valid);
     const test::OutlierRates a = test::outlier_rates(off.dense, truth, leaves);
     const test::OutlierRates b = test::outlier_rates(on.dense, truth, leaves);

@@ -11,7 +11,7 @@
 
 #include "interpolation/geodesic.hpp"
 
-using namespace lidarflow::interp;
+using namespace lidarflow::interpolation;
 
 namespace {
 

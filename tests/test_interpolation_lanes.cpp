@@ -10,7 +10,7 @@
 
 #include "interpolation/piecewise_model.hpp"
 
-using namespace lidarflow::interp;
+using namespace lidarflow::interpolation;
 
 namespace {
 

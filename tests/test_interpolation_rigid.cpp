@@ -34,8 +34,8 @@ StereoCamera kitti_camera() {
 
 // The true motion as an EgoMotion (exact rotation, not a linearisation): a car turning while
 // driving forward.
-interp::EgoMotion true_motion(const StereoCamera &cam) {
-    interp::EgoMotion m;
+interpolation::EgoMotion true_motion(const StereoCamera &cam) {
+    interpolation::EgoMotion m;
     m.valid = m.calibrated = true;
     m.camera = cam;
     const double w[3] = {0.004, -0.015, 0.002};
@@ -54,7 +54,7 @@ interp::EgoMotion true_motion(const StereoCamera &cam) {
 
 using Points = test::MotionSamples;
 
-Points make_points(const interp::EgoMotion &truth, int n, uint64_t seed) {
+Points make_points(const interpolation::EgoMotion &truth, int n, uint64_t seed) {
     test::TestRng rng(seed);
     Points p;
     for (int i = 0; i < n; ++i) {
@@ -69,9 +69,9 @@ Points make_points(const interp::EgoMotion &truth, int n, uint64_t seed) {
 
 void rigid_fit_exact(void **) {
     const StereoCamera cam = kitti_camera();
-    const interp::EgoMotion truth = true_motion(cam);
+    const interpolation::EgoMotion truth = true_motion(cam);
     const Points fit = make_points(truth, 2000, 1), held = make_points(truth, 500, 2);
-    const interp::EgoMotion m = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const interpolation::EgoMotion m = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_true(m.valid && m.calibrated);
     assert_int_equal(m.inliers, 2000);
     double e_d1, e_fl;
@@ -83,22 +83,22 @@ void rigid_fit_exact(void **) {
     for (int k = 0; k < 9; ++k) assert_true(std::fabs(m.R[k] - truth.R[k]) < 1e-5);
     // The inverse motion takes every point back to where it was; a point the motion puts behind
     // the camera is reported; only rigid models have an inverse.
-    const interp::EgoMotion back = truth.inverse();
+    const interpolation::EgoMotion back = truth.inverse();
     for (size_t i = 0; i < held.x.size(); ++i) {
         float d0, u, v;
         assert_true(back.predict(held.x[i] + held.u[i], held.y[i] + held.v[i], held.d1[i], d0, u, v));
         assert_true(std::fabs(d0 - held.d0[i]) < 1e-3 && std::fabs(held.u[i] + u) < 1e-3 && std::fabs(held.v[i] + v) < 1e-3);
     }
-    interp::EgoMotion away = truth;
+    interpolation::EgoMotion away = truth;
     away.t[2] = -100;  // 100 m forward: a point 50 m ahead ends up behind the camera
     float d1, u, v;
     assert_false(away.predict(610, 175, 720 * 0.54 / 50, d1, u, v));
-    assert_false(interp::EgoMotion{}.inverse().valid);
+    assert_false(interpolation::EgoMotion{}.inverse().valid);
 }
 
 void rigid_fit_robust_and_deterministic(void **) {
     const StereoCamera cam = kitti_camera();
-    const interp::EgoMotion truth = true_motion(cam);
+    const interpolation::EgoMotion truth = true_motion(cam);
     Points fit = make_points(truth, 3000, 3);
     const Points held = make_points(truth, 500, 4);
     test::TestRng rng(5);
@@ -116,7 +116,7 @@ void rigid_fit_robust_and_deterministic(void **) {
         fit.u[i] += static_cast<float>(0.4 * (rng.uniform() - 0.5));
         fit.d1[i] += static_cast<float>(0.2 * (rng.uniform() - 0.5));
     }
-    const interp::EgoMotion m = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const interpolation::EgoMotion m = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_true(m.valid);
     const int good = static_cast<int>(fit.x.size()) - bad;
     double e_d1, e_fl;
@@ -125,15 +125,15 @@ void rigid_fit_robust_and_deterministic(void **) {
                 m.inliers, e_d1, e_fl);
     assert_true(m.inliers >= good - 20 && m.inliers <= good + bad / 20);
     assert_true(e_d1 < 0.1 && e_fl < 0.2);
-    const interp::EgoMotion again = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const interpolation::EgoMotion again = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_int_equal(again.inliers, m.inliers);
     for (int k = 0; k < 9; ++k) assert_true(again.R[k] == m.R[k]);
     for (int k = 0; k < 3; ++k) assert_true(again.t[k] == m.t[k]);
     // The hypotheses are scored in parallel: the same model, bit for bit, on any thread count.
     for (int threads : {2, 3, 7}) {
-        interp::EgoMotionOptions o;
+        interpolation::EgoMotionOptions o;
         o.threads = threads;
-        const interp::EgoMotion par = interp::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, o, cam);
+        const interpolation::EgoMotion par = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, o, cam);
         assert_int_equal(par.inliers, m.inliers);
         for (int k = 0; k < 9; ++k) assert_true(par.R[k] == m.R[k]);
         for (int k = 0; k < 3; ++k) assert_true(par.t[k] == m.t[k]);
@@ -142,16 +142,16 @@ void rigid_fit_robust_and_deterministic(void **) {
 
 void rigid_fit_refuses(void **) {
     const StereoCamera cam = kitti_camera();
-    const interp::EgoMotion truth = true_motion(cam);
+    const interpolation::EgoMotion truth = true_motion(cam);
     const Points p = make_points(truth, 500, 6);
     // No camera: nothing to triangulate with.
-    assert_false(interp::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, p.u, p.v, {}, StereoCamera{}).valid);
+    assert_false(interpolation::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, p.u, p.v, {}, StereoCamera{}).valid);
     // Too few matches.
     const Points few = make_points(truth, 20, 7);
-    assert_false(interp::fit_rigid_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}, cam).valid);
+    assert_false(interpolation::fit_rigid_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}, cam).valid);
     // Mismatched array lengths are refused, not read out of bounds.
     std::vector<float> shorter(p.u.begin(), p.u.end() - 1);
-    assert_false(interp::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, shorter, p.v, {}, cam).valid);
+    assert_false(interpolation::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, shorter, p.v, {}, cam).valid);
     // Pure noise has no dominant motion.
     test::TestRng rng(8);
     Points noise = p;
@@ -160,7 +160,7 @@ void rigid_fit_refuses(void **) {
         noise.v[i] = static_cast<float>(80 * rng.uniform() - 40);
         noise.d1[i] = static_cast<float>(1 + 100 * rng.uniform());
     }
-    assert_false(interp::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
+    assert_false(interpolation::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
 }
 
 // The rig of the street scenes below (320x160) and its motion: 0.5 m straight ahead.
@@ -171,8 +171,8 @@ StereoCamera street_camera() {
     return c;
 }
 
-interp::EgoMotion driving_forward(const StereoCamera &cam) {
-    interp::EgoMotion ego;
+interpolation::EgoMotion driving_forward(const StereoCamera &cam) {
+    interpolation::EgoMotion ego;
     ego.valid = ego.calibrated = true;
     ego.camera = cam;
     ego.t[2] = -0.5;
@@ -189,7 +189,7 @@ struct StreetScene {
 
 // A plain 320x160 wall image, an all-valid zero truth for the scene to fill, the street rig;
 // returns the camera's motion.
-interp::EgoMotion start_street(StreetScene &c) {
+interpolation::EgoMotion start_street(StreetScene &c) {
     const int w = 320, h = 160;
     c.cam = street_camera();
     c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
@@ -230,7 +230,7 @@ struct OcclusionCase : StreetScene {
 
 OcclusionCase occlusion_case() {
     OcclusionCase c;
-    const interp::EgoMotion ego = start_street(c);
+    const interpolation::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
     const cv::Rect post(150, 30, 30, 110);
     c.image(post).setTo(cv::Scalar(30, 40, 200));
@@ -271,16 +271,16 @@ double mean_d1_error(const SceneFlowField &est, const OcclusionCase &c) {
 void occlusion_reasoning_fixes_hidden_d1(void **) {
     const OcclusionCase c = occlusion_case();
     assert_true(cv::countNonZero(c.hidden) > 500);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     // The hidden band's wrong d1 must dominate its superpixels' neighbourhoods: with the default
     // 256 neighbours the visible matches around it already fix it (0.16 px off and on).
     o.num_neighbors = 64;
     // The hidden wall is static by its flow, so the static-d1 rule alone would fix it too.
     o.static_d1_from_background = false;
     o.occlusion_reasoning = false;
-    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+    const interpolation::InterpolationResult off = interpolation::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
     o.occlusion_reasoning = true;
-    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+    const interpolation::InterpolationResult on = interpolation::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
     const double e_off = mean_d1_error(off.dense, c), e_on = mean_d1_error(on.dense, c);
     std::printf("hidden band (%d px): %d matches released; d1 error off %.2f px, on %.2f px\n",
                 cv::countNonZero(c.hidden), on.occluded_seeds, e_off, e_on);
@@ -293,7 +293,7 @@ void occlusion_reasoning_fixes_hidden_d1(void **) {
     const test::OutlierRates r = test::outlier_rates(on.dense, c.truth);
     assert_true(r.sf < 1.0);
     // Without the camera the calibration-free model is used and the run still succeeds.
-    const interp::InterpolationResult nocam = interp::RobustInterpolator(o).run(c.matches, {}, c.image);
+    const interpolation::InterpolationResult nocam = interpolation::RobustInterpolator(o).run(c.matches, {}, c.image);
     assert_false(nocam.ego.calibrated);
 }
 
@@ -308,7 +308,7 @@ struct StaticCase : StreetScene {
 
 StaticCase static_case() {
     StaticCase c;
-    const interp::EgoMotion ego = start_street(c);
+    const interpolation::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
     c.patch = cv::Rect(20, 50, 48, 48);
     c.car = cv::Rect(150, 70, 21, 21);  // 5 m ahead, within ~14 px of the principal point
@@ -332,14 +332,14 @@ StaticCase static_case() {
 
 void static_matches_take_background_d1(void **) {
     const StaticCase c = static_case();
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.num_neighbors = 64;  // the patch's wrong d1 must dominate its superpixels' neighbourhoods
     auto run = [&](bool rule, float discrimination) {
         o.static_d1_from_background = rule;
         o.static_d1_discrimination = discrimination;
-        return interp::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
+        return interpolation::RobustInterpolator(o).run(c.matches, {}, c.image, {}, c.cam);
     };
-    const interp::InterpolationResult off = run(false, 2.0f), on = run(true, 2.0f), unguarded = run(true, 0.0f);
+    const interpolation::InterpolationResult off = run(false, 2.0f), on = run(true, 2.0f), unguarded = run(true, 0.0f);
     std::printf("static d1: car error off %.2f; patch error off %.2f / on %.2f px (%d matches released); car error on %.2f, "
                 "without the guard %.2f px\n",
                 mean_error(off.dense.d1, c.truth.d1, c.car), mean_error(off.dense.d1, c.truth.d1, c.patch), mean_error(on.dense.d1, c.truth.d1, c.patch),
@@ -356,7 +356,7 @@ void static_matches_take_background_d1(void **) {
     assert_true(mean_error(unguarded.dense.d1, c.truth.d1, c.car) > car_off + 1.0);
     // Without the camera there is no rigid model, and nothing is released.
     o.static_d1_from_background = true;
-    assert_int_equal(interp::RobustInterpolator(o).run(c.matches, {}, c.image).static_d1_seeds, 0);
+    assert_int_equal(interpolation::RobustInterpolator(o).run(c.matches, {}, c.image).static_d1_seeds, 0);
 }
 
 // A wall at 20 m, a near block at 8.3 m without a single match (a hole), and a box 10 m away
@@ -372,9 +372,9 @@ struct Lidar1Case : StreetScene {
 
 Lidar1Case lidar1_case() {
     Lidar1Case c;
-    const interp::EgoMotion ego = start_street(c);
+    const interpolation::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
-    interp::EgoMotion box_motion = ego;
+    interpolation::EgoMotion box_motion = ego;
     box_motion.t[0] = 1.0;  // its own 1 m to the side, on top of the camera's motion
     c.block = cv::Rect(20, 40, 80, 80);
     c.box = cv::Rect(200, 50, 50, 50);
@@ -409,14 +409,14 @@ Lidar1Case lidar1_case() {
 void lidar1_points_measure_static_holes(void **) {
     const Lidar1Case c = lidar1_case();
     assert_true(c.block_points > 50 && c.lidar1_box.points.size() > 20);
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     auto run = [&](bool rule, int radius, const SparseLidar &lidar1) {
         o.lidar1_from_background = rule;
         o.lidar1_check_radius = radius;
-        return interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, lidar1);
+        return interpolation::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, lidar1);
     };
-    const interp::InterpolationResult off = run(false, 10, c.lidar1), on = run(true, 10, c.lidar1);
-    const interp::InterpolationResult box = run(true, 10, c.lidar1_box), box_unchecked = run(true, 0, c.lidar1_box);
+    const interpolation::InterpolationResult off = run(false, 10, c.lidar1), on = run(true, 10, c.lidar1);
+    const interpolation::InterpolationResult box = run(true, 10, c.lidar1_box), box_unchecked = run(true, 0, c.lidar1_box);
     // Block points within the check radius of its edge see the wall's matches, another depth,
     // in the majority, and are dropped too: the block's inside is measured.
     const cv::Rect inside(c.block.x + 10, c.block.y + 10, c.block.width - 20, c.block.height - 20);
@@ -435,19 +435,19 @@ void lidar1_points_measure_static_holes(void **) {
     assert_true(box_unchecked.lidar1_points > static_cast<int>(c.lidar1_box.points.size()) / 2);
     // Without the camera there is no rigid model to move the points back.
     o.lidar1_check_radius = 10;
-    assert_int_equal(interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, {}, c.lidar1).lidar1_points, 0);
+    assert_int_equal(interpolation::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, {}, c.lidar1).lidar1_points, 0);
     // A t1 scan of another size is refused like a t0 one.
     const SparseLidar wrong{c.lidar1.width / 2, c.lidar1.height, c.lidar1.points};
-    expect_error([&] { interp::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, wrong); },
+    expect_error([&] { interpolation::RobustInterpolator(o).run(c.matches, c.lidar0, c.image, {}, c.cam, wrong); },
                  ErrorCode::SizeMismatch);
 }
 
 void rejects_bad_rigid_options(void **) {
-    using O = interp::InterpolationOptions;
+    using O = interpolation::InterpolationOptions;
     auto bad = [](void (*edit)(O &)) {
         O o;
         edit(o);
-        expect_error([&] { interp::RobustInterpolator ri(o); }, ErrorCode::InvalidArgument);
+        expect_error([&] { interpolation::RobustInterpolator ri(o); }, ErrorCode::InvalidArgument);
     };
     bad([](O &o) { o.background_preference = 0; });
     bad([](O &o) { o.background_preference = 1.5f; });

@@ -60,11 +60,11 @@ const Case &the_case() {
 
 void synthetic_street_outliers_bounded(void **) {
     const Case &c = the_case();
-    interp::InterpolationOptions o;
+    interpolation::InterpolationOptions o;
     o.num_threads = 2;
-    const interp::InterpolationResult on = interp::RobustInterpolator(o).run(c.matches, c.scene.lidar0, c.scene.left0);
+    const interpolation::InterpolationResult on = interpolation::RobustInterpolator(o).run(c.matches, c.scene.lidar0, c.scene.left0);
     o.use_lidar = false;
-    const interp::InterpolationResult off = interp::RobustInterpolator(o).run(c.matches, c.scene.lidar0, c.scene.left0);
+    const interpolation::InterpolationResult off = interpolation::RobustInterpolator(o).run(c.matches, c.scene.lidar0, c.scene.left0);
     const test::OutlierRates a = test::outlier_rates(on.dense, c.truth);
     const test::OutlierRates b = test::outlier_rates(off.dense, c.truth);
     std::printf("synthetic street, %d matches, %zu LiDAR: Interp+LiDAR D0 %.2f D1 %.2f Fl %.2f SF %.2f | "

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "eval/kitti_eval.hpp"
+#include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
 #include "pipeline/estimator.hpp"
-#include "pipeline/kitti_runner.hpp"
 #include "test_support.hpp"
 
 using namespace lidarflow;
@@ -52,15 +52,15 @@ struct Means {
 
 // Runs the default estimator on the golden frames with LiDAR from `lidar`, checks each frame
 // against its record (and with `check`, if given) and returns the means over the frames.
-Means score_golden(const Golden (&golden)[2], const pipeline::LidarInputOptions &lidar, const char *label,
-                   const std::function<void(const pipeline::KittiFrame &, const SceneFlowField &)> &check = {},
+Means score_golden(const Golden (&golden)[2], const eval::LidarInputOptions &lidar, const char *label,
+                   const std::function<void(const eval::KittiFrame &, const SceneFlowField &)> &check = {},
                    const char *preset = "default") {
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(preset);
     opt.threads = 2;
     const pipeline::Estimator estimator(opt);
     Means m;
     for (const Golden &g : golden) {
-        const pipeline::KittiFrame f = pipeline::load_kitti_frame(g_root, g.id, lidar);
+        const eval::KittiFrame f = eval::load_kitti_frame(g_root, g.id, lidar);
         const pipeline::EstimatorResult r = estimator.run(f.input);
         if (check) check(f, r.dense);
         const eval::FrameScore s = eval::evaluate_frame(eval::load_ground_truth(g_root, g.id), r.dense, eval::EvalOptions{});
@@ -76,7 +76,7 @@ Means score_golden(const Golden (&golden)[2], const pipeline::LidarInputOptions 
 }
 
 void golden_frames(void **) {
-    const Means m = score_golden(kGolden, {}, "", [](const pipeline::KittiFrame &f, const SceneFlowField &out) {
+    const Means m = score_golden(kGolden, {}, "", [](const eval::KittiFrame &f, const SceneFlowField &out) {
         assert_int_equal(cv::countNonZero(out.valid), out.valid.rows * out.valid.cols);  // dense
         for (const LidarPoint &p : f.input.lidar0.points)  // LiDAR d0 is honoured exactly
             assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);
@@ -86,10 +86,10 @@ void golden_frames(void **) {
 }
 
 void golden_frames_velodyne(void **) {
-    pipeline::LidarInputOptions velodyne;
-    velodyne.protocol = pipeline::LidarProtocol::Velodyne;
+    eval::LidarInputOptions velodyne;
+    velodyne.protocol = eval::LidarProtocol::Velodyne;
     velodyne.points = 0;  // the whole scan
-    const Means m = score_golden(kGoldenVelodyne, velodyne, ", Velodyne", [](const pipeline::KittiFrame &f, const SceneFlowField &) {
+    const Means m = score_golden(kGoldenVelodyne, velodyne, ", Velodyne", [](const eval::KittiFrame &f, const SceneFlowField &) {
         assert_true(f.input.lidar0.points.size() > 15000);
     });
     std::printf("Velodyne: mean SF %.2f %% (bound %.2f %%), mean D0 %.2f %% (bound %.2f %%)\n", m.sf,
@@ -99,7 +99,7 @@ void golden_frames_velodyne(void **) {
 }
 
 void golden_frames_realtime(void **) {
-    const Means m = score_golden(kGoldenRealtime, {}, ", realtime", [](const pipeline::KittiFrame &f, const SceneFlowField &out) {
+    const Means m = score_golden(kGoldenRealtime, {}, ", realtime", [](const eval::KittiFrame &f, const SceneFlowField &out) {
         assert_int_equal(cv::countNonZero(out.valid), out.valid.rows * out.valid.cols);
         for (const LidarPoint &p : f.input.lidar0.points)
             assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);

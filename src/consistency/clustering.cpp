@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
 
@@ -40,9 +41,9 @@ private:
 
 }  // namespace
 
-ClusterResult remove_small_clusters(const SceneFlowField &field, const LidarReference &lidar,
-                                    const cv::Mat1b &lidar_motion_unreliable, const ConsistencyOptions &opt) {
-    detail::check_options(opt);
+ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const LidarReference &lidar,
+                                            const cv::Mat1b &lidar_motion_unreliable, const CheckedOptions &checked) {
+    const ConsistencyOptions &opt = checked.get();
     detail::check_field(field, "clustered");
     const int h = field.height(), w = field.width();
     detail::check_size(lidar.is_lidar, h, w, "LiDAR mask");
@@ -99,6 +100,11 @@ ClusterResult remove_small_clusters(const SceneFlowField &field, const LidarRefe
                 ++r.removed_matches;
         }
     return r;
+}
+
+ClusterResult remove_small_clusters(const SceneFlowField &field, const LidarReference &lidar,
+                                    const cv::Mat1b &lidar_motion_unreliable, const ConsistencyOptions &opt) {
+    return detail::remove_small_clusters(field, lidar, lidar_motion_unreliable, detail::CheckedOptions(opt));
 }
 
 }  // namespace lidarflow::consistency

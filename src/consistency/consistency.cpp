@@ -3,6 +3,7 @@
 
 #include <chrono>
 
+#include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
 
@@ -16,13 +17,11 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 long long count_valid(const SceneFlowField &f) { return cv::countNonZero(f.valid); }
 
-}  // namespace
-
-ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlowField &backward,
-                                  const DisparityMap &sgm, const SparseLidar &lidar0,
-                                  const ConsistencyOptions &opt) {
+// The stages on options checked where they entered (run_consistency).
+ConsistencyResult run_checked(const SceneFlowField &forward, const SceneFlowField &backward, const DisparityMap &sgm,
+                              const SparseLidar &lidar0, const detail::CheckedOptions &checked) {
     const Clock::time_point start = Clock::now();
-    detail::check_options(opt);
+    const ConsistencyOptions &opt = checked.get();
     detail::check_field(forward, "forward");
     detail::check_field(backward, "backward");
     const int h = forward.height(), w = forward.width();
@@ -50,31 +49,31 @@ ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlow
         r.counts.input = count_valid(input);
 
         t = Clock::now();
-        SceneFlowField checked_sgm = sgm_check(input, sgm, lidar, opt);
+        SceneFlowField checked_sgm = detail::sgm_check(input, sgm, lidar, checked);
         r.seconds.sgm_check = seconds_since(t);
         r.counts.after_sgm_check = count_valid(checked_sgm);
         input = SceneFlowField();
 
         t = Clock::now();
-        r.after_sgm = remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), opt).field;
+        r.after_sgm = detail::remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), checked).field;
         r.seconds.sgm_clusters = seconds_since(t);
         r.counts.after_sgm_clusters = count_valid(r.after_sgm);
     }
 
     t = Clock::now();
-    ForwardBackwardResult fb = forward_backward_check(r.after_sgm, backward, lidar, opt);
+    ForwardBackwardResult fb = detail::forward_backward_check(r.after_sgm, backward, lidar, checked);
     r.seconds.fb_check = seconds_since(t);
     r.counts.after_fb_check = count_valid(fb.field);
     r.counts.lidar_motion_unreliable = cv::countNonZero(fb.lidar_motion_unreliable);
 
     t = Clock::now();
-    r.after_fb = remove_small_clusters(fb.field, lidar, fb.lidar_motion_unreliable, opt).field;
+    r.after_fb = detail::remove_small_clusters(fb.field, lidar, fb.lidar_motion_unreliable, checked).field;
     fb.field = SceneFlowField();
     r.seconds.fb_clusters = seconds_since(t);
     r.counts.after_fb_clusters = count_valid(r.after_fb);
 
     t = Clock::now();
-    r.sparse = sparsify(r.after_fb, fb.error, lidar, opt);
+    r.sparse = detail::sparsify(r.after_fb, fb.error, lidar, checked);
     r.seconds.sparsify = seconds_since(t);
     r.counts.sparse = count_valid(r.sparse);
 
@@ -84,15 +83,23 @@ ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlow
     return r;
 }
 
+}  // namespace
+
+ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlowField &backward,
+                                  const DisparityMap &sgm, const SparseLidar &lidar0,
+                                  const ConsistencyOptions &opt) {
+    return run_checked(forward, backward, sgm, lidar0, detail::CheckedOptions(opt));
+}
+
 ConsistencyResult run_consistency(const SceneFlowField &forward, const SceneFlowField &backward, const cv::Mat &left0,
                                   const cv::Mat &right0, const SparseLidar &lidar0, const ConsistencyOptions &opt) {
     const Clock::time_point start = Clock::now();
-    detail::check_options(opt);
+    const detail::CheckedOptions checked(opt);
     detail::check_field(forward, "forward");
     detail::check_size(left0, forward.height(), forward.width(), "left image");
-    const DisparityMap sgm = compute_sgm_disparity(left0, right0, opt.sgm);
+    const DisparityMap sgm = detail::compute_sgm_disparity(left0, right0, checked);
     const double sgm_seconds = seconds_since(start);
-    ConsistencyResult r = run_consistency(forward, backward, sgm, lidar0, opt);
+    ConsistencyResult r = run_checked(forward, backward, sgm, lidar0, checked);
     r.seconds.sgm = sgm_seconds;
     r.seconds.total = seconds_since(start);
     return r;

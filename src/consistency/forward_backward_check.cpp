@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
 
@@ -48,9 +49,9 @@ bool sample_bilinear(const SceneFlowField &b, float qx, float qy, BackwardSample
 
 }  // namespace
 
-ForwardBackwardResult forward_backward_check(const SceneFlowField &forward, const SceneFlowField &backward,
-                                             const LidarReference &lidar, const ConsistencyOptions &opt) {
-    detail::check_options(opt);
+ForwardBackwardResult detail::forward_backward_check(const SceneFlowField &forward, const SceneFlowField &backward,
+                                                     const LidarReference &lidar, const CheckedOptions &checked) {
+    const ConsistencyOptions &opt = checked.get();
     detail::check_field(forward, "forward");
     detail::check_field(backward, "backward");
     const int h = forward.height(), w = forward.width();
@@ -98,6 +99,11 @@ ForwardBackwardResult forward_backward_check(const SceneFlowField &forward, cons
             if (is_lidar && !ok) r.lidar_motion_unreliable(y, x) = 1;
         }
     return r;
+}
+
+ForwardBackwardResult forward_backward_check(const SceneFlowField &forward, const SceneFlowField &backward,
+                                             const LidarReference &lidar, const ConsistencyOptions &opt) {
+    return detail::forward_backward_check(forward, backward, lidar, detail::CheckedOptions(opt));
 }
 
 }  // namespace lidarflow::consistency

@@ -13,6 +13,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
 
@@ -49,18 +50,16 @@ void require_sgm_headroom(int width, int num_disparities, int block_size) {
     if (address_space_headroom() < need) throw std::bad_alloc();
 }
 
-}  // namespace
-
-DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmOptions &opt) {
+void check_sgm_images(const cv::Mat &left, const cv::Mat &right) {
     require(!left.empty() && !right.empty(), ErrorCode::InvalidArgument, "SGM: empty image");
     require(left.depth() == CV_8U && (left.channels() == 1 || left.channels() == 3), ErrorCode::InvalidArgument,
             "SGM: images must be 8-bit gray or BGR");
     require(left.size() == right.size() && left.type() == right.type(), ErrorCode::SizeMismatch,
             "SGM: left and right images differ in size or type");
-    ConsistencyOptions check;
-    check.sgm = opt;
-    detail::check_options(check);
+}
 
+// compute_sgm_disparity on checked images and settings.
+DisparityMap sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmOptions &opt) {
     const int cn = left.channels(), b = opt.block_size;
     cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
         0, opt.num_disparities, b, 8 * cn * b * b, 32 * cn * b * b, opt.disp12_max_diff, 63,
@@ -99,9 +98,24 @@ DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, co
     return out;
 }
 
-SceneFlowField sgm_check(const SceneFlowField &forward, const DisparityMap &sgm, const LidarReference &lidar,
-                         const ConsistencyOptions &opt) {
-    detail::check_options(opt);
+}  // namespace
+
+DisparityMap compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmOptions &opt) {
+    check_sgm_images(left, right);
+    ConsistencyOptions check;
+    check.sgm = opt;
+    detail::check_options(check);
+    return sgm_disparity(left, right, opt);
+}
+
+DisparityMap detail::compute_sgm_disparity(const cv::Mat &left, const cv::Mat &right, const CheckedOptions &checked) {
+    check_sgm_images(left, right);
+    return sgm_disparity(left, right, checked.get().sgm);
+}
+
+SceneFlowField detail::sgm_check(const SceneFlowField &forward, const DisparityMap &sgm, const LidarReference &lidar,
+                                 const CheckedOptions &checked) {
+    const ConsistencyOptions &opt = checked.get();
     detail::check_field(forward, "forward");
     const int h = forward.height(), w = forward.width();
     detail::check_size(sgm, h, w, "SGM disparity");
@@ -124,6 +138,11 @@ SceneFlowField sgm_check(const SceneFlowField &forward, const DisparityMap &sgm,
             if (keep) detail::keep_match(out, forward, y, x);
         }
     return out;
+}
+
+SceneFlowField sgm_check(const SceneFlowField &forward, const DisparityMap &sgm, const LidarReference &lidar,
+                         const ConsistencyOptions &opt) {
+    return detail::sgm_check(forward, sgm, lidar, detail::CheckedOptions(opt));
 }
 
 }  // namespace lidarflow::consistency

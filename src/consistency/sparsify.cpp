@@ -6,14 +6,15 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
 
 namespace lidarflow::consistency {
 
-SceneFlowField sparsify(const SceneFlowField &field, const cv::Mat1f &error, const LidarReference &lidar,
-                        const ConsistencyOptions &opt) {
-    detail::check_options(opt);
+SceneFlowField detail::sparsify(const SceneFlowField &field, const cv::Mat1f &error, const LidarReference &lidar,
+                                const CheckedOptions &checked) {
+    const ConsistencyOptions &opt = checked.get();
     detail::check_field(field, "sparsified");
     const int h = field.height(), w = field.width();
     detail::check_size(error, h, w, "consistency error");
@@ -59,6 +60,11 @@ SceneFlowField sparsify(const SceneFlowField &field, const cv::Mat1f &error, con
             if (best_x >= 0) detail::keep_match(out, field, best_y, best_x);
         }
     return out;
+}
+
+SceneFlowField sparsify(const SceneFlowField &field, const cv::Mat1f &error, const LidarReference &lidar,
+                        const ConsistencyOptions &opt) {
+    return detail::sparsify(field, error, lidar, detail::CheckedOptions(opt));
 }
 
 }  // namespace lidarflow::consistency

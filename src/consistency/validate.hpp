@@ -19,6 +19,18 @@ void check_size(const cv::Mat &m, int rows, int cols, const std::string &name);
 // size or bad SGM settings.
 void check_options(const ConsistencyOptions &opt);
 
+// Options that passed check_options: constructing one is the check. The steps' internal entry
+// points (steps.hpp) take this instead of ConsistencyOptions, so that a frame's walk through
+// stages 2-3 checks its options once. Refers to `opt`, which must outlive it.
+class CheckedOptions {
+public:
+    explicit CheckedOptions(const ConsistencyOptions &opt) : opt_(opt) { check_options(opt_); }
+    const ConsistencyOptions &get() const { return opt_; }
+
+private:
+    const ConsistencyOptions &opt_;
+};
+
 // Matcher confidence at (y, x); 0 when the field has no confidence plane.
 inline float confidence_at(const SceneFlowField &f, int y, int x) {
     return f.confidence.empty() ? 0.0f : f.confidence(y, x);

@@ -12,7 +12,7 @@
 
 #include "core/error.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct SedModel::Impl {
     cv::Ptr<cv::ximgproc::StructuredEdgeDetection> sed;
@@ -155,4 +155,4 @@ cv::Mat1f compute_edge_map(const cv::Mat &image, const EdgeMapOptions &o, const 
     return e;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -9,7 +9,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 enum class EdgeMethod {
     // Colour gradient magnitude at one scale (Gaussian sigma = base_sigma). Cheapest.
@@ -53,4 +53,4 @@ private:
 cv::Mat1f compute_edge_map(const cv::Mat &image, const EdgeMapOptions &options,
                            const SedModel *sed = nullptr);
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

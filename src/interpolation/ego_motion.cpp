@@ -8,7 +8,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 // Scaled coordinates keep the 4x4 systems well conditioned (pixels ~1000, disparities ~100).
@@ -244,4 +244,4 @@ EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &
     return em;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

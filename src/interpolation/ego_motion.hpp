@@ -21,7 +21,7 @@
 
 #include "core/camera.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct EgoMotion {
     bool valid = false;
@@ -77,4 +77,4 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
                                const std::vector<float> &v, const EgoMotionOptions &options,
                                const StereoCamera &camera);
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

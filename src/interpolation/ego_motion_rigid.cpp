@@ -13,7 +13,7 @@
 #include "core/random.hpp"
 #include "interpolation/ego_motion.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 using Rng = SplitMix64;
@@ -272,4 +272,4 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     return em;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

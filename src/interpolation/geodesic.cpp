@@ -10,7 +10,7 @@
 #include "core/branchless.hpp"
 #include "core/error.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 // Two forward/backward sweeps: enough for the convex-ish cells of a dense seed set.
 constexpr int kGeodesicPasses = 2;
@@ -162,4 +162,4 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
 
 SeedSearch::SeedSearch(int num_seeds) : dist_(num_seeds, 0.0f), stamp_(num_seeds, 0u) {}
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -10,7 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct SeedGraph {
     cv::Mat1i nearest;   // index of the geodesically nearest seed per pixel
@@ -55,6 +55,6 @@ private:
     std::vector<std::pair<float, int>> heap_;
 };
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation
 
 #include "interpolation/geodesic_search.inl"

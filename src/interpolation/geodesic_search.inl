@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <functional>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 // The traversal settles seeds in order of increasing distance whatever the callers collect,
 // and stops as soon as `visit(seed, distance)` says it has enough.
@@ -70,4 +70,4 @@ void SeedSearch::nearest_two(const SeedGraph &g, cv::Point from, int k, std::vec
     });
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -20,7 +20,7 @@
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/piecewise_model.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -477,31 +477,27 @@ Model perturb(const Problem &p, const Model &m, float radius, Rng &rng) {
     return out;
 }
 
-}  // namespace
+// The seeds and the flags every later phase reads.
+struct SeedSet {
+    Seeds seeds;
+    cv::Mat1i seed_at;         // seed index per pixel, -1 where none
+    bool use_lidar = false;    // LiDAR on and D_l^0 has points
+    bool subtract_d0 = false;  // the d1 and flow models describe the remainder after the background
+    bool background = false;   // "no remainder" is a hypothesis of the d1 and flow models
+};
 
-RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
-    validate_options(options_);
-    if (options_.edges.method == EdgeMethod::StructuredForest)
-        sed_ = std::make_shared<const SedModel>(options_.edges.sed_model_path);
-}
-
-InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
-                                            const cv::Mat &image, const DisparityMap &geometry_hint,
-                                            const StereoCamera &camera, const SparseLidar &lidar1,
-                                            int threads) const {
-    require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
-    InterpolationOptions this_call = options_;
-    if (threads > 0) this_call.num_threads = threads;
-    const InterpolationOptions &o = this_call;
-    const auto t_start = Clock::now();
-    validate_inputs(matches, lidar0, image);
-    validate_lidar(lidar1, image.size(), "t1 LiDAR");
-    validate_hint(geometry_hint, image.size());
-    const int w = image.cols, h = image.rows;
-    const bool use_lidar = o.use_lidar && !lidar0.points.empty();
-    cv::Mat1i seed_at;
-    Seeds seeds = collect_seeds(matches, lidar0, use_lidar, seed_at);
-    InterpolationResult res;
+// Phase 1: the seeds and the background model. Fits the ego-motion, subtracts its prediction
+// from the matches, releases hidden and static matches to it and adds the t1 LiDAR points and
+// the geometry hint's seeds. Sets res.ego and the seed counts of res.
+SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, const SparseLidar &lidar1,
+                      const DisparityMap &geometry_hint, const StereoCamera &camera, int w, int h,
+                      const InterpolationOptions &o, InterpolationResult &res) {
+    SeedSet set;
+    set.use_lidar = o.use_lidar && !lidar0.points.empty();
+    const bool use_lidar = set.use_lidar;
+    cv::Mat1i &seed_at = set.seed_at;
+    Seeds &seeds = set.seeds;
+    seeds = collect_seeds(matches, lidar0, use_lidar, seed_at);
     // Background prediction, subtracted from the matches here and added back per pixel from
     // the dense d0. The match's own d0 is used: its d1 and flow were measured with it, so the
     // residual stays consistent even where LiDAR replaces d0.
@@ -520,12 +516,12 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         res.ego = rigid ? fit_rigid_ego_motion(mx, my, md0, md1, mu, mv, eo, camera)
                         : fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
     }
-    const bool subtract_d0 = o.d1_from_change || res.ego.valid;
+    set.subtract_d0 = o.d1_from_change || res.ego.valid;
     // The zero remainder (pure background) is a hypothesis of its own only with a background
     // model to fall back on.
-    const bool background = res.ego.valid && o.background_hypothesis;
+    set.background = res.ego.valid && o.background_hypothesis;
     for (int i = 0; i < seeds.size(); ++i) {
-        if (!seeds.has_motion[i] || !subtract_d0) continue;
+        if (!seeds.has_motion[i] || !set.subtract_d0) continue;
         float d1e, ue, ve;
         res.ego.predict(seeds.x[i], seeds.y[i], seeds.d0_match[i], d1e, ue, ve);
         seeds.z1[i] = seeds.d1[i] - d1e;
@@ -540,28 +536,53 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     // After the ego-motion fit: hints carry no motion.
     if (use_lidar && o.use_geometry_hint && !geometry_hint.empty())
         res.hint_seeds = add_hint_seeds(seeds, seed_at, geometry_hint, lidar0, o);
+    return set;
+}
 
+// Phase 2: the edge map (res.edges) and the superpixels of the image.
+Superpixels segment(const cv::Mat &image, const SedModel *sed, const InterpolationOptions &o,
+                    InterpolationResult &res) {
     auto t = Clock::now();
-    res.edges = compute_edge_map(image, o.edges, sed_.get());
+    res.edges = compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
 
     t = Clock::now();
     SuperpixelOptions spo = o.superpixels;
     spo.num_threads = o.num_threads;
-    const Superpixels sp = compute_superpixels(image, spo);
+    Superpixels sp = compute_superpixels(image, spo);
     res.superpixels = sp.labels;
     res.num_superpixels = sp.count;
     res.timings.superpixels_s = seconds_since(t);
+    return sp;
+}
 
-    t = Clock::now();
-    const SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
-    LidarAnchors anchors =
-        use_lidar ? associate_lidar(sp, seeds.pos, seeds.is_lidar, seeds.has_motion, o.lidar_anchor_distance)
+// Each superpixel's anchors and its geometry (d0) and motion (u, v, d1) neighbourhoods: lists of
+// up to K (seed, geodesic distance), nearest first.
+struct Neighbourhoods {
+    SeedGraph graph;
+    LidarAnchors anchors;
+    std::vector<std::vector<std::pair<int, float>>> geo_nb, mot_nb;
+};
+
+// Phase 3: the seed graph over the edge map, the LiDAR anchors and the K geodesically nearest
+// seeds of each superpixel's anchors. Sets the anchor counts of res.
+Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, const InterpolationOptions &o,
+                                   InterpolationResult &res) {
+    const Seeds &seeds = set.seeds;
+    const auto t = Clock::now();
+    Neighbourhoods n;
+    n.graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
+    const SeedGraph &graph = n.graph;
+    LidarAnchors &anchors = n.anchors;
+    anchors = set.use_lidar
+                  ? associate_lidar(sp, seeds.pos, seeds.is_lidar, seeds.has_motion, o.lidar_anchor_distance)
                   : LidarAnchors::none(sp.count);
     if (!o.lidar_motion_anchors) std::fill(anchors.motion.begin(), anchors.motion.end(), -1);
     // Neighbourhoods, flat: geometry (d0) and motion (u, v, d1) lists of up to K seeds each.
     const int K = o.num_neighbors;
-    std::vector<std::vector<std::pair<int, float>>> geo_nb(sp.count), mot_nb(sp.count);
+    auto &geo_nb = n.geo_nb, &mot_nb = n.mot_nb;
+    geo_nb.resize(sp.count);
+    mot_nb.resize(sp.count);
     ParallelErrors errors;
 #pragma omp parallel num_threads(o.num_threads)
     {
@@ -587,11 +608,32 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
         res.lidar_anchored_geometry += anchors.geometry[s] >= 0;
         res.lidar_anchored_motion += anchors.motion[s] >= 0;
     }
+    return n;
+}
 
-    t = Clock::now();
+// The model of each (superpixel, channel), at s * kNumChannels + c, and its weighted inlier
+// share over its neighbourhood.
+struct Models {
+    std::vector<Model> cur;
+    std::vector<float> share;
+};
+
+// Phase 4: per superpixel and channel, the model from random hypotheses, propagation from the
+// adjacent superpixels, random search and refinement.
+Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhoods &n, const InterpolationOptions &o,
+                  InterpolationResult &res) {
+    const Seeds &seeds = set.seeds;
+    const bool use_lidar = set.use_lidar, background = set.background;
+    const LidarAnchors &anchors = n.anchors;
+    const auto &geo_nb = n.geo_nb, &mot_nb = n.mot_nb;
+    const auto t = Clock::now();
     const int S = sp.count;
-    std::vector<Model> cur(static_cast<size_t>(S) * kNumChannels), next(cur.size());
-    std::vector<float> share(cur.size(), 0.0f);
+    Models models;
+    std::vector<Model> &cur = models.cur;
+    cur.resize(static_cast<size_t>(S) * kNumChannels);
+    std::vector<Model> next(cur.size());
+    std::vector<float> &share = models.share;
+    share.assign(cur.size(), 0.0f);
     auto build = [&](int s, int c, Problem &p) {
         const auto &nb = c == kD0 ? geo_nb[s] : mot_nb[s];
         const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
@@ -682,8 +724,22 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     }
     std::vector<Problem>().swap(problems);  // before the output's fields are allocated
     res.timings.models_s = seconds_since(t);
+    return models;
+}
 
-    t = Clock::now();
+// Phase 5: the dense field. Each pixel takes the models of its superpixel or of an adjacent
+// one (pixel_model_selection), adds the background prediction back and, with LiDAR, keeps the
+// measured d0 (keep_lidar_values).
+void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhoods &n, const Models &models,
+                  const SparseLidar &lidar0, int w, int h, const InterpolationOptions &o, InterpolationResult &res) {
+    const Seeds &seeds = set.seeds;
+    const cv::Mat1i &seed_at = set.seed_at;
+    const bool use_lidar = set.use_lidar, subtract_d0 = set.subtract_d0;
+    const SeedGraph &graph = n.graph;
+    const LidarAnchors &anchors = n.anchors;
+    const std::vector<Model> &cur = models.cur;
+    const std::vector<float> &share = models.share;
+    const auto t = Clock::now();
     res.dense = SceneFlowField::uninitialized(w, h);  // the pixel loop below writes every value
     res.dense.valid.setTo(1);
     // Per-pixel model choice: a pixel keeps its superpixel's model unless the matches around
@@ -797,6 +853,35 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     if (use_lidar && o.keep_lidar_values)
         for (const LidarPoint &lp : lidar0.points) res.dense.d0(lp.y, lp.x) = seeds.d0[seed_at(lp.y, lp.x)];
     res.timings.output_s = seconds_since(t);
+}
+
+}  // namespace
+
+RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
+    validate_options(options_);
+    if (options_.edges.method == EdgeMethod::StructuredForest)
+        sed_ = std::make_shared<const SedModel>(options_.edges.sed_model_path);
+}
+
+InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
+                                            const cv::Mat &image, const DisparityMap &geometry_hint,
+                                            const StereoCamera &camera, const SparseLidar &lidar1,
+                                            int threads) const {
+    require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
+    InterpolationOptions this_call = options_;
+    if (threads > 0) this_call.num_threads = threads;
+    const InterpolationOptions &o = this_call;
+    const auto t_start = Clock::now();
+    validate_inputs(matches, lidar0, image);
+    validate_lidar(lidar1, image.size(), "t1 LiDAR");
+    validate_hint(geometry_hint, image.size());
+    const int w = image.cols, h = image.rows;
+    InterpolationResult res;
+    const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
+    const Superpixels sp = segment(image, sed_.get(), o, res);
+    const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);
+    const Models models = fit_models(seed_set, sp, neighbourhoods, o, res);
+    write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);
     res.timings.total_s = seconds_since(t_start);
     return res;
 }
@@ -806,4 +891,4 @@ SceneFlowField interpolate_scene_flow(const SceneFlowField &matches, const Spars
     return RobustInterpolator(options).run(matches, lidar0, image).dense;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -30,7 +30,7 @@
 #include "interpolation/ego_motion.hpp"
 #include "interpolation/superpixels.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct InterpolationOptions {
     bool use_lidar = true;
@@ -218,4 +218,4 @@ private:
 SceneFlowField interpolate_scene_flow(const SceneFlowField &matches, const SparseLidar &lidar0,
                                       const cv::Mat &image, const InterpolationOptions &options = {});
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

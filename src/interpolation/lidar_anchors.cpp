@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 // Uniform bucket grid for nearest-point queries: a full Velodyne scan has ~20k points in the
@@ -88,4 +88,4 @@ LidarAnchors associate_lidar(const Superpixels &sp, const std::vector<cv::Point>
     return a;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -11,7 +11,7 @@
 
 #include "interpolation/superpixels.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct LidarAnchors {
     std::vector<int> geometry;  // seed index per superpixel, -1 = centre anchor
@@ -25,4 +25,4 @@ LidarAnchors associate_lidar(const Superpixels &sp, const std::vector<cv::Point>
                              const std::vector<uint8_t> &is_lidar, const std::vector<uint8_t> &has_motion,
                              float max_distance);
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

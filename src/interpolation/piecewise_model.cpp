@@ -8,7 +8,7 @@
 #include <immintrin.h>
 #endif
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 bool plane_from_3(const float x[3], const float y[3], const float z[3], Plane &out) {
     const double x1 = x[1] - x[0], y1 = y[1] - y[0], x2 = x[2] - x[0], y2 = y[2] - y[0];
@@ -171,4 +171,4 @@ void robust_lanes(const Model &m, int dims, const float *x, const float *y, cons
     lanes_portable(m, two, x, y, z0, z1, w, n, tau, acc);
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

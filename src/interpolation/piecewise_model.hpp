@@ -6,7 +6,7 @@
 // homography a moving plane induces). Plain value types; no allocation.
 #include <cmath>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct Plane {
     float a = 0, b = 0, c = 0;
@@ -49,4 +49,4 @@ void robust_lanes(const Model &m, int dims, const float *x, const float *y, cons
 // Whether robust_lanes can run isa here (Portable always; Best is whichever is fastest).
 bool lane_isa_available(LaneIsa isa);
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -12,7 +12,7 @@
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 namespace {
 
 struct Centre {
@@ -221,4 +221,4 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     return sp;
 }
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

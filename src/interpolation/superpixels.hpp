@@ -8,7 +8,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace lidarflow::interp {
+namespace lidarflow::interpolation {
 
 struct SuperpixelOptions {
     int region_size = 16;     // grid step S [px]; superpixels have ~S*S pixels; >= 4
@@ -31,4 +31,4 @@ struct Superpixels {
 // unsupported image or options out of range. Deterministic.
 Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &options);
 
-}  // namespace lidarflow::interp
+}  // namespace lidarflow::interpolation

@@ -27,8 +27,8 @@ cv::Mat gray(const cv::Mat &m) {
 
 // The dominant rigid motion t0 -> t1, fitted to sparse tracks on a grid and the stereo
 // disparities at both ends (invalid when they support none).
-interp::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0,
-                                     const DisparityMap &d1, const StereoCamera &camera, int step, uint64_t seed) {
+interpolation::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0,
+                                            const DisparityMap &d1, const StereoCamera &camera, int step, uint64_t seed) {
     std::vector<cv::Point2f> from, to;
     for (int y = step / 2; y < g0.rows; y += step)
         for (int x = step / 2; x < g0.cols; x += step)
@@ -49,16 +49,16 @@ interp::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const
         us.push_back(to[i].x - from[i].x);
         vs.push_back(to[i].y - from[i].y);
     }
-    interp::EgoMotionOptions eo;
+    interpolation::EgoMotionOptions eo;
     eo.seed = static_cast<unsigned>(seed);
-    return camera.valid() ? interp::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
-                          : interp::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
+    return camera.valid() ? interpolation::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
+                          : interpolation::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
 }
 
 // The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
 // has none; empty when m is invalid. DIS resamples it down its pyramid, so it is predicted on a
 // 2 px grid and resized (a 4 px grid cost 0.2 points).
-cv::Mat2f rigid_flow(const interp::EgoMotion &m, const DisparityMap &d) {
+cv::Mat2f rigid_flow(const interpolation::EgoMotion &m, const DisparityMap &d) {
     if (!m.valid) return {};
     constexpr int kStep = 2;
     cv::Mat2f coarse((d.rows + kStep - 1) / kStep, (d.cols + kStep - 1) / kStep);
@@ -141,14 +141,14 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
 
     t = Clock::now();
     const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
-    interp::EgoMotion motion;
+    interpolation::EgoMotion motion;
     if (opt.flow.prior_track_step > 0)
         motion = track_rigid_motion(g0, g1, r.sgm0, r.sgm1, camera, opt.flow.prior_track_step, opt.random_seed);
     const SparseLidar none{in.left0.cols, in.left0.rows, {}};
     r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1,
                          opt.use_lidar ? in.lidar0 : none);
     if (backward) {
-        const interp::EgoMotion back = motion.valid ? motion.inverse() : motion;
+        const interpolation::EgoMotion back = motion.valid ? motion.inverse() : motion;
         r.backward = assemble(dense_inverse_search(g1, g0, opt.flow, rigid_flow(back, r.sgm1)), r.sgm1, r.sgm0,
                               opt.use_lidar ? in.lidar1 : none);
     }

@@ -7,19 +7,15 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdint>
-#include <cstring>
-#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <thread>
 
-#include <opencv2/imgproc.hpp>
-
 #include "core/error.hpp"
-#include "core/parallel_errors.hpp"
 #include "matching/cost_cases.hpp"
+#include "matching/descriptor_pyramid.hpp"
 #include "matching/lidar_support.hpp"
 
 namespace lidarflow::matching {
@@ -78,40 +74,9 @@ std::vector<LidarPoint> dedupe(const SparseLidar &l) {
 
 // Everything one matcher shares between directions: validated LiDAR and the descriptor
 // pyramids of the four images.
-struct MatcherData {
-    MatchingOptions opt;
-    int width = 0, height = 0;
+struct MatcherData : DescriptorPyramid {
     std::vector<LidarPoint> lidar[2];  // t0 (aligned to left0), t1 (aligned to left1)
-    // levels[l].desc[i]: image i in (left0, right0, left1, right1) order. Level 0 points into
-    // the pairs, the others into coarse[i].
-    struct Level {
-        int w = 0, h = 0;
-        const features::DescriptorImage *desc[4] = {nullptr, nullptr, nullptr, nullptr};
-    };
-    std::vector<Level> levels;
-    // Owners of the full-resolution descriptors: the (left0, right0) and (left1, right1) pairs.
-    std::shared_ptr<const StereoFeatures> pair[2];
-    // The pairs whose full-resolution descriptors this matcher still has to compute (null: done
-    // or reused); the same objects as pair[t].
-    StereoFeatures *pending[2] = {nullptr, nullptr};
-    // Levels 1.. of each image (coarse[i][l - 1]), this matcher's own; empty once released.
-    std::vector<features::DescriptorImage> coarse[4];
-    double seconds_features = 0;
-    bool reused_t0 = false;
-
-    // lend: into the t1 pair's full-resolution buffers (run_both), else owned storage.
-    void describe_coarse(bool lend);
-    bool coarse_lent() const;
-    void release_coarse();
-    void describe_full();
 };
-
-// Pyramid levels: factor 0.5 while the coarser image stays min_coarsest_height high.
-int pyramid_levels(const MatchingOptions &o, int width, int height) {
-    int nlev = 1;
-    while (nlev < o.max_levels && (height >> nlev) >= o.min_coarsest_height && (width >> nlev) >= 8) ++nlev;
-    return nlev;
-}
 
 // The PatchMatch of one direction. All per-seed arrays are allocated once up front.
 class Engine {
@@ -842,103 +807,6 @@ MatchResult result_of(const Engine &e) {
     return r;
 }
 
-// One job per image, images in parallel; each job's descriptor loops get the threads left.
-void run_image_jobs(const std::vector<std::function<void(int)>> &jobs, int threads) {
-    const int n = static_cast<int>(jobs.size());
-    if (n == 0) return;
-    const int outer = std::max(1, std::min(threads, n));
-    const int inner = std::max(1, threads / outer);
-    ParallelErrors errors;  // descriptor images are large: bad_alloc is likely here
-#pragma omp parallel for schedule(static) num_threads(outer)
-    for (int i = 0; i < n; ++i) errors.run([&] { jobs[i](inner); });
-    errors.rethrow_if_any();
-}
-
-const cv::Mat &image_of(const MatcherData &m, int i) { return i % 2 == 0 ? m.pair[i / 2]->left : m.pair[i / 2]->right; }
-
-bool MatcherData::coarse_lent() const {
-    for (const auto &c : coarse)
-        for (const features::DescriptorImage &d : c)
-            if (d.lent) return true;
-    return false;
-}
-
-void MatcherData::describe_coarse(bool lend) {
-    const int nlev = static_cast<int>(levels.size());
-    if (nlev < 2) return;
-    bool complete = true;
-    for (const auto &c : coarse)
-        for (const features::DescriptorImage &d : c) complete = complete && !d.empty();
-    // Lent levels live in the t1 pair's full-resolution buffers, which a single run needs at the
-    // same time: it recomputes them into owned storage.
-    if (complete && (lend || !coarse_lent())) return;
-    const auto t0 = Clock::now();
-    release_coarse();
-    // Each image's levels go to consecutive 64-byte aligned slices of the two buffers, sized for
-    // the full resolution first (sizing touches no page; a recycled pair already has the size).
-    std::vector<uint8_t *> memory(4 * (nlev - 1), nullptr);
-    const auto round64 = [](size_t n) { return (n + 63) / 64 * 64; };
-    if (lend && pending[1]) {
-        const size_t need = features::descriptor_bytes(width, height, opt.sift) + 64;
-        uint8_t *base[2];
-        size_t used[2] = {0, 0}, room[2];
-        for (int b = 0; b < 2; ++b) {
-            auto &data = pending[1]->desc[b].data;
-            if (data.size() < need) {
-                data.clear();  // a growing resize would copy the old bytes over first
-                data.resize(need);
-            }
-            const auto addr = reinterpret_cast<std::uintptr_t>(data.data());
-            base[b] = data.data() + (round64(addr) - addr);
-            room[b] = data.size() - static_cast<size_t>(base[b] - data.data());
-        }
-        int b = 0;
-        for (int i = 0; i < 4; ++i)
-            for (int l = 1; l < nlev; ++l) {
-                const size_t bytes = round64(features::descriptor_bytes(levels[l].w, levels[l].h, opt.sift));
-                while (b < 2 && used[b] + bytes > room[b]) ++b;
-                if (b == 2) break;  // the rest in owned storage
-                memory[i * (nlev - 1) + l - 1] = base[b] + used[b];
-                used[b] += bytes;
-            }
-    }
-    std::vector<std::function<void(int)>> jobs;
-    for (int i = 0; i < 4; ++i)
-        jobs.emplace_back([this, i, nlev, &memory](int inner) {
-            cv::Mat1f g = features::to_gray_float(image_of(*this, i));
-            for (int l = 1; l < nlev; ++l) {
-                cv::Mat1f next;
-                cv::pyrDown(g, next);
-                g = next;
-                features::compute_dense_sift(g, opt.sift, inner, coarse[i][l - 1], memory[i * (nlev - 1) + l - 1]);
-            }
-        });
-    run_image_jobs(jobs, opt.threads);
-    seconds_features += seconds_since(t0);
-}
-
-void MatcherData::release_coarse() {
-    for (auto &c : coarse)
-        for (features::DescriptorImage &d : c) d = features::DescriptorImage();
-}
-
-void MatcherData::describe_full() {
-    if (!pending[0] && !pending[1]) return;
-    if (pending[1] && coarse_lent()) release_coarse();  // their memory is overwritten now
-    const auto t0 = Clock::now();
-    std::vector<std::function<void(int)>> jobs;
-    for (int t = 0; t < 2; ++t)
-        for (int k = 0; k < 2 && pending[t]; ++k)
-            jobs.emplace_back([this, t, k](int inner) {
-                StereoFeatures &p = *pending[t];
-                features::compute_dense_sift(features::to_gray_float(k == 0 ? p.left : p.right), opt.sift, inner,
-                                             p.desc[k]);
-            });
-    run_image_jobs(jobs, opt.threads);
-    pending[0] = pending[1] = nullptr;
-    seconds_features += seconds_since(t0);
-}
-
 }  // namespace
 
 struct SceneFlowMatcher::Impl : MatcherData {
@@ -975,19 +843,6 @@ MatchPair SceneFlowMatcher::run_both() {
     return r;
 }
 
-bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const {
-    auto same = [](const cv::Mat &a, const cv::Mat &b) {
-        if (a.size() != b.size() || a.type() != b.type()) return false;
-        const size_t row = a.cols * a.elemSize();
-        for (int y = 0; y < a.rows; ++y)
-            if (std::memcmp(a.ptr(y), b.ptr(y), row) != 0) return false;
-        return true;
-    };
-    return !desc[0].empty() && !desc[1].empty() && sift.cell_size == o.sift.cell_size && sift.dim == o.sift.dim &&
-           sift.bits == o.sift.bits && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
-           same(left, l) && same(right, r);
-}
-
 SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
                                    std::shared_ptr<const StereoFeatures> reuse_t0,
                                    std::shared_ptr<StereoFeatures> storage)
@@ -1016,34 +871,7 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
         m.lidar[1] = dedupe(in.lidar1);
     }
 
-    // The t0 pair's full-resolution descriptors come from the previous frame when it is the
-    // same stereo pair (streaming: that frame's t1); everything else is computed here or later.
-    const bool reuse0 = reuse_t0 && reuse_t0->matches(in.left0, in.right0, options);
-    auto fresh0 = reuse0 ? nullptr : std::make_shared<StereoFeatures>();
-    auto fresh1 = storage ? std::move(storage) : std::make_shared<StereoFeatures>();
-    m.pending[0] = fresh0.get();
-    m.pending[1] = fresh1.get();
-    const cv::Mat *src[2][2] = {{&in.left0, &in.right0}, {&in.left1, &in.right1}};
-    for (int t = 0; t < 2; ++t)
-        if (m.pending[t]) {
-            m.pending[t]->left = src[t][0]->clone();
-            m.pending[t]->right = src[t][1]->clone();
-            m.pending[t]->sift = options.sift;
-        }
-    m.pair[0] = reuse0 ? reuse_t0 : std::shared_ptr<const StereoFeatures>(fresh0);
-    m.pair[1] = fresh1;
-    m.reused_t0 = reuse0;
-
-    // Level sizes as cv::pyrDown makes them; descriptor images have their image's size.
-    const int nlev = pyramid_levels(options, m.width, m.height);
-    m.levels.resize(nlev);
-    for (int i = 0; i < 4; ++i) m.coarse[i].resize(nlev - 1);
-    for (int l = 0; l < nlev; ++l) {
-        MatcherData::Level &lev = m.levels[l];
-        lev.w = l == 0 ? m.width : (m.levels[l - 1].w + 1) / 2;
-        lev.h = l == 0 ? m.height : (m.levels[l - 1].h + 1) / 2;
-        for (int i = 0; i < 4; ++i) lev.desc[i] = l == 0 ? &m.pair[i / 2]->desc[i % 2] : &m.coarse[i][l - 1];
-    }
+    m.init(in, std::move(reuse_t0), std::move(storage));
 }
 
 SceneFlowMatcher::~SceneFlowMatcher() = default;

@@ -22,8 +22,8 @@ double seconds_since(Clock::time_point t0) {
 }
 
 // The stage options as the estimator runs them: one thread count and one LiDAR switch.
-interp::InterpolationOptions interpolation_options(const EstimatorOptions &o) {
-    interp::InterpolationOptions io = o.interpolation;
+interpolation::InterpolationOptions interpolation_options(const EstimatorOptions &o) {
+    interpolation::InterpolationOptions io = o.interpolation;
     io.num_threads = o.threads;
     io.use_lidar = io.use_lidar && o.use_lidar;
     return io;

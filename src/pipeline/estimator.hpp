@@ -56,7 +56,7 @@ struct EstimatorOptions {
     lidar::VisibilityFilterOptions lidar_visibility;
     matching::MatchingOptions matching;
     consistency::ConsistencyOptions consistency;
-    interp::InterpolationOptions interpolation;
+    interpolation::InterpolationOptions interpolation;
 
     // Throws Error(InvalidArgument) naming the first bad field.
     void validate() const;
@@ -167,7 +167,7 @@ private:
 
     EstimatorOptions options_;
     EstimatorOptions stage_options_;  // options_ with search ranges at processing_scale
-    interp::RobustInterpolator interpolator_;
+    interpolation::RobustInterpolator interpolator_;
 };
 
 }  // namespace lidarflow::pipeline

@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "args.hpp"
-#include "option_assignments.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "eval/metrics.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "pipeline/estimator.hpp"
+#include "pipeline/option_assignments.hpp"
 #include "synth/scene.hpp"
 #include "synth/write_kitti.hpp"
 #include "synth_args.hpp"
@@ -129,7 +129,7 @@ int run_demo(int argc, char **argv) {
     for (const bool lidar : {true, false}) {
         pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
         opt.threads = args.integer("threads", 2);
-        apply_option_assignments(opt, args.list("set"));
+        pipeline::apply_option_assignments(opt, args.list("set"));
         opt.use_lidar = lidar;
         DemoRun r{lidar ? "lidarflow" : "image-only", pipeline::Estimator(opt).run(in), {}, {}};
         const SceneFlowField &f = r.result.dense;

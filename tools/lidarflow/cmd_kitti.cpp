@@ -10,10 +10,10 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "log.hpp"
-#include "option_assignments.hpp"
 #include "core/error.hpp"
+#include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
-#include "pipeline/kitti_runner.hpp"
+#include "pipeline/option_assignments.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -21,7 +21,7 @@ namespace {
 // Per row and frame: mean (+- standard error of the mean) of the occ outlier rates over the
 // runs, which differ in their random seeds and, with --placements, in where the paper
 // protocol's sampling grids fall.
-std::string format_seed_summary(const std::vector<pipeline::KittiRunReport> &runs, int seeds, int placements) {
+std::string format_seed_summary(const std::vector<eval::KittiRunReport> &runs, int seeds, int placements) {
     std::string out;
     char line[256];
     if (placements == 1)
@@ -83,16 +83,16 @@ int run_kitti_command(int argc, char **argv) {
         std::printf("%s", args.usage().c_str());
         return 0;
     }
-    pipeline::KittiRunOptions o;
+    eval::KittiRunOptions o;
     o.root = args.required("root");
     o.ids = args.list("ids");
-    o.lidar.protocol = pipeline::parse_protocol(args.str("lidar", "paper"));
-    const bool velodyne = o.lidar.protocol == pipeline::LidarProtocol::Velodyne;
+    o.lidar.protocol = eval::parse_protocol(args.str("lidar", "paper"));
+    const bool velodyne = o.lidar.protocol == eval::LidarProtocol::Velodyne;
     o.lidar.points = args.integer("points", velodyne ? 0 : 88);
     o.lidar.beams = args.integer("beams", 0);
     require(o.lidar.points >= 0 && o.lidar.beams >= 0, ErrorCode::InvalidArgument,
             "kitti: --points and --beams must be >= 0");
-    require(o.lidar.protocol == pipeline::LidarProtocol::Paper ? o.lidar.points > 0 : true,
+    require(o.lidar.protocol == eval::LidarProtocol::Paper ? o.lidar.points > 0 : true,
             ErrorCode::InvalidArgument, "kitti: --points must be > 0 for the paper protocol");
     o.estimator = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     o.estimator.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
@@ -104,7 +104,7 @@ int run_kitti_command(int argc, char **argv) {
         o.estimator.matching.random_seed = static_cast<uint64_t>(seed);
         o.estimator.interpolation.random_seed = static_cast<unsigned>(seed);
     }
-    apply_option_assignments(o.estimator, args.list("set"));
+    pipeline::apply_option_assignments(o.estimator, args.list("set"));
     o.ablation = args.flag("ablation");
     o.out = args.str("out", "");
     o.write_viz = !args.flag("no-viz");
@@ -114,7 +114,7 @@ int run_kitti_command(int argc, char **argv) {
     const int placements = args.integer("placements", 1);
     require(placements >= 1 && placements <= 1000, ErrorCode::InvalidArgument,
             "kitti: --placements must be in [1, 1000]");
-    require(placements == 1 || o.lidar.protocol == pipeline::LidarProtocol::Paper, ErrorCode::InvalidArgument,
+    require(placements == 1 || o.lidar.protocol == eval::LidarProtocol::Paper, ErrorCode::InvalidArgument,
             "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
 
     const bool tty = isatty(fileno(stderr)) && verbosity() != Verbosity::Quiet;
@@ -149,31 +149,31 @@ int run_kitti_command(int argc, char **argv) {
         ++run_index;
     };
     detail("kitti: LiDAR %s, preset %s, %d thread(s), up to stage %s, %d seed(s) x %d placement(s)\n",
-           pipeline::protocol_name(o.lidar.protocol), args.str("preset", "default").c_str(), o.estimator.threads,
+           eval::protocol_name(o.lidar.protocol), args.str("preset", "default").c_str(), o.estimator.threads,
            pipeline::stage_name(o.estimator.last_stage), seeds, placements);
-    const pipeline::KittiRunReport rep = pipeline::run_kitti(o, progress);
+    const eval::KittiRunReport rep = eval::run_kitti(o, progress);
     finish_run();
     // Further seeds and placements: scored only (the first seed's run at the paper's placement
     // is the one written to --out).
-    std::vector<pipeline::KittiRunReport> more;
+    std::vector<eval::KittiRunReport> more;
     for (int k = 0; k < seeds; ++k)
         for (int j = 0; j < placements; ++j) {
             if (k == 0 && j == 0) continue;
-            pipeline::KittiRunOptions ok = o;
+            eval::KittiRunOptions ok = o;
             ok.out.clear();
             ok.lidar.placement = j;
             ok.estimator.matching.random_seed = o.estimator.matching.random_seed + static_cast<uint64_t>(k);
             ok.estimator.interpolation.random_seed = o.estimator.interpolation.random_seed + static_cast<unsigned>(k);
-            more.push_back(pipeline::run_kitti(ok, progress));
+            more.push_back(eval::run_kitti(ok, progress));
             finish_run();
         }
     if (tty) std::fprintf(stderr, "\r\033[K");
     note("kitti: done in %s\n", format_duration(clock.seconds()).c_str());
 
     std::printf("lidarflow kitti: %zu frame(s), LiDAR %s, stage %s, %d thread(s)\n", rep.timings.size(),
-                pipeline::protocol_name(o.lidar.protocol), pipeline::stage_name(o.estimator.last_stage),
+                eval::protocol_name(o.lidar.protocol), pipeline::stage_name(o.estimator.last_stage),
                 o.estimator.threads);
-    for (const pipeline::FrameTimings &t : rep.timings) {
+    for (const eval::FrameTimings &t : rep.timings) {
         std::printf("  %s  LiDAR %zu + %zu points  %.2f s (", t.id.c_str(), t.lidar0_points, t.lidar1_points,
                     t.total_seconds);
         for (size_t j = 0; j < t.stages.size(); ++j)
@@ -182,16 +182,16 @@ int run_kitti_command(int argc, char **argv) {
     }
     if (velodyne) {
         std::string without_t1;
-        for (const pipeline::FrameTimings &t : rep.timings)
+        for (const eval::FrameTimings &t : rep.timings)
             if (t.lidar1_points == 0) without_t1 += (without_t1.empty() ? "" : ", ") + t.id;
         if (!without_t1.empty())
             std::printf("  no scan at t1 (velodyne/ID_11.bin) for %s: D1 is empty there, the estimator uses the t0 "
                         "scan only\n",
                         without_t1.c_str());
     }
-    std::printf("\n%s", pipeline::format_report(rep).c_str());
+    std::printf("\n%s", eval::format_report(rep).c_str());
     if (!more.empty()) {
-        std::vector<pipeline::KittiRunReport> all{rep};
+        std::vector<eval::KittiRunReport> all{rep};
         all.insert(all.end(), more.begin(), more.end());
         std::printf("\n%s", format_seed_summary(all, seeds, placements).c_str());
     }

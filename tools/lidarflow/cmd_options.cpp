@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: MIT
 // lidarflow options: every option key of the C ABI (the `--set` keys) with its type, bounds and
-// default, read from capi/option_keys.cpp's table so the listing cannot drift from what is
-// accepted.
+// default, read from the option key table (src/pipeline/option_keys.cpp) so the listing cannot
+// drift from what is accepted.
 #include <cstdio>
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "option_keys.hpp"
+#include "pipeline/option_keys.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -18,7 +18,7 @@ int list_options(int argc, char **argv) {
         return 0;
     }
     std::printf("%-40s %-7s %-32s %s\n", "key", "type", "accepted", "default");
-    for (const capi::OptionKeyDescription &d : capi::describe_option_keys())
+    for (const pipeline::OptionKeyDescription &d : pipeline::describe_option_keys())
         std::printf("%-40s %-7s %-32s %s\n", d.name.c_str(), d.type.c_str(),
                     d.bounds.empty() ? "-" : d.bounds.c_str(), d.defaults.c_str());
     std::printf("\npresets (key \"preset\", CLI --preset): default, balanced, fast, realtime; set it before other keys.\n"

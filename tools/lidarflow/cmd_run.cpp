@@ -10,7 +10,6 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "log.hpp"
-#include "option_assignments.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/image_file.hpp"
@@ -23,6 +22,7 @@
 #include "io/velodyne.hpp"
 #include "lidar/velodyne_protocol.hpp"
 #include "pipeline/estimator.hpp"
+#include "pipeline/option_assignments.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/flow_color.hpp"
 #include "viz/legend.hpp"
@@ -109,7 +109,7 @@ int run(int argc, char **argv) {
     opt.use_lidar = !args.flag("no-lidar");
     opt.threads = args.integer("threads", 2);
     opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
-    apply_option_assignments(opt, args.list("set"));
+    pipeline::apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
 
     detail("run: preset %s, %d thread(s), up to stage %s, LiDAR %s, output name %s\n",

@@ -16,6 +16,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "eval/kitti_runner.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/velo_to_left.hpp"
@@ -25,7 +26,6 @@
 #include "lidarflow_calibration_t.h"
 #include "lidarflow_lidar_t.h"
 #include "lidarflow_stereo_t.h"
-#include "pipeline/kitti_runner.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -43,7 +43,7 @@ enum class SweepWire { Disparity, LidarT, PointcloudT };
 struct Clip {
     std::string id;
     StereoCamera camera;
-    pipeline::KittiFrame frame;
+    eval::KittiFrame frame;
     // Raw sweeps (SweepWire::LidarT / PointcloudT): Velodyne frame, t0 and t1 (empty when the
     // folder has no scan at t1, as KITTI 2015), and Velodyne -> left rectified camera.
     std::vector<io::VelodynePoint> raw[2];
@@ -218,9 +218,9 @@ int run(int argc, char **argv) {
         std::printf("%s\n", matrix_text(T).c_str());
         return 0;
     }
-    pipeline::LidarInputOptions lidar_opt;
-    lidar_opt.protocol = pipeline::parse_protocol(args.str("lidar", "paper"));
-    const bool velodyne = lidar_opt.protocol == pipeline::LidarProtocol::Velodyne;
+    eval::LidarInputOptions lidar_opt;
+    lidar_opt.protocol = eval::parse_protocol(args.str("lidar", "paper"));
+    const bool velodyne = lidar_opt.protocol == eval::LidarProtocol::Velodyne;
     lidar_opt.points = args.integer("points", velodyne ? 0 : 88);
     lidar_opt.beams = args.integer("beams", 0);
     const std::string frame_name = args.str("lidar-frame", "disparity"), type_name = args.str("lidar-type", "lidar_t");
@@ -257,9 +257,9 @@ int run(int argc, char **argv) {
         Clip c;
         c.id = id;
         c.camera = io::read_calib_cam_to_cam(layout.calib_cam_to_cam(id)).camera;
-        pipeline::LidarInputOptions images_only = lidar_opt;
-        if (wire != SweepWire::Disparity) images_only.protocol = pipeline::LidarProtocol::None;
-        c.frame = pipeline::load_kitti_frame(root, id, images_only);
+        eval::LidarInputOptions images_only = lidar_opt;
+        if (wire != SweepWire::Disparity) images_only.protocol = eval::LidarProtocol::None;
+        c.frame = eval::load_kitti_frame(root, id, images_only);
         if (wire != SweepWire::Disparity) {
             c.lidar_to_camera = kitti_lidar_to_camera(layout, id);
             // As the velodyne protocol: the scan at t1 only where the folder has one.
@@ -306,7 +306,7 @@ int run(int argc, char **argv) {
                                           static_cast<int32_t>(sweeps));
                         ++sweeps;
                     }
-                } else if (lidar_opt.protocol != pipeline::LidarProtocol::None && !lidar.points.empty()) {
+                } else if (lidar_opt.protocol != eval::LidarProtocol::None && !lidar.points.empty()) {
                     publish_lidar(lcm, ch, lidar, utime);
                     ++sweeps;
                 }

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// The key table of lf_options_t: every key, its type, bounds and the EstimatorOptions field
-// it writes. The header's key table documents the same bounds; tests/test_capi_options.c
+// The option key table of the estimator: every key, its type, bounds and the EstimatorOptions
+// field it writes. One table for every front end: the C ABI's lf_options_t (capi/options.cpp),
+// `--set KEY=VALUE` of the CLI and bench_pipeline (option_assignments.hpp) and `lidarflow
+// options`. The C header's key table documents the same bounds; tests/test_capi_options.c
 // checks both ends of each.
 #include <cstdint>
 #include <string>
@@ -9,15 +11,15 @@
 
 #include "pipeline/estimator.hpp"
 
-namespace lidarflow::capi {
+namespace lidarflow::pipeline {
 
 // What the options object holds: the estimator settings plus the names of the string keys.
 struct OptionValues {
-    pipeline::EstimatorOptions estimator;
+    EstimatorOptions estimator;
     std::string preset = "default";
 };
 
-enum class KeyType { Int, Bool, Float, String };
+enum class OptionKeyType { Int, Bool, Float, String };
 
 struct OptionKey;
 
@@ -34,7 +36,7 @@ struct OptionKeyDescription {
     std::string defaults;  // the value of a fresh lf_options_t
 };
 std::vector<OptionKeyDescription> describe_option_keys();
-KeyType option_key_type(const OptionKey &k);
+OptionKeyType option_key_type(const OptionKey &k);
 
 // Setters: check type and bounds, then write. Throw Error(InvalidArgument) naming the key,
 // the bounds and the rejected value; `values` is untouched then.
@@ -52,4 +54,4 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k);
 // Error(InvalidArgument) for an unknown name.
 OptionValues preset_values(const std::string &name, const OptionValues &current);
 
-}  // namespace lidarflow::capi
+}  // namespace lidarflow::pipeline

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "pipeline/kitti_runner.hpp"
+#include "eval/kitti_runner.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -22,7 +22,14 @@
 #include "viz/error_map.hpp"
 #include "viz/flow_color.hpp"
 
-namespace lidarflow::pipeline {
+namespace lidarflow::eval {
+
+using pipeline::Estimator;
+using pipeline::EstimatorOptions;
+using pipeline::EstimatorResult;
+using pipeline::Stage;
+using pipeline::stage_name;
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -36,8 +43,8 @@ bool has_ground_truth(const io::KittiLayout &k, const std::string &id) {
 class RowTable {
 public:
     explicit RowTable(std::vector<ResultRow> &rows) : rows_(rows) {}
-    void add(const std::string &group, const std::string &name, eval::FillMode mode,
-             const eval::FrameGroundTruth &gt, const SceneFlowField &field, const DisparityMap &seeds,
+    void add(const std::string &group, const std::string &name, FillMode mode,
+             const FrameGroundTruth &gt, const SceneFlowField &field, const DisparityMap &seeds,
              const std::string &id) {
         ResultRow *row = nullptr;
         for (ResultRow &r : rows_)
@@ -49,15 +56,15 @@ public:
         }
         const bool any_seed = cv::countNonZero(seeds >= 0) > 0;
         row->evaluation.frames.push_back(
-            eval::evaluate_frame(gt, field, row->evaluation.options, any_seed ? &seeds : nullptr, id));
+            evaluate_frame(gt, field, row->evaluation.options, any_seed ? &seeds : nullptr, id));
     }
 
 private:
     std::vector<ResultRow> &rows_;
 };
 
-eval::FillMode mode_for(Stage s) {
-    return s == Stage::Consistency || s == Stage::Sparse ? eval::FillMode::EstimateOnly : eval::FillMode::Filled;
+FillMode mode_for(Stage s) {
+    return s == Stage::Consistency || s == Stage::Sparse ? FillMode::EstimateOnly : FillMode::Filled;
 }
 
 const char *group_of(Stage s) {
@@ -65,7 +72,7 @@ const char *group_of(Stage s) {
 }
 
 void write_viz(const std::string &out, const std::string &id, const SceneFlowField &f,
-               const eval::FrameGroundTruth *gt) {
+               const FrameGroundTruth *gt) {
     const std::string dir = out + "/viz/" + id;
     const FlowField flow = io::field_flow(f);
     const DisparityMap d0 = io::field_disparity0(f), d1 = io::field_disparity1(f);
@@ -73,8 +80,8 @@ void write_viz(const std::string &out, const std::string &id, const SceneFlowFie
     io::write_image(dir + "_disp0.png", viz::disparity_to_color(d0));
     io::write_image(dir + "_disp1.png", viz::disparity_to_color(d1));
     if (!gt) return;
-    const eval::GroundTruth &occ = gt->occ;
-    const eval::GroundTruth *noc = gt->has_noc ? &gt->noc : nullptr;
+    const GroundTruth &occ = gt->occ;
+    const GroundTruth *noc = gt->has_noc ? &gt->noc : nullptr;
     io::write_image(dir + "_disp0_error.png", viz::disparity_error_image(d0, occ.d0, noc ? noc->d0 : DisparityMap()));
     io::write_image(dir + "_disp1_error.png", viz::disparity_error_image(d1, occ.d1, noc ? noc->d1 : DisparityMap()));
     io::write_image(dir + "_flow_error.png", viz::flow_error_image(flow, occ.flow, noc ? noc->flow : FlowField()));
@@ -188,7 +195,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
     EstimatorOptions image_opt = main_opt;
     image_opt.use_lidar = false;
     const bool image_rows = o.ablation && main_opt.use_lidar;
-    interp::InterpolationOptions interp_only = main_opt.interpolation;
+    interpolation::InterpolationOptions interp_only = main_opt.interpolation;
     interp_only.use_lidar = false;
     interp_only.num_threads = main_opt.threads;
 
@@ -202,8 +209,8 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         // Table II scores the D_l^0 the estimator used: after its visibility filter.
         const DisparityMap seeds = lidar_in_use(main_opt, frame.input.lidar0).to_map();
         const bool scored = has_ground_truth(k, id);
-        eval::FrameGroundTruth gt;
-        if (scored) gt = eval::load_ground_truth(o.root, id);
+        FrameGroundTruth gt;
+        if (scored) gt = load_ground_truth(o.root, id);
 
         if (progress) progress(i, ids.size(), id + ": " + main_name);
         const EstimatorResult r = estimator.run(frame.input);
@@ -228,51 +235,51 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
         const DisparityMap no_seeds(seeds.size(), kInvalidDisparity);
         if (main_opt.use_lidar) {
             using matching::MatchVariant;
-            table.add("Matching", "im-only", eval::FillMode::Filled, gt, img.forward, seeds, id);
+            table.add("Matching", "im-only", FillMode::Filled, gt, img.forward, seeds, id);
             for (MatchVariant v : {MatchVariant::ImLidar, MatchVariant::ImLidarWin, MatchVariant::ImLidarWinConst1}) {
                 if (progress) progress(i, ids.size(), id + ": matching " + matching::variant_name(v));
                 // The main run's settings (preset, scale) with this row's LiDAR switches.
                 EstimatorOptions vo = main_opt;
                 vo.matching = main_opt.matching.with_variant(v);
                 vo.last_stage = Stage::Matching;
-                table.add("Matching", matching::variant_name(v), eval::FillMode::Filled, gt,
+                table.add("Matching", matching::variant_name(v), FillMode::Filled, gt,
                           Estimator(vo).run(frame.input).forward, seeds, id);
             }
         }
-        table.add("Matching", main_name, eval::FillMode::Filled, gt, r.forward, seeds, id);
+        table.add("Matching", main_name, FillMode::Filled, gt, r.forward, seeds, id);
         if (last == Stage::Matching) continue;
-        table.add("Consist. Check", main_opt.use_lidar ? "Disp+LiDAR" : "disp", eval::FillMode::EstimateOnly, gt,
+        table.add("Consist. Check", main_opt.use_lidar ? "Disp+LiDAR" : "disp", FillMode::EstimateOnly, gt,
                   r.after_sgm, seeds, id);
         table.add("Consist. Check", main_opt.use_lidar ? "disp+LiDAR & backward+LiDAR" : "disp & backward",
-                  eval::FillMode::EstimateOnly, gt, r.after_fb, seeds, id);
+                  FillMode::EstimateOnly, gt, r.after_fb, seeds, id);
         if (image_rows)
-            table.add("Consist. Check", "image-only", eval::FillMode::EstimateOnly, gt, img.after_fb, no_seeds, id);
+            table.add("Consist. Check", "image-only", FillMode::EstimateOnly, gt, img.after_fb, no_seeds, id);
         if (last == Stage::Consistency) continue;
-        table.add("Interpolation", main_opt.use_lidar ? "Spars+LiDAR" : "Spars", eval::FillMode::EstimateOnly, gt,
+        table.add("Interpolation", main_opt.use_lidar ? "Spars+LiDAR" : "Spars", FillMode::EstimateOnly, gt,
                   r.sparse, seeds, id);
         if (last == Stage::Sparse) continue;
         if (main_opt.use_lidar) {
             if (progress) progress(i, ids.size(), id + ": interp-only");
             const SceneFlowField dense_only =
-                interp::RobustInterpolator(interp_only)
+                interpolation::RobustInterpolator(interp_only)
                     .run(r.sparse, frame.input.lidar0, frame.input.left0, DisparityMap(), frame.input.camera)
                     .dense;
-            table.add("Interpolation", "Spars+LiDAR & Interp-only", eval::FillMode::Filled, gt, dense_only, seeds, id);
+            table.add("Interpolation", "Spars+LiDAR & Interp-only", FillMode::Filled, gt, dense_only, seeds, id);
         }
         table.add("Interpolation", main_opt.use_lidar ? "LiDAR-Flow (Spars+LiDAR & Interp+LiDAR)" : "image-only",
-                  eval::FillMode::Filled, gt, r.dense, seeds, id);
-        if (image_rows) table.add("Interpolation", "image-only", eval::FillMode::Filled, gt, img.dense, seeds, id);
+                  FillMode::Filled, gt, r.dense, seeds, id);
+        if (image_rows) table.add("Interpolation", "image-only", FillMode::Filled, gt, img.dense, seeds, id);
 
         const cv::Mat1b objects = load_objects(k, id, frame.input.left0.size());
         const auto breakdown = [&](const SceneFlowField &dense) {
-            return eval::outlier_breakdown(gt, eval::estimate_from_scene_flow(dense),
+            return outlier_breakdown(gt, estimate_from_scene_flow(dense),
                                            cv::countNonZero(seeds >= 0) > 0 ? &seeds : nullptr,
                                            objects.empty() ? nullptr : &objects);
         };
         rep.outlier_regions += breakdown(r.dense);
         if (image_rows) rep.outlier_regions_image_only += breakdown(img.dense);
     }
-    for (ResultRow &row : rep.rows) row.evaluation.summary = eval::summarize(row.evaluation.frames);
+    for (ResultRow &row : rep.rows) row.evaluation.summary = summarize(row.evaluation.frames);
     for (size_t i = 0; i < rep.rows.size(); ++i)
         if (rep.rows[i].name.rfind(main_name, 0) == 0 && rep.rows[i].group == group_of(last)) rep.main_row = i;
     if (!o.out.empty()) {
@@ -295,7 +302,7 @@ std::string format_report(const KittiRunReport &rep) {
       << pad("D0", 7) << pad("D1", 7) << pad("Fl", 7) << pad("SF", 7) << "   " << pad("[%]", 7) << "\n";
     std::string group;
     for (const ResultRow &row : rep.rows) {
-        const eval::ComponentMeans &m = row.evaluation.summary.mean_dense.occ;
+        const ComponentMeans &m = row.evaluation.summary.mean_dense.occ;
         s << pad_right(row.group == group ? "" : row.group, 16) << pad_right(row.name, 42) << pad(fmt(m.d0.epe), 8)
           << pad(fmt(m.d1.epe), 8) << pad(fmt(m.fl.epe), 8) << "   " << pad(fmt(m.d0.outlier_pct), 7)
           << pad(fmt(m.d1.outlier_pct), 7) << pad(fmt(m.fl.outlier_pct), 7) << pad(fmt(m.sf.outlier_pct), 7) << "   "
@@ -303,19 +310,19 @@ std::string format_report(const KittiRunReport &rep) {
         group = row.group;
     }
     s << "\nSF outliers [%] per frame (occ / noc)\n" << pad_right("variant", 58);
-    for (const eval::FrameScore &f : rep.rows.front().evaluation.frames) s << pad(f.id, 16);
+    for (const FrameScore &f : rep.rows.front().evaluation.frames) s << pad(f.id, 16);
     s << pad("pooled", 16) << "\n";
     for (const ResultRow &row : rep.rows) {
         s << pad_right(row.group + ": " + row.name, 58);
-        auto cell = [](const eval::RegionScores &r) {
+        auto cell = [](const RegionScores &r) {
             return fmt(r.occ.sf.outlier_pct()) + " / " + (r.has_noc ? fmt(r.noc.sf.outlier_pct()) : "-");
         };
-        for (const eval::FrameScore &f : row.evaluation.frames) s << pad(cell(f.dense), 16);
+        for (const FrameScore &f : row.evaluation.frames) s << pad(cell(f.dense), 16);
         s << pad(cell(row.evaluation.summary.pooled.dense), 16) << "\n";
     }
     bool header = false;
     for (const ResultRow &row : rep.rows) {
-        const eval::Summary &sm = row.evaluation.summary;
+        const Summary &sm = row.evaluation.summary;
         if (row.group != "Interpolation" || !sm.pooled.has_lidar) continue;
         if (!header) {
             s << "\nTable II (final SF outliers [%], occ, mean over frames)\n" << pad_right("variant", 42)
@@ -330,7 +337,7 @@ std::string format_report(const KittiRunReport &rep) {
     }
     if (!rep.outlier_regions.regions.empty())
         s << "\n"
-          << eval::format_outlier_breakdown(rep.outlier_regions,
+          << format_outlier_breakdown(rep.outlier_regions,
                                             rep.outlier_regions_image_only.regions.empty()
                                                 ? nullptr
                                                 : &rep.outlier_regions_image_only,
@@ -356,13 +363,13 @@ std::string report_json(const KittiRunOptions &o, const KittiRunReport &rep) {
     s << "\n  ],\n  \"main_row\": " << rep.main_row << ",\n  \"rows\": [";
     for (size_t i = 0; i < rep.rows.size(); ++i)
         s << (i ? "," : "") << "\n    {\"group\": \"" << rep.rows[i].group << "\", \"name\": \"" << rep.rows[i].name
-          << "\", \"evaluation\": " << eval::to_json(rep.rows[i].evaluation) << "}";
+          << "\", \"evaluation\": " << to_json(rep.rows[i].evaluation) << "}";
     s << "\n  ]";
-    if (!rep.outlier_regions.regions.empty()) s << ",\n  \"outlier_regions\": " << eval::to_json(rep.outlier_regions);
+    if (!rep.outlier_regions.regions.empty()) s << ",\n  \"outlier_regions\": " << to_json(rep.outlier_regions);
     if (!rep.outlier_regions_image_only.regions.empty())
-        s << ",\n  \"outlier_regions_image_only\": " << eval::to_json(rep.outlier_regions_image_only);
+        s << ",\n  \"outlier_regions_image_only\": " << to_json(rep.outlier_regions_image_only);
     s << "\n}\n";
     return s.str();
 }
 
-}  // namespace lidarflow::pipeline
+}  // namespace lidarflow::eval

@@ -10,7 +10,7 @@
 #include "eval/outlier_regions.hpp"
 #include "pipeline/estimator.hpp"
 
-namespace lidarflow::pipeline {
+namespace lidarflow::eval {
 
 enum class LidarProtocol { Paper, Velodyne, None };
 
@@ -28,7 +28,7 @@ struct LidarInputOptions {
 // One KITTI frame pair with its sparse LiDAR, as the estimator takes it.
 struct KittiFrame {
     std::string id;
-    FrameInput input;
+    pipeline::FrameInput input;
 };
 
 // Loads the four images of `id` and makes the LiDAR inputs by the chosen protocol (paper: from
@@ -40,13 +40,13 @@ KittiFrame load_kitti_frame(const std::string &root, const std::string &id, cons
 struct ResultRow {
     std::string group;  // "Matching", "Consist. Check", "Interpolation"
     std::string name;   // e.g. "im+LiDAR+win", "Spars+LiDAR & Interp+LiDAR"
-    eval::KittiEvaluation evaluation;
+    KittiEvaluation evaluation;
 };
 
 struct FrameTimings {
     std::string id;
     size_t lidar0_points = 0, lidar1_points = 0;
-    std::vector<StageTime> stages;  // of the main (non-ablation) run
+    std::vector<pipeline::StageTime> stages;  // of the main (non-ablation) run
     double total_seconds = 0;
 };
 
@@ -54,7 +54,7 @@ struct KittiRunOptions {
     std::string root;              // KITTI training folder (images, calibration, GT)
     std::vector<std::string> ids;  // frames; empty = every frame in root
     LidarInputOptions lidar;
-    EstimatorOptions estimator;    // last_stage = what is written; use_lidar from the protocol
+    pipeline::EstimatorOptions estimator;  // last_stage = what is written; use_lidar from the protocol
     bool ablation = false;         // Table I rows for every stage up to last_stage
     std::string out;               // submission layout + viz + report.json ("" = write nothing)
     bool write_viz = true;
@@ -66,7 +66,7 @@ struct KittiRunReport {
     size_t main_row = 0;          // index of the row that was written to out
     // Ablation runs to the final stage: where the final result's SF outliers are, pooled over
     // frames, and the same for the image-only pipeline when the main one uses LiDAR.
-    eval::OutlierBreakdown outlier_regions, outlier_regions_image_only;
+    OutlierBreakdown outlier_regions, outlier_regions_image_only;
 };
 
 // Progress callback: (frame index, frame count, what is running now).
@@ -83,4 +83,4 @@ KittiRunReport run_kitti(const KittiRunOptions &options, const Progress &progres
 std::string format_report(const KittiRunReport &report);
 std::string report_json(const KittiRunOptions &options, const KittiRunReport &report);
 
-}  // namespace lidarflow::pipeline
+}  // namespace lidarflow::eval

@@ -1,0 +1,318 @@
+// SPDX-License-Identifier: MIT
+#include "pipeline/option_keys.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "core/error.hpp"
+#include "core/limits.hpp"
+
+namespace lidarflow::pipeline {
+
+using O = EstimatorOptions;
+
+enum class Extra { None, Odd, MultipleOf16, PowerOfTwo };
+
+struct OptionKey {
+    const char *name;
+    OptionKeyType type;
+    double lo, hi;
+    bool lo_open;  // (lo, hi] instead of [lo, hi]
+    Extra extra;
+    int64_t (*get_int)(const O &);
+    void (*set_int)(O &, int64_t);
+    double (*get_float)(const O &);
+    void (*set_float)(O &, double);
+};
+
+namespace {
+
+// Accessors of one EstimatorOptions field, as captureless lambdas (function pointers).
+#define LF_INT_FIELD(field)                                                                        \
+    [](const O &o) -> int64_t { return static_cast<int64_t>(o.field); },                           \
+        [](O &o, int64_t v) { o.field = static_cast<decltype(o.field)>(v); }, nullptr, nullptr
+#define LF_FLOAT_FIELD(field)                                                                      \
+    nullptr, nullptr, [](const O &o) -> double { return o.field; },                                \
+        [](O &o, double v) { o.field = static_cast<decltype(o.field)>(v); }
+
+constexpr double kBig = 10000.0;
+constexpr double kMaxSeed53 = 9007199254740992.0;  // 2^53: exact as a double
+
+const OptionKey kKeys[] = {
+    // general
+    {"threads", OptionKeyType::Int, 1, 256, false, Extra::None, LF_INT_FIELD(threads)},
+    {"adaptive_threads", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(adaptive_threads)},
+    {"preset", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    {"use_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
+    {"processing_scale", OptionKeyType::Float, 0.125, 1, false, Extra::None, LF_FLOAT_FIELD(processing_scale)},
+    {"last_stage", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    // The paper has one support window: the matcher's and the consistency check's are the same.
+    {"support_window", OptionKeyType::Int, 1, 101, false, Extra::Odd,
+     [](const O &o) -> int64_t { return o.matching.window_size; },
+     [](O &o, int64_t v) { o.matching.window_size = o.consistency.support_window = static_cast<int>(v); },
+     nullptr, nullptr},
+    // LiDAR input (lidar/visibility_filter.hpp)
+    {"lidar.visibility_filter", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(lidar_visibility.enabled)},
+    {"lidar.visibility_half_width", OptionKeyType::Int, 0, 64, false, Extra::None, LF_INT_FIELD(lidar_visibility.half_width)},
+    {"lidar.visibility_half_height", OptionKeyType::Int, 0, 64, false, Extra::None,
+     LF_INT_FIELD(lidar_visibility.half_height)},
+    {"lidar.visibility_ratio", OptionKeyType::Float, 0, 10, false, Extra::None, LF_FLOAT_FIELD(lidar_visibility.ratio)},
+    {"lidar.visibility_margin", OptionKeyType::Float, 0, kMaxLidarDisparity, false, Extra::None,
+     LF_FLOAT_FIELD(lidar_visibility.margin)},
+    // stage 1
+    {"matching.method", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+    {"matching.flow_finest_scale", OptionKeyType::Int, 0, 8, false, Extra::None, LF_INT_FIELD(matching.flow.finest_scale)},
+    {"matching.flow_patch_size", OptionKeyType::Int, 2, 32, false, Extra::None, LF_INT_FIELD(matching.flow.patch_size)},
+    {"matching.flow_patch_stride", OptionKeyType::Int, 1, 31, false, Extra::None, LF_INT_FIELD(matching.flow.patch_stride)},
+    {"matching.flow_descent_iterations", OptionKeyType::Int, 1, 200, false, Extra::None,
+     LF_INT_FIELD(matching.flow.descent_iterations)},
+    {"matching.flow_refine_iterations", OptionKeyType::Int, 0, 100, false, Extra::None,
+     LF_INT_FIELD(matching.flow.refine_iterations)},
+    {"matching.flow_prior_track_step", OptionKeyType::Int, 0, 256, false, Extra::None,
+     LF_INT_FIELD(matching.flow.prior_track_step)},
+    {"matching.support_windows", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.support_window)},
+    {"matching.const1", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const1)},
+    {"matching.const2", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const2)},
+    {"matching.use_lidar1", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.use_lidar1)},
+    {"matching.keep_disparity_change", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(matching.keep_disparity_change)},
+    {"matching.d1_terms_anchored", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     [](const O &o) -> int64_t { return o.matching.d1_terms == matching::D1Terms::ReferenceAnchored ? 1 : 0; },
+     [](O &o, int64_t v) { o.matching.d1_terms = v ? matching::D1Terms::ReferenceAnchored : matching::D1Terms::Paper; },
+     nullptr, nullptr},
+    {"matching.grid_step", OptionKeyType::Int, 1, 32, false, Extra::None, LF_INT_FIELD(matching.grid_step)},
+    {"matching.backward_grid_step", OptionKeyType::Int, 0, 32, false, Extra::None, LF_INT_FIELD(matching.backward_grid_step)},
+    {"matching.iterations", OptionKeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.iterations)},
+    {"matching.thin_from_level", OptionKeyType::Int, 1, 100, false, Extra::None, LF_INT_FIELD(matching.thin_from_level)},
+    {"matching.max_levels", OptionKeyType::Int, 1, 10, false, Extra::None, LF_INT_FIELD(matching.max_levels)},
+    {"matching.min_coarsest_height", OptionKeyType::Int, 8, 4096, false, Extra::None,
+     LF_INT_FIELD(matching.min_coarsest_height)},
+    {"matching.lazy_random_search", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.lazy_random_search)},
+    {"matching.settle_ratio", OptionKeyType::Float, 0, 100, false, Extra::None, LF_FLOAT_FIELD(matching.settle_ratio)},
+    {"matching.descriptor_bits", OptionKeyType::Int, 4, 8, false, Extra::PowerOfTwo, LF_INT_FIELD(matching.sift.bits)},
+    {"matching.patch_radius", OptionKeyType::Int, 0, 16, false, Extra::None, LF_INT_FIELD(matching.patch_radius)},
+    {"matching.stop_ratio", OptionKeyType::Float, 0, 1, false, Extra::None, LF_FLOAT_FIELD(matching.stop_ratio)},
+    {"matching.max_flow", OptionKeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_flow)},
+    {"matching.max_disparity", OptionKeyType::Float, 1, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.max_disparity)},
+    {"matching.const2_abs", OptionKeyType::Float, 0, kBig, false, Extra::None, LF_FLOAT_FIELD(matching.const2_abs)},
+    {"matching.const2_rel", OptionKeyType::Float, 0, 10, false, Extra::None, LF_FLOAT_FIELD(matching.const2_rel)},
+    {"matching.random_seed", OptionKeyType::Int, 0, kMaxSeed53, false, Extra::None, LF_INT_FIELD(matching.random_seed)},
+    // stages 2-3
+    {"consistency.sgm_max_diff", OptionKeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.sgm_max_diff)},
+    {"consistency.sgm_keep_unverified", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.sgm_keep_unverified)},
+    {"consistency.sgm_num_disparities", OptionKeyType::Int, 16, 1024, false, Extra::MultipleOf16,
+     LF_INT_FIELD(consistency.sgm.num_disparities)},
+    {"consistency.sgm_block_size", OptionKeyType::Int, 1, 31, false, Extra::Odd, LF_INT_FIELD(consistency.sgm.block_size)},
+    {"consistency.fb_max_flow", OptionKeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_flow)},
+    {"consistency.fb_max_d0", OptionKeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_d0)},
+    {"consistency.fb_max_d1", OptionKeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(consistency.fb_max_d1)},
+    {"consistency.fb_search_radius", OptionKeyType::Int, 0, 8, false, Extra::None,
+     LF_INT_FIELD(consistency.fb_search_radius)},
+    {"consistency.keep_unreliable_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.keep_unreliable_lidar)},
+    {"consistency.cluster_max_flow_step", OptionKeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(consistency.cluster_max_flow_step)},
+    {"consistency.cluster_max_disp_step", OptionKeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(consistency.cluster_max_disp_step)},
+    {"consistency.cluster_min_size", OptionKeyType::Int, 1, 100000000, false, Extra::None,
+     LF_INT_FIELD(consistency.cluster_min_size)},
+    {"consistency.keep_lidar_clusters", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(consistency.keep_lidar_clusters)},
+    {"consistency.sparsify_block", OptionKeyType::Int, 1, 64, false, Extra::None, LF_INT_FIELD(consistency.sparsify_block)},
+    {"consistency.sparsify_support", OptionKeyType::Int, 1, 63, false, Extra::Odd,
+     LF_INT_FIELD(consistency.sparsify_support)},
+    // stage 4
+    {"interpolation.use_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(interpolation.use_lidar)},
+    {"interpolation.superpixel_size", OptionKeyType::Int, 4, 512, false, Extra::None,
+     LF_INT_FIELD(interpolation.superpixels.region_size)},
+    {"interpolation.num_neighbors", OptionKeyType::Int, 1, 4096, false, Extra::None,
+     LF_INT_FIELD(interpolation.num_neighbors)},
+    {"interpolation.iterations", OptionKeyType::Int, 0, 1000, false, Extra::None, LF_INT_FIELD(interpolation.iterations)},
+    {"interpolation.initial_hypotheses", OptionKeyType::Int, 1, 10000, false, Extra::None,
+     LF_INT_FIELD(interpolation.initial_hypotheses)},
+    {"interpolation.random_hypotheses", OptionKeyType::Int, 0, 10000, false, Extra::None,
+     LF_INT_FIELD(interpolation.random_hypotheses)},
+    {"interpolation.ego_hypotheses", OptionKeyType::Int, 1, 100000, false, Extra::None,
+     LF_INT_FIELD(interpolation.ego.hypotheses)},
+    {"interpolation.edge_gain", OptionKeyType::Float, 0, kBig, false, Extra::None, LF_FLOAT_FIELD(interpolation.edge_gain)},
+    {"interpolation.distance_sigma", OptionKeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(interpolation.distance_sigma)},
+    {"interpolation.disparity_inlier", OptionKeyType::Float, 0, kBig, true, Extra::None,
+     LF_FLOAT_FIELD(interpolation.disparity_inlier)},
+    {"interpolation.flow_inlier", OptionKeyType::Float, 0, kBig, true, Extra::None, LF_FLOAT_FIELD(interpolation.flow_inlier)},
+    {"interpolation.lidar_anchor_distance", OptionKeyType::Float, 0, kBig, false, Extra::None,
+     LF_FLOAT_FIELD(interpolation.lidar_anchor_distance)},
+    {"interpolation.pixel_model_selection", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.pixel_model_selection)},
+    {"interpolation.exits_follow_background", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.exits_follow_background)},
+    {"interpolation.static_d1_from_background", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.static_d1_from_background)},
+    {"interpolation.lidar1_from_background", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.lidar1_from_background)},
+    {"interpolation.keep_lidar_values", OptionKeyType::Bool, 0, 1, false, Extra::None,
+     LF_INT_FIELD(interpolation.keep_lidar_values)},
+    {"interpolation.random_seed", OptionKeyType::Int, 0, 4294967295.0, false, Extra::None,
+     LF_INT_FIELD(interpolation.random_seed)},
+    {"interpolation.sed_model", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
+};
+
+#undef LF_INT_FIELD
+#undef LF_FLOAT_FIELD
+
+const char *type_name(OptionKeyType t) {
+    switch (t) {
+    case OptionKeyType::Int: return "an integer";
+    case OptionKeyType::Bool: return "a 0/1 switch";
+    case OptionKeyType::Float: return "a float";
+    case OptionKeyType::String: return "a string";
+    }
+    return "?";
+}
+
+std::string number(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// A float key's value is a float32: its shortest decimal that reads back as the same float
+// ("0.05", not the double expansion "0.05000000074505806").
+std::string float_number(double v) {
+    char buf[64];
+    for (int digits = 1; digits <= 9; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+        if (static_cast<float>(std::strtod(buf, nullptr)) == static_cast<float>(v)) break;
+    }
+    return buf;
+}
+
+std::string bounds_text(const OptionKey &k) {
+    if (k.type == OptionKeyType::Bool) return "0 or 1";
+    std::string s = (k.lo_open ? "(" : "[") + number(k.lo) + ", " + number(k.hi) + "]";
+    if (k.extra == Extra::Odd) s += " and odd";
+    if (k.extra == Extra::MultipleOf16) s += " and a multiple of 16";
+    if (k.extra == Extra::PowerOfTwo) s += " and a power of two";
+    return s;
+}
+
+void check_bounds(const OptionKey &k, double v, const std::string &shown) {
+    bool ok = std::isfinite(v) && (k.lo_open ? v > k.lo : v >= k.lo) && v <= k.hi;
+    if (ok && k.extra == Extra::Odd) ok = std::fmod(v, 2.0) != 0.0;
+    if (ok && k.extra == Extra::MultipleOf16) ok = std::fmod(v, 16.0) == 0.0;
+    if (ok && k.extra == Extra::PowerOfTwo) ok = (static_cast<int64_t>(v) & (static_cast<int64_t>(v) - 1)) == 0;
+    require(ok, ErrorCode::InvalidArgument,
+            std::string("option '") + k.name + "' must be " + bounds_text(k) + ", got " + shown);
+}
+
+[[noreturn]] void wrong_type(const OptionKey &k, const char *used) {
+    throw Error(ErrorCode::InvalidArgument,
+                std::string("option '") + k.name + "' is " + type_name(k.type) + " option; " + used + " does not apply");
+}
+
+bool is_key(const OptionKey &k, const char *name) { return std::string(k.name) == name; }
+
+}  // namespace
+
+const OptionKey *find_option_key(const std::string &key) {
+    for (const OptionKey &k : kKeys)
+        if (key == k.name) return &k;
+    return nullptr;
+}
+
+OptionKeyType option_key_type(const OptionKey &k) { return k.type; }
+
+std::vector<std::string> option_key_names() {
+    std::vector<std::string> names;
+    for (const OptionKey &k : kKeys) names.emplace_back(k.name);
+    return names;
+}
+
+std::vector<OptionKeyDescription> describe_option_keys() {
+    const OptionValues fresh;
+    std::vector<OptionKeyDescription> rows;
+    for (const OptionKey &k : kKeys) {
+        OptionKeyDescription d;
+        d.name = k.name;
+        switch (k.type) {
+        case OptionKeyType::Int: d.type = "int"; break;
+        case OptionKeyType::Bool: d.type = "0/1"; break;
+        case OptionKeyType::Float: d.type = "float"; break;
+        case OptionKeyType::String: d.type = "string"; break;
+        }
+        if (k.type != OptionKeyType::String) d.bounds = bounds_text(k);
+        else if (is_key(k, "preset")) d.bounds = "default | balanced | fast | realtime";
+        else if (is_key(k, "matching.method")) d.bounds = "patchmatch | decoupled";
+        else if (is_key(k, "last_stage")) d.bounds = "matching | consistency | sparse | interpolation";
+        else d.bounds = "a file path, or \"\"";
+        if (k.type == OptionKeyType::String) d.defaults = std::string("\"") + get_option_string(fresh, k) + "\"";
+        else if (k.type == OptionKeyType::Float) d.defaults = float_number(get_option_float(fresh, k));
+        else d.defaults = std::to_string(get_option_int(fresh, k));
+        rows.push_back(std::move(d));
+    }
+    return rows;
+}
+
+void set_option_int(OptionValues &values, const OptionKey &k, int64_t v) {
+    if (k.type == OptionKeyType::Float) return set_option_float(values, k, static_cast<double>(v));
+    if (k.type == OptionKeyType::String) wrong_type(k, "lf_options_set_int");
+    // Compare as integers: large int64 values do not survive a trip through double (bounds
+    // are integers of at most 2^53, exact in both types).
+    const bool in_range = v >= static_cast<int64_t>(k.lo) && v <= static_cast<int64_t>(k.hi);
+    check_bounds(k, in_range ? static_cast<double>(v) : std::nan(""), std::to_string(v));
+    k.set_int(values.estimator, v);
+}
+
+void set_option_float(OptionValues &values, const OptionKey &k, double v) {
+    if (k.type != OptionKeyType::Float) wrong_type(k, "lf_options_set_float");
+    check_bounds(k, v, number(v));
+    k.set_float(values.estimator, v);
+}
+
+void set_option_string(OptionValues &values, const OptionKey &k, const std::string &v) {
+    if (k.type != OptionKeyType::String) wrong_type(k, "lf_options_set_string");
+    if (is_key(k, "preset")) {
+        values = preset_values(v, values);
+    } else if (is_key(k, "last_stage")) {
+        values.estimator.last_stage = parse_stage(v);
+    } else if (is_key(k, "matching.method")) {
+        values.estimator.matching.method = matching::parse_match_method(v);
+    } else {  // interpolation.sed_model
+        interpolation::EdgeMapOptions &e = values.estimator.interpolation.edges;
+        e.sed_model_path = v;
+        e.method = v.empty() ? interpolation::EdgeMapOptions{}.method : interpolation::EdgeMethod::StructuredForest;
+    }
+}
+
+int64_t get_option_int(const OptionValues &values, const OptionKey &k) {
+    if (k.type != OptionKeyType::Int && k.type != OptionKeyType::Bool) wrong_type(k, "lf_options_get_int");
+    return k.get_int(values.estimator);
+}
+
+double get_option_float(const OptionValues &values, const OptionKey &k) {
+    if (k.type == OptionKeyType::Float) return k.get_float(values.estimator);
+    if (k.type == OptionKeyType::String) wrong_type(k, "lf_options_get_float");
+    return static_cast<double>(k.get_int(values.estimator));
+}
+
+const char *get_option_string(const OptionValues &values, const OptionKey &k) {
+    if (k.type != OptionKeyType::String) wrong_type(k, "lf_options_get_string");
+    if (is_key(k, "preset")) return values.preset.c_str();
+    if (is_key(k, "last_stage")) return stage_name(values.estimator.last_stage);
+    if (is_key(k, "matching.method")) return matching::match_method_name(values.estimator.matching.method);
+    return values.estimator.interpolation.edges.sed_model_path.c_str();
+}
+
+OptionValues preset_values(const std::string &name, const OptionValues &current) {
+    // The core owns the preset table, so the C ABI, the CLI's --preset, --set preset=..,
+    // Python and the bridge all get the same values.
+    OptionValues v;
+    v.estimator = EstimatorOptions::preset(name);
+    v.preset = name;
+    v.estimator.threads = current.estimator.threads;
+    return v;
+}
+
+}  // namespace lidarflow::pipeline

@@ -33,18 +33,13 @@
 //    the interval), its d1 moves by the same amount: the seed takes the neighbour's motion
 //    (u, v, d1 - d0) on its own LiDAR depth instead of pairing the corrected d0 with a d1 that
 //    belonged to another d0. Random-search candidates are left alone (shifting their d1 too
-//    turned every clamped d0 sample into an extra d1 sample: same accuracy, matching +10 %).
-//    Measured (SF outliers 000002 / 000003, mean of seeds 1-8, `lidarflow kitti --seed N`):
-//    matching stage 26.36 / 26.74 -> 26.33 / 26.64 (image-only 27.11 / 26.85); final pipeline
-//    10.44 / 12.64 -> 10.22 / 12.96, i.e. neutral (single seeds spread +-0.5).
+//    turned every clamped d0 sample into an extra d1 sample for the same accuracy). Neutral on
+//    the final SF, kept because the matches it gives are consistent.
 //  - d1_terms (default Paper = Eqs. 10 / 12 as printed; ReferenceAnchored is opt-in): the t1
 //    stereo term E(l1, r1) of the D_l^1 cases compares two target patches and never the
 //    reference point, so with d1 tied to the LiDAR it rewards *any* flow target on the
-//    measured surface. ReferenceAnchored replaces it by the cross term E(l0, r1). Matching
-//    stage: 26.78 / 27.06 -> 26.71 / 27.00 alone, 26.66 / 26.91 with keep_disparity_change
-//    (Fl of pixels whose true target lies in a D_l^1 window 6.1 -> 4.9 % on 000002); but the
-//    final pipeline got worse on 000002 (8 seeds, measured with d0-rule shifts on all candidates:
-//    10.24 -> 10.79), so it is not the default.
+//    measured surface. ReferenceAnchored replaces it by the cross term E(l0, r1): better
+//    matches, but a worse final result on 000002, so it is not the default.
 //    Image-only matching is unaffected by both (no LiDAR case, no LiDAR rule).
 #include <cstdint>
 #include <string>
@@ -94,23 +89,16 @@ struct MatchingOptions {
     int grid_step = 3;
     // Seed grid of the backward direction (0 = grid_step): the backward field only serves the
     // round-trip check of stage 2b, where a coarser grid is paired with a wider search for the
-    // best round trip (consistency fb_search_radius 2 for a 6 px grid). Measured, final SF means,
-    // step 6 + radius 2 against the default (3 + 1): paper protocol seeds 1-8 11.11 vs 10.99 %,
-    // Velodyne seeds 1-4 7.67 vs 7.84 %, image-only seeds 1-4 16.01 vs 15.53 %, synthetic frames
-    // 0-3 x seeds 1-4 9.64 vs 9.49 %; radius 2 alone 11.10 % (seeds 1-4); -14 % user CPU of
-    // `kitti --stage consistency`. A trade, so only `balanced` takes it (11.13 -> 11.29 %).
-    // Step 9 + radius 3: 11.84 % (seeds 1-4); in `fast` (6 px grid) 9 or 12 cost 0.8 / 2.5 points.
+    // best round trip (consistency fb_search_radius 2 for a 6 px grid). It trades a little
+    // accuracy for time, so only `balanced` takes it.
     int backward_grid_step = 0;
     // Coarse levels need fewer seeds: from this pyramid level on (0 = full resolution; >= 1),
     // each coarser level keeps every second grid node per axis (stride 2, 4, ...). A large value
-    // keeps every seed on every level, as CPM does. Measured (final SF, KITTI 000002/3, mean of
-    // seeds 1-8, 4 iterations): from the 1/8 level 11.59 %, from the 1/4 level 11.59 % (-15 %
-    // time), from the 1/2 level 11.95 % (-25 %).
+    // keeps every seed on every level, as CPM does. Thinning from the 1/4 level costs no
+    // accuracy; from the 1/2 level it does.
     int thin_from_level = 2;
     // ... but a thinned level keeps at least this many grid seeds (stride halved until it
-    // does): on a 160x64 image ~300 seeds on the coarsest level lost the match entirely, and
-    // the 640x192 synthetic scene's 3.4k lost accuracy (SF +0.3, hard regions +2.9, scenes
-    // 1-4). KITTI keeps 13k seeds on its 1/4 and 1/8 levels: seeds 1-8, SF 11.47 %.
+    // does): too few seeds on the coarsest level lose the match on small images.
     int min_level_seeds = 4000;
     // PatchMatch iterations per level; a level stops early once fewer than stop_ratio of the
     // seeds improved in one iteration. Past the 4th, an iteration improves < 10 % of the seeds
@@ -119,11 +107,7 @@ struct MatchingOptions {
     float stop_ratio = 0.05f;
     // Random search after a level's first iteration only for seeds whose match changed in their
     // last visit (or in this visit's propagation): the others already failed a random search
-    // around the same match. KITTI, matching stage: 25 % fewer candidate evaluations per level
-    // and ~16 % less CPU for the whole `kitti --stage matching` run; final SF over seeds 1-8
-    // 10.51 / 12.65 (mean 11.58 %) against 11.47 % without, i.e. within about 1.5 standard
-    // errors. Off by default (the default preset holds the paper-level accuracy). In `fast`
-    // (seeds 1-6) it saved ~2 % CPU for SF 14.77 -> 15.09 %, so `fast` leaves it off too.
+    // around the same match. Less CPU for about 0.1 point, so it is an option, off by default.
     bool lazy_random_search = false;
     // The lazy rule, only for settled seeds, and only for (u, v) and d0: after a level's first
     // iteration a seed whose match changed neither in its last visit nor by this visit's
@@ -132,13 +116,7 @@ struct MatchingOptions {
     // lazy rule's loss came from seeds stuck on a poor match that no neighbour improves, while
     // a seed no costlier than its neighbours is where PatchMatch has converged; d1 is the
     // weakest component (textureless regions, where all costs are alike, need its search).
-    // Measured, means over seeds (final SF, default against 0): KITTI paper protocol seeds 1-8
-    // 11.50 vs 11.47 %, synthetic 640x192 frames 0-3 x seeds 1-4 9.49 vs 9.73 %; user CPU of
-    // `kitti --stage matching` -5.4 % (seeds 1-8 alternated: 3.86 -> 3.65 s). Skipping the d1
-    // search too saved -8 % and kept KITTI at 11.47 % (Velodyne 8.61 vs 8.71 %, image-only
-    // 15.82 vs 15.78 %, fast 15.01 vs 15.02 %, synthetic 9.37 %), but the textureless box of the
-    // synthetic street then lost at the matching stage (seed 1: D1 40.1 -> 45.9 %); a ratio of
-    // 1.5 skips more and costs KITTI 0.1 point (11.59 %), as the lazy rule.
+    // Same accuracy for ~5 % less matching CPU (928da5b; docs/experiments/speed-stage1.md).
     float settle_ratio = 1.0f;
     // Skip a candidate whose four image positions its seed already tried on this level with
     // this case formula: its cost is the same and the seed's best has only improved since, so

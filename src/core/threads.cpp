@@ -65,8 +65,14 @@ int threads_for_now(int requested) {
 }
 
 void release_openmp_workers() {
+#if defined(__clang__)
+    // Clang builds use LLVM's libomp, whose pause stops the whole process's runtime, other host
+    // threads' teams included: not ours to do. Its workers sleep after KMP_BLOCKTIME instead.
+#else
+    // libgomp (GCC): the pause ends only the calling thread's pool.
     if (omp_in_parallel() || omp_get_level() > 0) return;
     omp_pause_resource(omp_pause_soft, omp_get_initial_device());
+#endif
 }
 
 }  // namespace lidarflow

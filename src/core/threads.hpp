@@ -15,7 +15,8 @@ int threads_for_now(int requested);
 // Ends the calling thread's OpenMP worker pool when it is outside any parallel region, so that
 // its idle workers sleep (they exit) instead of spin-waiting for the next region (libgomp spins
 // for milliseconds by default, taking the CPUs from OpenCV's own threads and from other
-// processes). The next parallel region starts a new pool. Thread-safe; never throws.
+// processes). The next parallel region starts a new pool. With LLVM's libomp (clang builds),
+// whose pause is process-wide, it does nothing. Thread-safe; never throws.
 void release_openmp_workers();
 
 }  // namespace lidarflow

@@ -1,23 +1,17 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // Field comparisons shared by the suites that run the estimator on synthetic scenes.
-#include <cstring>
-
 #include <opencv2/core.hpp>
 
 #include "core/maps.hpp"
+#include "core/pixels.hpp"
 #include "eval/metrics.hpp"
 #include "synth/scene.hpp"
 
 namespace lidarflow::test {
 
-// Bit-for-bit equality of two images (size, type and every byte of every row).
-inline bool same_mat(const cv::Mat &a, const cv::Mat &b) {
-    if (a.size() != b.size() || a.type() != b.type()) return false;
-    for (int y = 0; y < a.rows; ++y)
-        if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0) return false;
-    return true;
-}
+// Bit-for-bit equality of two images (core/pixels.hpp).
+inline bool same_mat(const cv::Mat &a, const cv::Mat &b) { return pixel_identical(a, b); }
 
 inline bool same_field(const SceneFlowField &a, const SceneFlowField &b) {
     return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&

@@ -9,6 +9,7 @@
 
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
+#include "core/pixels.hpp"
 #include "interpolation/ego_motion.hpp"
 
 namespace lidarflow::matching {
@@ -120,10 +121,7 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
 }  // namespace
 
 bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r) const {
-    auto same = [](const cv::Mat &a, const cv::Mat &b) {
-        return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
-    };
-    return !disparity.empty() && same(left, l) && same(right, r);
+    return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r);
 }
 
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,

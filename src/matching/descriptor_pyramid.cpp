@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
-#include <cstring>
 #include <functional>
 
 #include <opencv2/imgproc.hpp>
 
 #include "core/parallel_errors.hpp"
+#include "core/pixels.hpp"
 
 namespace lidarflow::matching {
 
@@ -158,16 +158,9 @@ void DescriptorPyramid::describe_full() {
 }
 
 bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const {
-    auto same = [](const cv::Mat &a, const cv::Mat &b) {
-        if (a.size() != b.size() || a.type() != b.type()) return false;
-        const size_t row = a.cols * a.elemSize();
-        for (int y = 0; y < a.rows; ++y)
-            if (std::memcmp(a.ptr(y), b.ptr(y), row) != 0) return false;
-        return true;
-    };
     return !desc[0].empty() && !desc[1].empty() && sift.cell_size == o.sift.cell_size && sift.dim == o.sift.dim &&
            sift.bits == o.sift.bits && sift.clip == o.sift.clip && sift.norm_floor == o.sift.norm_floor &&
-           same(left, l) && same(right, r);
+           pixel_identical(left, l) && pixel_identical(right, r);
 }
 
 }  // namespace lidarflow::matching

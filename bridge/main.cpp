@@ -97,7 +97,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
-// Every option of kUsage; the parser (tools/common, shared with the CLI) suggests the nearest
+// Every option of kUsage; the parser (src/programs, shared with the CLI) suggests the nearest
 // name for a typo. help stays empty: kUsage is the help text.
 std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     std::vector<lidarflow::cli::OptionSpec> spec;

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The README's "Running on LCM" walkthrough, run as a user types it: every ```sh block of that
-# section in order, in one bash, from the repository root, with only the line K=/path/to/...
+# The LCM walkthrough, run as a user types it: every ```sh block of the README's "Running on
+# LCM" and then of docs/LCM.md's "Try it" (which goes on with the README's variables), in order,
+# in one bash, from the repository root, with only the line K=/path/to/...
 # replaced by $LIDARFLOW_KITTI_DIR (skipped without) and the build step left out (the test runs
 # on the tree ctest was built from; rebuilding under a running ctest would relink the programs
 # in use). Inside a private network namespace (the blocks use udpm). Passes when every command
@@ -22,8 +23,15 @@ private_netns "$0" "$@"
 
 tmp="$LIDARFLOW_TEST_TMP/bridge_readme_lcm"
 rm -rf "$tmp" && mkdir -p "$tmp"
-awk '/^## Running on LCM/ { on = 1; next } /^## / { on = 0 } on && /^```sh$/ { code = 1; next }
-     code && /^```$/ { code = 0; next } code' "$repo/README.md" >"$tmp/walkthrough.sh"
+# blocks FILE HEADING: the ```sh blocks of FILE's section HEADING (up to the next heading of the
+# same or a higher level).
+blocks() {
+    awk -v heading="$2" '$0 == heading { on = 1; level = index($0, " "); next }
+         on && /^#+ / && index($0, " ") <= level { on = 0 }
+         on && /^```sh$/ { code = 1; next } code && /^```$/ { code = 0; next } code' "$1"
+}
+{ blocks "$repo/README.md" "## Running on LCM"; blocks "$repo/docs/LCM.md" "### Try it"; } >"$tmp/walkthrough.sh"
+grep -q 'shard' "$tmp/walkthrough.sh" || fail "docs/LCM.md's Try it section has no blocks"
 grep -q '^K=/path/to/kitti/training$' "$tmp/walkthrough.sh" || fail "the walkthrough no longer sets K=/path/to/kitti/training"
 sed -i "s|^K=/path/to/kitti/training\$|K='$LIDARFLOW_KITTI_DIR'|" "$tmp/walkthrough.sh"
 grep -q '^tools/dev.sh build$' "$tmp/walkthrough.sh" || fail "the walkthrough no longer starts with tools/dev.sh build"

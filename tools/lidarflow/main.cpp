@@ -15,7 +15,7 @@
 #include "heap_policy.hpp"
 #include "log.hpp"
 #include "core/error.hpp"
-#include "lidarflow/lidarflow.h"
+#include "lidarflow/lidarflow_version.h"
 
 namespace lidarflow::cli {
 std::vector<Command> &command_registry() {
@@ -30,7 +30,7 @@ using lidarflow::cli::Command;
 
 void print_usage(FILE *f) {
     std::fprintf(f, "lidarflow %s - dense scene flow from stereo images and sparse LiDAR\n\n",
-                 lf_version_string());
+                 LF_VERSION_STRING);
     std::fprintf(f, "usage: lidarflow <command> [options]   (lidarflow <command> --help)\n\ncommands:\n");
     auto cmds = lidarflow::cli::command_registry();
     std::sort(cmds.begin(), cmds.end(), [](const Command &a, const Command &b) { return a.order < b.order; });
@@ -75,7 +75,7 @@ int main(int argc, char **argv) {
         return argc < 2 ? 2 : 0;
     }
     if (!std::strcmp(argv[1], "--version")) {
-        std::printf("lidarflow %s\n", lf_version_string());
+        std::printf("lidarflow %s\n", LF_VERSION_STRING);
         return 0;
     }
     for (const Command &c : lidarflow::cli::command_registry()) {

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
-// The heap policy of the project's programs (tools/common/heap_policy.hpp): applied under glibc,
+// The heap policy of the project's programs (src/programs/heap_policy.hpp): applied under glibc,
 // and never over a GLIBC_TUNABLES malloc setting the user chose.
 #include <cstdlib>
 #include <cstring>
 
-#include "../tools/common/heap_policy.hpp"
+#include "programs/heap_policy.hpp"
 #include "core/sanitizers.hpp"
 #include "test_support.hpp"
 

@@ -9,6 +9,7 @@ ABLATION: --lidar paper --ablation --seeds K; VELODYNE: --lidar velodyne --seeds
 --lidar paper --placements P --seeds S. Prints the markdown table and the placement line.
 Only the paper's own figures (in brackets) are typed here: they are the reference, not a result.
 """
+import decimal
 import re
 import sys
 
@@ -75,6 +76,12 @@ def per_frame(summary, group, variant, what):
     return [summary[(name, f)] for f in frames]
 
 
+def mean_of_printed(values):
+    """The mean of figures as printed (2 decimals), rounded half up as a reader would."""
+    total = sum(decimal.Decimal("%.2f" % v) for v in values)
+    return str((total / len(values)).quantize(decimal.Decimal("0.01"), rounding=decimal.ROUND_HALF_UP))
+
+
 def row_line(stage, label, scores, paper_sf, paper_density, frames, show_mean):
     d0, d1, fl, sf, density = scores
     sf_text = "**%.2f**" % sf if label.startswith("**") else "%.2f" % sf
@@ -85,8 +92,8 @@ def row_line(stage, label, scores, paper_sf, paper_density, frames, show_mean):
         density_text += " (%s)" % paper_density
     seeds = " / ".join("%.2f" % x for x in frames)
     if show_mean:
-        mean = sum(frames) / len(frames)
-        seeds += " (mean **%.2f**)" % mean if label.startswith("**") else " (mean %.2f)" % mean
+        mean = mean_of_printed(frames)
+        seeds += " (mean **%s**)" % mean if label.startswith("**") else " (mean %s)" % mean
     return "| %s | %s | %.2f | %.2f | %.2f | %s | %s | %s |" % (stage, label, d0, d1, fl, sf_text, density_text, seeds)
 
 
@@ -124,7 +131,7 @@ def main(argv):
     frames = per_frame(seed_summary(placements, "placements"), "Interpolation", "LiDAR-Flow", "placements")
     print()
     print("Over %s placements of the sampling grids x %s seed(s) (`--placements %s --seeds %s`) the final SF is "
-          "**%.2f %%**." % (m.group(2), m.group(1), m.group(2), m.group(1), sum(frames) / len(frames)))
+          "**%s %%**." % (m.group(2), m.group(1), m.group(2), m.group(1), mean_of_printed(frames)))
 
 
 if __name__ == "__main__":

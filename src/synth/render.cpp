@@ -249,25 +249,28 @@ Rig drive_rig(const SynthConfig &config, int k, int last_time) {
     return rig;
 }
 
-// Velodyne HDL-like ring pattern (see render_drive_frame).
-constexpr int kDriveRings = 32;
-constexpr double kDriveTopDeg = 2.0, kDriveBottomDeg = -24.8, kDriveAzimuthStepDeg = 0.35, kDriveRange = 120.0;
+// Velodyne HDL-64-like ring pattern (see render_drive_frame).
+constexpr double kDriveTopDeg = 2.0, kDriveBottomDeg = -24.8, kDriveRange = 120.0;
+constexpr double kKittiFx = 721.0, kKittiRingDeg = 0.42, kKittiAzimuthDeg = 0.09;
 
 std::vector<io::VelodynePoint> drive_scan(const Rig &rig) {
     const cv::Matx44d velo_to_cam = drive_velo_to_cam();
     const Pose &pose = rig.model.left[0];
     const V3 origin_cam{velo_to_cam(0, 3), velo_to_cam(1, 3), velo_to_cam(2, 3)};
     const V3 origin = pose.rot.apply(origin_cam) + pose.centre;
-    const int per_ring = static_cast<int>(std::lround(360.0 / kDriveAzimuthStepDeg));
+    // Angles spread by KITTI's focal over ours: the image gets KITTI's points per pixel.
+    const double spread = kKittiFx / rig.cam.fx;
+    const int rings = std::max(2, static_cast<int>((kDriveTopDeg - kDriveBottomDeg) / (kKittiRingDeg * spread)) + 1);
+    const int per_ring = std::max(16, static_cast<int>(std::lround(360.0 / (kKittiAzimuthDeg * spread))));
     std::vector<io::VelodynePoint> points;
-    for (int r = 0; r < kDriveRings; ++r) {
-        const double el = (kDriveTopDeg + (kDriveBottomDeg - kDriveTopDeg) * r / (kDriveRings - 1)) * M_PI / 180.0;
+    for (int r = 0; r < rings; ++r) {
+        const double el = (kDriveTopDeg + (kDriveBottomDeg - kDriveTopDeg) * r / (rings - 1)) * M_PI / 180.0;
         for (int a = 0; a < per_ring; ++a) {
             const double az = -M_PI + (a + 0.5) * 2.0 * M_PI / per_ring;
             const cv::Vec3d dv(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
             const cv::Vec3d dc = velo_to_cam.get_minor<3, 3>(0, 0) * dv;
             const V3 dir = pose.rot.apply(V3{dc[0], dc[1], dc[2]});
-            const Hit h = cast_ray(rig.model, 0, origin, dir);
+    const Hit h = cast_ray(rig.model, 0, origin, dir);
             if (h.label == kLabelNone || h.t > kDriveRange) continue;
             // Back to the LiDAR frame through the inverse rigid transform (R^T (X_cam - T)).
             const V3 cam = pose.rot.inverse(h.point - pose.centre) - origin_cam;

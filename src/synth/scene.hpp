@@ -86,9 +86,11 @@ struct DriveFrame {
 StereoCamera drive_camera(const SynthConfig &config);
 cv::Matx44d drive_velo_to_cam();
 
-// Frame k of the drive: both images, and a scan of 32 rings from +2 to -24.8 deg elevation,
-// every 0.35 deg of azimuth over the full turn, ray-cast from the LiDAR at time k; stored ring
-// by ring, each ring from azimuth -180 to +180 deg as KITTI's scans are; only rays that hit
+// Frame k of the drive: both images, and a scan ray-cast from the LiDAR at time k in an
+// HDL-64-like pattern: rings from +2 to -24.8 deg elevation over the full turn, at KITTI's
+// 0.42 deg between rings and 0.09 deg of azimuth for a focal length of 721 px, both spread by
+// 721 / fx otherwise, so that points are as many pixels apart as in KITTI's images. Stored
+// ring by ring, each ring from azimuth -180 to +180 deg as KITTI's scans are; only rays that hit
 // within 120 m give a point (reflectance: |cos| of the incidence angle). Throws like render(),
 // and Error(InvalidArgument) for k outside [0, kMaxDriveFrames).
 DriveFrame render_drive_frame(const SynthConfig &config, int k);

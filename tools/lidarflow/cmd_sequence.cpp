@@ -200,6 +200,7 @@ int run_sequence(int argc, char **argv) {
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
+               {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default 2)"},
                {"skip-existing", false, "do not recompute a pair whose result files all exist (counted as skipped)"}});
     if (args.help_requested()) {
@@ -215,7 +216,9 @@ int run_sequence(int argc, char **argv) {
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     opt.threads = args.integer("threads", 2);
     std::vector<std::string> assignments;
-    for (const std::string &a : args.all("option"))
+    std::vector<std::string> given = args.all("option");
+    for (const std::string &a : args.all("set")) given.push_back(a);
+    for (const std::string &a : given)
         for (const std::string &item : split_list(a)) assignments.push_back(item);
     pipeline::apply_option_assignments(opt, assignments);
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <omp.h>
+#include <opencv2/calib3d.hpp>
 
 #include "core/error.hpp"
 #include "synth/model.hpp"
@@ -249,12 +250,33 @@ Rig drive_rig(const SynthConfig &config, int k, int last_time) {
     return rig;
 }
 
+// The LiDAR -> left camera transform: Velodyne axes (x forward, y left, z up) -> camera axes
+// (x right, y down, z forward), tilted down by 0.5 deg about the camera's x axis.
+cv::Matx44d velo_to_left() {
+    const double c = std::cos(0.5 * M_PI / 180.0), s = std::sin(0.5 * M_PI / 180.0);
+    const cv::Matx33d axes(0, -1, 0, 0, 0, -1, 1, 0, 0);
+    const cv::Matx33d tilt(1, 0, 0, 0, c, -s, 0, s, c);
+    const cv::Matx33d R = tilt * axes;
+    return cv::Matx44d(R(0, 0), R(0, 1), R(0, 2), -0.004, R(1, 0), R(1, 1), R(1, 2), -0.076, R(2, 0), R(2, 1),
+                       R(2, 2), -0.272, 0, 0, 0, 1);
+}
+
+// Camera 2's offset t2 in camera 0's rectified frame (P_rect_02 = K [I | t2]), near KITTI's.
+cv::Vec3d left_offset() { return {0.06, -0.0003, 0.004}; }
+
+// R_rect_00: a 0.3 deg rotation about an oblique axis, of the size of KITTI's.
+cv::Matx33d rect_rotation() {
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(0.6, -0.64, 0.48) * (0.3 * M_PI / 180.0), R);
+    return R;
+}
+
 // Velodyne HDL-64-like ring pattern (see render_drive_frame).
 constexpr double kDriveTopDeg = 2.0, kDriveBottomDeg = -24.8, kDriveRange = 120.0;
 constexpr double kKittiFx = 721.0, kKittiRingDeg = 0.42, kKittiAzimuthDeg = 0.09;
 
 std::vector<io::VelodynePoint> drive_scan(const Rig &rig) {
-    const cv::Matx44d velo_to_cam = drive_velo_to_cam();
+    const cv::Matx44d velo_to_cam = velo_to_left();
     const Pose &pose = rig.model.left[0];
     const V3 origin_cam{velo_to_cam(0, 3), velo_to_cam(1, 3), velo_to_cam(2, 3)};
     const V3 origin = pose.rot.apply(origin_cam) + pose.centre;
@@ -284,20 +306,33 @@ std::vector<io::VelodynePoint> drive_scan(const Rig &rig) {
 
 }  // namespace
 
-StereoCamera drive_camera(const SynthConfig &config) {
+io::CamToCamCalib drive_calibration(const SynthConfig &config) {
     validate(config);
-    return camera_of(config);
+    const StereoCamera cam = camera_of(config);
+    const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+    io::CamToCamCalib c;
+    c.camera = cam;
+    const cv::Vec3d t2 = left_offset(), t3 = t2 - cv::Vec3d(cam.baseline, 0, 0);
+    const cv::Vec3d k2 = K * t2, k3 = K * t3;
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) c.P_rect_02(r, k) = c.P_rect_03(r, k) = K(r, k);
+        c.P_rect_02(r, 3) = k2[r];
+        c.P_rect_03(r, 3) = k3[r];
+    }
+    c.R_rect_00 = rect_rotation();
+    return c;
 }
 
 cv::Matx44d drive_velo_to_cam() {
-    // Velodyne (x forward, y left, z up) -> camera (x right, y down, z forward), tilted down by
-    // 0.5 deg about the camera's x axis so that the transform is not a pure axis permutation.
-    const double c = std::cos(0.5 * M_PI / 180.0), s = std::sin(0.5 * M_PI / 180.0);
-    const cv::Matx33d axes(0, -1, 0, 0, 0, -1, 1, 0, 0);
-    const cv::Matx33d tilt(1, 0, 0, 0, c, -s, 0, s, c);
-    const cv::Matx33d R = tilt * axes;
-    return cv::Matx44d(R(0, 0), R(0, 1), R(0, 2), -0.004, R(1, 0), R(1, 1), R(1, 2), -0.076, R(2, 0), R(2, 1),
-                       R(2, 2), -0.272, 0, 0, 0, 1);
+    // Tr = [R_rect_00^T 0; 0 1] * [I -t2; 0 1] * velo_to_left: velo_to_left_rect's chain inverted.
+    const cv::Matx33d Rt = rect_rotation().t();
+    const cv::Vec3d t2 = left_offset();
+    cv::Matx44d undo = cv::Matx44d::eye();
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) undo(r, k) = Rt(r, k);
+        undo(r, 3) = -(Rt * t2)[r];
+    }
+    return undo * velo_to_left();
 }
 
 DriveFrame render_drive_frame(const SynthConfig &config, int k) {

@@ -25,6 +25,7 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "io/calib.hpp"
 #include "io/velodyne.hpp"
 
 namespace lidarflow::synth {
@@ -80,10 +81,14 @@ struct DriveFrame {
     std::vector<io::VelodynePoint> scan;   // simulated Velodyne scan in the LiDAR frame
 };
 
-// The rig of a drive: the camera render() uses for `config`, and the LiDAR mounted as KITTI's
-// (axes x forward, y left, z up; 0.27 m behind and 0.08 m above camera 0), as the rigid
-// transform Velodyne -> camera 0 of calib_velo_to_cam.txt (camera 0 is the left camera here).
-StereoCamera drive_camera(const SynthConfig &config);
+// The rig of a drive, as KITTI raw describes it: camera 0 is the reference, the left camera
+// (camera 2) sits 0.06 m to its right and the rectification R_rect_00 is a 0.3 deg rotation, so
+// P_rect_02 has an offset column as KITTI's does; the LiDAR is mounted as KITTI's (axes x
+// forward, y left, z up; 0.27 m behind and 0.08 m above the left camera, tilted 0.5 deg).
+// drive_calibration: P_rect_02 / P_rect_03 / R_rect_00 (its camera is render()'s for
+// `config`); drive_velo_to_cam: calib_velo_to_cam.txt's Velodyne -> camera 0 (unrectified)
+// transform, which io::velo_to_left_rect turns back into the LiDAR -> left camera transform.
+io::CamToCamCalib drive_calibration(const SynthConfig &config);
 cv::Matx44d drive_velo_to_cam();
 
 // Frame k of the drive: both images, and a scan ray-cast from the LiDAR at time k in an

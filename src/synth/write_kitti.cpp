@@ -67,7 +67,7 @@ void write_text(const std::string &path, const std::string &text) {
 }  // namespace
 
 void write_drive_rig(const SynthConfig &config, const std::string &root) {
-    io::write_calib_cam_to_cam(root + "/calib_cam_to_cam.txt", io::calib_from_camera(drive_camera(config)));
+    io::write_calib_cam_to_cam(root + "/calib_cam_to_cam.txt", drive_calibration(config));
     const cv::Matx44d T = drive_velo_to_cam();
     std::string text = "calib_time: synthetic\nR:";
     char buf[64];

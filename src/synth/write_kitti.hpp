@@ -27,7 +27,7 @@ std::string shadow_mask_path(const std::string &root, const std::string &id);
 //   image_02/data/NNNNNNNNNN.png, image_03/data/NNNNNNNNNN.png   left / right of frame N
 //   velodyne_points/data/NNNNNNNNNN.bin                           its scan (KITTI .bin)
 //   {image_02,image_03,velodyne_points}/timestamps.txt            one line per frame, 10 Hz
-//   calib_cam_to_cam.txt, calib_velo_to_cam.txt                   the rig (drive_camera, drive_velo_to_cam)
+//   calib_cam_to_cam.txt, calib_velo_to_cam.txt                   the rig (drive_calibration, drive_velo_to_cam)
 //   gt/{disp_occ_0,disp_noc_0,disp_occ_1,disp_noc_1,flow_occ,flow_noc}/NNNNNNNNNN.png
 //                                                                 pair N -> N+1, KITTI PNGs
 // N is the frame index in 10 digits (drive_frame_name). Each function throws Error: Io when a

@@ -279,6 +279,7 @@ void test_errors(void **) {
     const std::string out = " --out " + q(f.dir / "err_out");
     expect_code(test::run_cli("sequence --drive " + q(f.drive) + out + " --frames 3:1"), 2);
     expect_code(test::run_cli("sequence --drive " + q(f.drive) + out + " --frames 1-3"), 2);
+    expect_code(test::run_cli("sequence --drive " + q(f.drive) + out + " --frames 0:9999999999"), 2);
     expect_code(test::run_cli("sequence --drive " + q(f.drive) + out + " --format tiff"), 2);
     expect_code(test::run_cli("sequence --drive " + q(f.drive) + out + " --option no.such=1"), 2);
     expect_code(test::run_cli("sequence --out " + q(f.dir / "err_out")), 2);

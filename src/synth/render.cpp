@@ -247,6 +247,15 @@ Rig drive_rig(const SynthConfig &config, int k, int last_time) {
     rig.height = config.height;
     rig.cam = camera_of(config);
     rig.model = drive_model(make_street_scene(config.seed, config.baseline), k);
+    // The renderer assumes no camera inside a box; a drive must end before it reaches a car.
+    for (int t = 0; t < 2; ++t)
+        for (const V3 &c : {rig.model.camera_centre(t, false), rig.model.camera_centre(t, true)})
+            for (const Box &b : rig.model.boxes) {
+                const V3 p = b.rot[t].inverse(c - b.centre[t]);
+                require(std::fabs(p.x) > b.half.x + 0.5 || std::fabs(p.z) > b.half.z + 0.5, ErrorCode::InvalidArgument,
+                        "synth: the drive of seed " + std::to_string(config.seed) + " reaches a car at frame " +
+                            std::to_string(k + t) + ": use fewer frames or another seed");
+            }
     return rig;
 }
 

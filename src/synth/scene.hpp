@@ -73,8 +73,8 @@ SynthScene render(const SynthConfig &config);
 // t0 -> t1 motions (the ego-motion and every box's) repeated once per frame, frame k at time k,
 // so pair k -> k+1 of the drive looks like render()'s pair, moved on by k steps. Each frame is
 // rendered once with its own noise, so consecutive pairs share their images bit for bit.
-// Longer drives would run into the scene's far end (the car ahead, the crossing car, the wall).
-constexpr int kMaxDriveFrames = 20;
+// Longer drives would run into the car ahead for the faster ego-motions of make_street_scene.
+constexpr int kMaxDriveFrames = 12;
 
 struct DriveFrame {
     cv::Mat left, right;                   // CV_8UC3, BGR
@@ -97,7 +97,8 @@ cv::Matx44d drive_velo_to_cam();
 // 721 / fx otherwise, so that points are as many pixels apart as in KITTI's images. Stored
 // ring by ring, each ring from azimuth -180 to +180 deg as KITTI's scans are; only rays that hit
 // within 120 m give a point (reflectance: |cos| of the incidence angle). Throws like render(),
-// and Error(InvalidArgument) for k outside [0, kMaxDriveFrames).
+// and Error(InvalidArgument) for k outside [0, kMaxDriveFrames) or a seed whose cameras would
+// come within 0.5 m of a car by frame k + 1.
 DriveFrame render_drive_frame(const SynthConfig &config, int k);
 
 // Ground truth of pair k -> k+1 in the fields of SynthScene (camera, disp*, flow*, masks,

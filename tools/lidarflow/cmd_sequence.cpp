@@ -38,6 +38,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kExitBadFrames = 3;  // as the bridge's --replay for lost frames
+constexpr long kMaxPairs = 1000000;  // 28 hours at 10 Hz
 
 std::string frame_name(long k) {
     char buf[24];
@@ -187,6 +188,9 @@ std::pair<long, long> parse_range(const std::string &text) {
             "sequence: --frames must be A:B with frame numbers A < B, got '" + text + "'");
     const long a = number(text.substr(0, colon)), b = number(text.substr(colon + 1));
     require(a < b, ErrorCode::InvalidArgument, "sequence: --frames " + text + " holds no pair (needs A < B)");
+    // Every index of the range is visited (a missing one is reported): bounded, not 10^10 lines.
+    require(b - a <= kMaxPairs, ErrorCode::InvalidArgument,
+            "sequence: --frames " + text + " spans more than " + std::to_string(kMaxPairs) + " pairs");
     return {a, b};
 }
 
@@ -196,7 +200,7 @@ int run_sequence(int argc, char **argv) {
     Args args("sequence", argc, argv,
               {{"drive", true, "DIR  drive in the KITTI raw layout: image_02/data/NNNNNNNNNN.png, image_03/data, velodyne_points/data/NNNNNNNNNN.bin; calib_cam_to_cam.txt and calib_velo_to_cam.txt in DIR or DIR/.."},
                {"out", true, "DIR  output folder: disp_0/, disp_1/, flow/, one file each per pair, named by its first frame (NNNNNNNNNN.EXT)"},
-               {"frames", true, "A:B  frames A..B (inclusive): pairs A->A+1 .. B-1->B (default: every frame)"},
+               {"frames", true, "A:B  frames A..B (inclusive): pairs A->A+1 .. B-1->B, at most 1000000 (default: every frame)"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
@@ -233,6 +237,9 @@ int run_sequence(int argc, char **argv) {
     long first = listed.front(), last = listed.back();
     if (args.has("frames")) std::tie(first, last) = parse_range(args.str("frames", ""));
     require(first < last, ErrorCode::Io, "sequence: " + root.string() + " has one frame only: no pair");
+    require(last - first <= kMaxPairs, ErrorCode::Io,
+            "sequence: " + root.string() + " spans frames " + std::to_string(first) + ".." + std::to_string(last) +
+                ", more than " + std::to_string(kMaxPairs) + " pairs (choose a part with --frames A:B)");
     io::prepare_output_folder(out);
     const std::set<long> present(listed.begin(), listed.end());
     detail("sequence: %s: frames %ld..%ld (%zu listed in the drive), preset %s, %d thread(s), fx %.2f px, baseline "

@@ -29,7 +29,7 @@ int write_drive(const Args &args) {
     const int frames = args.integer("frames", 0);
     require(frames >= 2 && frames <= synth::kMaxDriveFrames, ErrorCode::InvalidArgument,
             "synth: --frames must be in [2, " + std::to_string(synth::kMaxDriveFrames) +
-                "] with --drive (the street scene ends beyond)");
+                "] with --drive (further on, the camera would reach the car ahead)");
     synth::write_drive_rig(config, root);
     synth::write_drive_timestamps(root, frames);
     for (int k = 0; k < frames; ++k) {

@@ -25,6 +25,8 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "io/calib.hpp"
+#include "io/velodyne.hpp"
 
 namespace lidarflow::synth {
 
@@ -66,5 +68,42 @@ struct SynthScene {
 // non-finite noise, lidar_points < 0 or above the pixel count, supersampling outside [1, 8],
 // or threads < 0.
 SynthScene render(const SynthConfig &config);
+
+// A continuous drive through the scene of config.seed (`lidarflow synth --drive`): the scene's
+// t0 -> t1 motions (the ego-motion and every box's) repeated once per frame, frame k at time k,
+// so pair k -> k+1 of the drive looks like render()'s pair, moved on by k steps. Each frame is
+// rendered once with its own noise, so consecutive pairs share their images bit for bit.
+// Longer drives would run into the car ahead for the faster ego-motions of make_street_scene.
+constexpr int kMaxDriveFrames = 12;
+
+struct DriveFrame {
+    cv::Mat left, right;                   // CV_8UC3, BGR
+    std::vector<io::VelodynePoint> scan;   // simulated Velodyne scan in the LiDAR frame
+};
+
+// The rig of a drive, as KITTI raw describes it: camera 0 is the reference, the left camera
+// (camera 2) sits 0.06 m to its right and the rectification R_rect_00 is a 0.3 deg rotation, so
+// P_rect_02 has an offset column as KITTI's does; the LiDAR is mounted as KITTI's (axes x
+// forward, y left, z up; 0.27 m behind and 0.08 m above the left camera, tilted 0.5 deg).
+// drive_calibration: P_rect_02 / P_rect_03 / R_rect_00 (its camera is render()'s for
+// `config`); drive_velo_to_cam: calib_velo_to_cam.txt's Velodyne -> camera 0 (unrectified)
+// transform, which io::velo_to_left_rect turns back into the LiDAR -> left camera transform.
+io::CamToCamCalib drive_calibration(const SynthConfig &config);
+cv::Matx44d drive_velo_to_cam();
+
+// Frame k of the drive: both images, and a scan ray-cast from the LiDAR at time k in an
+// HDL-64-like pattern: rings from +2 to -24.8 deg elevation over the full turn, at KITTI's
+// 0.42 deg between rings and 0.09 deg of azimuth for a focal length of 721 px, both spread by
+// 721 / fx otherwise, so that points are as many pixels apart as in KITTI's images. Stored
+// ring by ring, each ring from azimuth -180 to +180 deg as KITTI's scans are; only rays that hit
+// within 120 m give a point (reflectance: |cos| of the incidence angle). Throws like render(),
+// and Error(InvalidArgument) for k outside [0, kMaxDriveFrames) or a seed whose cameras would
+// come within 0.5 m of a car by frame k + 1.
+DriveFrame render_drive_frame(const SynthConfig &config, int k);
+
+// Ground truth of pair k -> k+1 in the fields of SynthScene (camera, disp*, flow*, masks,
+// labels0, ego motion of the pair); images, depth and LiDAR stay empty. Throws like
+// render_drive_frame, with k + 1 < kMaxDriveFrames.
+SynthScene render_drive_ground_truth(const SynthConfig &config, int k);
 
 }  // namespace lidarflow::synth

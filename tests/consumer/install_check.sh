@@ -10,7 +10,8 @@
 # writes for the same input and settings (same KITTI PNG bytes). The C++ header lidarflow.hpp
 # compiles alone and with OpenCV, and the C++ example (examples/cpp) is built with pkg-config and
 # with CMake and writes its .flo (also for KITTI 000002/000003 when LIDARFLOW_KITTI_DIR names
-# them). The installed tools must start without LD_LIBRARY_PATH, and the installed LCM types
+# them). The installed tools must start without LD_LIBRARY_PATH (and `synth --drive` + `sequence`
+# run from the installed tree), and the installed LCM types
 # must compile.
 #   install_check.sh prefix|deb BUILD SRC WORK CLI HARNESS
 set -euo pipefail
@@ -126,6 +127,13 @@ for consumer in "$work/consumer_pc" "$work/cmake-build/consumer"; do
             { echo "$consumer: $map differs from lidarflow run"; exit 1; }
     done
     echo "$consumer: same disp_0, disp_1 and flow as lidarflow run"
+done
+
+# A recorded drive with the installed tool: `synth --drive` writes one, `sequence` computes it.
+"$prefix/bin/lidarflow" synth --drive "$work/drive" --frames 3 --width 320 --height 96 >/dev/null
+"$prefix/bin/lidarflow" sequence --drive "$work/drive" --out "$work/drive_flow" --preset realtime --quiet
+for pair in 0000000000 0000000001; do
+    [ -s "$work/drive_flow/flow/$pair.png" ] || { echo "installed sequence wrote no flow/$pair.png"; exit 1; }
 done
 
 # LCM types: definitions, generated C (header + source) and C++ headers, used together.

@@ -215,8 +215,13 @@ if [ "$mode" = prefix ]; then
     awk '/<!-- install-check: begin -->/ {on=1; next} /<!-- install-check: end -->/ {on=0}
          on && !/^```/' "$root/README.md" > "$work/readme_install.sh"
     [ -s "$work/readme_install.sh" ] || { echo "README has no install-check block"; exit 1; }
-    # Debian's python3 (with python3-numpy) first, as on a fresh bookworm machine.
-    (cd "$user" && HOME="$user/home" PATH="/usr/bin:/bin:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
+    # A python3 without numpy first on PATH, as pyenv's is on many machines: the README's commands
+    # must name Debian's /usr/bin/python3 where they need numpy.
+    mkdir -p "$work/other-python"
+    printf '#!/bin/sh\necho "python3 without numpy: ModuleNotFoundError: No module named numpy" >&2\nexit 1\n' \
+        > "$work/other-python/python3"
+    chmod +x "$work/other-python/python3"
+    (cd "$user" && HOME="$user/home" PATH="$work/other-python:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
         > "$work/readme_install.log" 2>&1 || { cat "$work/readme_install.log"; echo "README install commands failed"; exit 1; }
     # capi_example twice (pkg-config, CMake), python_example once: each with the true motion
     # (the C++ example's line, should the README run it too, says "(C++)" and is not counted).

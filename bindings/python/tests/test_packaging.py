@@ -56,6 +56,17 @@ class Packaging(unittest.TestCase):
             self.assertEqual(os.path.dirname(os.path.dirname(lcm_init)), site)
             self.assertEqual(float(fx), 1.0)
 
+    def test_without_numpy_the_error_names_debians_python(self):
+        """A python3 without numpy (pyenv's, a plain venv's) gets an ImportError that says which
+        interpreter lacks it and to use Debian's /usr/bin/python3, for both packages."""
+        for package in ("lidarflow", "lidarflow_lcm"):
+            code = "import sys; sys.modules['numpy'] = None; import %s" % package
+            p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+            self.assertNotEqual(p.returncode, 0, p.stdout)
+            last = p.stderr.strip().splitlines()[-1]
+            self.assertIn("ImportError: %s needs numpy, which %s cannot import" % (package, sys.executable), last)
+            self.assertIn("/usr/bin/python3", last)
+
     def test_readme_venv_recipe_finds_the_checkouts_library(self):
         """The README's venv recipe, as typed in a checkout: the package pip installs into the
         venv finds the checkout's build/capi/ library with no environment variable."""

@@ -15,8 +15,8 @@
 #include "args.hpp"
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
-#include "lcm_url.hpp"
 #include "heap_policy.hpp"
+#include "lcm_url.hpp"
 #include "replay.hpp"
 
 namespace {

@@ -16,6 +16,7 @@
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
 #include "heap_policy.hpp"
+#include "lcm_url.hpp"
 #include "replay.hpp"
 
 namespace {
@@ -25,7 +26,8 @@ void on_signal(int) { g_stop = 1; }
 
 const char *kUsage =
     "usage: lidarflow-lcm-bridge [options]\n"
-    "  --lcm-url URL            LCM provider (default: $LCM_DEFAULT_URL or LCM's default)\n"
+    "  --lcm-url URL            LCM provider (default: $LCM_DEFAULT_URL or LCM's default); a udpm://\n"
+    "                           URL gets recv_buf_size (16 MiB) capped at net.core.rmem_max\n"
     "  --stereo-channel NAME    stereo_t or bot_core.images_t input (default LIDARFLOW_STEREO)\n"
     "  --left-channel NAME --right-channel NAME\n"
     "                           a camera per channel (bot_core.image_t each) instead of the stereo\n"
@@ -273,9 +275,18 @@ int main(int argc, char **argv) {
     sigaction(SIGTERM, &sa, nullptr);
     if (!replay_in.empty()) return replay(config, replay_in, replay_out);
 
-    lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
+    // Ask udpm for the receive buffer the kernel grants (LCM warns on anything more), and say
+    // once how to raise the kernel's limit when it is below what large images need.
+    const ReceiveBufferFit fit = fit_receive_buffer(effective_lcm_url(url), read_rmem_max());
+    if (fit.limited())
+        std::fprintf(stderr,
+                     "lidarflow-lcm-bridge: note: UDP receive buffer %lld bytes (the kernel's net.core.rmem_max), "
+                     "%lld wanted; large images may lose fragments. Raise the limit as root: "
+                     "sysctl -w net.core.rmem_max=%lld\n",
+                     fit.requested, fit.wanted, fit.wanted);
+    lcm_t *lcm = lcm_create(fit.url.c_str());
     if (!lcm) {
-        std::fprintf(stderr, "lidarflow-lcm-bridge: cannot open LCM '%s'\n", url.c_str());
+        std::fprintf(stderr, "lidarflow-lcm-bridge: cannot open LCM '%s'\n", fit.url.c_str());
         return 1;
     }
 

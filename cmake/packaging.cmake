@@ -5,6 +5,9 @@
 #   lidarflow-tools        tools     lidarflow, lidarflow-lcm-bridge
 #   lidarflow-lcm-types    lcm       .lcm definitions, generated C and C++ types
 #   python3-lidarflow      python    the pure-Python binding and lidarflow_lcm in /usr/lib/python3/dist-packages
+# The library, CMake package and pkg-config files are in the multiarch libdir with /usr paths
+# (the deb layout of cmake/install.cmake); Python packages byte-compile in postinst and clean up
+# in prerm, as Debian's own do.
 # `tools/dev.sh package` (or `cpack -G DEB` in the build tree) writes them to build/packages/.
 # Run-time dependencies on system libraries come from dpkg-shlibdeps; the ones it cannot see
 # (between our own packages, Python, LCM headers) are declared below.
@@ -20,7 +23,7 @@ set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGE_CONTACT "${LIDARFLOW_DEB_MAINTAINER}")
 set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
 set(CPACK_PACKAGE_DIRECTORY ${PROJECT_BINARY_DIR}/packages)
-set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_PACKAGING_INSTALL_PREFIX ${LIDARFLOW_DEB_PREFIX})  # the layout cmake/install.cmake installs for
 set(CPACK_STRIP_FILES ON)
 
 set(CPACK_DEB_COMPONENT_INSTALL ON)
@@ -67,6 +70,14 @@ macro(_lf_deb_component comp package section architecture summary)
   # EXCLUDE_FROM_ALL: only component installs (CPack) get these, not `cmake --install`.
   install(FILES ${_lf_deb_dir}/copyright ${_lf_deb_dir}/changelog.Debian.gz
           DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/${package} COMPONENT ${comp} EXCLUDE_FROM_ALL)
+  # Every Python package: byte-compiled in postinst, cleaned in prerm (cmake/debian/python-*.in),
+  # so that a purge leaves no __pycache__ behind.
+  if(${section} STREQUAL python)
+    set(LF_DEB_PACKAGE ${package})
+    configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/python-postinst.in ${_lf_deb_dir}/${package}/postinst @ONLY)
+    configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/python-prerm.in ${_lf_deb_dir}/${package}/prerm @ONLY)
+    set(CPACK_DEBIAN_${_C}_PACKAGE_CONTROL_EXTRA ${_lf_deb_dir}/${package}/postinst ${_lf_deb_dir}/${package}/prerm)
+  endif()
 endmacro()
 
 # copyright (machine-readable format) and changelog.Debian.gz, generated once per configuration.

@@ -2,7 +2,7 @@
 """Reads the scene flow results of an LCM log in Python (lidarflow_lcm; numpy only, neither
 liblcm nor liblidarflow needed):
 
-    python3 examples/lcm_read_flow.py OUT.log [IN.log]
+    PYTHONPATH=bindings/python /usr/bin/python3 examples/lcm_read_flow.py OUT.log [IN.log]
 
 OUT.log: a log with scene_flow_t on LIDARFLOW_FLOW (lidarflow-lcm-bridge --replay ... --out,
 or lcm-logger). IN.log (optional): a log with the calibration_t on LIDARFLOW_CALIB, for metric

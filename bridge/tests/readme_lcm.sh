@@ -37,8 +37,13 @@ sed -i "s|^K=/path/to/kitti/training\$|K='$LIDARFLOW_KITTI_DIR'|" "$tmp/walkthro
 grep -q '^tools/dev.sh build$' "$tmp/walkthrough.sh" || fail "the walkthrough no longer starts with tools/dev.sh build"
 sed -i '/^tools\/dev.sh build$/d' "$tmp/walkthrough.sh"
 # Fail on the first command that fails, as a careful user would stop there.
-# Debian's python3 (with python3-numpy) first, as on the fresh bookworm machine the README is for.
-(cd "$repo" && PATH="/usr/bin:/bin:$PATH" bash -e "$tmp/walkthrough.sh") >"$tmp/out.txt" 2>&1 || { cat "$tmp/out.txt"; fail "a command failed"; }
+# A python3 without numpy first on PATH, as pyenv's is on many machines: the walkthrough must
+# name Debian's /usr/bin/python3 where it needs numpy.
+mkdir -p "$tmp/other-python"
+printf '#!/bin/sh\necho "python3 without numpy: ModuleNotFoundError: No module named numpy" >&2\nexit 1\n' \
+    > "$tmp/other-python/python3"
+chmod +x "$tmp/other-python/python3"
+(cd "$repo" && PATH="$tmp/other-python:$PATH" bash -e "$tmp/walkthrough.sh") >"$tmp/out.txt" 2>&1 || { cat "$tmp/out.txt"; fail "a command failed"; }
 grep -v "receive buffer\|multicast_setup\|^\s*$\|is smaller than\|WARNING\|^Summary: " "$tmp/out.txt"
 # The live runs at the walkthrough's rate: each bridge (and shard) received the 4 frames and dropped none.
 stops=$(grep -c "stopped. stereo received 4, processed 4, dropped 0" "$tmp/out.txt")

@@ -40,9 +40,40 @@ esac
 pc="$(find "$prefix" -name lidarflow.pc | head -1)"
 [ -n "$pc" ] || { echo "no lidarflow.pc under $prefix"; exit 1; }
 libdir="$(cd "$(dirname "$pc")/.." && pwd)"
-grep -q '^prefix=${pcfiledir}/' "$pc" || { echo "lidarflow.pc is not relative to itself:"; cat "$pc"; exit 1; }
-if grep -rqs -- "$build" "$prefix"/lib*/cmake "$pc"; then
+lcm_pc="$(find "$prefix" -name lidarflow-lcm-types.pc | head -1)"
+if grep -rqs -- "$build" "$libdir/cmake" "$pc" ${lcm_pc:+"$lcm_pc"}; then
     echo "installed CMake/pkg-config files name the build tree"; exit 1
+fi
+if [ "$mode" = prefix ]; then
+    # Relocatable: the .pc files find the prefix from their own place.
+    for f in "$pc" ${lcm_pc:+"$lcm_pc"}; do
+        grep -q '^prefix=${pcfiledir}/' "$f" || { echo "$f is not relative to itself:"; cat "$f"; exit 1; }
+    done
+    export PKG_CONFIG_PATH="$libdir/pkgconfig"
+else
+    # The packages' layout: the library in the multiarch libdir, .pc files with plain /usr paths
+    # (no "..", nothing relative), what pkg-config prints on the installed system.
+    multiarch="$(dpkg-architecture -qDEB_HOST_MULTIARCH 2>/dev/null || gcc -print-multiarch)"
+    [ "$libdir" = "$prefix/lib/$multiarch" ] || { echo "lidarflow.pc in $libdir, not in lib/$multiarch"; exit 1; }
+    [ -f "$libdir/liblidarflow.so.0" ] && [ -z "$(find "$prefix/lib" -maxdepth 1 -name 'liblidarflow*')" ] ||
+        { echo "liblidarflow not (only) in lib/$multiarch:"; find "$prefix" -name 'liblidarflow*'; exit 1; }
+    [ -z "$lcm_pc" ] || [ "$lcm_pc" = "$prefix/share/pkgconfig/lidarflow-lcm-types.pc" ] ||
+        { echo "lidarflow-lcm-types.pc (Architecture: all) not in share/pkgconfig: $lcm_pc"; exit 1; }
+    for f in "$pc" ${lcm_pc:+"$lcm_pc"}; do
+        grep -q '^prefix=/usr$' "$f" && ! grep -q '\.\.\|pcfiledir' "$f" || { echo "$f is not plain /usr:"; cat "$f"; exit 1; }
+    done
+    # (echo: pkgconf ends its output with a space)
+    flags="$(echo $(PKG_CONFIG_PATH="$libdir/pkgconfig" PKG_CONFIG_ALLOW_SYSTEM_CFLAGS=1 PKG_CONFIG_ALLOW_SYSTEM_LIBS=1 \
+             pkg-config --cflags --libs lidarflow))"
+    echo "pkg-config --cflags --libs lidarflow (system paths kept): $flags"
+    [ "$flags" = "-I/usr/include -L/usr/lib/$multiarch -llidarflow" ] || { echo "not normalised: $flags"; exit 1; }
+    # The unpacked tree stands in for /usr: copies of the .pc files with its path as prefix (a
+    # sysroot would move the system's opencv4 and lcm paths too).
+    mkdir -p "$work/pkgconfig"
+    for f in "$pc" ${lcm_pc:+"$lcm_pc"}; do
+        sed "s|^prefix=/usr\$|prefix=$prefix|" "$f" > "$work/pkgconfig/$(basename "$f")"
+    done
+    export PKG_CONFIG_PATH="$work/pkgconfig"
 fi
 
 # The tools start from the installed tree alone (RUNPATH relative to themselves).
@@ -54,7 +85,6 @@ for tool in lidarflow lidarflow-lcm-bridge; do
     "$exe" --help >/dev/null || { echo "$exe does not start"; exit 1; }
 done
 
-export PKG_CONFIG_PATH="$libdir/pkgconfig"
 cc -std=c99 -Wall -Wextra -Werror -pedantic "$src/consumer.c" -o "$work/consumer_pc" \
    $(pkg-config --cflags --libs lidarflow)
 cmake -S "$src" -B "$work/cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
@@ -136,15 +166,21 @@ for pair in 0000000000 0000000001; do
     [ -s "$work/drive_flow/flow/$pair.png" ] || { echo "installed sequence wrote no flow/$pair.png"; exit 1; }
 done
 
-# LCM types: definitions, generated C (header + source) and C++ headers, used together.
+# LCM types: definitions, generated C (header + source) and C++ headers, used together, through
+# lidarflow-lcm-types.pc and through find_package(lidarflow COMPONENTS lcm_types).
 if [ -d "$prefix/share/lidarflow/lcm" ]; then
     [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 5 ] || { echo "missing .lcm files"; exit 1; }
-    cc -std=c99 -c "$prefix/share/lidarflow/lcm/c/lidarflow_status_t.c" -I"$prefix/include/lidarflow/lcm" \
-       $(pkg-config --cflags lcm) -o "$work/lidarflow_status_t.o"
+    [ -n "$lcm_pc" ] || { echo "no lidarflow-lcm-types.pc"; exit 1; }
+    csources="$(pkg-config --variable=csourcedir lidarflow-lcm-types)"
+    [ -f "$csources/lidarflow_status_t.c" ] || { echo "no C sources in $csources"; exit 1; }
+    cc -std=c99 -c "$csources/lidarflow_status_t.c" $(pkg-config --cflags lidarflow-lcm-types) \
+       -o "$work/lidarflow_status_t.o"
     c++ -std=c++17 -Wall -Wextra -Werror "$src/lcm_types_consumer.cpp" "$work/lidarflow_status_t.o" \
-        -I"$prefix/include" -I"$prefix/include/lidarflow/lcm" $(pkg-config --cflags --libs lcm) \
-        -o "$work/lcm_types_consumer"
+        $(pkg-config --cflags --libs lidarflow-lcm-types) -o "$work/lcm_types_consumer"
     "$work/lcm_types_consumer"
+    cmake -S "$src/lcm_types" -B "$work/lcm-cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+    cmake --build "$work/lcm-cmake-build" >/dev/null
+    "$work/lcm-cmake-build/lcm_types_consumer"
 elif [ -e "$build/lcm_types" ]; then
     echo "LCM build has no installed LCM types"; exit 1
 fi
@@ -187,8 +223,13 @@ if [ "$mode" = prefix ]; then
     awk '/<!-- install-check: begin -->/ {on=1; next} /<!-- install-check: end -->/ {on=0}
          on && !/^```/' "$root/README.md" > "$work/readme_install.sh"
     [ -s "$work/readme_install.sh" ] || { echo "README has no install-check block"; exit 1; }
-    # Debian's python3 (with python3-numpy) first, as on a fresh bookworm machine.
-    (cd "$user" && HOME="$user/home" PATH="/usr/bin:/bin:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
+    # A python3 without numpy first on PATH, as pyenv's is on many machines: the README's commands
+    # must name Debian's /usr/bin/python3 where they need numpy.
+    mkdir -p "$work/other-python"
+    printf '#!/bin/sh\necho "python3 without numpy: ModuleNotFoundError: No module named numpy" >&2\nexit 1\n' \
+        > "$work/other-python/python3"
+    chmod +x "$work/other-python/python3"
+    (cd "$user" && HOME="$user/home" PATH="$work/other-python:$PATH" bash -euo pipefail -x "$work/readme_install.sh") \
         > "$work/readme_install.log" 2>&1 || { cat "$work/readme_install.log"; echo "README install commands failed"; exit 1; }
     # capi_example twice (pkg-config, CMake), python_example once: each with the true motion
     # (the C++ example's line, should the README run it too, says "(C++)" and is not counted).

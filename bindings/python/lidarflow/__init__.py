@@ -13,6 +13,13 @@ lidarflow._lib for where it is looked for) and checks its ABI version.
     cal = lidarflow.read_kitti_calibration("calib_cam_to_cam/000002.txt", "calib_velo_to_cam/000002.txt")
     est = lidarflow.Estimator(**cal)     # Velodyne points then go in with lidar_kind="lidar"
 """
+try:
+    import numpy as _numpy  # noqa: F401
+except ImportError as _e:  # a python3 other than Debian's (pyenv, a plain venv) often lacks it
+    import sys as _sys
+    raise ImportError("%s needs numpy, which %s cannot import; use Debian's /usr/bin/python3 with "
+                      "python3-numpy (or a venv made with /usr/bin/python3 -m venv --system-site-packages)"
+                      % (__name__, _sys.executable)) from _e
 from ._lib import ABI_MAJOR, lib as _lib_handle
 from .calibration import read_kitti_calibration
 from .estimator import Estimator, LidarflowError

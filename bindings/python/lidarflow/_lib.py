@@ -8,7 +8,9 @@ lidarflow is installed):
   3. the lib folders of the installation prefix this package sits in: for a package in
      PREFIX/lib/python3/dist-packages/lidarflow (Debian) or PREFIX/lib/python3.X/site-packages/
      lidarflow, that is PREFIX/lib and PREFIX/lib/<multiarch>;
-  4. the build tree of the checkout this package sits in (build*/capi/);
+  4. the build tree of the checkout this package sits in (build*/capi/), or, for a package
+     that pip installed from a checkout's bindings/python (a venv, --user, --prefix), of that
+     checkout: pip records where it came from in the package's direct_url.json (PEP 610);
   5. the system's loader by SONAME (LD_LIBRARY_PATH, ld.so.cache: /usr/lib/<multiarch>).
 A copy in the package's own prefix comes before the system's, so a prefix install is not
 shadowed by an older system package.
@@ -16,7 +18,9 @@ Its ABI major must equal ABI_MAJOR, else importing lidarflow raises ImportError.
 """
 import ctypes
 import glob
+import json
 import os
+import urllib.parse
 
 ABI_MAJOR = 0  # the lidarflow.h this module mirrors (LF_ABI_MAJOR)
 _SONAME = "liblidarflow.so.%d" % ABI_MAJOR
@@ -88,6 +92,25 @@ def _prefix_lib_dirs(package_dir):
     return [libdir] + sorted(d for d in glob.glob(os.path.join(libdir, "*-linux-gnu*")) if os.path.isdir(d))
 
 
+def _installed_from(package_dir):
+    """The checkout whose bindings/python pip installed package_dir from (its dist-info's
+    direct_url.json, PEP 610), or None: not installed by pip, or not from a local folder."""
+    site = os.path.dirname(package_dir)
+    for record in sorted(glob.glob(os.path.join(site, "lidarflow-*.dist-info", "direct_url.json"))):
+        try:
+            with open(record) as f:
+                url = json.load(f).get("url", "")
+        except (OSError, ValueError, AttributeError):
+            continue
+        parsed = urllib.parse.urlparse(url)
+        if parsed.scheme != "file":
+            continue
+        source = os.path.normpath(urllib.parse.unquote(parsed.path))  # CHECKOUT/bindings/python
+        if os.path.basename(source) == "python" and os.path.basename(os.path.dirname(source)) == "bindings":
+            return os.path.dirname(os.path.dirname(source))
+    return None
+
+
 def _candidates():
     env = os.environ.get("LIDARFLOW_LIBRARY")
     if env:
@@ -98,6 +121,11 @@ def _candidates():
     found += [os.path.join(d, _SONAME) for d in _prefix_lib_dirs(here)]
     repo = os.path.dirname(os.path.dirname(os.path.dirname(here)))  # bindings/python/lidarflow
     found += sorted(glob.glob(os.path.join(repo, "build*", "capi", _SONAME)))
+    checkout = _installed_from(here)
+    if checkout and checkout != repo:
+        # Not built yet: the usual place still shows up in the ImportError as "no such file".
+        found += sorted(glob.glob(os.path.join(checkout, "build*", "capi", _SONAME))) or \
+            [os.path.join(checkout, "build", "capi", _SONAME)]
     found.append(_SONAME)  # the system loader
     return found
 

@@ -12,6 +12,13 @@ the bytes of lcm-gen's C/C++ code (same fingerprints) and refuse malformed input
 MessageError. LogReader / LogWriter read and write LCM event logs. The package name differs
 from the `lidarflow` binding on purpose: `lcm-gen -p` would name these types `lidarflow` too.
 """
+try:
+    import numpy as _numpy  # noqa: F401
+except ImportError as _e:  # a python3 other than Debian's (pyenv, a plain venv) often lacks it
+    import sys as _sys
+    raise ImportError("%s needs numpy, which %s cannot import; use Debian's /usr/bin/python3 with "
+                      "python3-numpy (or a venv made with /usr/bin/python3 -m venv --system-site-packages)"
+                      % (__name__, _sys.executable)) from _e
 from .arrays import (calibration_message, flow_arrays, lidar_message, lidar_points, pixel_grid, points3d,
                      scene_flow_message, stereo_images, stereo_message)
 from .eventlog import Event, LogFormatError, LogReader, LogWarning, LogWriter, read_messages

@@ -56,6 +56,52 @@ class Packaging(unittest.TestCase):
             self.assertEqual(os.path.dirname(os.path.dirname(lcm_init)), site)
             self.assertEqual(float(fx), 1.0)
 
+    def test_without_numpy_the_error_names_debians_python(self):
+        """A python3 without numpy (pyenv's, a plain venv's) gets an ImportError that says which
+        interpreter lacks it and to use Debian's /usr/bin/python3, for both packages."""
+        for package in ("lidarflow", "lidarflow_lcm"):
+            code = "import sys; sys.modules['numpy'] = None; import %s" % package
+            p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+            self.assertNotEqual(p.returncode, 0, p.stdout)
+            last = p.stderr.strip().splitlines()[-1]
+            self.assertIn("ImportError: %s needs numpy, which %s cannot import" % (package, sys.executable), last)
+            self.assertIn("/usr/bin/python3", last)
+
+    def test_readme_venv_recipe_finds_the_checkouts_library(self):
+        """The README's venv recipe, as typed in a checkout: the package pip installs into the
+        venv finds the checkout's build/capi/ library with no environment variable."""
+        with open(os.path.join(SOURCE, "..", "..", "README.md")) as f:
+            lines = f.read().splitlines()
+        start = next(i for i, line in enumerate(lines) if "install it offline" in line)
+        recipe = []
+        for line in lines[start + 1:]:
+            if not line.strip():
+                if recipe:
+                    break
+                continue
+            self.assertTrue(line.startswith("    "), "the recipe is an indented block: %r" % line)
+            recipe.append(line.strip())
+        self.assertTrue(any(" -m venv " in line for line in recipe), recipe)
+        built = os.path.realpath(lidarflow._lib.lib._name)
+        with tempfile.TemporaryDirectory() as checkout:
+            shutil.copytree(SOURCE, os.path.join(checkout, "bindings", "python"),
+                            ignore=shutil.ignore_patterns("tests", "tests_lcm", "__pycache__", "build", "*.egg-info"))
+            os.makedirs(os.path.join(checkout, "build", "capi"))
+            library = os.path.join(checkout, "build", "capi", "liblidarflow.so.0")
+            shutil.copy(built, library)
+            env = {k: v for k, v in os.environ.items() if k not in ("LIDARFLOW_LIBRARY", "PYTHONPATH")}
+            p = subprocess.run(["bash", "-euo", "pipefail", "-c", "\n".join(recipe)], cwd=checkout, env=env,
+                               capture_output=True, text=True)
+            self.assertEqual(p.returncode, 0, "\n".join(recipe) + "\n" + p.stdout + p.stderr)
+            venv_python = os.path.join(checkout, ".venv", "bin", "python")
+            code = "import lidarflow, lidarflow._lib as l; print(l.lib._name); print(lidarflow.__file__)"
+            p = subprocess.run([venv_python, "-c", code], cwd=tempfile.gettempdir(), env=env,
+                               capture_output=True, text=True)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            name, init = p.stdout.split()
+            self.assertEqual(name, library)
+            self.assertTrue(init.startswith(os.path.join(checkout, ".venv")), init)
+
 
 if __name__ == "__main__":
     unittest.main()

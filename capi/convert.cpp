@@ -10,7 +10,6 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
-#include "io/calib.hpp"
 #include "lidar/projection.hpp"
 
 namespace lidarflow::capi {
@@ -68,18 +67,15 @@ SparseLidar from_points(const lf_lidar_t &l, size_t stride, cv::Size size, const
     const bool move = l.kind == LF_LIDAR_POINTS_LIDAR;
     require(!move || cal.has_lidar_to_camera, ErrorCode::InvalidArgument,
             "LF_LIDAR_POINTS_LIDAR needs the calibration's lidar_to_camera (has_lidar_to_camera = 0)");
-    std::vector<cv::Point3d> points(l.count);
+    std::vector<cv::Point3f> points(l.count);
     for (uint32_t i = 0; i < l.count; ++i) {
         float e[3];
         read_entry(l, stride, i, e);
         require(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2]), ErrorCode::InvalidArgument,
                 entry_text(i, e) + " is not finite");
-        cv::Vec4d p(e[0], e[1], e[2], 1.0);
-        if (move) p = cal.lidar_to_camera * p;
-        points[i] = {p[0], p[1], p[2]};
+        points[i] = {e[0], e[1], e[2]};
     }
-    // The ideal rectified pair of the camera: the left rectified frame is the camera frame.
-    return lidar::project_to_left(points, io::calib_from_camera(cal.camera), size);
+    return lidar::project_to_left_camera(points, move ? &cal.lidar_to_camera : nullptr, cal.camera, size);
 }
 
 }  // namespace

@@ -377,21 +377,25 @@ std::string output_name_from_path(const std::string &path) {
     return stem;
 }
 
+std::vector<std::string> result_paths(const std::string &out_root, const std::string &id, ResultFormat format) {
+    const std::string stem = result_file_stem(id);
+    auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
+    if (format == ResultFormat::Kitti) return {path("disp_0", "png"), path("disp_1", "png"), path("flow", "png")};
+    const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
+    return {path("disp_0", disp_ext), path("disp_1", disp_ext), path("flow", result_format_name(format))};
+}
+
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
                                        ResultFormat format) {
     require(!f.u.empty(), ErrorCode::InvalidArgument, "write_results: empty scene-flow field");
-    const std::string stem = result_file_stem(id);
-    auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
+    const std::vector<std::string> paths = result_paths(out_root, id, format);
+    const std::string &d0 = paths[0], &d1 = paths[1], &fl = paths[2];
     if (format == ResultFormat::Kitti) {
-        const std::string d0 = path("disp_0", "png"), d1 = path("disp_1", "png"), fl = path("flow", "png");
         write_disparity_png(d0, field_disparity0(f));
         write_disparity_png(d1, field_disparity1(f));
         write_flow_png(fl, field_flow(f));
-        return {d0, d1, fl};
+        return paths;
     }
-    const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
-    const char *flow_ext = result_format_name(format);
-    const std::string d0 = path("disp_0", disp_ext), d1 = path("disp_1", disp_ext), fl = path("flow", flow_ext);
     const auto write_map = format == ResultFormat::Npy ? write_npy : write_pfm;
     write_map(d0, disparity_with_nan(field_disparity0(f)));
     write_map(d1, disparity_with_nan(field_disparity1(f)));
@@ -399,7 +403,7 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
         write_flo(fl, field_flow(f));
     else
         write_map(fl, flow_with_valid(field_flow(f)));
-    return {d0, d1, fl};
+    return paths;
 }
 
 }  // namespace lidarflow::io

@@ -40,6 +40,9 @@ std::string output_name_from_path(const std::string &path);
 // Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
                                        ResultFormat format);
+// The three paths write_results writes for `format` (disp_0, disp_1, flow), without writing.
+// Throws like check_output_name.
+std::vector<std::string> result_paths(const std::string &out_root, const std::string &id, ResultFormat format);
 
 // CV_32FC1 or CV_32FC3 maps. Writers create missing parent folders and throw Error: Io when the
 // file cannot be written, InvalidArgument for an empty map or another type. Readers throw Io

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "core/error.hpp"
@@ -38,6 +39,22 @@ VelodyneScan read_velodyne_bin(const std::string &path) {
     }
     require(!scan.points.empty(), ErrorCode::Format, path + ": no finite point in the Velodyne scan");
     return scan;
+}
+
+void write_velodyne_bin(const std::string &path, const std::vector<VelodynePoint> &points) {
+    require(!points.empty(), ErrorCode::InvalidArgument, path + ": a Velodyne scan needs at least one point");
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    std::vector<char> raw(points.size() * 16);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const float v[4] = {points[i].x, points[i].y, points[i].z, points[i].reflectance};
+        std::memcpy(raw.data() + 16 * i, v, sizeof v);
+    }
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(raw.data(), static_cast<std::streamsize>(raw.size()));
+    out.close();
+    require(out.good(), ErrorCode::Io, "cannot write " + path);
 }
 
 }  // namespace lidarflow::io

@@ -23,4 +23,9 @@ struct VelodyneScan {
 // is finite.
 VelodyneScan read_velodyne_bin(const std::string &path);
 
+// Writes the points as a .bin file that read_velodyne_bin reads back unchanged (creating
+// missing parent folders). Throws Error: InvalidArgument for no points, Io when the file cannot
+// be written.
+void write_velodyne_bin(const std::string &path, const std::vector<VelodynePoint> &points);
+
 }  // namespace lidarflow::io

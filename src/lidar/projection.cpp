@@ -84,4 +84,15 @@ SparseLidar project_to_left(const std::vector<cv::Point3d> &rect_points, const i
     return buf.result();
 }
 
+SparseLidar project_to_left_camera(const std::vector<cv::Point3f> &points, const cv::Matx44d *lidar_to_camera,
+                                   const StereoCamera &camera, cv::Size image) {
+    std::vector<cv::Point3d> moved(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        cv::Vec4d p(points[i].x, points[i].y, points[i].z, 1.0);
+        if (lidar_to_camera) p = *lidar_to_camera * p;
+        moved[i] = {p[0], p[1], p[2]};
+    }
+    return project_to_left(moved, io::calib_from_camera(camera), image);
+}
+
 }  // namespace lidarflow::lidar

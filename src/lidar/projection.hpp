@@ -34,4 +34,13 @@ SparseLidar project_to_left(const std::vector<io::VelodynePoint> &points, const 
 SparseLidar project_to_left(const std::vector<cv::Point3d> &rect_points, const io::CamToCamCalib &calib,
                             cv::Size image, const ProjectionOptions &opt = {});
 
+// The C ABI's path for 3-D points (LF_LIDAR_POINTS_LIDAR / LF_LIDAR_POINTS_CAMERA): each point
+// moved by *lidar_to_camera (LiDAR frame -> left rectified camera frame; null: the points are
+// already there), then projected by the ideal rectified pair of `camera` (io::calib_from_camera).
+// `lidarflow sequence` takes its scans through here too, so that it gives the C ABI's maps bit for
+// bit. Same ownership and errors as above, plus InvalidArgument for a camera outside the ranges
+// of core/limits.hpp.
+SparseLidar project_to_left_camera(const std::vector<cv::Point3f> &points, const cv::Matx44d *lidar_to_camera,
+                                   const StereoCamera &camera, cv::Size image);
+
 }  // namespace lidarflow::lidar

@@ -27,6 +27,8 @@ enum StreamId : uint64_t {
     kLidarGrid1,
     kLidarNoise0,
     kLidarNoise1,
+    kDriveLeft,
+    kDriveRight,
 };
 
 struct Rig {
@@ -194,17 +196,137 @@ void ground_truth(const Rig &rig, const SynthConfig &cfg, SynthScene &s) {
     }
 }
 
+StereoCamera camera_of(const SynthConfig &config) {
+    StereoCamera cam;
+    cam.fx = cam.fy = config.fx > 0 ? config.fx : 0.58 * config.width;
+    cam.cx = 0.5 * (config.width - 1);
+    cam.cy = 0.46 * (config.height - 1);
+    cam.baseline = config.baseline;
+    return cam;
+}
+
+// Left camera pose at drive time k: the scene's one-step ego-motion (given in the camera frame
+// of the step's start) composed k times.
+Pose drive_pose(const SceneModel &base, int k) {
+    Pose p;
+    for (int i = 0; i < k; ++i) {
+        p.centre = p.centre + p.rot.apply(base.left[1].centre);
+        p.yaw += base.left[1].yaw;
+        p.rot = Yaw(p.yaw);
+    }
+    return p;
+}
+
+// The model whose t0 and t1 are drive times k and k + 1: boxes move on linearly (translation
+// and yaw per step as in the base scene), the camera by drive_pose.
+SceneModel drive_model(const SceneModel &base, int k) {
+    SceneModel m = base;
+    m.left[0] = drive_pose(base, k);
+    m.left[1] = drive_pose(base, k + 1);
+    for (size_t i = 0; i < m.boxes.size(); ++i) {
+        const Box &b = base.boxes[i];
+        Box &out = m.boxes[i];
+        for (int t = 0; t < 2; ++t) {
+            const double steps = k + t;
+            out.centre[t] = b.centre[0] + steps * (b.centre[1] - b.centre[0]);
+            out.yaw[t] = b.yaw[0] + steps * (b.yaw[1] - b.yaw[0]);
+            out.rot[t] = Yaw(out.yaw[t]);
+        }
+    }
+    return m;
+}
+
+Rig drive_rig(const SynthConfig &config, int k, int last_time) {
+    validate(config);
+    require(k >= 0 && last_time < kMaxDriveFrames, ErrorCode::InvalidArgument,
+            "synth: drive frame " + std::to_string(last_time) + " outside [0, " + std::to_string(kMaxDriveFrames) +
+                ")");
+    Rig rig;
+    rig.width = config.width;
+    rig.height = config.height;
+    rig.cam = camera_of(config);
+    rig.model = drive_model(make_street_scene(config.seed, config.baseline), k);
+    return rig;
+}
+
+// Velodyne HDL-like ring pattern (see render_drive_frame).
+constexpr int kDriveRings = 32;
+constexpr double kDriveTopDeg = 2.0, kDriveBottomDeg = -24.8, kDriveAzimuthStepDeg = 0.35, kDriveRange = 120.0;
+
+std::vector<io::VelodynePoint> drive_scan(const Rig &rig) {
+    const cv::Matx44d velo_to_cam = drive_velo_to_cam();
+    const Pose &pose = rig.model.left[0];
+    const V3 origin_cam{velo_to_cam(0, 3), velo_to_cam(1, 3), velo_to_cam(2, 3)};
+    const V3 origin = pose.rot.apply(origin_cam) + pose.centre;
+    const int per_ring = static_cast<int>(std::lround(360.0 / kDriveAzimuthStepDeg));
+    std::vector<io::VelodynePoint> points;
+    for (int r = 0; r < kDriveRings; ++r) {
+        const double el = (kDriveTopDeg + (kDriveBottomDeg - kDriveTopDeg) * r / (kDriveRings - 1)) * M_PI / 180.0;
+        for (int a = 0; a < per_ring; ++a) {
+            const double az = -M_PI + (a + 0.5) * 2.0 * M_PI / per_ring;
+            const cv::Vec3d dv(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+            const cv::Vec3d dc = velo_to_cam.get_minor<3, 3>(0, 0) * dv;
+            const V3 dir = pose.rot.apply(V3{dc[0], dc[1], dc[2]});
+            const Hit h = cast_ray(rig.model, 0, origin, dir);
+            if (h.label == kLabelNone || h.t > kDriveRange) continue;
+            // Back to the LiDAR frame through the inverse rigid transform (R^T (X_cam - T)).
+            const V3 cam = pose.rot.inverse(h.point - pose.centre) - origin_cam;
+            const cv::Vec3d v = velo_to_cam.get_minor<3, 3>(0, 0).t() * cv::Vec3d(cam.x, cam.y, cam.z);
+            points.push_back({static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]),
+                              static_cast<float>(std::fabs(dot(dir, h.normal)))});
+        }
+    }
+    return points;
+}
+
 }  // namespace
+
+StereoCamera drive_camera(const SynthConfig &config) {
+    validate(config);
+    return camera_of(config);
+}
+
+cv::Matx44d drive_velo_to_cam() {
+    // Velodyne (x forward, y left, z up) -> camera (x right, y down, z forward), tilted down by
+    // 0.5 deg about the camera's x axis so that the transform is not a pure axis permutation.
+    const double c = std::cos(0.5 * M_PI / 180.0), s = std::sin(0.5 * M_PI / 180.0);
+    const cv::Matx33d axes(0, -1, 0, 0, 0, -1, 1, 0, 0);
+    const cv::Matx33d tilt(1, 0, 0, 0, c, -s, 0, s, c);
+    const cv::Matx33d R = tilt * axes;
+    return cv::Matx44d(R(0, 0), R(0, 1), R(0, 2), -0.004, R(1, 0), R(1, 1), R(1, 2), -0.076, R(2, 0), R(2, 1),
+                       R(2, 2), -0.272, 0, 0, 0, 1);
+}
+
+DriveFrame render_drive_frame(const SynthConfig &config, int k) {
+    const Rig rig = drive_rig(config, k, k);
+    DriveFrame f;
+    const uint64_t frame = static_cast<uint64_t>(k);
+    render_view(rig, config, 0, false, mix64(stream_key(config.seed, kDriveLeft) + frame), f.left, nullptr, nullptr);
+    render_view(rig, config, 0, true, mix64(stream_key(config.seed, kDriveRight) + frame), f.right, nullptr, nullptr);
+    f.scan = drive_scan(rig);
+    return f;
+}
+
+SynthScene render_drive_ground_truth(const SynthConfig &config, int k) {
+    const Rig rig = drive_rig(config, k, k + 1);
+    SynthScene s;
+    s.config = config;
+    s.camera = rig.cam;
+    // The pair's ego-motion in its t0 camera frame: one step of the base scene.
+    const Pose &p0 = rig.model.left[0], &p1 = rig.model.left[1];
+    const V3 t = p0.rot.inverse(p1.centre - p0.centre);
+    s.ego_translation = cv::Vec3d(t.x, t.y, t.z);
+    s.ego_yaw = p1.yaw - p0.yaw;
+    ground_truth(rig, config, s);
+    return s;
+}
 
 SynthScene render(const SynthConfig &config) {
     validate(config);
     Rig rig;
     rig.width = config.width;
     rig.height = config.height;
-    rig.cam.fx = rig.cam.fy = config.fx > 0 ? config.fx : 0.58 * config.width;
-    rig.cam.cx = 0.5 * (config.width - 1);
-    rig.cam.cy = 0.46 * (config.height - 1);
-    rig.cam.baseline = config.baseline;
+    rig.cam = camera_of(config);
     rig.model = make_street_scene(config.seed, config.baseline);
 
     SynthScene s;

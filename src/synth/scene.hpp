@@ -25,6 +25,7 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "io/velodyne.hpp"
 
 namespace lidarflow::synth {
 
@@ -66,5 +67,35 @@ struct SynthScene {
 // non-finite noise, lidar_points < 0 or above the pixel count, supersampling outside [1, 8],
 // or threads < 0.
 SynthScene render(const SynthConfig &config);
+
+// A continuous drive through the scene of config.seed (`lidarflow synth --drive`): the scene's
+// t0 -> t1 motions (the ego-motion and every box's) repeated once per frame, frame k at time k,
+// so pair k -> k+1 of the drive looks like render()'s pair, moved on by k steps. Each frame is
+// rendered once with its own noise, so consecutive pairs share their images bit for bit.
+// Longer drives would run into the scene's far end (the car ahead, the crossing car, the wall).
+constexpr int kMaxDriveFrames = 20;
+
+struct DriveFrame {
+    cv::Mat left, right;                   // CV_8UC3, BGR
+    std::vector<io::VelodynePoint> scan;   // simulated Velodyne scan in the LiDAR frame
+};
+
+// The rig of a drive: the camera render() uses for `config`, and the LiDAR mounted as KITTI's
+// (axes x forward, y left, z up; 0.27 m behind and 0.08 m above camera 0), as the rigid
+// transform Velodyne -> camera 0 of calib_velo_to_cam.txt (camera 0 is the left camera here).
+StereoCamera drive_camera(const SynthConfig &config);
+cv::Matx44d drive_velo_to_cam();
+
+// Frame k of the drive: both images, and a scan of 32 rings from +2 to -24.8 deg elevation,
+// every 0.35 deg of azimuth over the full turn, ray-cast from the LiDAR at time k; stored ring
+// by ring, each ring from azimuth -180 to +180 deg as KITTI's scans are; only rays that hit
+// within 120 m give a point (reflectance: |cos| of the incidence angle). Throws like render(),
+// and Error(InvalidArgument) for k outside [0, kMaxDriveFrames).
+DriveFrame render_drive_frame(const SynthConfig &config, int k);
+
+// Ground truth of pair k -> k+1 in the fields of SynthScene (camera, disp*, flow*, masks,
+// labels0, ego motion of the pair); images, depth and LiDAR stay empty. Throws like
+// render_drive_frame, with k + 1 < kMaxDriveFrames.
+SynthScene render_drive_ground_truth(const SynthConfig &config, int k);
 
 }  // namespace lidarflow::synth

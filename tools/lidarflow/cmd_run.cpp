@@ -10,6 +10,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "log.hpp"
+#include "result_files.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/image_file.hpp"
@@ -52,16 +53,6 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
     return l;
 }
 
-std::vector<io::ResultFormat> parse_formats(const std::vector<std::string> &names) {
-    std::vector<io::ResultFormat> out;
-    for (const std::string &n : names) {
-        const io::ResultFormat f = io::parse_result_format(n);
-        if (std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
-    }
-    require(!out.empty(), ErrorCode::InvalidArgument, "run: --format needs at least one of kitti, flo, pfm, npy");
-    return out;
-}
-
 int run(int argc, char **argv) {
     Args args("run", argc, argv,
               {{"left0", true, "IMG  rectified left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
@@ -93,7 +84,7 @@ int run(int argc, char **argv) {
     io::check_output_name(id);
     io::prepare_output_folder(out);
     const std::vector<io::ResultFormat> formats =
-        parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"});
+        parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"}, "run");
     require(!(args.has("lidar0") && args.has("velo0")), ErrorCode::InvalidArgument,
             "run: give --lidar0 or --velo0, not both");
     require(!(args.has("lidar1") && args.has("velo1")), ErrorCode::InvalidArgument,
@@ -149,11 +140,7 @@ int run(int argc, char **argv) {
 
     note("run: writing %s\n", out.c_str());
     const Stopwatch writing;
-    std::vector<std::string> written;
-    for (io::ResultFormat fmt : formats) {
-        for (const std::string &file : io::write_results(out, id, f, fmt))  // flo and pfm share the disparities
-            if (std::find(written.begin(), written.end(), file) == written.end()) written.push_back(file);
-    }
+    const std::vector<std::string> written = write_result_files(out, id, f, formats);
     // Pictures with their legends, as `viz` draws them; both disparity maps on one scale.
     {
         const FlowField flow = io::field_flow(f);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // lidarflow synth: renders synthetic stereo + LiDAR frames with exact ground truth and writes
-// them in the KITTI Scene Flow 2015 layout (plus lidar_0/1 and masks/).
+// them in the KITTI Scene Flow 2015 layout (plus lidar_0/1 and masks/); with --drive, one
+// continuous drive in the KITTI raw layout (images, Velodyne scans, calibration, ground truth).
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -15,9 +16,40 @@
 namespace lidarflow::cli {
 namespace {
 
+// A continuous drive of `frames` frames (synth/scene.hpp), layout in synth/write_kitti.hpp.
+int write_drive(const Args &args) {
+    const std::string root = args.required("drive");
+    for (const char *other : {"out", "id", "points", "lidar-noise"})
+        require(!args.has(other), ErrorCode::InvalidArgument,
+                std::string("synth: --") + other + " does not apply to --drive (a drive has Velodyne scans, frame "
+                "indices from 0 and the folder --drive)");
+    const synth::SynthConfig config = synth_config_from_args(args, "synth");
+    require(args.has("frames"), ErrorCode::InvalidArgument, "synth: --drive needs --frames N (2 to " +
+                                                               std::to_string(synth::kMaxDriveFrames) + ")");
+    const int frames = args.integer("frames", 0);
+    require(frames >= 2 && frames <= synth::kMaxDriveFrames, ErrorCode::InvalidArgument,
+            "synth: --frames must be in [2, " + std::to_string(synth::kMaxDriveFrames) +
+                "] with --drive (the street scene ends beyond)");
+    synth::write_drive_rig(config, root);
+    synth::write_drive_timestamps(root, frames);
+    for (int k = 0; k < frames; ++k) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const synth::DriveFrame frame = synth::render_drive_frame(config, k);
+        synth::write_drive_frame(frame, root, k);
+        if (k + 1 < frames) synth::write_drive_ground_truth(synth::render_drive_ground_truth(config, k), root, k);
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("%s  %dx%d  scan %zu points  rendered in %.0f ms\n", synth::drive_frame_name(k).c_str(),
+                    config.width, config.height, frame.scan.size(), ms);
+    }
+    std::printf("wrote a drive of %d frames (seed %llu) to %s, ground truth of its %d pairs in %s/gt\n", frames,
+                static_cast<unsigned long long>(config.seed), root.c_str(), frames - 1, root.c_str());
+    return 0;
+}
+
 int run_synth(int argc, char **argv) {
     Args args("synth", argc, argv,
               {{"out", true, "DIR  output folder (KITTI layout; created)"},
+               {"drive", true, "DIR  instead: one continuous drive in the KITTI raw layout (image_02, image_03, velodyne_points, calib_*.txt, gt/), --frames 2.." + std::to_string(synth::kMaxDriveFrames)},
                {"id", true, "NNNNNN  id of the first frame (default 000000)"},
                {"frames", true, "K  number of frames, ids id..id+K-1, seeds seed..seed+K-1 (default 1)"},
                {"seed", true, "S  scene seed (default 1)"},
@@ -30,6 +62,7 @@ int run_synth(int argc, char **argv) {
         std::printf("%s", args.usage().c_str());
         return 0;
     }
+    if (args.has("drive")) return write_drive(args);
     const std::string out = args.required("out");
     synth::SynthConfig config = synth_config_from_args(args, "synth");
     const int frames = args.integer("frames", 1);

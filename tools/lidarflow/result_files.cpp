@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+#include "result_files.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+
+#include "core/error.hpp"
+
+namespace lidarflow::cli {
+
+std::vector<io::ResultFormat> parse_formats(const std::vector<std::string> &names, const std::string &command) {
+    std::vector<io::ResultFormat> out;
+    for (const std::string &n : names) {
+        const io::ResultFormat f = io::parse_result_format(n);
+        if (std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
+    }
+    require(!out.empty(), ErrorCode::InvalidArgument, command + ": --format needs at least one of kitti, flo, pfm, npy");
+    return out;
+}
+
+std::vector<std::string> result_file_paths(const std::string &out, const std::string &id,
+                                           const std::vector<io::ResultFormat> &formats) {
+    std::vector<std::string> paths;
+    for (io::ResultFormat fmt : formats)
+        for (const std::string &p : io::result_paths(out, id, fmt))
+            if (std::find(paths.begin(), paths.end(), p) == paths.end()) paths.push_back(p);
+    return paths;
+}
+
+std::vector<std::string> write_result_files(const std::string &out, const std::string &id, const SceneFlowField &f,
+                                            const std::vector<io::ResultFormat> &formats) {
+    namespace fs = std::filesystem;
+    io::check_output_name(id);
+    // Dot-prefixed and with the process id: hidden from `ls`, and two processes writing the same
+    // pair never share a temporary file.
+    const std::string tmp_id = ".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + id.substr(0, 100);
+    std::vector<std::string> temporaries;
+    const auto remove_temporaries = [&] {
+        std::error_code ignored;
+        for (const std::string &t : temporaries) fs::remove(t, ignored);
+    };
+    try {
+        std::vector<std::pair<std::string, std::string>> renames;  // temporary -> final
+        for (io::ResultFormat fmt : formats) {
+            const std::vector<std::string> finals = io::result_paths(out, id, fmt);
+            const std::vector<std::string> written = io::write_results(out, tmp_id, f, fmt);
+            for (size_t i = 0; i < written.size(); ++i) {
+                temporaries.push_back(written[i]);
+                renames.emplace_back(written[i], finals[i]);
+            }
+        }
+        for (const auto &[from, to] : renames) {
+            std::error_code ec;
+            if (!fs::exists(from)) continue;  // flo and pfm write the same disparity twice: renamed once
+            fs::rename(from, to, ec);
+            require(!ec, ErrorCode::Io, "cannot rename " + from + " to " + to + ": " + ec.message());
+        }
+    } catch (...) {
+        remove_temporaries();
+        throw;
+    }
+    return result_file_paths(out, id, formats);
+}
+
+}  // namespace lidarflow::cli

@@ -2,7 +2,7 @@
 # Install rules (included by the top-level CMakeLists.txt after every target exists).
 # Everything installed is relocatable: nothing below may bake CMAKE_INSTALL_PREFIX into a file,
 # because `cmake --install build --prefix P` and CPack pick the prefix after configuration.
-# Components, one Debian package each (cmake/packaging.cmake): runtime, dev, tools, lcm, python.
+# Components, one Debian package each (cmake/packaging.cmake): runtime, dev, tools, lcm, python, dask.
 include(CMakePackageConfigHelpers)
 
 # Executables find liblidarflow through a RUNPATH relative to themselves, so an install
@@ -63,3 +63,7 @@ set(LIDARFLOW_INSTALL_PYTHONDIR "lib/python3/dist-packages" CACHE STRING
     "Where the Python packages lidarflow and lidarflow_lcm are installed, relative to the prefix")
 install(DIRECTORY bindings/python/lidarflow bindings/python/lidarflow_lcm DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
         COMPONENT python FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+# lidarflow_dask (Dask runs of drives and logs through the CLI and the bridge): a package of its
+# own, as it needs Dask, which the binding does not.
+install(DIRECTORY bindings/python/lidarflow_dask DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
+        COMPONENT dask FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)

@@ -18,7 +18,7 @@ Thread-safety: run() is meant for one caller per output folder at a time; run_ch
 concurrently on any number of workers (each writes files under names of its own and renames them).
 """
 from .chunks import ToolNotFound, find_tool, run_chunk
-from .runner import Settings, Source, SourceError, default_threads, detect, merge, plan, run
+from .runner import ClusterError, Settings, Source, SourceError, default_threads, detect, merge, plan, run
 
-__all__ = ["Settings", "Source", "SourceError", "ToolNotFound", "default_threads", "detect", "find_tool", "merge",
+__all__ = ["ClusterError", "Settings", "Source", "SourceError", "ToolNotFound", "default_threads", "detect", "find_tool", "merge",
            "plan", "run", "run_chunk"]

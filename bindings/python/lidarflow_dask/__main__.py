@@ -37,8 +37,9 @@ def parse(argv):
                    help="frames per chunk, consecutive chunks sharing one (default 20: 19 pairs)")
     p.add_argument("--force", action="store_true", help="recompute everything, also what is complete")
     p.add_argument("--bin-dir", metavar="DIR",
-                   help="where lidarflow and lidarflow-lcm-bridge are (default: $LIDARFLOW_BIN_DIR, else next to "
-                        "this package, else the PATH); a build tree works")
+                   help="where lidarflow and lidarflow-lcm-bridge are, for every worker (default: "
+                        "$LIDARFLOW_BIN_DIR, else each worker looks next to its lidarflow_dask, then on its PATH); a "
+                        "build tree works")
     p.add_argument("--stereo-channel", default="LIDARFLOW_STEREO", metavar="NAME",
                    help="LCM logs: the stereo channel (default LIDARFLOW_STEREO)")
     p.add_argument("--bridge-arg", action="append", default=[], metavar="ARG",
@@ -69,12 +70,11 @@ def main(argv=None):
     else:
         threads = runner.default_threads(max(1, workers), 1 if serial else a.threads_per_worker)
     try:
+        # This command's choice goes to every worker (the same path on each host).
+        bin_dir = a.bin_dir or os.environ.get("LIDARFLOW_BIN_DIR")
         settings = runner.Settings(a.out, preset=a.preset, options=a.option, chunk=a.chunk, threads=threads,
-                                   force=a.force, bin_dir=a.bin_dir, stereo_channel=a.stereo_channel,
-                                   bridge_args=a.bridge_arg)
-        if a.bin_dir:
-            # LocalCluster workers inherit the environment.
-            os.environ["LIDARFLOW_BIN_DIR"] = a.bin_dir
+                                   force=a.force, bin_dir=os.path.abspath(bin_dir) if bin_dir else None,
+                                   stereo_channel=a.stereo_channel, bridge_args=a.bridge_arg)
         if serial:
             rc, _ = runner.run(a.sources, settings, client=None)
             return rc
@@ -91,7 +91,7 @@ def main(argv=None):
     except (runner.SourceError, ValueError) as e:
         print("lidarflow_dask: %s" % e, file=sys.stderr)
         return 2
-    except chunks.ToolNotFound as e:
+    except (chunks.ToolNotFound, runner.ClusterError) as e:
         print("lidarflow_dask: %s" % e, file=sys.stderr)
         return 1
     except OSError as e:

@@ -18,6 +18,10 @@ class SourceError(ValueError):
     """A source that is neither a drive nor an LCM log, or has no pair of frames."""
 
 
+class ClusterError(RuntimeError):
+    """No worker, or workers that cannot run the chunks (the executables or lidarflow_dask missing)."""
+
+
 class Settings:
     """What every chunk of a run shares (see chunks.py)."""
 
@@ -217,8 +221,14 @@ def run_dask(todo, report, client, progress_bar):
 
 def check_workers(client, kinds, bin_dir):
     """The executables on every worker; {worker: why} for those without them."""
-    answers = client.run(ch.check_tools, sorted(kinds), bin_dir)
-    return {w: why for w, why in answers.items() if why}
+    answers = client.run(ch.check_tools, sorted(kinds), bin_dir, on_error="return")
+    bad = {}
+    for w, why in answers.items():
+        if isinstance(why, BaseException):  # e.g. lidarflow_dask not importable there
+            bad[w] = "%s: %s (install python3-lidarflow-dask on every worker host)" % (type(why).__name__, why)
+        elif why:
+            bad[w] = why
+    return bad
 
 
 def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=False):
@@ -233,9 +243,14 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
         if why:
             raise ch.ToolNotFound(why)
     else:
+        # Workers started just before may not have joined yet: the check needs at least one.
+        try:
+            client.wait_for_workers(1, timeout=120)
+        except TimeoutError:
+            raise ClusterError("no Dask worker joined the scheduler within 120 s") from None
         bad = check_workers(client, kinds, settings.bin_dir)
         if bad:
-            raise ch.ToolNotFound("; ".join("worker %s: %s" % kv for kv in sorted(bad.items())))
+            raise ClusterError("; ".join("worker %s: %s" % kv for kv in sorted(bad.items())))
     print("lidarflow_dask: %d source(s), %d chunk(s) of up to %d frames, %d to compute (%d complete), %s"
           % (len(sources), sum(len(s.chunks) for s in sources), settings.chunk, len(todo),
              sum(len(s.chunks) for s in sources) - len(todo),
@@ -270,4 +285,4 @@ def default_threads(workers, threads_per_worker):
     return max(1, (os.cpu_count() or 1) // max(1, workers * threads_per_worker))
 
 
-__all__ = ["Settings", "Source", "SourceError", "detect", "plan", "merge", "run", "default_threads"]
+__all__ = ["ClusterError", "Settings", "Source", "SourceError", "detect", "plan", "merge", "run", "default_threads"]

@@ -192,12 +192,11 @@ class Dask(unittest.TestCase):
                                         os.path.join(self.serial, "drive", "flow", n), shallow=False), n)
 
     def test_rerun_skips_and_force_recomputes(self):
+        # The serial run's folder, copied (times kept): the same command finds it complete.
         out = os.path.join(self.tmp.name, "rerun")
+        shutil.copytree(self.serial, out)
         args = ["--serial", "--out", out, "--preset", "realtime", "--chunk", str(CHUNK), "--threads-per-task", "1",
                 "--bin-dir", BIN, self.drive, self.log]
-        p = cli(*args)
-        self.assertEqual(p.returncode, 0, p.stderr)
-        self.assertIn("15 pairs computed", p.stderr)
         stamp = {f: os.stat(os.path.join(out, f)).st_mtime_ns for f in ("run.log", "drive/flow/0000000000.png")}
         p = cli(*args)
         self.assertEqual(p.returncode, 0, p.stderr)

@@ -70,11 +70,12 @@ const char *kUsage =
 
 // --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
 // 1 when the logs cannot be read or written.
-int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out) {
+int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out,
+           const lidarflow::bridge::ReplayFrames &frames) {
     using namespace lidarflow::bridge;
     ReplayReport r;
     const double t0 = monotonic_seconds();
-    const std::string err = run_replay(config, in, out, &r, &g_stop);
+    const std::string err = run_replay(config, in, out, &r, &g_stop, frames);
     const double seconds = monotonic_seconds() - t0;
     if (!err.empty()) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: replay of %s: %s\n", in.c_str(), err.c_str());
@@ -96,6 +97,11 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
                  (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
                  (long long)r.flows_written, (long long)r.status_written, (long long)c.pairs_lost_calibration_change);
+    if (frames.first > 0 || frames.last < INT64_MAX)
+        std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range not "
+                             "computed, %s\n",
+                     (long long)frames.first, (long long)frames.last, (long long)r.stereo_before_range,
+                     r.stopped_after_range ? "stopped at the frame after it" : "the log ended within it");
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
@@ -107,7 +113,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
                              "pair-buffer", "lidar-channel", "calib-channel", "flow-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
                              "lidar-buffer", "queue", "shard", "shard-timeout", "shard-key", "encoding", "step", "option", "status-period", "replay",
-                             "out"})
+                             "out", "frames"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
     spec.push_back({"version", false, ""});
@@ -117,7 +123,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
 // The command line into config; false (after a message on stderr) when it is bad.
 bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *config, std::string *url,
                         std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *threads_given,
-                        bool *queue_given) {
+                        bool *queue_given, lidarflow::bridge::ReplayFrames *frames) {
     using namespace lidarflow::bridge;
     const lidarflow::cli::Args args("lidarflow-lcm-bridge", argc, argv, bridge_options());
     *url = args.str("lcm-url", "");
@@ -187,6 +193,19 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
             return false;
         }
     }
+    if (args.has("frames")) {
+        const std::string v = args.str("frames", "");
+        long long a = -1, b = -1;
+        int used = 0;
+        if (replay_in->empty() || std::sscanf(v.c_str(), "%lld:%lld%n", &a, &b, &used) != 2 ||
+            v[static_cast<size_t>(used)] != '\0' || a < 0 || b <= a) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --frames %s: expected A:B with 0 <= A < B, with --replay\n",
+                         v.c_str());
+            return false;
+        }
+        frames->first = a;
+        frames->last = b;
+    }
     config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
     config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);
     if (config->shard_timeout_s > 0 && (config->shard_count < 2 || config->status_period_s <= 0)) {
@@ -222,6 +241,7 @@ int main(int argc, char **argv) {
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
     bool threads_given = false, queue_given = false;
+    ReplayFrames frames;
     // --help and --version answer before anything else is checked, as they always did.
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -236,7 +256,7 @@ int main(int argc, char **argv) {
     }
     try {
         if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &threads_given,
-                                &queue_given))
+                                &queue_given, &frames))
             return 2;
     } catch (const lidarflow::cli::UsageError &e) {
         std::fprintf(stderr, "%s\n", e.what());
@@ -273,7 +293,7 @@ int main(int argc, char **argv) {
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
-    if (!replay_in.empty()) return replay(config, replay_in, replay_out);
+    if (!replay_in.empty()) return replay(config, replay_in, replay_out, frames);
 
     // Ask udpm for the receive buffer the kernel grants (LCM warns on anything more), and say
     // once how to raise the kernel's limit when it is below what large images need.

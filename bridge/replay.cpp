@@ -105,7 +105,7 @@ const char *drop_reason(const Counters &a, const Counters &b) {
 }  // namespace
 
 std::string run_replay(const BridgeConfig &config_in, const std::string &in_path, const std::string &out_path,
-                       ReplayReport *report, const volatile std::sig_atomic_t *stop) {
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop, const ReplayFrames &frames) {
     *report = ReplayReport();
     BridgeConfig config = config_in;
     const double status_period_s = config.status_period_s;
@@ -171,11 +171,16 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
         LogReader reader(&in, config);
         double next_status = -1;
         int64_t last_utime = 0;
+        int64_t stereo_index = -1;  // of the stereo event in hand, in log order
         while (error.empty() && !interrupted) {
             LogReader::Pending *p = reader.peek(0);
             if (!p) break;
             if (stop && *stop) {
                 interrupted = true;
+                break;
+            }
+            if (p->event->channel == config.stereo_channel && stereo_index + 1 > frames.last) {
+                report->stopped_after_range = true;
                 break;
             }
             EventPtr event = std::move(p->event);
@@ -202,6 +207,8 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             } else if (channel == config.calibration_channel) {
                 ++report->calibration_events;
                 feed(*event);
+            } else if (channel == config.stereo_channel && ++stereo_index < frames.first) {
+                ++report->stereo_before_range;  // its LiDAR is handed over in log order
             } else if (channel == config.stereo_channel) {
                 ++report->stereo_events;
                 // Sweeps logged shortly after the frame reach the live bridge while the frame

@@ -32,6 +32,8 @@ struct ReplayReport {
     int64_t lookahead_cut = 0;        // stereo frames whose LiDAR look-ahead stopped at a bound (notes)
     int64_t lookahead_peak_bytes = 0; // the most data read ahead for one frame
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
+    int64_t stereo_before_range = 0;  // stereo frames before ReplayFrames::first, not handed over
+    bool stopped_after_range = false; // a stereo frame after ReplayFrames::last ended the replay
     // One line per stereo frame that did not reach the estimator, frames missing from the log
     // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
     // sync word, reading stopped: frames there are unaccounted for); empty when every frame was
@@ -42,16 +44,26 @@ struct ReplayReport {
     Counters counters;          // the bridge's final counters
 };
 
+// A range of stereo frames, numbered 0.. in log order (every event on the stereo channel), both
+// ends included: only the pairs of two frames inside it are computed. Calibration and LiDAR
+// events before the range are still handed over, so a range's results are those of the whole
+// log's replay; reading ends at the first stereo frame after `last`.
+struct ReplayFrames {
+    int64_t first = 0;
+    int64_t last = INT64_MAX;
+};
+
 // Replays `in_path` into `out_path` (created or truncated) through a bridge configured by
 // `config` (channels, calibration, estimator options, ...; its lcm URL is irrelevant).
 // status_period_s counts log time here. A LiDAR sweep logged up to config.lidar_wait_ms after
 // a stereo frame is handed over before that frame (as the live bridge would wait for it); the
 // look-ahead is bounded in log time from the event after the frame, in events and in bytes.
 // `stop` (optional) is polled between events and while waiting for the bridge, e.g. set by
-// SIGINT. Returns "" when the replay ran to the end or was interrupted (frames may still be
+// SIGINT. `frames` restricts the replay to a range of stereo frames. Returns "" when the replay ran to the end or was interrupted (frames may still be
 // lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot
 // be read or an output that cannot be written (the first failed write ends the replay).
 std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
-                       ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr);
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr,
+                       const ReplayFrames &frames = ReplayFrames());
 
 }  // namespace lidarflow::bridge

@@ -3,7 +3,7 @@
 # A prefix install is relocatable: nothing below may bake CMAKE_INSTALL_PREFIX into a file,
 # because `cmake --install build --prefix P` picks the prefix after configuration. Only the
 # Debian layout (below) names its fixed prefix, LIDARFLOW_DEB_PREFIX.
-# Components, one Debian package each (cmake/packaging.cmake): runtime, dev, tools, lcm, python.
+# Components, one Debian package each (cmake/packaging.cmake): runtime, dev, tools, lcm, python, dask.
 include(CMakePackageConfigHelpers)
 
 # The packages' library folder: the multiarch libdir (lib/<triplet>, Debian policy 9.1.1).
@@ -120,3 +120,7 @@ set(LIDARFLOW_INSTALL_PYTHONDIR "lib/python3/dist-packages" CACHE STRING
     "Where the Python packages lidarflow and lidarflow_lcm are installed, relative to the prefix")
 install(DIRECTORY bindings/python/lidarflow bindings/python/lidarflow_lcm DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
         COMPONENT python FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)
+# lidarflow_dask (Dask runs of drives and logs through the CLI and the bridge): a package of its
+# own, as it needs Dask, which the binding does not.
+install(DIRECTORY bindings/python/lidarflow_dask DESTINATION ${LIDARFLOW_INSTALL_PYTHONDIR}
+        COMPONENT dask FILES_MATCHING PATTERN "*.py" PATTERN "__pycache__" EXCLUDE)

@@ -5,6 +5,7 @@
 #   lidarflow-tools        tools     lidarflow, lidarflow-lcm-bridge
 #   lidarflow-lcm-types    lcm       .lcm definitions, generated C and C++ types
 #   python3-lidarflow      python    the pure-Python binding and lidarflow_lcm in /usr/lib/python3/dist-packages
+#   python3-lidarflow-dask dask      lidarflow_dask: drives and LCM logs in chunks over a Dask cluster
 # The library, CMake package and pkg-config files are in the multiarch libdir with /usr paths
 # (the deb layout of cmake/install.cmake); Python packages byte-compile in postinst and clean up
 # in prerm, as Debian's own do.
@@ -27,7 +28,7 @@ set(CPACK_PACKAGING_INSTALL_PREFIX ${LIDARFLOW_DEB_PREFIX})  # the layout cmake/
 set(CPACK_STRIP_FILES ON)
 
 set(CPACK_DEB_COMPONENT_INSTALL ON)
-set(CPACK_COMPONENTS_ALL runtime dev tools python)
+set(CPACK_COMPONENTS_ALL runtime dev tools python dask)
 if(LIDARFLOW_WITH_LCM)
   list(APPEND CPACK_COMPONENTS_ALL lcm)
 endif()
@@ -124,6 +125,11 @@ _lf_deb_component(python python3-lidarflow python all "dense scene flow from ste
   "This package holds the Python 3 binding (ctypes and NumPy) and lidarflow_lcm,\nthe LCM messages and log reader/writer in pure Python.")
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS "liblidarflow0 (= ${_lf_deb_version})")
 set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "python3, python3-numpy, liblidarflow0 (= ${_lf_deb_version})")
+_lf_deb_component(dask python3-lidarflow-dask python all "dense scene flow from stereo and sparse LiDAR - Dask runs"
+  "This package holds lidarflow_dask (python3 -m lidarflow_dask): recorded drives\nand LCM logs in chunks of frames over a Dask cluster, each chunk computed by\nlidarflow sequence or lidarflow-lcm-bridge --replay.")
+# Its chunks run the tools of the same build; lidarflow_lcm (python3-lidarflow) reads the logs.
+set(CPACK_DEBIAN_DASK_PACKAGE_DEPENDS
+    "python3, python3-distributed, python3-lidarflow (= ${_lf_deb_version}), lidarflow-tools (= ${_lf_deb_version})")
 # The tools are built from the same tree as the library: the exact version, not just >=.
 set(CPACK_DEBIAN_TOOLS_PACKAGE_DEPENDS "liblidarflow0 (= ${_lf_deb_version})")
 if(LIDARFLOW_WITH_LCM)

@@ -29,7 +29,8 @@ packages=(build-essential cmake pkg-config git
           libopencv-dev libopencv-contrib-dev libeigen3-dev libcmocka-dev nlohmann-json3-dev
           liblcm-dev liblcm-bin libglib2.0-dev libssl-dev iproute2 util-linux
           abigail-tools python3 python3-numpy dpkg-dev file
-          python3-pip python3-setuptools python3-wheel python3-venv)
+          python3-pip python3-setuptools python3-wheel python3-venv
+          python3-distributed)  # lidarflow_dask and its test (python_dask)
 
 deps() {
     local missing=()

@@ -5,7 +5,8 @@
 #     the inputs from the input log), the final status accounting for every stereo frame;
 #  2. lcm-logplayer plays the result log (into a file:// log, no network) and the played copy
 #     passes the same check;
-#  3. logs with a frame missing (frame_number gap) or a calibration missing (frames before any
+#  3. --frames A:B replays stereo frames A..B only: their pairs, equal to the whole log's;
+#  4. logs with a frame missing (frame_number gap) or a calibration missing (frames before any
 #     calibration) exit 3 and name the frames.
 set -euo pipefail
 : "${LIDARFLOW_CLI:?}" "${LIDARFLOW_BRIDGE:?}" "${LIDARFLOW_LOG_CHECK:?}" "${LIDARFLOW_TEST_TMP:?}"
@@ -30,6 +31,21 @@ if command -v lcm-logplayer >/dev/null; then
 else
     echo "lcm-logplayer not installed: playing the result log not checked"
 fi
+
+# Frames 3..7: frame 3 is the second of sequence 1, so its pair (2, 3) is left out and the
+# range's pairs are those of sequences 2 and 3.
+"$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/range.log" --frames 3:7 "${opts[@]}" 2>"$tmp/range.err" \
+    || { rc=$?; cat "$tmp/range.err"; fail "replay --frames 3:7 exited $rc"; }
+cat "$tmp/range.err"
+grep -q "stereo processed 5, dropped 0" "$tmp/range.err" || fail "--frames 3:7: not frames 3..7 processed"
+grep -q "; 2 results," "$tmp/range.err" || fail "--frames 3:7: not 2 results"
+grep -q "3 stereo frame(s) before the range" "$tmp/range.err" || fail "--frames 3:7: frames before not counted"
+"$LIDARFLOW_LOG_CHECK" edit "$tmp/out.log" "$tmp/out_tail.log" --drop LIDARFLOW_FLOW:0 --drop LIDARFLOW_FLOW:1
+"$LIDARFLOW_LOG_CHECK" compare "$tmp/range.log" "$tmp/out_tail.log" || fail "--frames 3:7: not the whole log's results"
+for bad in 3:3 5:2 -1:4 3: x; do
+    "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/x.log" --frames "$bad" 2>/dev/null && fail "--frames $bad accepted"
+    [ $? = 2 ] || fail "--frames $bad: not a usage error"
+done
 
 expect_lost() {  # LOG PATTERN...
     local log="$1"; shift

@@ -203,6 +203,13 @@ PY
     ) || { echo "installed lidarflow_lcm failed"; exit 1; }
 fi
 
+# lidarflow_dask, installed, finds the tools of its own prefix with no variable and no PATH.
+[ -f "$pydir/lidarflow_dask/__main__.py" ] || { echo "lidarflow_dask not installed in $pydir"; exit 1; }
+found="$(cd "$work" && env -u LIDARFLOW_BIN_DIR PATH=/usr/bin:/bin PYTHONPATH="$pydir" PYTHONDONTWRITEBYTECODE=1 \
+         /usr/bin/python3 -c 'import lidarflow_dask as d; print(d.find_tool("lidarflow"))')" ||
+    { echo "installed lidarflow_dask failed"; exit 1; }
+[ "$found" = "$prefix/bin/lidarflow" ] || { echo "installed lidarflow_dask found '$found', not $prefix/bin/lidarflow"; exit 1; }
+
 # Licence and notices are installed.
 if [ "$mode" = prefix ]; then
     for f in LICENSE THIRD_PARTY_NOTICES.md; do

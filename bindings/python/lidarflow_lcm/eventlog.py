@@ -45,10 +45,11 @@ class LogReader:
     channels: None (all), a channel name, or an iterable of names: other events are skipped
     (their data is not read into memory). strict=False (default) reads past what it can and records
     each irregularity in `problems` (and warns once per log); strict=True raises LogFormatError
-    at the first one instead. `path` may also be a binary file object.
+    at the first one instead. `path` may also be a binary file object. data=False yields the
+    events with data None, never reading it (counting the frames of a long log).
     """
 
-    def __init__(self, path, channels=None, strict=False):
+    def __init__(self, path, channels=None, strict=False, data=True):
         self._own = not hasattr(path, "read")
         self._f = open(path, "rb") if self._own else path
         self.name = path if self._own else getattr(path, "name", "<log>")
@@ -57,6 +58,7 @@ class LogReader:
         else:
             self._channels = set(channels)
         self.strict = strict
+        self.data = data
         self.problems = []
 
     def close(self):
@@ -127,6 +129,9 @@ class LogReader:
             channel = channel_raw.decode("utf-8", "replace")
             offset = end
             if self._channels is not None and channel not in self._channels:
+                continue
+            if not self.data:
+                yield Event(number, utime, channel, None)
                 continue
             f.seek(end - data_len)
             data = f.read(data_len)

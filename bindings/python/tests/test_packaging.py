@@ -27,8 +27,8 @@ class Packaging(unittest.TestCase):
         built = lidarflow._lib.lib._name  # the library this test run uses
         with tempfile.TemporaryDirectory() as tmp:
             src = os.path.join(tmp, "src")  # setuptools writes build/ and *.egg-info next to it
-            shutil.copytree(SOURCE, src, ignore=shutil.ignore_patterns("tests", "tests_lcm", "__pycache__", "build",
-                                                                       "*.egg-info"))
+            shutil.copytree(SOURCE, src, ignore=shutil.ignore_patterns("tests", "tests_lcm", "tests_dask", "__pycache__",
+                                                                       "build", "*.egg-info"))
             prefix = os.path.join(tmp, "prefix")
             p = subprocess.run([sys.executable, "-m", "pip", "install", "--no-build-isolation", "--no-index",
                                 "--no-deps", "--prefix", prefix, "."], cwd=src, capture_output=True, text=True)
@@ -44,16 +44,17 @@ class Packaging(unittest.TestCase):
 
             env = {k: v for k, v in os.environ.items() if k not in ("LIDARFLOW_LIBRARY", "PYTHONPATH")}
             env["PYTHONPATH"] = site
-            code = ("import lidarflow, lidarflow._lib as l, lidarflow_lcm as ll; print(l.lib._name); "
-                    "print(lidarflow.__version__); print(ll.__file__); "
+            code = ("import lidarflow, lidarflow._lib as l, lidarflow_lcm as ll, lidarflow_dask as ld; "
+                    "print(l.lib._name); print(lidarflow.__version__); print(ll.__file__); print(ld.__file__); "
                     "print(ll.calibration_t.decode(ll.calibration_message(1, 1, 0, 0, 1).encode()).fx)")
             p = subprocess.run([sys.executable, "-c", code], cwd=tmp, env=env, capture_output=True, text=True)
             self.assertEqual(p.returncode, 0, p.stderr)
-            name, version, lcm_init, fx = p.stdout.split()
+            name, version, lcm_init, dask_init, fx = p.stdout.split()
             self.assertEqual(name, installed)
             self.assertEqual(version, lidarflow.__version__)
-            # lidarflow_lcm comes with the binding, from the same installed site folder.
+            # lidarflow_lcm and lidarflow_dask come with the binding, from the same installed site folder.
             self.assertEqual(os.path.dirname(os.path.dirname(lcm_init)), site)
+            self.assertEqual(os.path.dirname(os.path.dirname(dask_init)), site)
             self.assertEqual(float(fx), 1.0)
 
     def test_without_numpy_the_error_names_debians_python(self):

@@ -1,0 +1,266 @@
+# SPDX-License-Identifier: MIT
+"""lidarflow_dask on a small synthetic drive and LCM log (CTest: python_dask; needs
+LIDARFLOW_BIN_DIR, the build tree, which CTest sets, and Debian's python3-distributed):
+
+  * a local cluster of 2 workers x 1 thread writes byte for byte the serial run's drive results
+    and the same LCM results (compute_seconds aside: a timing), which are the whole log's replay;
+  * a worker killed mid-chunk: its chunk process dies with it (parent-death signal) and the
+    chunk is rerun elsewhere; every pair is in the result log exactly once;
+  * a corrupt frame in the middle of a drive: its chunk is reported with source and frames,
+    exit 1, and only that frame's two pairs are missing;
+  * rerunning the command computes nothing; --force recomputes everything.
+"""
+import filecmp
+import io
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+
+import lidarflow_lcm as ll
+
+BIN = os.environ.get("LIDARFLOW_BIN_DIR")
+PY = sys.executable
+CHUNK = 4
+try:
+    import distributed
+except ImportError:  # reported as skipped: tools/dev.sh deps installs python3-distributed
+    distributed = None
+
+if BIN:
+    import lidarflow_dask as ld
+    from lidarflow_dask import chunks as ldc
+
+
+def tool(*parts):
+    return os.path.join(BIN, *parts)
+
+
+def make_log(tmp):
+    """8 frames of 4 synthetic scenes as one stream (one sequence, frame numbers 0..7): 7 pairs,
+    three of them across a chunk boundary (frames 3 and 6 are shared by two chunks)."""
+    scene, raw, log = os.path.join(tmp, "scene"), os.path.join(tmp, "raw.log"), os.path.join(tmp, "run.log")
+    subprocess.run([tool("tools", "lidarflow", "lidarflow"), "synth", "--out", scene, "--width", "320", "--height", "96",
+                    "--frames", "4"], check=True, capture_output=True)
+    subprocess.run([tool("tools", "lidarflow", "lidarflow"), "publish-kitti", "--root", scene, "--lidar", "paper",
+                    "--rate", "0", "--lcm-url", "file://%s?mode=w" % raw], check=True, capture_output=True)
+    n = 0
+    with ll.LogWriter(log) as w:
+        for e, m in ll.read_messages(raw, strict=True):
+            if isinstance(m, ll.stereo_t):
+                m.sequence, m.frame_number, n = 0, n, n + 1
+                w.write(e.channel, m.encode(), e.utime)
+            elif not (isinstance(m, ll.calibration_t) and n > 0):  # one calibration: one stream
+                w.write(e.channel, e.data, e.utime)
+    return log
+
+
+def flows(path):
+    """(log time, scene_flow_t bytes with compute_seconds zeroed) of a result log."""
+    out = []
+    for e, m in ll.read_messages(path, channels=ldc.FLOW_CHANNEL, strict=True):
+        m.compute_seconds = 0.0
+        out.append((e.utime, m.encode()))
+    return out
+
+
+def same_tree(test, a, b):
+    """Every file of folders a and b, byte for byte; returns the number of files."""
+    n = 0
+    for root, _, files in os.walk(a):
+        rel = os.path.relpath(root, a)
+        other = sorted(f for f in os.listdir(os.path.join(b, rel)) if os.path.isfile(os.path.join(b, rel, f)))
+        test.assertEqual(sorted(files), other, rel)
+        for f in files:
+            test.assertTrue(filecmp.cmp(os.path.join(root, f), os.path.join(b, rel, f), shallow=False),
+                            os.path.join(rel, f))
+            n += 1
+    return n
+
+
+def cli(*args):
+    return subprocess.run([PY, "-m", "lidarflow_dask"] + list(args), capture_output=True, text=True, timeout=300)
+
+
+@unittest.skipUnless(BIN and distributed, "LIDARFLOW_BIN_DIR not set or python3-distributed missing")
+class Dask(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        t = cls.tmp.name
+        cls.drive = os.path.join(t, "drive")
+        subprocess.run([tool("tools", "lidarflow", "lidarflow"), "synth", "--drive", cls.drive, "--frames", "9",
+                        "--width", "320", "--height", "96"], check=True, capture_output=True)
+        cls.log = make_log(t)
+        cls.settings = dict(preset="realtime", chunk=CHUNK, threads=1)
+        # The serial run, the reference of the others.
+        cls.serial = os.path.join(t, "serial")
+        cls.serial_rc, cls.serial_summary = ld.run([cls.drive, cls.log], ld.Settings(cls.serial, **cls.settings))
+        whole = os.path.join(t, "whole.log")
+        subprocess.run([tool("bridge", "lidarflow-lcm-bridge"), "--replay", cls.log, "--out", whole,
+                        "--option", "preset=realtime", "--option", "threads=1"], check=True, capture_output=True)
+        cls.whole = flows(whole)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def test_serial_run_computes_every_pair_once(self):
+        self.assertEqual(self.serial_rc, 0, self.serial_summary)
+        self.assertEqual(self.serial_summary["pairs"], 8 + 7)
+        names = sorted(os.listdir(os.path.join(self.serial, "drive", "flow")))
+        self.assertEqual(names, ["%010d.png" % k for k in range(8)])
+        got = flows(os.path.join(self.serial, "run.log"))
+        self.assertEqual(len(got), 7)
+        # Chunks 0:3, 3:6, 6:7 of the log: their results are the whole log's replay's.
+        self.assertEqual(got, self.whole)
+
+    def test_local_cluster_equals_serial_run(self):
+        out = os.path.join(self.tmp.name, "cluster")
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c, \
+                distributed.Client(c) as client:
+            rc, summary = ld.run([self.drive, self.log], ld.Settings(out, **self.settings), client=client,
+                                 stream=io.StringIO())
+        self.assertEqual(rc, 0, summary)
+        self.assertEqual(summary["pairs"], 15)
+        self.assertGreaterEqual(same_tree(self, os.path.join(self.serial, "drive"), os.path.join(out, "drive")), 8 * 3)
+        self.assertEqual(flows(os.path.join(out, "run.log")), self.whole)
+
+    def test_killed_worker_every_pair_exactly_once(self):
+        out = os.path.join(self.tmp.name, "killed")
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c, \
+                distributed.Client(c) as client:
+            pids = set(client.run(os.getpid).values())
+            box = {}
+            runner = threading.Thread(target=lambda: box.update(r=ld.run(
+                [self.log], ld.Settings(out, preset="realtime", chunk=3, threads=1), client=client,
+                stream=io.StringIO())))
+            runner.start()
+            # The first chunk process seen under a worker is stopped (so it cannot finish), then
+            # its worker is killed: the parent-death signal must end it.
+            child = worker = None
+            deadline = time.monotonic() + 120
+            while child is None and time.monotonic() < deadline:
+                for pid, ppid, comm in processes():
+                    if ppid in pids and comm.startswith("lidarflow-lcm"):
+                        try:
+                            os.kill(pid, signal.SIGSTOP)
+                        except ProcessLookupError:
+                            continue
+                        child, worker = pid, ppid
+                        break
+                time.sleep(0.005)
+            self.assertIsNotNone(child, "no chunk process seen")
+            os.kill(worker, signal.SIGKILL)
+            try:
+                for _ in range(500):
+                    if not alive(child):
+                        break
+                    time.sleep(0.02)
+                self.assertFalse(alive(child), "the chunk process outlived its killed worker")
+            finally:
+                if alive(child):
+                    os.kill(child, signal.SIGKILL)
+            runner.join(240)
+        rc, summary = box["r"]
+        self.assertEqual(rc, 0, summary)
+        got = flows(os.path.join(out, "run.log"))
+        self.assertEqual(len(got), 7)
+        self.assertEqual(got, self.whole)  # each pair once, in order
+
+    def test_corrupt_frame_reported_and_only_its_pairs_missing(self):
+        drive = os.path.join(self.tmp.name, "bad_drive")
+        shutil.copytree(self.drive, drive)
+        with open(os.path.join(drive, "image_02", "data", "0000000005.png"), "r+b") as f:
+            f.truncate(40)  # a cut-off PNG
+        out = os.path.join(self.tmp.name, "bad")
+        p = cli("--serial", "--out", out, "--preset", "realtime", "--chunk", str(CHUNK), "--threads-per-task", "1",
+                "--bin-dir", BIN, drive)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        # Frame 5 is in chunk 3:6: that chunk failed, the others did not.
+        self.assertRegex(p.stderr, r"FAILED: %s frames 3:6: exit 3" % drive)
+        self.assertIn("1 of 3 chunks failed", p.stderr)
+        names = sorted(os.listdir(os.path.join(out, "bad_drive", "flow")))
+        self.assertEqual(names, ["%010d.png" % k for k in range(8) if k not in (4, 5)])
+        for n in names:
+            self.assertTrue(filecmp.cmp(os.path.join(out, "bad_drive", "flow", n),
+                                        os.path.join(self.serial, "drive", "flow", n), shallow=False), n)
+
+    def test_rerun_skips_and_force_recomputes(self):
+        # The serial run's folder, copied (times kept): the same command finds it complete.
+        out = os.path.join(self.tmp.name, "rerun")
+        shutil.copytree(self.serial, out)
+        args = ["--serial", "--out", out, "--preset", "realtime", "--chunk", str(CHUNK), "--threads-per-task", "1",
+                "--bin-dir", BIN, self.drive, self.log]
+        stamp = {f: os.stat(os.path.join(out, f)).st_mtime_ns for f in ("run.log", "drive/flow/0000000000.png")}
+        p = cli(*args)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("0 to compute (6 complete)", p.stderr)
+        self.assertIn("0 pairs computed", p.stderr)
+        self.assertIn("15 complete before", p.stderr)
+        for f, t in stamp.items():
+            self.assertEqual(os.stat(os.path.join(out, f)).st_mtime_ns, t, f)
+        # Other settings into the same folder are refused.
+        p = cli(*[a if a != "realtime" else "fast" for a in args])
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("use --force", p.stderr)
+        p = cli(*(args + ["--force"]))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("15 pairs computed", p.stderr)
+        for f, t in stamp.items():
+            self.assertGreater(os.stat(os.path.join(out, f)).st_mtime_ns, t, f)
+        self.assertEqual(flows(os.path.join(out, "run.log")), self.whole)
+
+    def test_bad_sources_and_missing_tools(self):
+        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), self.tmp.name)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("not a KITTI raw drive", p.stderr)
+        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), os.path.join(self.drive, "calib_cam_to_cam.txt"))
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("neither a drive folder nor an LCM log", p.stderr)
+        empty = os.path.join(self.tmp.name, "empty_bin")
+        os.makedirs(empty, exist_ok=True)
+        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), "--bin-dir", empty, self.log)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("lidarflow-lcm-bridge not found in %s" % empty, p.stderr)
+
+    def test_plan_shares_one_frame(self):
+        self.assertEqual(ld.plan(0, 7, 3), [(0, 2), (2, 4), (4, 6), (6, 7)])
+        self.assertEqual(ld.plan(5, 6, 20), [(5, 6)])
+        pairs = [(a, a + 1) for s, e in ld.plan(3, 100, 7) for a in range(s, e)]
+        self.assertEqual(pairs, [(a, a + 1) for a in range(3, 100)])
+
+
+def processes():
+    """(pid, parent pid, command name) of every process."""
+    out = []
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open("/proc/%s/stat" % d) as f:
+                stat = f.read()
+        except OSError:
+            continue
+        comm = stat[stat.index("(") + 1:stat.rindex(")")]
+        fields = stat[stat.rindex(")") + 2:].split()
+        out.append((int(d), int(fields[1]), comm))
+    return out
+
+
+def alive(pid):
+    """True while pid exists and is not a zombie."""
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -103,8 +103,7 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
     cv::fillConvexPoly(view, tri, 3, cv::Scalar(255, 255, 255), cv::LINE_AA);
     return with_color_bar(
         view, [max_speed](double s) { return speed_color(s, max_speed); }, 0.0, max_speed,
-        points[0].has_object_motion ? "|object motion| [m / frame], ego-motion removed"
-                                    : "|motion| [m / frame], relative to the camera");
+        points[0].has_object_motion ? "|object motion| [m / frame]" : "|motion| [m / frame]");
 }
 
 }  // namespace lidarflow::viz

@@ -130,7 +130,7 @@ done
 
 # LCM types: definitions, generated C (header + source) and C++ headers, used together.
 if [ -d "$prefix/share/lidarflow/lcm" ]; then
-    [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 5 ] || { echo "missing .lcm files"; exit 1; }
+    [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 6 ] || { echo "missing .lcm files"; exit 1; }
     cc -std=c99 -c "$prefix/share/lidarflow/lcm/c/lidarflow_status_t.c" -I"$prefix/include/lidarflow/lcm" \
        $(pkg-config --cflags lcm) -o "$work/lidarflow_status_t.o"
     c++ -std=c++17 -Wall -Wextra -Werror "$src/lcm_types_consumer.cpp" "$work/lidarflow_status_t.o" \

@@ -560,7 +560,8 @@ typedef struct lf_object_motion_buffers_t {
      * t1 (as lf_get_points3d) and T of lf_get_ego_motion: the scene flow with the camera's own
      * motion taken out, in the left camera frame at t1. About 0 on the static world. */
     lf_plane_t motion;
-    /* uint8: as lf_points3d_buffers_t.valid; elsewhere motion is NaN. */
+    /* uint8: 1 where lf_points3d_buffers_t.valid is 1 and the object motion fits a float32
+     * (in practice: the same pixels); elsewhere motion is NaN. */
     lf_plane_t valid;
 } lf_object_motion_buffers_t;
 

@@ -555,8 +555,8 @@ struct EgoMotion {
 
 // Object motion of the latest result (lf_get_object_motion), owned by the caller; width * height
 // entries, row-major: motion (mx, my, mz) [m] = X1 - T X0 (scene flow without the camera's
-// motion, left camera frame at t1; about 0 on the static world), valid as Points3d::valid
-// (elsewhere motion is NaN).
+// motion, left camera frame at t1; about 0 on the static world), valid as Points3d::valid where
+// the object motion fits a float (elsewhere motion is NaN).
 struct ObjectMotion {
     uint32_t width = 0, height = 0;
     std::vector<float> motion;

@@ -902,11 +902,18 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         h.compute_seconds = static_cast<float>(info.total_seconds);
         lidarflow_scene_flow_t msg = flow.message();
         std::vector<uint8_t> bytes = encode_scene_flow(msg);
-        if (bytes.empty()) {
-            err = "encoding the scene flow failed";
+        lf_ego_motion_t ego;
+        lf_ego_motion_init(&ego);
+        std::vector<uint8_t> ego_bytes;
+        if (lf_get_ego_motion(estimator_, &ego) == LF_OK) {
+            lidarflow_ego_motion_t em = ego_motion_message(ego, info.t1_us, info.t0_us, m.sequence);
+            ego_bytes = encode_ego_motion(em);
+        }
+        if (bytes.empty() || ego_bytes.empty()) {
+            err = bytes.empty() ? "encoding the scene flow failed" : "encoding the ego-motion failed";
         } else {
             std::lock_guard<std::mutex> lock(mutex_);
-            outbox_.push_back({std::move(bytes), frame.received_seconds, info.total_seconds});
+            outbox_.push_back({std::move(bytes), std::move(ego_bytes), frame.received_seconds, info.total_seconds});
             return;
         }
     }
@@ -922,6 +929,14 @@ void Bridge::flush_outbox() {
         out.swap(outbox_);
     }
     for (const Outgoing &o : out) {
+        // The ego-motion first: a consumer (and --replay, which counts results) that has the
+        // flow then has its ego-motion too.
+        if (lcm_publish(lcm_, config_.ego_channel.c_str(), o.ego_bytes.data(), static_cast<unsigned>(o.ego_bytes.size())) !=
+            0) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            counters_.last_error = "publishing on " + config_.ego_channel + " failed";
+            log("publishing %zu bytes on %s failed", o.ego_bytes.size(), config_.ego_channel.c_str());
+        }
         const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
                                    static_cast<unsigned>(o.bytes.size()));
         if (rc == 0) publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size());

@@ -47,6 +47,9 @@ struct BridgeConfig {
     std::string calibration_channel = "LIDARFLOW_CALIB";
     std::string flow_channel = "LIDARFLOW_FLOW";
     std::string status_channel = "LIDARFLOW_STATUS";
+    // ego_motion_t of each result, published just before its scene_flow_t (no shard MAC: the
+    // shards coordinate on the flow and status channels only).
+    std::string ego_channel = "LIDARFLOW_EGO_MOTION";
     // A fixed calibration (--calib); when set, calibration messages are counted but not used.
     bool fixed_calibration = false;
     lf_calibration_t calibration{};
@@ -261,6 +264,7 @@ private:
     bool warned_foreign_split_ = false;
     struct Outgoing {
         std::vector<uint8_t> bytes;
+        std::vector<uint8_t> ego_bytes;  // the result's ego_motion_t
         double received_seconds;
         double compute_seconds;
     };

@@ -37,6 +37,7 @@ const char *kUsage =
     "  --lidar-channel NAME     lidar_t or bot_core.pointcloud_t input (default LIDARFLOW_LIDAR)\n"
     "  --calib-channel NAME     calibration_t input (default LIDARFLOW_CALIB)\n"
     "  --flow-channel NAME      scene_flow_t output (default LIDARFLOW_FLOW)\n"
+    "  --ego-channel NAME       ego_motion_t output, one per result (default LIDARFLOW_EGO_MOTION)\n"
     "  --status-channel NAME    status_t output (default LIDARFLOW_STATUS)\n"
     "  --calib FILE             fixed calibration (KITTI calib_cam_to_cam.txt); default: from the channel\n"
     "  --lidar-tolerance-ms T   pair a LiDAR sweep with the stereo frame within T ms (default 20)\n"
@@ -110,7 +111,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
 std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     std::vector<lidarflow::cli::OptionSpec> spec;
     for (const char *name : {"lcm-url", "stereo-channel", "left-channel", "right-channel", "pair-wait-ms",
-                             "pair-buffer", "lidar-channel", "calib-channel", "flow-channel",
+                             "pair-buffer", "lidar-channel", "calib-channel", "flow-channel", "ego-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
                              "lidar-buffer", "queue", "shard", "shard-timeout", "shard-key", "encoding", "step", "option", "status-period", "replay",
                              "out", "frames"})
@@ -145,6 +146,11 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
     config->calibration_channel = args.str("calib-channel", config->calibration_channel);
     config->flow_channel = args.str("flow-channel", config->flow_channel);
     config->status_channel = args.str("status-channel", config->status_channel);
+    config->ego_channel = args.str("ego-channel", config->ego_channel);
+    if (config->ego_channel == config->flow_channel || config->ego_channel == config->status_channel) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --ego-channel must differ from the flow and status channels\n");
+        return false;
+    }
     config->verbose = args.flag("verbose");
     if (args.has("lidar-to-camera")) {
         const std::string v = args.str("lidar-to-camera", "");
@@ -319,13 +325,13 @@ int main(int argc, char **argv) {
             lcm_destroy(lcm);
             return 1;
         }
-        std::fprintf(stderr, "lidarflow-lcm-bridge: lidarflow %s, listening on %s / %s / %s%s, publishing %s / %s\n",
+        std::fprintf(stderr, "lidarflow-lcm-bridge: lidarflow %s, listening on %s / %s / %s%s, publishing %s / %s / %s\n",
                      lf_version_string(),
                      config.left_channel.empty() ? config.stereo_channel.c_str()
                                                  : (config.left_channel + " + " + config.right_channel).c_str(),
                      config.lidar_channel.c_str(),
                      config.calibration_channel.c_str(), config.fixed_calibration ? " (calibration from --calib)" : "",
-                     config.flow_channel.c_str(), config.status_channel.c_str());
+                     config.flow_channel.c_str(), config.ego_channel.c_str(), config.status_channel.c_str());
         while (!g_stop) {
             if (bridge->run_once(100) != 0) {
                 std::fprintf(stderr, "lidarflow-lcm-bridge: LCM receive failed; stopping\n");

@@ -64,8 +64,8 @@ private:
 struct Output {
     EventLogWriter *log = nullptr;
     int64_t now = 0;  // log clock: timestamp of the input event being handled
-    int64_t flows = 0, status = 0, failures = 0;
-    std::string flow_channel;
+    int64_t flows = 0, status = 0, egos = 0, failures = 0;
+    std::string flow_channel, ego_channel;
 };
 
 void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
@@ -75,6 +75,7 @@ void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
         return;
     }
     if (out->flow_channel == channel) ++out->flows;
+    else if (out->ego_channel == channel) ++out->egos;
     else ++out->status;
 }
 
@@ -118,6 +119,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     EventLogWriter writer;
     Output out;
     out.flow_channel = config.flow_channel;
+    out.ego_channel = config.ego_channel;
     out.log = &writer;
     if (!writer.open(out_path)) return "cannot write the log " + writer.error();
     lcm_t *lcm = lcm_create("memq://");
@@ -125,11 +127,12 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     std::string error;
     {
         std::unique_ptr<Bridge> bridge = Bridge::create(config, lcm, &error);
-        lcm_subscription_t *subs[2] = {nullptr, nullptr};
+        lcm_subscription_t *subs[3] = {nullptr, nullptr, nullptr};
         if (bridge) {
             subs[0] = lcm_subscribe(lcm, config.flow_channel.c_str(), write_output, &out);
             subs[1] = lcm_subscribe(lcm, config.status_channel.c_str(), write_output, &out);
-            if (!subs[0] || !subs[1]) error = "cannot subscribe to the output channels";
+            subs[2] = lcm_subscribe(lcm, config.ego_channel.c_str(), write_output, &out);
+            if (!subs[0] || !subs[1] || !subs[2]) error = "cannot subscribe to the output channels";
         }
         auto handled = [&] {
             const Counters c = bridge->counters();
@@ -321,6 +324,8 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     if (error.empty() && out.failures) error = printf_string("%" PRId64 " events could not be written to %s", out.failures, out_path.c_str());
     if (error.empty() && out.flows != report->counters.results_published)
         error = printf_string("%" PRId64 " results published, %" PRId64 " written", report->counters.results_published, out.flows);
+    if (error.empty() && out.egos != out.flows)
+        error = printf_string("%" PRId64 " results written with %" PRId64 " ego-motions", out.flows, out.egos);
     return error;
 }
 

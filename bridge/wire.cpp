@@ -73,6 +73,8 @@ constexpr int kStatusFixed = 221;
 // last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
 // compute_seconds 4, plane_size 4, valid_size 4 = 72.
 constexpr int kFlowFixed = 72;
+// ego_motion_t: utime 8, utime0 8, sequence 4, state 1, transform 128, inliers 4, candidates 4 = 157.
+constexpr int kEgoMotionFixed = 157;
 
 int bytes_per_pixel(int8_t format) {
     switch (format) {
@@ -693,6 +695,64 @@ std::string decode_bot_pointcloud(const void *data, size_t size, const double *T
     out.in_lidar_frame = true;
     out.lidar_xyz = std::move(lidar_xyz);
     std::copy(T, T + 16, out.lidar_to_camera);
+    return "";
+}
+
+lidarflow_ego_motion_t ego_motion_message(const lf_ego_motion_t &ego, int64_t utime, int64_t utime0, int32_t sequence) {
+    lidarflow_ego_motion_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.utime0 = utime0;
+    m.sequence = sequence;
+    m.state = static_cast<int8_t>(ego.state);
+    for (int k = 0; k < 16; ++k) m.transform[k] = ego.transform[k];
+    // The counts are matches of one frame: far below 2^31.
+    m.inliers = static_cast<int32_t>(std::min<uint32_t>(ego.inliers, std::numeric_limits<int32_t>::max()));
+    m.candidates = static_cast<int32_t>(std::min<uint32_t>(ego.candidates, std::numeric_limits<int32_t>::max()));
+    return m;
+}
+
+std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg) {
+    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_ego_motion_t_encoded_size(&msg)));
+    const int n = lidarflow_ego_motion_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
+    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
+    return buf;
+}
+
+std::string decode_ego_motion(const void *data, size_t size, lidarflow_ego_motion_t &out) {
+    const std::string err = check_wire(data, size, "lidarflow.ego_motion_t", __lidarflow_ego_motion_t_get_hash(),
+                                       kEgoMotionFixed, {});
+    if (!err.empty()) return err;
+    lidarflow_ego_motion_t m;
+    std::memset(&m, 0, sizeof m);
+    if (lidarflow_ego_motion_t_decode(data, 0, static_cast<int>(size), &m) != static_cast<int>(size))
+        return "decoding failed";
+    if (m.state < LIDARFLOW_EGO_MOTION_T_STATE_OK || m.state > LIDARFLOW_EGO_MOTION_T_STATE_DISABLED)
+        return printf_string("unknown state %d (0 ok .. 4 disabled)", m.state);
+    const double *T = m.transform;
+    for (int k = 0; k < 16; ++k)
+        if (!std::isfinite(T[k])) return printf_string("transform[%d] is not finite", k);
+    if (T[12] != 0 || T[13] != 0 || T[14] != 0 || T[15] != 1)
+        return printf_string("transform's last row is %g %g %g %g, not 0 0 0 1", T[12], T[13], T[14], T[15]);
+    if (m.state == LIDARFLOW_EGO_MOTION_T_STATE_OK) {
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                double dot = 0;
+                for (int k = 0; k < 3; ++k) dot += T[4 * k + i] * T[4 * k + j];
+                if (!(std::fabs(dot - (i == j ? 1.0 : 0.0)) <= 1e-6))
+                    return printf_string("transform's rotation is not orthonormal ((R^T R)[%d][%d] = %.9g)", i, j, dot);
+            }
+        const double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
+                           T[2] * (T[4] * T[9] - T[5] * T[8]);
+        if (!(det > 0)) return printf_string("transform's rotation has determinant %g (a reflection)", det);
+    } else {
+        for (int k = 0; k < 16; ++k)
+            if (T[k] != (k % 5 == 0 ? 1.0 : 0.0))
+                return printf_string("state %d (no ego-motion) with a transform other than the identity", m.state);
+    }
+    if (m.inliers < 0 || m.candidates < 0 || m.inliers > m.candidates)
+        return printf_string("inliers %d, candidates %d (0 <= inliers <= candidates)", m.inliers, m.candidates);
+    out = m;
     return "";
 }
 

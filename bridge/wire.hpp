@@ -15,6 +15,7 @@
 
 #include "lidarflow/lidarflow.h"
 #include "lidarflow_calibration_t.h"
+#include "lidarflow_ego_motion_t.h"
 #include "lidarflow_lidar_t.h"
 #include "lidarflow_scene_flow_t.h"
 #include "lidarflow_status_t.h"
@@ -175,5 +176,17 @@ struct StatusMessage {
 // Decodes a raw status_t, checked like the inputs (and for a NUL-terminated last_error).
 // Returns "" or the problem.
 std::string decode_status(const void *data, size_t size, StatusMessage &out);
+
+// ego_motion_t of a result: header fields from the caller, the rest from lf_get_ego_motion.
+lidarflow_ego_motion_t ego_motion_message(const lf_ego_motion_t &ego, int64_t utime, int64_t utime0, int32_t sequence);
+
+// Encoded bytes of a message (lcm-gen's encoder).
+std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg);
+
+// Decodes a raw ego_motion_t, checked like the inputs, then: state one of STATE_*; transform
+// finite with last row 0 0 0 1; its 3x3 block a proper rotation (R^T R within 1e-6 of I per
+// entry, det R > 0) when STATE_OK, else the identity; 0 <= inliers <= candidates. Returns "" or
+// the problem.
+std::string decode_ego_motion(const void *data, size_t size, lidarflow_ego_motion_t &out);
 
 }  // namespace lidarflow::bridge

@@ -44,6 +44,8 @@ std::unique_ptr<Result> make_result(const lidarflow::pipeline::EstimatorResult &
     out->t1_us = t1;
     out->timings = r.timings;
     out->total_seconds = r.total_seconds;
+    out->ego = r.ego;
+    out->ego_state = r.ego_state;
     return out;
 }
 

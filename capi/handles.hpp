@@ -41,6 +41,8 @@ struct Result {
     int64_t t0_us = 0, t1_us = 0;
     std::vector<pipeline::StageTime> timings;
     double total_seconds = 0;
+    interpolation::EgoMotion ego;  // stage 4's background motion (pipeline::EstimatorResult::ego)
+    pipeline::EgoState ego_state = pipeline::EgoState::NotRun;
 };
 
 }  // namespace lidarflow::capi

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Result queries of the C ABI: info, timings, copies into caller planes, borrowed views and
 // the 3-D (metric) form. Every argument is checked before the first byte is written.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -182,6 +183,71 @@ LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buff
                 return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;
             };
             if (b.points.data) std::memcpy(row(b.points), points.data(), points.size() * sizeof(float));
+            if (b.motion.data) std::memcpy(row(b.motion), motion.data(), motion.size() * sizeof(float));
+            if (b.valid.data) std::memcpy(row(b.valid), valid.data(), valid.size());
+        }
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_ego_motion(lf_estimator_t *estimator, lf_ego_motion_t *ego) {
+    return guarded(sink_of(estimator), "lf_get_ego_motion", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(ego, "ego");
+        check_struct_size(ego, ego->struct_size, sizeof(lf_ego_motion_t), "ego");
+        const Result &r = ready_result(estimator);
+        lf_ego_motion_t out;
+        std::memset(&out, 0, sizeof out);
+        out.state = static_cast<int32_t>(r.ego_state);
+        for (int i = 0; i < 4; ++i) out.transform[5 * i] = 1.0;
+        if (r.ego_state == lidarflow::pipeline::EgoState::Ok)
+            for (int i = 0; i < 3; ++i) {
+                for (int j = 0; j < 3; ++j) out.transform[4 * i + j] = r.ego.R[3 * i + j];
+                out.transform[4 * i + 3] = r.ego.t[i];
+            }
+        out.inliers = static_cast<uint32_t>(std::max(0, r.ego.inliers));
+        out.candidates = static_cast<uint32_t>(std::max(0, r.ego.candidates));
+        write_struct(ego, out);
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_motion_buffers_t *buffers) {
+    return guarded(sink_of(estimator), "lf_get_object_motion", [&] {
+        require_non_null(estimator, "estimator");
+        require_non_null(buffers, "buffers");
+        check_struct_size(buffers, buffers->struct_size, sizeof(lf_object_motion_buffers_t), "buffers");
+        const Result &r = ready_result(estimator);
+        const lf_object_motion_buffers_t &b = *buffers;
+        check_buffer_size(b.width, b.height, r);
+        check_plane(b.motion, b.width, 3 * sizeof(float), "motion");
+        check_plane(b.valid, b.width, 1, "valid");
+        require(r.ego_state == lidarflow::pipeline::EgoState::Ok, ErrorCode::BadState,
+                std::string("no object motion: the ego-motion is ") + lidarflow::pipeline::ego_state_text(r.ego_state));
+
+        const lidarflow::StereoCamera &cam = estimator->calibration.camera;
+        const int w = r.field.u.cols, h = r.field.u.rows;
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        std::vector<float> motion(3 * static_cast<size_t>(w));
+        std::vector<unsigned char> valid(static_cast<size_t>(w));
+        for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+                lidarflow::ScenePoint3 q;
+                double m[3] = {0, 0, 0};
+                const bool ok = r.field.valid(y, x) &&
+                                lidarflow::triangulate_scene_flow(cam, x, y, r.field.u(y, x), r.field.v(y, x),
+                                                                  r.field.d0(y, x), r.field.d1(y, x), &q);
+                if (ok) lidarflow::object_motion(q, r.ego.R, r.ego.t, m);
+                // Same validity as lf_get_points3d: every written value fits a float.
+                const bool fits = ok && std::fabs(m[0]) <= std::numeric_limits<float>::max() &&
+                                  std::fabs(m[1]) <= std::numeric_limits<float>::max() &&
+                                  std::fabs(m[2]) <= std::numeric_limits<float>::max();
+                valid[x] = fits ? 1 : 0;
+                for (int c = 0; c < 3; ++c) motion[3 * x + c] = fits ? static_cast<float>(m[c]) : nan;
+            }
+            auto row = [&](const lf_plane_t &pl) {
+                return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;
+            };
             if (b.motion.data) std::memcpy(row(b.motion), motion.data(), motion.size() * sizeof(float));
             if (b.valid.data) std::memcpy(row(b.valid), valid.data(), valid.size());
         }

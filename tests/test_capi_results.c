@@ -80,6 +80,14 @@ static void test_not_ready(void **state) {
     EXPECT_FAIL(e, lf_get_points3d(e, &p), LF_ERR_NOT_READY, "no result yet");
     EXPECT_FAIL(e, lf_get_timing(e, 0, &name, NULL), LF_ERR_NOT_READY, "no result yet");
     assert_null(name);
+    lf_ego_motion_t ego;
+    lf_ego_motion_init(&ego);
+    lf_object_motion_buffers_t om;
+    lf_object_motion_buffers_init(&om);
+    EXPECT_FAIL(e, lf_get_ego_motion(e, &ego), LF_ERR_NOT_READY, "no result yet");
+    EXPECT_FAIL(e, lf_get_object_motion(e, &om), LF_ERR_NOT_READY, "no result yet");
+    EXPECT_FAIL(NULL, lf_get_ego_motion(NULL, &ego), LF_ERR_INVALID_ARGUMENT, "estimator is NULL");
+    EXPECT_FAIL(NULL, lf_get_object_motion(NULL, &om), LF_ERR_INVALID_ARGUMENT, "estimator is NULL");
     assert_int_equal(lf_has_result(e), 0);
     assert_int_equal(lf_has_result(NULL), 0);
     EXPECT_FAIL(NULL, lf_get_result_info(NULL, &info), LF_ERR_INVALID_ARGUMENT, "estimator is NULL");
@@ -303,6 +311,104 @@ static void test_points3d_beyond_float_range(void **state) {
     lf_destroy(e);
 }
 
+/* The scene is one plane at 5 m moved by (3, 1) px: a rigid motion of the whole view. The
+ * ego-motion explains it, so the object motion is about 0 wherever the result is right. */
+static void test_ego_motion(void **state) {
+    fixture_t *f = (fixture_t *)*state;
+    lf_estimator_t *e = f->est;
+    lf_ego_motion_t ego;
+    lf_ego_motion_init(&ego);
+    EXPECT_FAIL(e, lf_get_ego_motion(e, NULL), LF_ERR_INVALID_ARGUMENT, "ego is NULL");
+    ego.struct_size = 8;
+    EXPECT_FAIL(e, lf_get_ego_motion(e, &ego), LF_ERR_INVALID_ARGUMENT, "struct_size");
+    lf_ego_motion_init(&ego);
+    assert_int_equal(lf_get_ego_motion(e, &ego), LF_OK);
+    assert_int_equal(ego.state, LF_EGO_OK);
+    assert_int_equal(ego.struct_size, sizeof ego);
+    assert_true(ego.inliers > 0.5 * ego.candidates && ego.candidates > 0);
+    const double *T = ego.transform;
+    assert_true(T[12] == 0 && T[13] == 0 && T[14] == 0 && T[15] == 1);
+    /* T moves the plane's centre pixel point (0, 0, 5) m by the scene's (3, 1) px at 5 m depth. */
+    const double X = T[3] + 5 * T[2], Y = T[7] + 5 * T[6], Z = T[11] + 5 * T[10];
+    assert_true(fabs(100 * X / Z - 3) < 0.3 && fabs(100 * Y / Z - 1) < 0.3 && fabs(Z - 5) < 0.3);
+
+    static float om[W * H * 3];
+    static uint8_t valid[W * H];
+    lf_object_motion_buffers_t b;
+    lf_object_motion_buffers_init(&b);
+    b.width = W;
+    b.height = H;
+    b.motion.data = om;
+    b.motion.stride_bytes = W * 12;
+    b.valid.data = valid;
+    b.valid.stride_bytes = W;
+    lf_object_motion_buffers_t bad = b;
+    bad.motion.stride_bytes = W * 4;
+    EXPECT_FAIL(e, lf_get_object_motion(e, &bad), LF_ERR_SIZE_MISMATCH, "motion.stride_bytes 640");
+    bad = b;
+    bad.height = 3;
+    EXPECT_FAIL(e, lf_get_object_motion(e, &bad), LF_ERR_SIZE_MISMATCH, "buffers are 160x3");
+    EXPECT_FAIL(e, lf_get_object_motion(e, NULL), LF_ERR_INVALID_ARGUMENT, "buffers is NULL");
+    bad = b;
+    bad.struct_size = 4;
+    EXPECT_FAIL(e, lf_get_object_motion(e, &bad), LF_ERR_INVALID_ARGUMENT, "struct_size");
+    assert_int_equal(lf_get_object_motion(e, &b), LF_OK);
+
+    static float pts[W * H * 3], mot[W * H * 3];
+    static uint8_t valid3d[W * H];
+    lf_points3d_buffers_t p = packed_points3d(pts, mot, valid3d);
+    assert_int_equal(lf_get_points3d(e, &p), LF_OK);
+    int still = 0;
+    for (int i = 0; i < W * H; ++i) {
+        assert_int_equal(valid[i], valid3d[i]);
+        if (!valid[i]) {
+            assert_true(isnan(om[3 * i]) && isnan(om[3 * i + 1]) && isnan(om[3 * i + 2]));
+            continue;
+        }
+        /* The documented formula, X1 - T X0, from lf_get_points3d's X0 and X1 = X0 + motion. */
+        for (int k = 0; k < 3; ++k) {
+            const double x1 = (double)pts[3 * i + k] + mot[3 * i + k];
+            const double tx = T[4 * k] * pts[3 * i] + T[4 * k + 1] * pts[3 * i + 1] + T[4 * k + 2] * pts[3 * i + 2] +
+                              T[4 * k + 3];
+            if (fabs(om[3 * i + k] - (x1 - tx)) > 1e-4 * (1 + fabs(x1)))
+                fail_msg("pixel %d [%d]: %.7g, expected %.7g", i, k, om[3 * i + k], x1 - tx);
+        }
+        still += om[3 * i] * om[3 * i] + om[3 * i + 1] * om[3 * i + 1] + om[3 * i + 2] * om[3 * i + 2] < 0.02f * 0.02f;
+    }
+    assert_true(still > 0.9 * W * H);
+}
+
+/* Without stage 4 there is no fit: a state says so, the transform is the identity and the
+ * object motion is refused with the reason. */
+static void test_ego_motion_not_run(void **state) {
+    fixture_t *f = (fixture_t *)*state;
+    lf_options_t *o = scene_options(1);
+    assert_int_equal(lf_options_set_string(o, "last_stage", "sparse"), LF_OK);
+    lf_calibration_t c = scene_calibration(&f->scene);
+    lf_estimator_t *e = NULL;
+    assert_int_equal(lf_create(o, &c, &e), LF_OK);
+    lf_options_destroy(o);
+    assert_int_equal(scene_push_pair(e, &f->scene, 0, 1), LF_OK);
+    lf_ego_motion_t ego;
+    lf_ego_motion_init(&ego);
+    assert_int_equal(lf_get_ego_motion(e, &ego), LF_OK);
+    assert_int_equal(ego.state, LF_EGO_NOT_RUN);
+    for (int k = 0; k < 16; ++k) assert_true(ego.transform[k] == (k % 5 == 0 ? 1.0 : 0.0));
+    assert_int_equal(ego.inliers, 0);
+    assert_int_equal(ego.candidates, 0);
+    static float om[W * H * 3];
+    lf_object_motion_buffers_t b;
+    lf_object_motion_buffers_init(&b);
+    b.width = W;
+    b.height = H;
+    b.motion.data = om;
+    b.motion.stride_bytes = W * 12;
+    om[0] = 42.0f;
+    EXPECT_FAIL(e, lf_get_object_motion(e, &b), LF_ERR_BAD_STATE, "before interpolation");
+    assert_true(om[0] == 42.0f); /* nothing written */
+    lf_destroy(e);
+}
+
 /* Creates an estimator from `o` (destroyed here) and pushes the scene's pair into it. */
 static lf_estimator_t *create_and_push(lf_options_t *o, const scene_t *s) {
     lf_calibration_t c = scene_calibration(s);
@@ -522,6 +628,8 @@ int main(void) {
         cmocka_unit_test(test_views_borrow_the_result),
         cmocka_unit_test(test_points3d),
         cmocka_unit_test(test_points3d_beyond_float_range),
+        cmocka_unit_test(test_ego_motion),
+        cmocka_unit_test(test_ego_motion_not_run),
         cmocka_unit_test(test_sparse_stage),
         cmocka_unit_test(test_half_resolution),
         cmocka_unit_test(test_lidar_kinds_agree),

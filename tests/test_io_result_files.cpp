@@ -303,6 +303,44 @@ void test_point_cloud(void **) {
     test::expect_error([&] { io::read_ply((dir / "neg.ply").string()); }, ErrorCode::Format);
     test::expect_error([&] { io::scene_points(f, StereoCamera{}, image); }, ErrorCode::InvalidArgument);
     test::expect_error([&] { io::scene_points(f, cam, cv::Mat(4, 7, CV_8UC3)); }, ErrorCode::SizeMismatch);
+    assert_true(ply.find("omx") == std::string::npos);  // no ego-motion given: the original nine
+
+    // With the ego-motion T: omx omy omz = X1 - T X0, appended after blue.
+    const double a = 0.05;
+    const cv::Matx44d T(std::cos(a), 0, std::sin(a), 0.1, 0, 1, 0, -0.02, -std::sin(a), 0, std::cos(a), -0.9, 0, 0, 0, 1);
+    const std::vector<io::CloudPoint> om = io::scene_points(f, cam, image, &T);
+    assert_int_equal(om.size(), pts.size());
+    for (size_t i = 0; i < om.size(); ++i) {
+        assert_true(om[i].has_object_motion && !pts[i].has_object_motion);
+        const cv::Vec4d x0(om[i].position[0], om[i].position[1], om[i].position[2], 1);
+        const cv::Vec4d moved = T * x0;
+        for (int k = 0; k < 3; ++k) {
+            const double want = om[i].position[k] + om[i].motion[k] - moved[k];
+            assert_true(std::fabs(om[i].object_motion[k] - want) < 1e-4 * (1 + std::fabs(want)));
+        }
+    }
+    io::write_ply((dir / "om.ply").string(), om);
+    const std::string om_ply = slurp(dir / "om.ply");
+    assert_non_null(std::strstr(om_ply.c_str(), "property uchar blue\nproperty float omx\nproperty float omy\n"
+                                                "property float omz\nend_header\n"));
+    const std::vector<io::CloudPoint> om_back = io::read_ply((dir / "om.ply").string());
+    assert_int_equal(om_back.size(), om.size());
+    for (size_t i = 0; i < om.size(); ++i)
+        assert_true(om_back[i].has_object_motion && om_back[i].object_motion == om[i].object_motion &&
+                    om_back[i].position == om[i].position && om_back[i].rgb == om[i].rgb);
+    // A reader that knows only the first nine properties finds them where they were, in 39-byte
+    // records instead of 27.
+    const size_t body = om_ply.find("end_header\n") + 11;
+    assert_int_equal(om_ply.size() - body, 39 * om.size());
+    for (size_t i = 0; i < om.size(); ++i) {
+        float x;
+        std::memcpy(&x, om_ply.data() + body + 39 * i, 4);
+        assert_true(x == om[i].position[0]);
+        assert_true(static_cast<uchar>(om_ply[body + 39 * i + 24]) == om[i].rgb[0]);
+    }
+    std::vector<io::CloudPoint> mixed = om;
+    mixed.back().has_object_motion = false;
+    test::expect_error([&] { io::write_ply((dir / "mixed.ply").string(), mixed); }, ErrorCode::InvalidArgument);
 }
 
 }  // namespace

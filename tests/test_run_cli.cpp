@@ -6,6 +6,7 @@
 // bad arguments exit 2 and bad files 1. Runs the built binary ($LIDARFLOW_CLI, set by CTest).
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -184,6 +185,9 @@ void test_formats_and_points(void **) {
         assert_true(p.position[2] > 0);
     }
     expect_contains(r, "wrote     " + ply.string() + ": " + std::to_string(cloud.size()) + " points");
+    // Stage sparse: no ego-motion, so no object motion either (and run says why).
+    expect_contains(r, "ego       not fitted: the result comes from a stage before interpolation");
+    for (const io::CloudPoint &p : cloud) assert_false(p.has_object_motion);
 
     // viz reads every format run wrote: the same picture from each, and error maps against the
     // KITTI PNGs of the same result.
@@ -221,6 +225,39 @@ void test_formats_and_points(void **) {
     const cv::Mat bev = io::read_image((s.dir / "bev.png").string());
     assert_int_equal(bev.cols, 600);
     assert_true(bev.rows > 600);  // + the speed colour bar
+}
+
+// The whole pipeline with the rig: run reports the ego-motion, its PLY carries the object motion
+// (omx omy omz), and viz --points colours by it, saying so in its output and its legend.
+void test_points_object_motion(void **) {
+    const Scene s = make_scene("cli_run_object_motion");
+    const fs::path ply = s.dir / "cloud.ply";
+    const Result r = run("run" + s.images + " --lidar0 " + q(s.k.lidar("000000", 0)) + " --calib " +
+                             q(s.k.calib_cam_to_cam("000000")) + " --preset realtime --points " + q(ply) + " --out " +
+                             q(s.dir / "o"),
+                         s.dir);
+    if (r.code != 0) fail_msg("run --points failed: %s", r.output.c_str());
+    expect_contains(r, "ego       T t = (");
+    expect_contains(r, "red green blue, omx omy omz [m])");
+    const std::vector<io::CloudPoint> cloud = io::read_ply(ply.string());
+    assert_true(cloud.size() > 1000);
+    std::vector<double> moving, still;
+    for (const io::CloudPoint &p : cloud) {
+        assert_true(p.has_object_motion && cv::checkRange(p.object_motion));
+        moving.push_back(cv::norm(p.motion));
+        still.push_back(cv::norm(p.object_motion));
+    }
+    std::nth_element(moving.begin(), moving.begin() + moving.size() / 2, moving.end());
+    std::nth_element(still.begin(), still.begin() + still.size() / 2, still.end());
+    std::printf("median |motion| %.3f m, |object motion| %.3f m\n", moving[moving.size() / 2], still[still.size() / 2]);
+    // The synthetic camera moves: most of the world moves with it and stays still once it is removed.
+    assert_true(moving[moving.size() / 2] > 0.1);
+    assert_true(still[still.size() / 2] < 0.25 * moving[moving.size() / 2]);
+    const Result v = run("viz --points " + q(ply) + " --out " + q(s.dir / "bev.png"), s.dir);
+    if (v.code != 0) fail_msg("viz --points failed: %s", v.output.c_str());
+    expect_contains(v, "colour = |object motion|, ego-motion removed");
+    const cv::Mat bev = io::read_image((s.dir / "bev.png").string());
+    assert_true(bev.cols == 600 && bev.rows > 600);  // + the colour bar of the object motion
 }
 
 void expect_failure(const std::string &args, const fs::path &dir, int code, const std::string &message) {
@@ -341,6 +378,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_velodyne_inputs),
         cmocka_unit_test(test_formats_and_points),
+        cmocka_unit_test(test_points_object_motion),
         cmocka_unit_test(test_bad_arguments),
         cmocka_unit_test(test_output_names_and_jpeg_inputs),
         cmocka_unit_test(test_quiet_and_verbose),

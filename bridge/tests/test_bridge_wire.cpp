@@ -4,9 +4,11 @@
 // terminating NUL, messages beyond what an int counts. Messages are written byte by byte here,
 // since lcm-gen's encoder cannot produce most of them (it has the same memcpy on empty arrays).
 // Found by, and kept in step with, the fuzz targets of tests/fuzz/ (fuzz_lcm_*).
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -257,11 +259,59 @@ void test_status_string(void **) {
 
 }  // namespace
 
+// ego_motion_t: what ego_motion_message + encode_ego_motion write decodes to the same fields;
+// the decoder refuses what is no rigid motion (the same rules as lidarflow_lcm's decoder).
+void test_ego_motion(void **) {
+    lf_ego_motion_t e;
+    lf_ego_motion_init(&e);
+    const double c = std::cos(0.1), s = std::sin(0.1);
+    const double T[16] = {c, 0, s, 0.1, 0, 1, 0, 0, -s, 0, c, -0.8, 0, 0, 0, 1};
+    std::copy(T, T + 16, e.transform);
+    e.inliers = 5;
+    e.candidates = 9;
+    lidarflow_ego_motion_t m = ego_motion_message(e, 2000, 1000, 7);
+    const std::vector<uint8_t> bytes = encode_ego_motion(m);
+    assert_int_equal(bytes.size(), 165);
+    lidarflow_ego_motion_t got;
+    assert_true(decode_ego_motion(bytes.data(), bytes.size(), got).empty());
+    assert_true(got.utime == 2000 && got.utime0 == 1000 && got.sequence == 7 && got.state == 0);
+    assert_true(got.inliers == 5 && got.candidates == 9);
+    assert_memory_equal(got.transform, T, sizeof T);
+    assert_error(decode_ego_motion(bytes.data(), bytes.size() - 1, got), "truncated");
+
+    auto refused = [&](lidarflow_ego_motion_t bad, const char *needle) {
+        const std::vector<uint8_t> b = encode_ego_motion(bad);
+        assert_error(decode_ego_motion(b.data(), b.size(), got), needle);
+    };
+    lidarflow_ego_motion_t bad = m;
+    bad.state = 5;
+    refused(bad, "unknown state 5");
+    bad = m;
+    bad.transform[3] = std::numeric_limits<double>::quiet_NaN();
+    refused(bad, "transform[3] is not finite");
+    bad = m;
+    bad.transform[14] = 0.5;
+    refused(bad, "last row");
+    bad = m;
+    bad.transform[1] = 0.5;
+    refused(bad, "not orthonormal");
+    bad = m;
+    for (int r = 0; r < 3; ++r) bad.transform[4 * r] = -bad.transform[4 * r];
+    refused(bad, "determinant");
+    bad = m;
+    bad.state = LIDARFLOW_EGO_MOTION_T_STATE_TOO_FEW_INLIERS;
+    refused(bad, "other than the identity");
+    bad = m;
+    bad.inliers = 10;
+    refused(bad, "inliers 10, candidates 9");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stereo_zero_size),  cmocka_unit_test(test_oversized_message),
         cmocka_unit_test(test_flow_size_overflow), cmocka_unit_test(test_flow_consistency),
         cmocka_unit_test(test_lidar_transform_range), cmocka_unit_test(test_status_string),
+        cmocka_unit_test(test_ego_motion),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -510,6 +510,75 @@ static inline void lf_points3d_buffers_init(lf_points3d_buffers_t *b) {
  * 12 bytes per pixel). Errors, ownership and threads as lf_get_result(). */
 LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buffers_t *buffers);
 
+/* ----- Ego-motion and object motion ------------------------------------------------- */
+
+/* Whether lf_ego_motion_t.transform holds the camera's metric ego-motion (values never change;
+ * new ones are appended). lf_create requires a calibration and no option key turns the model
+ * off, so through this ABI only LF_EGO_OK, LF_EGO_NOT_RUN and LF_EGO_TOO_FEW_INLIERS occur
+ * today; the others name what the core reports to its other front ends (the CLI). */
+typedef enum lf_ego_state_t {
+    LF_EGO_OK = 0,
+    LF_EGO_NOT_RUN = 1,          /* the result comes from a stage before interpolation ("last_stage") */
+    LF_EGO_NO_CALIBRATION = 2,   /* the estimator has no stereo calibration (all-zero): image terms only */
+    LF_EGO_TOO_FEW_INLIERS = 3,  /* the matches agree on no dominant rigid (background) motion */
+    LF_EGO_DISABLED = 4          /* the options turn the rigid background model off */
+} lf_ego_state_t;
+
+/* The rigid motion of the static scene between the result's two frames, as stage 4
+ * (interpolation) fits it to the sparse matches (RANSAC, then a refit on its inliers).
+ * Convention: transform = T maps the coordinates of a static point in the left rectified camera
+ * frame at t0 (X0, metres) to its coordinates in that camera's frame at t1:
+ *     X1 = T * [X0; 1],   T = [R t; 0 0 0 1]   (row-major: transform[4 * row + col]).
+ * The camera's own motion (its pose at t1 expressed in its frame at t0) is T^-1. Driving
+ * forward makes t[2] (transform[11]) negative: static points come closer. */
+typedef struct lf_ego_motion_t {
+    uint32_t struct_size;   /* set by the caller: sizeof(lf_ego_motion_t) */
+    int32_t state;          /* lf_ego_state_t; transform is the identity unless LF_EGO_OK */
+    double transform[16];   /* T, row-major, translation in metres */
+    uint32_t inliers;       /* matches the motion explains (d1 within 1 px, flow within 2 px at the
+                             * processing resolution) */
+    uint32_t candidates;    /* matches the fit saw (0 when no fit ran) */
+} lf_ego_motion_t;
+
+static inline void lf_ego_motion_init(lf_ego_motion_t *e) {
+    memset(e, 0, sizeof *e);
+    e->struct_size = (uint32_t)sizeof *e;
+}
+
+/* Fills *ego (caller-owned) from the latest result; no computation (the fit ran with the
+ * result). Returns LF_OK whenever it filled *ego, also when ego->state says there is no
+ * metric ego-motion (then transform is the identity; inliers and candidates report what a fit
+ * saw). Errors: LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small), LF_ERR_NOT_READY (no
+ * result yet). One thread at a time per estimator. */
+LF_API int32_t lf_get_ego_motion(lf_estimator_t *estimator, lf_ego_motion_t *ego);
+
+/* Caller buffers for lf_get_object_motion(). */
+typedef struct lf_object_motion_buffers_t {
+    uint32_t struct_size;    /* sizeof(lf_object_motion_buffers_t) */
+    uint32_t width, height;  /* must equal the result's */
+    /* float32 (mx, my, mz) per pixel [m]: X1 - T X0 with X0, X1 the pixel's point at t0 and
+     * t1 (as lf_get_points3d) and T of lf_get_ego_motion: the scene flow with the camera's own
+     * motion taken out, in the left camera frame at t1. About 0 on the static world. */
+    lf_plane_t motion;
+    /* uint8: 1 where lf_points3d_buffers_t.valid is 1 and the object motion fits a float32
+     * (in practice: the same pixels); elsewhere motion is NaN. */
+    lf_plane_t valid;
+} lf_object_motion_buffers_t;
+
+static inline void lf_object_motion_buffers_init(lf_object_motion_buffers_t *b) {
+    memset(b, 0, sizeof *b);
+    b->struct_size = (uint32_t)sizeof *b;
+}
+
+/* Writes the latest result's object motion into the non-NULL planes of *buffers (motion rows
+ * hold 12 bytes per pixel). Errors as lf_get_points3d(), plus LF_ERR_BAD_STATE when
+ * lf_get_ego_motion() reports a state other than LF_EGO_OK (the message says which). Nothing
+ * is written on error. The planes stay the caller's; only written during the call. One thread
+ * at a time per estimator. */
+LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_motion_buffers_t *buffers);
+
+/* ----- End of ego-motion and object motion ------------------------------------------- */
+
 /* Message of the most recent failed call on `estimator` ("" after a successful one). Owned by
  * the estimator, valid until the next call on it.
  * lf_last_error(NULL) is the message of the calling thread's most recent failed call (of any

@@ -57,6 +57,7 @@
 #ifndef LIDARFLOW_HPP
 #define LIDARFLOW_HPP
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -539,6 +540,34 @@ struct Points3d {
 #endif
 };
 
+// The static scene's rigid motion t0 -> t1 (lf_get_ego_motion): transform T, row-major 4x4,
+// maps a static point's coordinates in the left camera frame at t0 to those at t1
+// (X1 = T [X0; 1], metres); the camera's own motion is T^-1. inliers / candidates: the matches
+// the fit explained / saw.
+struct EgoMotion {
+    std::array<double, 16> transform{};
+    uint32_t inliers = 0, candidates = 0;
+
+#if LIDARFLOW_USE_OPENCV
+    cv::Matx44d matx() const { return cv::Matx44d(transform.data()); }
+#endif
+};
+
+// Object motion of the latest result (lf_get_object_motion), owned by the caller; width * height
+// entries, row-major: motion (mx, my, mz) [m] = X1 - T X0 (scene flow without the camera's
+// motion, left camera frame at t1; about 0 on the static world), valid as Points3d::valid where
+// the object motion fits a float (elsewhere motion is NaN).
+struct ObjectMotion {
+    uint32_t width = 0, height = 0;
+    std::vector<float> motion;
+    std::vector<uint8_t> valid;
+
+#if LIDARFLOW_USE_OPENCV
+    // A new CV_32FC3 copy owned by the caller, NaN where not valid.
+    cv::Mat motion_mat() const { return detail::copy_to_mat(motion, width, height, CV_32FC3, "motion"); }
+#endif
+};
+
 // Borrowed, read-only views into the estimator's latest result (lf_get_result_views): no copy,
 // the C ABI's values (0, not NaN, where not valid). Valid until the next push, reset, or the
 // destruction of the Estimator (a push that throws keeps them valid); read them only while no
@@ -710,6 +739,48 @@ public:
         return r;
     }
 
+    // The latest result's ego-motion (see EgoMotion). Throws Error(LF_ERR_NOT_READY) before
+    // there is a result, and Error(LF_ERR_BAD_STATE) when the result has none (the message
+    // names the lf_ego_state_t reason: no stage 4, too few inliers, ...).
+    EgoMotion ego_motion() {
+        lf_ego_motion_t e;
+        lf_ego_motion_init(&e);
+        detail::check(lf_get_ego_motion(handle_, &e), [this] { return lf_last_error(handle_); });
+        if (e.state != LF_EGO_OK) {
+            static const char *const reasons[] = {"fitted", "not fitted: the result comes from a stage before interpolation",
+                                                  "not metric: no stereo calibration",
+                                                  "not fitted: too few matches agree on one rigid background motion",
+                                                  "not fitted: the rigid background model is off"};
+            const bool known = e.state >= 0 && e.state < 5;
+            throw Error(LF_ERR_BAD_STATE, std::string("no ego-motion: ") +
+                                              (known ? reasons[e.state] : "unknown state " + std::to_string(e.state)));
+        }
+        EgoMotion r;
+        std::copy(e.transform, e.transform + 16, r.transform.begin());
+        r.inliers = e.inliers;
+        r.candidates = e.candidates;
+        return r;
+    }
+
+    // A copy of the latest result's object motion (see ObjectMotion). Throws like ego_motion().
+    ObjectMotion object_motion() {
+        const ResultInfo i = info();
+        ObjectMotion r;
+        r.width = i.width;
+        r.height = i.height;
+        const std::size_t n = std::size_t{i.width} * i.height;
+        r.motion.assign(3 * n, 0.0f);
+        r.valid.assign(n, 0);
+        lf_object_motion_buffers_t b;
+        lf_object_motion_buffers_init(&b);
+        b.width = i.width;
+        b.height = i.height;
+        b.motion = {r.motion.data(), uint64_t{i.width} * 3 * sizeof(float)};
+        b.valid = {r.valid.data(), uint64_t{i.width}};
+        detail::check(lf_get_object_motion(handle_, &b), [this] { return lf_last_error(handle_); });
+        return r;
+    }
+
     // Borrowed views of the latest result (see ResultViews for their lifetime). Throws
     // Error(LF_ERR_NOT_READY) before there is a result.
     ResultViews views() {
@@ -739,6 +810,7 @@ public:
     cv::Mat valid_mask() { return result(plane_valid).valid_mask(); }     // CV_8U 255/0
     cv::Mat points() { return points3d().points_mat(); }                   // CV_32FC3
     cv::Mat motion() { return points3d().motion_mat(); }                   // CV_32FC3
+    cv::Mat object_motion_mat() { return object_motion().motion_mat(); }   // CV_32FC3, NaN holes
 #endif
 
     // The owned handle, for C ABI calls; still owned by this object (null after a move).

@@ -34,4 +34,12 @@ inline bool triangulate_scene_flow(const StereoCamera &cam, double x, double y, 
     return true;
 }
 
+// Object motion: the point's position at t1 minus where the rigid background motion
+// (X1 = R X0 + t, R row-major, both in the left camera frame) would have carried it, i.e. the
+// scene flow with the camera's own motion taken out; ~0 on the static world [m, t1 frame].
+inline void object_motion(const ScenePoint3 &q, const double R[9], const double t[3], double out[3]) {
+    const double p[3] = {q.x, q.y, q.z}, p1[3] = {q.x + q.dx, q.y + q.dy, q.z + q.dz};
+    for (int i = 0; i < 3; ++i) out[i] = p1[i] - (R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2] + t[i]);
+}
+
 }  // namespace lidarflow

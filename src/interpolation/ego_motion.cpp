@@ -78,6 +78,7 @@ EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &
     for (int i = 0; i < static_cast<int>(x.size()); ++i)
         if (d0[i] > 0.5f && d1[i] > 0.5f) data.ids.push_back(i);
     const int n = static_cast<int>(data.ids.size());
+    em.candidates = n;
     if (n < std::max(o.min_inliers, 8)) return em;
     // Hypotheses are scored on a fixed, evenly strided subset (bounded cost per frame).
     std::vector<int> probe;

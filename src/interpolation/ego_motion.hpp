@@ -33,7 +33,8 @@ struct EgoMotion {
     bool calibrated = false;
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
     StereoCamera camera;
-    int inliers = 0;  // matches consistent with the model (d1 and flow)
+    int inliers = 0;     // matches consistent with the model (d1 and flow)
+    int candidates = 0;  // usable matches the fit saw (d0, d1 > 0.5 px for the rigid model)
 
     // Predicted t1 disparity and flow of a background point at (x, y) with disparity d0 >= 0.
     // Without a valid model: d1 = d0, (u, v) = 0. Returns false when a rigid model moves the

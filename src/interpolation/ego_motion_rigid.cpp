@@ -191,6 +191,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     for (int i = 0; i < static_cast<int>(len); ++i)
         if (d0[i] > 0.5f && d1[i] > 0.5f) ids.push_back(i);
     const int n = static_cast<int>(ids.size());
+    em.candidates = n;
     if (n < std::max(o.min_inliers, 8)) return em;
     std::vector<int> probe;
     const int stride = std::max(1, n / 3000);

@@ -17,11 +17,13 @@ namespace lidarflow::io {
 namespace {
 
 constexpr size_t kRecordBytes = 6 * 4 + 3;  // x y z dx dy dz float32, red green blue uchar
+constexpr size_t kObjectMotionBytes = 3 * 4;  // omx omy omz float32
 
-const char *const kHeaderProperties =
+const std::string kHeaderProperties =
     "property float x\nproperty float y\nproperty float z\n"
     "property float dx\nproperty float dy\nproperty float dz\n"
     "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+const std::string kObjectMotionProperties = "property float omx\nproperty float omy\nproperty float omz\n";
 
 void put_le32(std::string &buf, float f) {
     uint32_t u;
@@ -39,7 +41,14 @@ float get_le32(const char *p) {
 
 }  // namespace
 
-std::vector<CloudPoint> scene_points(const SceneFlowField &f, const StereoCamera &camera, const cv::Mat &left0) {
+std::vector<CloudPoint> scene_points(const SceneFlowField &f, const StereoCamera &camera, const cv::Mat &left0,
+                                     const cv::Matx44d *ego) {
+    double R[9] = {}, t[3] = {};
+    if (ego)
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) R[3 * i + j] = (*ego)(i, j);
+            t[i] = (*ego)(i, 3);
+        }
     require(camera.valid(), ErrorCode::InvalidArgument, "scene_points: the camera calibration is not valid");
     require(!f.u.empty(), ErrorCode::InvalidArgument, "scene_points: empty scene-flow field");
     require(!left0.empty() && left0.depth() == CV_8U && (left0.channels() == 1 || left0.channels() == 3),
@@ -64,20 +73,36 @@ std::vector<CloudPoint> scene_points(const SceneFlowField &f, const StereoCamera
             const cv::Vec3f mot(static_cast<float>(p.dx), static_cast<float>(p.dy), static_cast<float>(p.dz));
             // A non-finite u or v would give a non-finite motion: such a pixel is no point.
             if (!cv::checkRange(pos) || !cv::checkRange(mot)) continue;
-            out.push_back({pos, mot, rgb});
+            CloudPoint c{pos, mot, rgb, false, cv::Vec3f()};
+            if (ego) {
+                double om[3];
+                object_motion(p, R, t, om);
+                c.has_object_motion = true;
+                c.object_motion = cv::Vec3f(static_cast<float>(om[0]), static_cast<float>(om[1]), static_cast<float>(om[2]));
+                if (!cv::checkRange(c.object_motion)) continue;
+            }
+            out.push_back(c);
         }
     return out;
 }
 
 void write_ply(const std::string &path, const std::vector<CloudPoint> &points) {
+    const bool om = !points.empty() && points[0].has_object_motion;
+    for (const CloudPoint &p : points)
+        require(p.has_object_motion == om, ErrorCode::InvalidArgument,
+                "write_ply: either every point has its object motion or none");
     std::string buf = "ply\nformat binary_little_endian 1.0\ncomment lidarflow scene flow: position at t0 and "
-                      "motion to t1 [m], left rectified camera (x right, y down, z forward)\nelement vertex " +
-                      std::to_string(points.size()) + "\n" + kHeaderProperties + "end_header\n";
-    buf.reserve(buf.size() + points.size() * kRecordBytes);
+                      "motion to t1 [m], left rectified camera (x right, y down, z forward)\n" +
+                      std::string(om ? "comment omx omy omz: object motion X1 - T X0 [m], ego-motion T removed\n" : "") +
+                      "element vertex " + std::to_string(points.size()) + "\n" + kHeaderProperties +
+                      (om ? kObjectMotionProperties : "") + "end_header\n";
+    buf.reserve(buf.size() + points.size() * (kRecordBytes + (om ? kObjectMotionBytes : 0)));
     for (const CloudPoint &p : points) {
         for (int k = 0; k < 3; ++k) put_le32(buf, p.position[k]);
         for (int k = 0; k < 3; ++k) put_le32(buf, p.motion[k]);
         for (int k = 0; k < 3; ++k) buf.push_back(static_cast<char>(p.rgb[k]));
+        if (om)
+            for (int k = 0; k < 3; ++k) put_le32(buf, p.object_motion[k]);
     }
     const std::filesystem::path parent = std::filesystem::path(path).parent_path();
     std::error_code ec;
@@ -97,8 +122,11 @@ std::vector<CloudPoint> read_ply(const std::string &path) {
     const std::string header = data.substr(0, end);
     require(header.find("format binary_little_endian 1.0\n") != std::string::npos, ErrorCode::Format,
             path + ": expected a binary little-endian PLY");
-    require(header.find(kHeaderProperties) != std::string::npos, ErrorCode::Format,
-            path + ": expected the vertex properties x y z dx dy dz red green blue (as lidarflow writes them)");
+    const bool om = header.find(kHeaderProperties + kObjectMotionProperties) != std::string::npos;
+    require(om || header.find(kHeaderProperties) != std::string::npos, ErrorCode::Format,
+            path + ": expected the vertex properties x y z dx dy dz red green blue [omx omy omz] (as lidarflow "
+                   "writes them)");
+    const size_t record = kRecordBytes + (om ? kObjectMotionBytes : 0);
     const size_t v = header.find("element vertex ");
     require(v != std::string::npos, ErrorCode::Format, path + ": no vertex element");
     char *stop = nullptr;
@@ -109,19 +137,22 @@ std::vector<CloudPoint> read_ply(const std::string &path) {
             path + ": bad vertex count");
     const size_t body = end + end_marker.size();
     // Divided, not multiplied: a count whose size wraps modulo 2^64 could match any file size.
-    require(n <= (data.size() - body) / kRecordBytes, ErrorCode::Format,
+    require(n <= (data.size() - body) / record, ErrorCode::Format,
             path + ": vertex count " + std::to_string(n) + " needs more than the file's " +
-                std::to_string(data.size() - body) + " bytes of vertices (" + std::to_string(kRecordBytes) +
+                std::to_string(data.size() - body) + " bytes of vertices (" + std::to_string(record) +
                 " per point)");
-    require(data.size() - body == n * kRecordBytes, ErrorCode::Format,
+    require(data.size() - body == n * record, ErrorCode::Format,
             path + ": " + std::to_string(data.size() - body) + " bytes of vertices, the header announces " +
                 std::to_string(n) + " points");
     std::vector<CloudPoint> out(n);
     for (size_t i = 0; i < n; ++i) {
-        const char *r = data.data() + body + i * kRecordBytes;
+        const char *r = data.data() + body + i * record;
         for (int k = 0; k < 3; ++k) out[i].position[k] = get_le32(r + 4 * k);
         for (int k = 0; k < 3; ++k) out[i].motion[k] = get_le32(r + 12 + 4 * k);
         for (int k = 0; k < 3; ++k) out[i].rgb[k] = static_cast<uchar>(r[24 + k]);
+        out[i].has_object_motion = om;
+        if (om)
+            for (int k = 0; k < 3; ++k) out[i].object_motion[k] = get_le32(r + kRecordBytes + 4 * k);
     }
     return out;
 }

@@ -95,6 +95,17 @@ const char *stage_name(Stage s) {
     return "unknown";
 }
 
+const char *ego_state_text(EgoState s) {
+    switch (s) {
+    case EgoState::Ok: return "fitted";
+    case EgoState::NotRun: return "not fitted: the result comes from a stage before interpolation";
+    case EgoState::NoCalibration: return "not metric: no stereo calibration (image-only)";
+    case EgoState::TooFewInliers: return "not fitted: too few matches agree on one rigid background motion";
+    case EgoState::Disabled: return "not fitted: the options turn the rigid background model off";
+    }
+    return "unknown";
+}
+
 Stage parse_stage(const std::string &name) {
     for (Stage s : {Stage::Matching, Stage::Consistency, Stage::Sparse, Stage::Interpolation})
         if (name == stage_name(s)) return s;
@@ -306,7 +317,15 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &li
 
     // Stage 4.
     t = Clock::now();
-    r.dense = interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads).dense;
+    interpolation::InterpolationResult ir =
+        interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads);
+    r.dense = std::move(ir.dense);
+    r.ego = ir.ego;
+    const interpolation::InterpolationOptions &io = interpolator_.options();
+    r.ego_state = r.ego.valid && r.ego.calibrated      ? EgoState::Ok
+                  : !io.ego_motion || !io.rigid_ego_motion ? EgoState::Disabled
+                  : !frame.camera.valid()                  ? EgoState::NoCalibration
+                                                           : EgoState::TooFewInliers;
     r.timings.push_back({"interpolation", seconds_since(t)});
 }
 

@@ -88,6 +88,11 @@ struct FrameInput {
                          // models); anything else must lie in the ranges of core/limits.hpp
 };
 
+// Why EstimatorResult::ego is or is not the metric ego-motion (values of the C ABI's
+// lf_ego_state_t).
+enum class EgoState { Ok = 0, NotRun = 1, NoCalibration = 2, TooFewInliers = 3, Disabled = 4 };
+const char *ego_state_text(EgoState s);
+
 struct StageTime {
     std::string name;
     double seconds = 0;
@@ -103,6 +108,12 @@ struct EstimatorResult {
     SceneFlowField dense;     // stage 4 (the final result)
     // The output of last_stage: one of the fields above.
     const SceneFlowField &output() const;
+    // Stage 4's background model (interpolation::EgoMotion), kept as fitted: the rigid motion
+    // of the static scene t0 -> t1 when the camera was known (calibrated = true), its R, t in
+    // metres and so the same at any processing_scale. valid = false: stage 4 did not run, the
+    // ego-motion model is off, or too few matches agree on one motion.
+    interpolation::EgoMotion ego;
+    EgoState ego_state = EgoState::NotRun;  // Ok exactly when ego is valid and calibrated
 
     std::vector<StageTime> timings;  // in execution order
     double total_seconds = 0;

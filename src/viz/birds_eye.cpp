@@ -19,7 +19,9 @@ double percentile(std::vector<double> v, double q) {
     return v[k];
 }
 
-double speed(const io::CloudPoint &p) { return cv::norm(p.motion); }
+// Object motion where the cloud has it: the static world then stays still and movers stand out.
+const cv::Vec3f &shown_motion(const io::CloudPoint &p) { return p.has_object_motion ? p.object_motion : p.motion; }
+double speed(const io::CloudPoint &p) { return cv::norm(shown_motion(p)); }
 
 }  // namespace
 
@@ -45,8 +47,11 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
     depths.reserve(points.size());
     speeds.reserve(points.size());
     for (const io::CloudPoint &p : points) {
-        require(cv::checkRange(p.position) && cv::checkRange(p.motion), ErrorCode::InvalidArgument,
-                "birds_eye_view: non-finite point");
+        require(cv::checkRange(p.position) && cv::checkRange(p.motion) &&
+                    (!p.has_object_motion || cv::checkRange(p.object_motion)),
+                ErrorCode::InvalidArgument, "birds_eye_view: non-finite point");
+        require(p.has_object_motion == points[0].has_object_motion, ErrorCode::InvalidArgument,
+                "birds_eye_view: either every point has its object motion or none");
         depths.push_back(p.position[2]);
         speeds.push_back(speed(p));
     }
@@ -81,7 +86,8 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
         auto &c = cells[{static_cast<long>(std::floor(p.position[0] / o.cell)),
                          static_cast<long>(std::floor(p.position[2] / o.cell))}];
         ++c.first;
-        c.second += cv::Vec4d(p.position[0], p.position[2], p.motion[0], p.motion[2]);
+        const cv::Vec3f &m = shown_motion(p);
+        c.second += cv::Vec4d(p.position[0], p.position[2], m[0], m[2]);
     }
     for (const auto &kv : cells) {
         if (kv.second.first < o.min_points) continue;
@@ -97,7 +103,7 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
     cv::fillConvexPoly(view, tri, 3, cv::Scalar(255, 255, 255), cv::LINE_AA);
     return with_color_bar(
         view, [max_speed](double s) { return speed_color(s, max_speed); }, 0.0, max_speed,
-        "|motion| [m / frame]");
+        points[0].has_object_motion ? "|object motion| [m / frame]" : "|motion| [m / frame]");
 }
 
 }  // namespace lidarflow::viz

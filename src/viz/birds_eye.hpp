@@ -3,8 +3,10 @@
 // Bird's-eye view of a scene-flow point cloud: the ground plane seen from above (x right, z
 // forward, camera at the bottom centre), each point coloured by its speed |motion| (turbo colour
 // map, with a colour bar), and arrows of the mean ground-plane motion (dx, dz) of the points in
-// each cell, drawn to scale. Motion is relative to the camera, so the static scene shows the
-// ego-motion.
+// each cell, drawn to scale. The motion shown is the object motion (ego-motion removed: the
+// static world is still, movers stand out) when the points carry it (io::CloudPoint), else the
+// motion relative to the camera, where the static scene shows the ego-motion; the legend says
+// which.
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -22,7 +24,7 @@ struct BirdsEyeOptions {
 };
 
 // CV_8UC3 picture with its speed legend. Throws Error(InvalidArgument) for no points, a
-// non-finite point, or options out of range (range < 0, height < 64, max_speed < 0, cell <= 0).
+// non-finite point, points of which only some have object motion, or options out of range (range < 0, height < 64, max_speed < 0, cell <= 0).
 cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEyeOptions &options = {});
 
 // The colour of speed s on the view's scale [0, max_speed].

@@ -170,6 +170,8 @@ void test_errors(void **) {
     expect_error([&] { e.result(); }, LF_ERR_NOT_READY, "", "result before a push");
     expect_error([&] { e.info(); }, LF_ERR_NOT_READY, "", "info before a push");
     expect_error([&] { e.points3d(); }, LF_ERR_NOT_READY, "", "points3d before a push");
+    expect_error([&] { e.ego_motion(); }, LF_ERR_NOT_READY, "", "ego_motion before a push");
+    expect_error([&] { e.object_motion(); }, LF_ERR_NOT_READY, "", "object_motion before a push");
     expect_error([&] { e.views(); }, LF_ERR_NOT_READY, "", "views before a push");
     // Sizes that disagree, timestamps that do not increase, LiDAR the calibration cannot place.
     expect_error([&] { e.push(0, sc.image(sc.s.left0), lf::ImageView::gray8(sc.s.right0, W - 1, H)); },
@@ -295,7 +297,37 @@ void test_dense_run(void **) {
     }
     assert_true(valid3d > 0.9 * n);
 
+    // Ego-motion: one rigid plane moving, so the object motion is X1 - T X0 and about 0.
+    const lf::EgoMotion ego = e.ego_motion();
+    assert_true(ego.inliers > 0 && ego.inliers <= ego.candidates);
+    assert_true(ego.transform[15] == 1.0 && ego.transform[12] == 0.0);
+    const lf::ObjectMotion om = e.object_motion();
+    assert_int_equal(om.motion.size(), 3 * n);
+    std::size_t still = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        assert_int_equal(om.valid[i], p.valid[i]);
+        if (om.valid[i] == 0) {
+            assert_true(std::isnan(om.motion[3 * i]));
+            continue;
+        }
+        double sq = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double *T = &ego.transform[4 * k];
+            const double want = p.points[3 * i + k] + p.motion[3 * i + k] -
+                                (T[0] * p.points[3 * i] + T[1] * p.points[3 * i + 1] + T[2] * p.points[3 * i + 2] + T[3]);
+            assert_true(std::fabs(om.motion[3 * i + k] - want) < 1e-4 * (1 + std::fabs(want)));
+            sq += want * want;
+        }
+        still += sq < 0.02 * 0.02;
+    }
+    assert_true(still > 0.9 * n);
+
 #if LIDARFLOW_USE_OPENCV
+    const cv::Mat omm = e.object_motion_mat();
+    assert_int_equal(omm.type(), CV_32FC3);
+    assert_memory_equal(omm.ptr<float>(0), om.motion.data(), 3 * W * sizeof(float));
+    const cv::Matx44d Tm = ego.matx();
+    assert_true(Tm(3, 3) == 1.0 && Tm(0, 3) == ego.transform[3]);
     const cv::Mat flow = e.flow(), d0 = e.disparity0(), d1 = e.disparity1(), conf = e.confidence(),
                   mask = e.valid_mask(), pts = e.points(), mot = e.motion();
     assert_int_equal(flow.type(), CV_32FC2);
@@ -352,6 +384,10 @@ void test_nan_holes(void **) {
         }
     assert_true(holes > 0);
     assert_true(valid > 0);
+    // No stage 4, no ego-motion: the reason comes with the error.
+    expect_error([&] { e.ego_motion(); }, LF_ERR_BAD_STATE, "before interpolation", "ego_motion of a sparse result");
+    expect_error([&] { e.object_motion(); }, LF_ERR_BAD_STATE, "before interpolation",
+                 "object_motion of a sparse result");
 
 #if LIDARFLOW_USE_OPENCV
     const cv::Mat flow = e.flow(), d0 = e.disparity0(), d1 = e.disparity1(), mask = e.valid_mask(), pts = e.points();

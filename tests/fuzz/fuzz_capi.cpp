@@ -507,6 +507,46 @@ void points_op(Program &in, Session &s) {
                     fail("lf_get_points3d: non-finite where valid or not NaN where not", rc, "");
         }
     }
+
+    // The ego-motion of the same result, and the object motion into the same planes' layout.
+    lf_ego_motion_t ego;
+    lf_ego_motion_init(&ego);
+    const int32_t rc_ego = lf_get_ego_motion(s.est, &ego);
+    check_status(rc_ego, lf_last_error(s.est), "lf_get_ego_motion");
+    if (rc_ego == LF_OK) {
+        if (ego.state < LF_EGO_OK || ego.state > LF_EGO_DISABLED) fail("lf_get_ego_motion: unknown state", rc_ego, "");
+        if (ego.inliers > ego.candidates) fail("lf_get_ego_motion: more inliers than candidates", rc_ego, "");
+        for (int k = 0; k < 16; ++k) {
+            const double t = ego.transform[k];
+            if (!std::isfinite(t) || (k >= 12 && t != (k == 15 ? 1.0 : 0.0)) ||
+                (ego.state != LF_EGO_OK && t != (k % 5 == 0 ? 1.0 : 0.0)))
+                fail("lf_get_ego_motion: transform not finite, last row not 0 0 0 1, or not the identity "
+                     "without a fit",
+                     rc_ego, "");
+        }
+    }
+    lf_object_motion_buffers_t o;
+    lf_object_motion_buffers_init(&o);
+    o.width = w;
+    o.height = h;
+    std::vector<uint8_t> om(bufs[1].size(), 0xCD), om_valid(bufs[2].size(), 0xCD);
+    if (mask & 2u) o.motion = {om.data(), b.motion.stride_bytes};
+    if (mask & 4u) o.valid = {om_valid.data(), b.valid.stride_bytes};
+    const int32_t rc_om = lf_get_object_motion(s.est, &o);
+    check_status(rc_om, lf_last_error(s.est), "lf_get_object_motion");
+    if (rc_om == LF_OK && (rc_ego != LF_OK || ego.state != LF_EGO_OK))
+        fail("lf_get_object_motion succeeded without an ego-motion", rc_om, "");
+    if (rc_om == LF_OK && rc == LF_OK && (mask & 6) == 6 && stride_mode == 0) {
+        // Valid only where lf_get_points3d is (the same triangulation); finite there, NaN elsewhere.
+        for (size_t i = 0; i < om_valid.size(); ++i) {
+            if (om_valid[i] > bufs[2][i]) fail("lf_get_object_motion: valid where lf_get_points3d is not", rc_om, "");
+            float m[3];
+            std::memcpy(m, &om[12 * i], 12);
+            for (float f : m)
+                if (om_valid[i] ? !std::isfinite(f) : !std::isnan(f))
+                    fail("lf_get_object_motion: non-finite where valid or not NaN where not", rc_om, "");
+        }
+    }
 }
 
 }  // namespace

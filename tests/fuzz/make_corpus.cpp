@@ -212,6 +212,27 @@ void lcm_seeds() {
         save("fuzz_lcm_scene_flow", f.name, bridge::encode_scene_flow(m));
     }
 
+    // ego_motion_t: what the bridge publishes (ego_motion_message + encode_ego_motion): a fitted
+    // motion (5 deg about y, 0.8 m forward) and a result without one.
+    {
+        lf_ego_motion_t e;
+        lf_ego_motion_init(&e);
+        const double c = std::cos(5 * M_PI / 180), s = std::sin(5 * M_PI / 180);
+        const double T[16] = {c, 0, s, 0.02, 0, 1, 0, -0.01, -s, 0, c, -0.8, 0, 0, 0, 1};
+        std::copy(T, T + 16, e.transform);
+        e.inliers = 900;
+        e.candidates = 1000;
+        lidarflow_ego_motion_t m = bridge::ego_motion_message(e, 200000, 100000, 3);
+        save("fuzz_lcm_ego_motion", "fitted", bridge::encode_ego_motion(m));
+        lf_ego_motion_init(&e);
+        e.state = LF_EGO_TOO_FEW_INLIERS;
+        for (int k = 0; k < 4; ++k) e.transform[5 * k] = 1;
+        e.inliers = 20;
+        e.candidates = 400;
+        m = bridge::ego_motion_message(e, 300000, 200000, 3);
+        save("fuzz_lcm_ego_motion", "too_few_inliers", bridge::encode_ego_motion(m));
+    }
+
     // status_t: with and without a last error.
     const char *errors[] = {"", "stereo: truncated: 12 bytes"};
     for (int i = 0; i < 2; ++i) {
@@ -239,9 +260,17 @@ void lcm_seeds() {
 // The PLY point cloud `lidarflow run --ply` writes and `viz --points` reads: two points.
 void ply_seeds() {
     const fs::path tmp = fs::temp_directory_path() / "lidarflow_make_corpus.ply";
-    io::write_ply(tmp.string(), {{cv::Vec3f(1, 2, 10), cv::Vec3f(0.1f, 0, -0.5f), cv::Vec3b(200, 0, 30)},
-                                 {cv::Vec3f(-3, 0.5f, 25), cv::Vec3f(0, 0, 0), cv::Vec3b(0, 255, 7)}});
+    std::vector<io::CloudPoint> points = {
+        {cv::Vec3f(1, 2, 10), cv::Vec3f(0.1f, 0, -0.5f), cv::Vec3b(200, 0, 30), false, cv::Vec3f()},
+        {cv::Vec3f(-3, 0.5f, 25), cv::Vec3f(0, 0, 0), cv::Vec3b(0, 255, 7), false, cv::Vec3f()}};
+    io::write_ply(tmp.string(), points);
     save("fuzz_io_ply", "two_points", file_bytes(tmp));
+    // With object motion (omx omy omz), as `run --points` writes when the ego-motion is known.
+    points[0].has_object_motion = points[1].has_object_motion = true;
+    points[0].object_motion = cv::Vec3f(0.1f, 0, 0.3f);
+    points[1].object_motion = cv::Vec3f(0, 0, 0.8f);
+    io::write_ply(tmp.string(), points);
+    save("fuzz_io_ply", "two_points_object_motion", file_bytes(tmp));
     fs::remove(tmp);
 }
 
@@ -396,6 +425,7 @@ std::string outcome(F f) {
 int check_seeds() {
     int bad = 0;
     const char *targets[] = {"fuzz_lcm_stereo",     "fuzz_lcm_lidar",   "fuzz_lcm_calibration", "fuzz_lcm_scene_flow",
+                             "fuzz_lcm_ego_motion",
                              "fuzz_lcm_status",     "fuzz_lcm_bot_image", "fuzz_kitti_png",     "fuzz_kitti_calib",
                              "fuzz_kitti_velodyne"};
     for (const char *t : targets) {
@@ -433,6 +463,10 @@ int check_seeds() {
                 bridge::DecodedFlow f;
                 const std::string err = bridge::decode_scene_flow(b.data(), b.size(), f);
                 r.emplace_back("decode_scene_flow", lcm(err, "ok"));
+            } else if (target == "fuzz_lcm_ego_motion") {
+                lidarflow_ego_motion_t m;
+                const std::string err = bridge::decode_ego_motion(b.data(), b.size(), m);
+                r.emplace_back("decode_ego_motion", lcm(err, err.empty() ? "ok state " + std::to_string(m.state) : ""));
             } else if (target == "fuzz_lcm_status") {
                 bridge::StatusMessage s;
                 const std::string err = bridge::decode_status(b.data(), b.size(), s);

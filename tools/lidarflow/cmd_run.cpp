@@ -3,6 +3,7 @@
 // images, optional sparse LiDAR as KITTI disparity PNGs or raw Velodyne scans), written in the
 // KITTI submission layout or float formats, plus pictures and optionally a point cloud.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -30,6 +31,21 @@
 
 namespace lidarflow::cli {
 namespace {
+
+// The rigid background motion as the C ABI's T (X1 = T X0); identity where there is none.
+cv::Matx44d ego_matrix(const interpolation::EgoMotion &e) {
+    cv::Matx44d T = cv::Matx44d::eye();
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) T(i, j) = e.R[3 * i + j];
+        T(i, 3) = e.t[i];
+    }
+    return T;
+}
+
+double rotation_degrees(const cv::Matx44d &T) {
+    const double c = std::clamp((T(0, 0) + T(1, 1) + T(2, 2) - 1) / 2, -1.0, 1.0);
+    return std::acos(c) * 180 / CV_PI;
+}
 
 SparseLidar read_lidar(const std::string &path, const cv::Size &size, const char *what) {
     const DisparityMap map = io::read_disparity_png(path);
@@ -157,8 +173,10 @@ int run(int argc, char **argv) {
     }
     detail("run: results and pictures written in %s\n", format_duration(writing.seconds()).c_str());
     size_t cloud = 0;
+    const cv::Matx44d ego = ego_matrix(r.ego);
     if (args.has("points")) {
-        const std::vector<io::CloudPoint> pts = io::scene_points(f, in.camera, in.left0);
+        const std::vector<io::CloudPoint> pts =
+            io::scene_points(f, in.camera, in.left0, r.ego_state == pipeline::EgoState::Ok ? &ego : nullptr);
         io::write_ply(args.str("points", ""), pts);
         cloud = pts.size();
     }
@@ -169,11 +187,17 @@ int run(int argc, char **argv) {
                 100.0 * cv::countNonZero(f.valid) / static_cast<double>(f.valid.total()));
     for (const pipeline::StageTime &t : r.timings) std::printf("  %-18s %8.3f s\n", t.name.c_str(), t.seconds);
     std::printf("  %-18s %8.3f s\n", "total", r.total_seconds);
+    if (r.ego_state == pipeline::EgoState::Ok)
+        std::printf("ego       T t = (%.3f, %.3f, %.3f) m, rotation %.3f deg, %d of %d matches\n", ego(0, 3), ego(1, 3),
+                    ego(2, 3), rotation_degrees(ego), r.ego.inliers, r.ego.candidates);
+    else
+        std::printf("ego       %s\n", pipeline::ego_state_text(r.ego_state));
     for (const std::string &w : written) std::printf("wrote     %s\n", w.c_str());
     std::printf("wrote     %s/viz/%s_{flow,disp0,disp1}.png\n", out.c_str(), id.c_str());
     if (args.has("points"))
-        std::printf("wrote     %s: %zu points (x y z, dx dy dz [m], red green blue)\n", args.str("points", "").c_str(),
-                    cloud);
+        std::printf("wrote     %s: %zu points (x y z, dx dy dz [m], red green blue%s)\n",
+                    args.str("points", "").c_str(), cloud,
+                    r.ego_state == pipeline::EgoState::Ok ? ", omx omy omz [m]" : "");
     return 0;
 }
 

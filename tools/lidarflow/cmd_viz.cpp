@@ -37,7 +37,8 @@ int birds_eye(const Args &args, const std::string &out) {
     require(!cloud.empty(), ErrorCode::InvalidArgument, "viz: " + path + " holds no points");
     const cv::Mat picture = viz::birds_eye_view(cloud, o);
     io::write_image(out, picture);
-    std::printf("wrote %s: bird's-eye view of %zu points (colour = |motion|), %dx%d\n", out.c_str(), cloud.size(),
+    std::printf("wrote %s: bird's-eye view of %zu points (colour = %s), %dx%d\n", out.c_str(), cloud.size(),
+                cloud[0].has_object_motion ? "|object motion|, ego-motion removed" : "|motion| relative to the camera",
                 picture.cols, picture.rows);
     return 0;
 }
@@ -46,7 +47,7 @@ int run_viz(int argc, char **argv) {
     Args args("viz", argc, argv,
               {{"disp", true, "FILE  disparity map: KITTI PNG (uint16, d*256), .pfm or .npy (float, NaN = none)"},
                {"flow", true, "FILE  flow: KITTI PNG (3 x uint16), .flo, .pfm or .npy (u, v[, valid])"},
-               {"points", true, "PLY  point cloud of `run --points`: draw a bird's-eye view of the motion"},
+               {"points", true, "PLY  point cloud of `run --points`: draw a bird's-eye view of the (object) motion"},
                {"gt", true, "FILE  ground truth (occ) of the same kind, any of those formats: draw the error map instead"},
                {"gt-noc", true, "FILE  non-occluded ground truth: occluded-only pixels drawn darker"},
                {"image", true, "IMG  camera image (left, t0; PNG, JPEG, BMP, PGM/PPM): draw the colours over it"},

@@ -80,6 +80,24 @@ class Points3dBuffers(ctypes.Structure):
                 ("points", Plane), ("motion", Plane), ("valid", Plane)]
 
 
+class EgoMotion(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("state", ctypes.c_int32), ("transform", ctypes.c_double * 16),
+                ("inliers", ctypes.c_uint32), ("candidates", ctypes.c_uint32)]
+
+
+class ObjectMotionBuffers(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
+                ("motion", Plane), ("valid", Plane)]
+
+
+# lf_ego_state_t
+EGO_OK = 0
+EGO_STATE_NAMES = {0: "fitted", 1: "not fitted: the result comes from a stage before interpolation",
+                   2: "not metric: no stereo calibration",
+                   3: "not fitted: too few matches agree on one rigid background motion",
+                   4: "not fitted: the rigid background model is off"}
+
+
 def _prefix_lib_dirs(package_dir):
     """PREFIX/lib and PREFIX/lib/<multiarch> for the prefix whose lib/pythonX/...-packages
     holds package_dir; none when the package does not sit in such a layout."""
@@ -172,6 +190,8 @@ def _declare(lib):
         "lf_get_timing": (i32, [c.c_void_p, u32, P(c.c_char_p), P(c.c_double)]),
         "lf_get_result": (i32, [c.c_void_p, P(ResultBuffers)]),
         "lf_get_points3d": (i32, [c.c_void_p, P(Points3dBuffers)]),
+        "lf_get_ego_motion": (i32, [c.c_void_p, P(EgoMotion)]),
+        "lf_get_object_motion": (i32, [c.c_void_p, P(ObjectMotionBuffers)]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
         "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
     }

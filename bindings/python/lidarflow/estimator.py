@@ -279,6 +279,42 @@ class Estimator:
             _check(lib.lf_get_points3d(h, ctypes.byref(b)), h)
         return out
 
+    def ego_motion(self):
+        """(T, inliers): the static scene's rigid motion between the result's frames as a (4, 4)
+        float64 array T with X1 = T @ [X0, 1] (a static point's coordinates in the left camera
+        frame at t0 to those at t1, metres; the camera's own motion is inv(T)), and how many
+        matches support it. Raises LidarflowError: ERR_NOT_READY before two frames,
+        ERR_BAD_STATE when the result has none (the message says why, e.g. no stage 4)."""
+        with self._busy:
+            h = self._h()
+            e = _lib.EgoMotion()
+            e.struct_size = ctypes.sizeof(_lib.EgoMotion)
+            _check(lib.lf_get_ego_motion(h, ctypes.byref(e)), h)
+        if e.state != _lib.EGO_OK:
+            raise LidarflowError(_lib.ERR_BAD_STATE, "no ego-motion: " +
+                                 _lib.EGO_STATE_NAMES.get(e.state, "unknown state %d" % e.state))
+        return np.array(e.transform[:], dtype=np.float64).reshape(4, 4), int(e.inliers)
+
+    def object_motion(self, out=None):
+        """The latest result's object motion: dict with motion (H, W, 3) float32, X1 - T X0 in
+        metres in the left camera frame at t1 (scene flow without the camera's own motion, about
+        0 on the static world; NaN where not valid) and valid (H, W) uint8. out: as in result().
+        Raises like ego_motion()."""
+        with self._busy:
+            h = self._h()
+            i = _result_info(h)
+            shape = (i.height, i.width)
+            out = _out_dict(out, {"motion": (shape + (3,), np.float32), "valid": (shape, np.uint8)})
+            b = _lib.ObjectMotionBuffers()
+            b.struct_size = ctypes.sizeof(_lib.ObjectMotionBuffers)
+            b.width, b.height = i.width, i.height
+            if "motion" in out:
+                b.motion = _plane("motion", out["motion"], shape, np.float32, 3)
+            if "valid" in out:
+                b.valid = _plane("valid", out["valid"], shape, np.uint8)
+            _check(lib.lf_get_object_motion(h, ctypes.byref(b)), h)
+        return out
+
 
 def _result_info(h):
     i = _lib.ResultInfo()

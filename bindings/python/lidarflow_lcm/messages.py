@@ -17,8 +17,8 @@ import struct
 
 import numpy as np
 
-__all__ = ["MessageError", "stereo_t", "lidar_t", "calibration_t", "scene_flow_t", "status_t", "TYPES",
-           "decode", "type_of"]
+__all__ = ["MessageError", "stereo_t", "lidar_t", "calibration_t", "scene_flow_t", "status_t", "ego_motion_t",
+           "TYPES", "decode", "type_of"]
 
 
 class MessageError(ValueError):
@@ -410,7 +410,57 @@ class status_t(_Message):
     __slots__ = tuple(f[0] for f in _FIELDS)
 
 
-TYPES = (stereo_t, lidar_t, calibration_t, scene_flow_t, status_t)
+class ego_motion_t(_Message):
+    """The static scene's rigid motion between the frames of the scene_flow_t with the same utime,
+    utime0 and sequence (lcm_types/ego_motion_t.lcm): transform T (16 doubles, row-major) maps a
+    static point's coordinates in the left camera frame at utime0 to those at utime,
+    X1 = T [X0; 1] [m]; the camera's own motion is inv(T). matrix() gives T as (4, 4)."""
+    TYPE_NAME = "lidarflow.ego_motion_t"
+    _FIELDS = (("utime", "int64_t", None), ("utime0", "int64_t", None), ("sequence", "int32_t", None),
+               ("state", "int8_t", None), ("transform", "double", 16), ("inliers", "int32_t", None),
+               ("candidates", "int32_t", None))
+    __slots__ = tuple(f[0] for f in _FIELDS)
+    STATE_OK, STATE_NOT_RUN, STATE_NO_CALIBRATION, STATE_TOO_FEW_INLIERS, STATE_DISABLED = 0, 1, 2, 3, 4
+
+    def __init__(self, **values):
+        values.setdefault("transform", np.eye(4).ravel())
+        super().__init__(**values)
+
+    def matrix(self):
+        """T as a new (4, 4) float64 array."""
+        return np.array(self.transform, np.float64).reshape(4, 4)
+
+    def check(self):
+        # bridge/wire.cpp decode_ego_motion, in its order.
+        t = self.TYPE_NAME
+        if not self.STATE_OK <= self.state <= self.STATE_DISABLED:
+            _fail(t, "unknown state %d (0 ok .. 4 disabled)", self.state)
+        T = np.asarray(self.transform, np.float64).ravel()
+        if T.size != 16:
+            return  # encode() names the length mismatch
+        bad = np.flatnonzero(~np.isfinite(T))
+        if bad.size:
+            _fail(t, "transform[%d] is not finite", bad[0])
+        if not np.array_equal(T[12:], [0, 0, 0, 1]):
+            _fail(t, "transform's last row is %g %g %g %g, not 0 0 0 1", *T[12:])
+        if self.state == self.STATE_OK:
+            R = T.reshape(4, 4)[:3, :3]
+            with np.errstate(over="ignore", invalid="ignore"):  # huge entries: not a rotation either way
+                RtR = R.T @ R
+                ok = np.abs(RtR - np.eye(3)) <= 1e-6
+            if not ok.all():
+                i, j = np.unravel_index(np.argmax(~ok), ok.shape)
+                _fail(t, "transform's rotation is not orthonormal ((R^T R)[%d][%d] = %.9g)", i, j, RtR[i, j])
+            det = np.linalg.det(R)
+            if not det > 0:
+                _fail(t, "transform's rotation has determinant %g (a reflection)", det)
+        elif not np.array_equal(T, np.eye(4).ravel()):
+            _fail(t, "state %d (no ego-motion) with a transform other than the identity", self.state)
+        if self.inliers < 0 or self.candidates < 0 or self.inliers > self.candidates:
+            _fail(t, "inliers %d, candidates %d (0 <= inliers <= candidates)", self.inliers, self.candidates)
+
+
+TYPES = (stereo_t, lidar_t, calibration_t, scene_flow_t, status_t, ego_motion_t)
 _BY_FINGERPRINT = {t._PACKED_FINGERPRINT: t for t in TYPES}
 
 
@@ -420,7 +470,7 @@ def type_of(data):
 
 
 def decode(data, check=True):
-    """Decodes a message of any of the five types, chosen by its fingerprint; MessageError for
+    """Decodes a message of any of the six types, chosen by its fingerprint; MessageError for
     an unknown fingerprint or a malformed message."""
     cls = type_of(data)
     if cls is None:

@@ -131,6 +131,44 @@ class RoundTrip(unittest.TestCase):
             self.assertFalse(est.has_result)
 
 
+class EgoMotion(unittest.TestCase):
+    def test_ego_motion_and_object_motion(self):
+        scene = make_scene()
+        with lidarflow.Estimator(options=FAST, **CAL) as est:
+            with self.assertRaises(lidarflow.LidarflowError) as ctx:
+                est.ego_motion()
+            self.assertEqual(ctx.exception.status, lidarflow.ERR_NOT_READY)
+            est.push(scene[0], scene[1], grid_lidar(10), timestamp=0)
+            est.push(scene[2], scene[3], grid_lidar(10), timestamp=1)
+            T, inliers = est.ego_motion()
+            self.assertEqual(T.shape, (4, 4))
+            self.assertEqual(T.dtype, np.float64)
+            np.testing.assert_array_equal(T[3], [0, 0, 0, 1])
+            self.assertGreater(inliers, 0)
+            p, o = est.points3d(), est.object_motion()
+            self.assertEqual(o["motion"].shape, (H, W, 3))
+            self.assertEqual(o["motion"].dtype, np.float32)
+            np.testing.assert_array_equal(o["valid"], p["valid"])
+            ok = o["valid"] == 1
+            self.assertTrue(np.isnan(o["motion"][~ok]).all())
+            x0 = p["points"][ok].astype(np.float64)
+            want = x0 + p["motion"][ok] - (x0 @ T[:3, :3].T + T[:3, 3])
+            np.testing.assert_allclose(o["motion"][ok], want, atol=1e-4)
+            # one rigid plane: everything moves with the camera, nothing on its own
+            self.assertGreater((np.linalg.norm(o["motion"][ok], axis=1) < 0.02).mean(), 0.9)
+
+    def test_no_ego_motion_without_stage_4(self):
+        scene = make_scene()
+        with lidarflow.Estimator(options=dict(FAST, last_stage="sparse"), **CAL) as est:
+            est.push(scene[0], scene[1], grid_lidar(10), timestamp=0)
+            est.push(scene[2], scene[3], grid_lidar(10), timestamp=1)
+            for call in (est.ego_motion, est.object_motion):
+                with self.assertRaises(lidarflow.LidarflowError) as ctx:
+                    call()
+                self.assertEqual(ctx.exception.status, lidarflow.ERR_BAD_STATE)
+                self.assertIn("before interpolation", str(ctx.exception))
+
+
 class BadInput(unittest.TestCase):
     def setUp(self):
         self.scene = make_scene()

@@ -89,6 +89,36 @@ class AgainstTheBridge(unittest.TestCase):
                 est.push(left, right, lidar=pts, lidar_kind=kind, timestamp=utime, colour_order=order)
             return est.result(), est.points3d(), cal
 
+    def expected_ego(self, flow):
+        """The binding's ego_motion() for the frames (and LiDAR) a scene_flow_t names."""
+        import lidarflow
+        stereo, lidar, cals = self.frames()
+        cal = cals[0]
+        with lidarflow.Estimator(cal.fx, cal.fy, cal.cx, cal.cy, cal.baseline, options=OPTIONS) as est:
+            for utime, flag, lidar_utime in ((flow.utime0, ll.scene_flow_t.LIDAR_T0, flow.lidar_utime0),
+                                             (flow.utime, ll.scene_flow_t.LIDAR_T1, flow.lidar_utime1)):
+                pts, kind = ll.lidar_points(lidar[lidar_utime]) if flow.lidar_flags & flag else (None, "disparity")
+                left, right, order = ll.stereo_images(stereo[utime])
+                est.push(left, right, lidar=pts, lidar_kind=kind, timestamp=utime, colour_order=order)
+            return est.ego_motion()
+
+    def test_ego_motion_beside_each_result(self):
+        # The bridge's C encoder (lcm-gen), read back by this package's decoder with its checks.
+        egos = [m for _, m in ll.read_messages(self.out_f32, channels=ll.CHANNELS["ego_motion"], strict=True)]
+        flows = self.flows(self.out_f32)
+        self.assertEqual(len(egos), len(flows))
+        for ego, flow in zip(egos, flows):
+            self.assertIsInstance(ego, ll.ego_motion_t)
+            self.assertEqual((ego.utime, ego.utime0, ego.sequence), (flow.utime, flow.utime0, flow.sequence))
+            self.assertEqual(ego.state, ll.ego_motion_t.STATE_OK)
+            T, inliers = self.expected_ego(flow)
+            np.testing.assert_array_equal(ego.matrix(), T)
+            self.assertEqual(ego.inliers, inliers)
+            self.assertGreater(ego.candidates, 0)
+        # Old consumers: the flow channel carries only scene_flow_t, as before.
+        self.assertTrue(all(isinstance(m, ll.scene_flow_t)
+                            for _, m in ll.read_messages(self.out_f32, channels=ll.CHANNELS["flow"])))
+
     def flows(self, log):
         got = [m for _, m in ll.read_messages(log, channels=ll.CHANNELS["flow"], strict=True)]
         self.assertEqual(len(got), 2)

@@ -69,6 +69,17 @@ def random_message(cls, rng, n=None):
                 setattr(m, name, float(np.float32(rng.uniform(0, 100))))
         m.last_error = "".join(chr(int(c)) for c in rng.integers(32, 0x3000, int(rng.integers(0, 20))))
         return m
+    if cls is ll.ego_motion_t:
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        R = q * np.sign(np.diag(r))
+        if np.linalg.det(R) < 0:
+            R[:, 0] = -R[:, 0]
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R, rng.normal(size=3)
+        c = int(rng.integers(0, 10**6))
+        return ll.ego_motion_t(utime=int(rng.integers(0, 2**62)), utime0=int(rng.integers(0, 2**62)),
+                               sequence=int(rng.integers(0, 100)), state=0, transform=T.ravel(),
+                               inliers=int(rng.integers(0, c + 1)), candidates=c)
     raise AssertionError(cls)
 
 
@@ -106,7 +117,7 @@ class AgainstLcmGen(unittest.TestCase):
     def test_fingerprints_equal_lcm_gen(self):
         for cls in ll.TYPES:
             self.assertEqual(cls._get_packed_fingerprint(), self.generated(cls)._get_packed_fingerprint(), cls.TYPE_NAME)
-        self.assertEqual(len({cls.FINGERPRINT for cls in ll.TYPES}), 5)
+        self.assertEqual(len({cls.FINGERPRINT for cls in ll.TYPES}), 6)
 
     def test_bytes_equal_lcm_gen_both_ways(self):
         rng = np.random.default_rng(11)
@@ -443,6 +454,31 @@ class Builders(unittest.TestCase):
         unused = ll.lidar_message(pts, utime=1, frame="camera")
         unused.lidar_to_camera[3] = np.inf
         self.assertEqual(ll.lidar_t.decode(unused.encode()).frame, ll.lidar_t.FRAME_CAMERA)
+
+    def test_ego_motion_rules(self):
+        # bridge/wire.cpp decode_ego_motion's checks, in its order.
+        c, s = np.cos(0.1), np.sin(0.1)
+        T = np.array([[c, 0, s, 0.1], [0, 1, 0, 0], [-s, 0, c, -0.8], [0, 0, 0, 1]])
+        good = ll.ego_motion_t(utime=2, utime0=1, state=0, transform=T.ravel(), inliers=5, candidates=9)
+        self.assertEqual(ll.ego_motion_t.decode(good.encode()), good)
+        np.testing.assert_array_equal(ll.ego_motion_t.decode(good.encode()).matrix(), T)
+        self.assertEqual(ll.ego_motion_t.decode(ll.ego_motion_t(state=1).encode()).state, 1)  # identity default
+        cases = [({"state": 5}, "unknown state 5"), ({"state": -1}, "unknown state -1"),
+                 ({"inliers": 10}, "inliers 10, candidates 9"), ({"candidates": -1}, "candidates -1"),
+                 ({"state": 3}, "state 3 .*identity")]
+        for k, v, reason in ((3, np.nan, r"transform\[3\] is not finite"), (11, np.inf, r"transform\[11\] is not"),
+                             (12, 0.5, "last row"), (1, 0.5, "not orthonormal")):
+            bad = T.copy().ravel()
+            bad[k] = v
+            cases.append(({"transform": bad}, reason))
+        mirror = T.copy()
+        mirror[:3, 0] *= -1
+        cases.append(({"transform": mirror.ravel()}, "determinant -1"))
+        for change, reason in cases:
+            m = ll.ego_motion_t(**dict(dict(utime=2, utime0=1, state=0, transform=T.ravel(), inliers=5, candidates=9),
+                                       **change))
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=reason):
+                ll.ego_motion_t.decode(m.encode(check=False))
 
     def test_lidar(self):
         pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)

@@ -28,6 +28,7 @@ from lidarflow_lcm.eventlog import LogReader
 
 CLI, BRIDGE = "lidarflow", "lidarflow-lcm-bridge"
 FLOW_CHANNEL = "LIDARFLOW_FLOW"
+EGO_CHANNEL = "LIDARFLOW_EGO_MOTION"  # the ego_motion_t that comes with each result
 STATE_DIR = ".lidarflow_dask"  # under the output folder: chunk markers and chunk logs
 _PR_SET_PDEATHSIG = 1
 

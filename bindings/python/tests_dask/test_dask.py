@@ -69,6 +69,12 @@ def flows(path):
     return out
 
 
+def egos(path):
+    """(log time, ego_motion_t bytes) of a result log."""
+    with ll.LogReader(path, channels=ldc.EGO_CHANNEL, strict=True) as r:
+        return [(e.utime, e.data) for e in r]
+
+
 def same_tree(test, a, b):
     """Every file of folders a and b, byte for byte; returns the number of files."""
     n = 0
@@ -105,6 +111,7 @@ class Dask(unittest.TestCase):
         subprocess.run([tool("bridge", "lidarflow-lcm-bridge"), "--replay", cls.log, "--out", whole,
                         "--option", "preset=realtime", "--option", "threads=1"], check=True, capture_output=True)
         cls.whole = flows(whole)
+        cls.whole_ego = egos(whole)
 
     @classmethod
     def tearDownClass(cls):
@@ -119,6 +126,8 @@ class Dask(unittest.TestCase):
         self.assertEqual(len(got), 7)
         # Chunks 0:3, 3:6, 6:7 of the log: their results are the whole log's replay's.
         self.assertEqual(got, self.whole)
+        self.assertEqual(len(self.whole_ego), 7)
+        self.assertEqual(egos(os.path.join(self.serial, "run.log")), self.whole_ego)
 
     def test_local_cluster_equals_serial_run(self):
         out = os.path.join(self.tmp.name, "cluster")

@@ -5,11 +5,12 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "args.hpp"
@@ -46,7 +47,7 @@ const char *kUsage =
     "  --encoding E             float32 | int16 (1/64 px fixed point; default)\n"
     "  --step N                 publish every N-th pixel in x and y (default 1)\n"
     "  --option KEY=VALUE       estimator option (lidarflow.h keys), repeatable; threads defaults\n"
-    "                           to the number of CPUs\n"
+    "                           to the library's: every usable CPU, fewer while others are busy\n"
     "  --shard K/N              one of N processes sharing the stream: compute only the pairs whose\n"
     "                           t1 frame index % N == K (index: stereo_t.frame_number, else arrival\n"
     "                           order); the queue default becomes 2 (a pair)\n"
@@ -112,10 +113,37 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     return spec;
 }
 
+// A library message on stderr, at most kBurst lines per kWindowS seconds (a warning of every
+// frame must not flood the log); the lines held back are counted in the next one shown.
+void library_message(int32_t level, const char *message, void *) {
+    constexpr int kBurst = 10;
+    constexpr double kWindowS = 10.0;
+    static std::mutex mutex;
+    static double window_start = -1e300;
+    static int in_window = 0;
+    static long long held_back = 0;
+    const std::lock_guard<std::mutex> lock(mutex);
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (now - window_start >= kWindowS) {
+        window_start = now;
+        in_window = 0;
+    }
+    if (++in_window > kBurst) {
+        ++held_back;
+        return;
+    }
+    const char *name = level >= LF_LOG_ERROR ? "error" : level >= LF_LOG_WARNING ? "warning" : level >= LF_LOG_INFO ? "info" : "debug";
+    if (held_back > 0)
+        std::fprintf(stderr, "lidarflow-lcm-bridge: library %s: %s (%lld earlier library lines held back)\n", name, message,
+                     held_back);
+    else
+        std::fprintf(stderr, "lidarflow-lcm-bridge: library %s: %s\n", name, message);
+    held_back = 0;
+}
+
 // The command line into config; false (after a message on stderr) when it is bad.
 bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *config, std::string *url,
-                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *threads_given,
-                        bool *queue_given) {
+                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *queue_given) {
     using namespace lidarflow::bridge;
     const lidarflow::cli::Args args("lidarflow-lcm-bridge", argc, argv, bridge_options());
     *url = args.str("lcm-url", "");
@@ -206,7 +234,6 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
             return false;
         }
         const std::string key = v.substr(0, eq);
-        *threads_given |= key == "threads";
         config->options.emplace_back(key, v.substr(eq + 1));
     }
     return true;
@@ -219,7 +246,7 @@ int main(int argc, char **argv) {
     lidarflow::tools::apply_heap_policy();
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
-    bool threads_given = false, queue_given = false;
+    bool queue_given = false;
     // --help and --version answer before anything else is checked, as they always did.
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -233,8 +260,7 @@ int main(int argc, char **argv) {
         }
     }
     try {
-        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &threads_given,
-                                &queue_given))
+        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &queue_given))
             return 2;
     } catch (const lidarflow::cli::UsageError &e) {
         std::fprintf(stderr, "%s\n", e.what());
@@ -243,10 +269,6 @@ int main(int argc, char **argv) {
     // A shard's frames come in pairs (t0, t1): room for both, or a t0 would go stale behind
     // the pair in progress.
     if (config.shard_count > 1 && !queue_given) config.queue_capacity = 2;
-    if (!threads_given) {
-        const unsigned n = std::thread::hardware_concurrency();
-        config.options.insert(config.options.begin(), {"threads", std::to_string(n ? n : 1)});
-    }
     if (!calib_file.empty()) {
         const std::string err = read_kitti_calibration(calib_file, &config.calibration);
         if (!err.empty()) {
@@ -271,6 +293,8 @@ int main(int argc, char **argv) {
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    // The library's own messages join the bridge's log: warnings always, the rest with --verbose.
+    lf_set_log_callback(library_message, config.verbose ? LF_LOG_INFO : LF_LOG_WARNING, nullptr);
     if (!replay_in.empty()) return replay(config, replay_in, replay_out);
 
     lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());

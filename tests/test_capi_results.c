@@ -340,7 +340,7 @@ static void test_sparse_stage(void **state) {
             assert_true(isfinite(pts[3 * i + 2]));
             continue;
         }
-        assert_true(r.u[i] == 0 && r.v[i] == 0 && r.d0[i] == 0 && r.d1[i] == 0 && r.confidence[i] == 0);
+        assert_true(isnan(r.u[i]) && isnan(r.v[i]) && isnan(r.d0[i]) && isnan(r.d1[i]) && r.confidence[i] == 0);
         assert_true(isnan(pts[3 * i]) && isnan(pts[3 * i + 1]) && isnan(pts[3 * i + 2]));
     }
     /* sparsified on 3x3 blocks: at most one match per block, and some survive */

@@ -151,20 +151,23 @@ void test_formats_and_points(void **) {
     const cv::Mat d1_npy = io::read_npy((out / "disp_1" / "000005_10.npy").string());
     const cv::Mat fl_pfm = io::read_pfm((out / "flow" / "000005_10.pfm").string());
     const cv::Mat fl_npy = io::read_npy((out / "flow" / "000005_10.npy").string());
+    const cv::Mat valid_npy = io::read_npy((out / "valid" / "000005_10.npy").string());
     const FlowField fl_flo = io::read_flo((out / "flow" / "000005_10.flo").string());
-    assert_true(d0_npy.size() == cv::Size(320, 96) && fl_npy.type() == CV_32FC3);
+    assert_true(d0_npy.size() == cv::Size(320, 96) && fl_npy.type() == CV_32FC2 && valid_npy.type() == CV_8UC1);
     int valid = 0, holes = 0, with_point = 0;
     for (int y = 0; y < 96; ++y)
         for (int x = 0; x < 320; ++x) {
             const float d = d0_npy.at<float>(y, x), dp = d0_pfm.at<float>(y, x);
-            const cv::Vec3f f = fl_npy.at<cv::Vec3f>(y, x), fp = fl_pfm.at<cv::Vec3f>(y, x);
-            const bool ok = f[2] == 1.0f;
+            const cv::Vec2f f = fl_npy.at<cv::Vec2f>(y, x);
+            const cv::Vec3f fp = fl_pfm.at<cv::Vec3f>(y, x);
+            const bool ok = valid_npy.at<uint8_t>(y, x) == 1;
+            assert_int_equal(ok, fp[2] == 1.0f);
             assert_int_equal(ok, disparity_valid(d0_png(y, x)));
             assert_int_equal(ok, flow_png.valid(y, x));
             assert_int_equal(ok, fl_flo.valid(y, x));
             if (!ok) {
                 ++holes;
-                assert_true(std::isnan(d) && std::isnan(dp) && std::isnan(f[0]) && fp[2] == 0.0f);
+                assert_true(std::isnan(d) && std::isnan(dp) && std::isnan(f[0]) && std::isnan(f[1]) && fp[2] == 0.0f);
                 continue;
             }
             ++valid;

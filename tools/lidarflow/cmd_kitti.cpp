@@ -71,7 +71,7 @@ int run_kitti_command(int argc, char **argv) {
                {"placements", true, "P    paper: also score P - 1 other placements of the sampling grids per seed (default 1: the paper's only)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
-               {"threads", true, "N    OpenMP threads (default 2)"},
+               {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"scale", true, "S    processing scale in [0.125, 1] (default: the preset's)"},
@@ -96,7 +96,7 @@ int run_kitti_command(int argc, char **argv) {
             ErrorCode::InvalidArgument, "kitti: --points must be > 0 for the paper protocol");
     o.estimator = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     o.estimator.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
-    o.estimator.threads = args.integer("threads", 2);
+    o.estimator.threads = args.integer("threads", o.estimator.threads);
     if (args.has("scale")) o.estimator.processing_scale = args.number("scale", 1.0);
     if (args.has("seed")) {
         const int seed = args.integer("seed", 1);

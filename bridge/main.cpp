@@ -2,6 +2,7 @@
 // lidarflow-lcm-bridge: runs the lidarflow estimator on stereo (+ LiDAR) frames from LCM and
 // publishes the scene flow and a status heartbeat. Uses only lidarflow's C ABI.
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "bridge_core.hpp"
 #include "calib_file.hpp"
 #include "heap_policy.hpp"
+#include "progress.hpp"
 #include "replay.hpp"
 
 namespace {
@@ -57,7 +60,9 @@ const char *kUsage =
     "                           -hex 32`): statuses and results carry an HMAC-SHA256 (on STATUS_CHANNEL_MAC),\n"
     "                           and the shard watch ignores (and counts) those without a valid one\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
-    "  --verbose                a line per published result\n"
+    "  --verbose                a line per published result, and the library's info messages\n"
+    "  --quiet                  no --replay progress lines and no library messages (errors and the\n"
+    "                           summary stay)\n"
     "  --replay IN.log --out OUT.log\n"
     "                           offline: every frame of the LCM log IN.log in log order at the\n"
     "                           estimator's pace (no network, nothing stale), results and status into\n"
@@ -69,11 +74,23 @@ const char *kUsage =
 
 // --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
 // 1 when the logs cannot be read or written.
-int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out) {
+int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out, bool quiet) {
     using namespace lidarflow::bridge;
     ReplayReport r;
     const double t0 = monotonic_seconds();
-    const std::string err = run_replay(config, in, out, &r, &g_stop);
+    // Progress by the share of the log read (frames per log are not known before the end).
+    std::error_code size_error;
+    const auto log_bytes = std::filesystem::file_size(in, size_error);
+    const double total = size_error ? 0.0 : static_cast<double>(log_bytes);
+    lidarflow::cli::Progress bar(!quiet, isatty(fileno(stderr)) != 0, 5.0);
+    const std::string err = run_replay(config, in, out, &r, &g_stop, [&](int64_t frames, int64_t bytes) {
+        const std::string share = total > 0 ? printf_string(", %.0f %% of the log", 100.0 * static_cast<double>(bytes) / total)
+                                            : std::string();
+        bar.update(static_cast<double>(bytes), total,
+                   printf_string("lidarflow-lcm-bridge: replay: stereo frame %lld%s", static_cast<long long>(frames),
+                                 share.c_str()));
+    });
+    bar.finish();
     const double seconds = monotonic_seconds() - t0;
     if (!err.empty()) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: replay of %s: %s\n", in.c_str(), err.c_str());
@@ -109,6 +126,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
                              "out"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
+    spec.push_back({"quiet", false, ""});
     spec.push_back({"version", false, ""});
     return spec;
 }
@@ -143,7 +161,8 @@ void library_message(int32_t level, const char *message, void *) {
 
 // The command line into config; false (after a message on stderr) when it is bad.
 bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *config, std::string *url,
-                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *queue_given) {
+                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *queue_given,
+                        bool *quiet) {
     using namespace lidarflow::bridge;
     const lidarflow::cli::Args args("lidarflow-lcm-bridge", argc, argv, bridge_options());
     *url = args.str("lcm-url", "");
@@ -166,6 +185,11 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
     config->flow_channel = args.str("flow-channel", config->flow_channel);
     config->status_channel = args.str("status-channel", config->status_channel);
     config->verbose = args.flag("verbose");
+    *quiet = args.flag("quiet");
+    if (*quiet && config->verbose) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --quiet and --verbose exclude each other\n");
+        return false;
+    }
     if (args.has("lidar-to-camera")) {
         const std::string v = args.str("lidar-to-camera", "");
         std::string text = v;
@@ -246,7 +270,7 @@ int main(int argc, char **argv) {
     lidarflow::tools::apply_heap_policy();
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
-    bool queue_given = false;
+    bool queue_given = false, quiet = false;
     // --help and --version answer before anything else is checked, as they always did.
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -260,7 +284,7 @@ int main(int argc, char **argv) {
         }
     }
     try {
-        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &queue_given))
+        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &queue_given, &quiet))
             return 2;
     } catch (const lidarflow::cli::UsageError &e) {
         std::fprintf(stderr, "%s\n", e.what());
@@ -294,8 +318,8 @@ int main(int argc, char **argv) {
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
     // The library's own messages join the bridge's log: warnings always, the rest with --verbose.
-    lf_set_log_callback(library_message, config.verbose ? LF_LOG_INFO : LF_LOG_WARNING, nullptr);
-    if (!replay_in.empty()) return replay(config, replay_in, replay_out);
+    if (!quiet) lf_set_log_callback(library_message, config.verbose ? LF_LOG_INFO : LF_LOG_WARNING, nullptr);
+    if (!replay_in.empty()) return replay(config, replay_in, replay_out, quiet);
 
     lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
     if (!lcm) {

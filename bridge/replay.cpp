@@ -105,7 +105,7 @@ const char *drop_reason(const Counters &a, const Counters &b) {
 }  // namespace
 
 std::string run_replay(const BridgeConfig &config_in, const std::string &in_path, const std::string &out_path,
-                       ReplayReport *report, const volatile std::sig_atomic_t *stop) {
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop, const ReplayProgress &progress) {
     *report = ReplayReport();
     BridgeConfig config = config_in;
     const double status_period_s = config.status_period_s;
@@ -264,6 +264,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     report->lost.push_back(
                         printf_string("%" PRId64 " frame(s) missing from the log before %s",
                             after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
+                if (progress) progress(report->stereo_events, event->offset + static_cast<int64_t>(event->data.size()));
             } else {
                 ++report->other_events;
             }

@@ -14,6 +14,7 @@
 // stereo event that completed its pair, so lcm-logplayer plays results in step with the inputs.
 #include <cstdint>
 #include <csignal>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,11 @@ struct ReplayReport {
 // SIGINT. Returns "" when the replay ran to the end or was interrupted (frames may still be
 // lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot
 // be read or an output that cannot be written (the first failed write ends the replay).
+// `progress` (optional) is called after each stereo frame handed to the bridge with the stereo
+// frames so far and the bytes of the input log read up to the end of that frame's event.
+using ReplayProgress = std::function<void(int64_t stereo_frames, int64_t bytes_read)>;
 std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
-                       ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr);
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr,
+                       const ReplayProgress &progress = {});
 
 }  // namespace lidarflow::bridge

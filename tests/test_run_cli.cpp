@@ -20,7 +20,10 @@
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
 #include "io/result_formats.hpp"
+#include "viz/disparity_color.hpp"
+#include "viz/error_map.hpp"
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
 #include <stdarg.h>
@@ -335,6 +338,56 @@ void test_quiet_and_verbose(void **) {
 
 }  // namespace
 
+// Whether `strip` holds the colour c somewhere.
+bool holds(const cv::Mat &strip, cv::Vec3b c) {
+    for (int y = 0; y < strip.rows; ++y)
+        for (int x = 0; x < strip.cols; ++x)
+            if (strip.at<cv::Vec3b>(y, x) == c) return true;
+    return false;
+}
+
+// kitti --out pictures carry legends below the map (320x96 here): error maps the ten bands of
+// the log scale with the threshold in white, disparities a bar from the colour of 0 to that of
+// its maximum, flow a colour wheel; and the library's messages come with --verbose.
+void test_kitti_pictures_have_legends(void **) {
+    const Scene s = make_scene("cli_kitti_legends");
+    const fs::path out = s.dir / "k";
+    const Result r = run("kitti --root " + q(s.root) + " --lidar velodyne --stage sparse --verbose --out " + q(out), s.dir);
+    if (r.code != 0) fail_msg("kitti --out failed: %s", r.output.c_str());
+    expect_contains(r, "lidarflow: info: 4 of 16 LiDAR points dropped: 2 behind the camera (z <= 0.1 m), 2 outside the 320x96 image");
+    const std::string base = (out / "viz" / "000000").string();
+    for (const char *kind : {"_disp0_error", "_disp1_error", "_flow_error"}) {
+        const cv::Mat p = cv::imread(base + kind + ".png", cv::IMREAD_COLOR);
+        if (p.empty()) fail_msg("no picture %s", kind);
+        assert_true(p.cols >= 320 && p.rows > 96 + 30);
+        const cv::Mat strip = p(cv::Rect(0, 96, p.cols, p.rows - 96));
+        for (double n : {0.0, 1.0 / 16, 1.0 / 8, 1.0 / 4, 1.0 / 2, 1.0, 2.0, 4.0, 8.0, 16.0})
+            if (!holds(strip, viz::log_error_color(n))) fail_msg("%s: band from %g not in the legend", kind, n);
+        assert_true(holds(strip, cv::Vec3b(255, 255, 255)));  // the outlier threshold
+    }
+    for (const char *kind : {"_disp0", "_disp1"}) {
+        const cv::Mat p = cv::imread(base + kind + ".png", cv::IMREAD_COLOR);
+        if (p.empty()) fail_msg("no picture %s", kind);
+        assert_true(p.cols >= 320 && p.rows > 96 + 20);
+        const cv::Mat strip = p(cv::Rect(0, 96, p.cols, p.rows - 96));
+        assert_true(holds(strip, viz::disparity_color(0, 1)) && holds(strip, viz::disparity_color(1, 1)));
+    }
+    const cv::Mat flow = cv::imread(base + "_flow.png", cv::IMREAD_COLOR);
+    assert_true(!flow.empty() && flow.rows > 96 + 20);
+    // The wheel: many hues below the map.
+    const cv::Mat strip = flow(cv::Rect(0, 96, flow.cols, flow.rows - 96));
+    std::vector<int> hues(256, 0);
+    cv::Mat hsv;
+    cv::cvtColor(strip, hsv, cv::COLOR_BGR2HSV_FULL);
+    int distinct = 0;
+    for (int y = 0; y < hsv.rows; ++y)
+        for (int x = 0; x < hsv.cols; ++x) {
+            const cv::Vec3b h = hsv.at<cv::Vec3b>(y, x);
+            if (h[1] > 60 && !hues[h[0]]++) ++distinct;
+        }
+    assert_true(distinct > 100);
+}
+
 int main() {
     const char *cli = std::getenv("LIDARFLOW_CLI");
     if (!cli || !*cli || !fs::exists(cli)) {
@@ -347,6 +400,7 @@ int main() {
         cmocka_unit_test(test_bad_arguments),
         cmocka_unit_test(test_output_names_and_jpeg_inputs),
         cmocka_unit_test(test_quiet_and_verbose),
+        cmocka_unit_test(test_kitti_pictures_have_legends),
     };
     return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
 }

@@ -313,7 +313,7 @@ static lf_estimator_t *create_and_push(lf_options_t *o, const scene_t *s) {
     return e;
 }
 
-/* Stopping after the sparsification: a sparse result with zeros where invalid, and NaN points. */
+/* Stopping after the sparsification: a sparse result with NaN (confidence 0) where invalid, and NaN points. */
 static void test_sparse_stage(void **state) {
     fixture_t *f = (fixture_t *)*state;
     lf_options_t *o = scene_options(1);

@@ -581,9 +581,9 @@ struct Points3d {
 };
 
 // Borrowed, read-only views into the estimator's latest result (lf_get_result_views): no copy,
-// the C ABI's values (0, not NaN, where not valid). Valid until the next push, reset, or the
-// destruction of the Estimator (a push that throws keeps them valid); read them only while no
-// other thread calls into that Estimator. Rows are stride_bytes apart.
+// the C ABI's values (NaN where not valid; 0 from a 0.1.0 library). Valid until the next push,
+// reset, or the destruction of the Estimator (a push that throws keeps them valid); read them
+// only while no other thread calls into that Estimator. Rows are stride_bytes apart.
 struct ResultViews {
     uint32_t width = 0, height = 0;
     lf_view_t u{}, v{}, d0{}, d1{}, valid{}, confidence{};

@@ -264,7 +264,10 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     report->lost.push_back(
                         printf_string("%" PRId64 " frame(s) missing from the log before %s",
                             after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
-                if (progress) progress(report->stereo_events, event->offset + static_cast<int64_t>(event->data.size()));
+                // The event ends after its 28-byte header (sync, number, time, two lengths), channel and data.
+                if (progress)
+                    progress(report->stereo_events,
+                             event->offset + 28 + static_cast<int64_t>(event->channel.size() + event->data.size()));
             } else {
                 ++report->other_events;
             }

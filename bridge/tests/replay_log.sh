@@ -32,6 +32,8 @@ cat "$tmp/replay.err"
 grep -q "stereo processed 8, dropped 0, missing from the log 0" "$tmp/replay.err" || fail "not every frame processed"
 grep -q "^lidarflow-lcm-bridge: replay: stereo frame 1, [0-9]* % of the log  (elapsed .*, ETA .*)$" "$tmp/replay.err" \
     || fail "no replay progress line"
+grep -q "^lidarflow-lcm-bridge: replay: stereo frame 8, 100 % of the log  (elapsed .*, ETA 0.0 s)$" "$tmp/replay.err" \
+    || fail "no last replay progress line"
 "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/quiet_out.log" "${opts[@]}" --quiet 2>"$tmp/quiet.err" \
     || fail "replay --quiet failed"
 grep -q "replay: stereo frame" "$tmp/quiet.err" && fail "replay --quiet wrote progress lines"

@@ -2,14 +2,17 @@
 // lidarflow-lcm-bridge: runs the lidarflow estimator on stereo (+ LiDAR) frames from LCM and
 // publishes the scene flow and a status heartbeat. Uses only lidarflow's C ABI.
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "args.hpp"
@@ -17,6 +20,7 @@
 #include "calib_file.hpp"
 #include "heap_policy.hpp"
 #include "lcm_url.hpp"
+#include "progress.hpp"
 #include "replay.hpp"
 
 namespace {
@@ -49,7 +53,7 @@ const char *kUsage =
     "  --encoding E             float32 | int16 (1/64 px fixed point; default)\n"
     "  --step N                 publish every N-th pixel in x and y (default 1)\n"
     "  --option KEY=VALUE       estimator option (lidarflow.h keys), repeatable; threads defaults\n"
-    "                           to the number of CPUs\n"
+    "                           to the library's: every usable CPU, fewer while others are busy\n"
     "  --shard K/N              one of N processes sharing the stream: compute only the pairs whose\n"
     "                           t1 frame index % N == K (index: stereo_t.frame_number, else arrival\n"
     "                           order); the queue default becomes 2 (a pair)\n"
@@ -59,7 +63,9 @@ const char *kUsage =
     "                           -hex 32`): statuses and results carry an HMAC-SHA256 (on STATUS_CHANNEL_MAC),\n"
     "                           and the shard watch ignores (and counts) those without a valid one\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
-    "  --verbose                a line per published result\n"
+    "  --verbose                a line per published result, and the library's info messages\n"
+    "  --quiet                  no --replay progress lines and no library messages (errors and the\n"
+    "                           summary stay)\n"
     "  --replay IN.log --out OUT.log\n"
     "                           offline: every frame of the LCM log IN.log in log order at the\n"
     "                           estimator's pace (no network, nothing stale), results and status into\n"
@@ -72,11 +78,23 @@ const char *kUsage =
 // --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
 // 1 when the logs cannot be read or written.
 int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in, const std::string &out,
-           const lidarflow::bridge::ReplayFrames &frames) {
+           const lidarflow::bridge::ReplayFrames &frames, bool quiet) {
     using namespace lidarflow::bridge;
     ReplayReport r;
     const double t0 = monotonic_seconds();
-    const std::string err = run_replay(config, in, out, &r, &g_stop, frames);
+    // Progress by the share of the log read (frames per log are not known before the end).
+    std::error_code size_error;
+    const auto log_bytes = std::filesystem::file_size(in, size_error);
+    const double total = size_error ? 0.0 : static_cast<double>(log_bytes);
+    lidarflow::cli::Progress bar(!quiet, isatty(fileno(stderr)) != 0, 5.0);
+    const std::string err = run_replay(config, in, out, &r, &g_stop, frames, [&](int64_t stereo_frames, int64_t bytes) {
+        const std::string share = total > 0 ? printf_string(", %.0f %% of the log", 100.0 * static_cast<double>(bytes) / total)
+                                            : std::string();
+        bar.update(static_cast<double>(bytes), total,
+                   printf_string("lidarflow-lcm-bridge: replay: stereo frame %lld%s", static_cast<long long>(stereo_frames),
+                                 share.c_str()));
+    });
+    bar.finish();
     const double seconds = monotonic_seconds() - t0;
     if (!err.empty()) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: replay of %s: %s\n", in.c_str(), err.c_str());
@@ -117,14 +135,43 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
                              "out", "frames"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
+    spec.push_back({"quiet", false, ""});
     spec.push_back({"version", false, ""});
     return spec;
 }
 
+// A library message on stderr, at most kBurst lines per kWindowS seconds (a warning of every
+// frame must not flood the log); the lines held back are counted in the next one shown.
+void library_message(int32_t level, const char *message, void *) {
+    constexpr int kBurst = 10;
+    constexpr double kWindowS = 10.0;
+    static std::mutex mutex;
+    static double window_start = -1e300;
+    static int in_window = 0;
+    static long long held_back = 0;
+    const std::lock_guard<std::mutex> lock(mutex);
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (now - window_start >= kWindowS) {
+        window_start = now;
+        in_window = 0;
+    }
+    if (++in_window > kBurst) {
+        ++held_back;
+        return;
+    }
+    const char *name = level >= LF_LOG_ERROR ? "error" : level >= LF_LOG_WARNING ? "warning" : level >= LF_LOG_INFO ? "info" : "debug";
+    if (held_back > 0)
+        std::fprintf(stderr, "lidarflow-lcm-bridge: library %s: %s (%lld earlier library lines held back)\n", name, message,
+                     held_back);
+    else
+        std::fprintf(stderr, "lidarflow-lcm-bridge: library %s: %s\n", name, message);
+    held_back = 0;
+}
+
 // The command line into config; false (after a message on stderr) when it is bad.
 bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *config, std::string *url,
-                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *threads_given,
-                        bool *queue_given, lidarflow::bridge::ReplayFrames *frames) {
+                        std::string *calib_file, std::string *replay_in, std::string *replay_out, bool *queue_given,
+                        bool *quiet, lidarflow::bridge::ReplayFrames *frames) {
     using namespace lidarflow::bridge;
     const lidarflow::cli::Args args("lidarflow-lcm-bridge", argc, argv, bridge_options());
     *url = args.str("lcm-url", "");
@@ -152,6 +199,11 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
         return false;
     }
     config->verbose = args.flag("verbose");
+    *quiet = args.flag("quiet");
+    if (*quiet && config->verbose) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --quiet and --verbose exclude each other\n");
+        return false;
+    }
     if (args.has("lidar-to-camera")) {
         const std::string v = args.str("lidar-to-camera", "");
         std::string text = v;
@@ -233,7 +285,6 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
             return false;
         }
         const std::string key = v.substr(0, eq);
-        *threads_given |= key == "threads";
         config->options.emplace_back(key, v.substr(eq + 1));
     }
     return true;
@@ -246,7 +297,7 @@ int main(int argc, char **argv) {
     lidarflow::tools::apply_heap_policy();
     BridgeConfig config;
     std::string url, calib_file, replay_in, replay_out;
-    bool threads_given = false, queue_given = false;
+    bool queue_given = false, quiet = false;
     ReplayFrames frames;
     // --help and --version answer before anything else is checked, as they always did.
     for (int i = 1; i < argc; ++i) {
@@ -261,8 +312,8 @@ int main(int argc, char **argv) {
         }
     }
     try {
-        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &threads_given,
-                                &queue_given, &frames))
+        if (!parse_command_line(argc, argv, &config, &url, &calib_file, &replay_in, &replay_out, &queue_given, &quiet,
+                                &frames))
             return 2;
     } catch (const lidarflow::cli::UsageError &e) {
         std::fprintf(stderr, "%s\n", e.what());
@@ -271,10 +322,6 @@ int main(int argc, char **argv) {
     // A shard's frames come in pairs (t0, t1): room for both, or a t0 would go stale behind
     // the pair in progress.
     if (config.shard_count > 1 && !queue_given) config.queue_capacity = 2;
-    if (!threads_given) {
-        const unsigned n = std::thread::hardware_concurrency();
-        config.options.insert(config.options.begin(), {"threads", std::to_string(n ? n : 1)});
-    }
     if (!calib_file.empty()) {
         const std::string err = read_kitti_calibration(calib_file, &config.calibration);
         if (!err.empty()) {
@@ -299,7 +346,9 @@ int main(int argc, char **argv) {
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
-    if (!replay_in.empty()) return replay(config, replay_in, replay_out, frames);
+    // The library's own messages join the bridge's log: warnings always, the rest with --verbose.
+    if (!quiet) lf_set_log_callback(library_message, config.verbose ? LF_LOG_INFO : LF_LOG_WARNING, nullptr);
+    if (!replay_in.empty()) return replay(config, replay_in, replay_out, frames, quiet);
 
     // Ask udpm for the receive buffer the kernel grants (LCM warns on anything more), and say
     // once how to raise the kernel's limit when it is below what large images need.

@@ -106,7 +106,8 @@ const char *drop_reason(const Counters &a, const Counters &b) {
 }  // namespace
 
 std::string run_replay(const BridgeConfig &config_in, const std::string &in_path, const std::string &out_path,
-                       ReplayReport *report, const volatile std::sig_atomic_t *stop, const ReplayFrames &frames) {
+                       ReplayReport *report, const volatile std::sig_atomic_t *stop, const ReplayFrames &frames,
+                       const ReplayProgress &progress) {
     *report = ReplayReport();
     BridgeConfig config = config_in;
     const double status_period_s = config.status_period_s;
@@ -274,6 +275,10 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                     report->lost.push_back(
                         printf_string("%" PRId64 " frame(s) missing from the log before %s",
                             after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
+                // The event ends after its 28-byte header (sync, number, time, two lengths), channel and data.
+                if (progress)
+                    progress(report->stereo_events,
+                             event->offset + 28 + static_cast<int64_t>(event->channel.size() + event->data.size()));
             } else {
                 ++report->other_events;
             }

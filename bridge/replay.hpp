@@ -14,6 +14,7 @@
 // stereo event that completed its pair, so lcm-logplayer plays results in step with the inputs.
 #include <cstdint>
 #include <csignal>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -59,11 +60,15 @@ struct ReplayFrames {
 // a stereo frame is handed over before that frame (as the live bridge would wait for it); the
 // look-ahead is bounded in log time from the event after the frame, in events and in bytes.
 // `stop` (optional) is polled between events and while waiting for the bridge, e.g. set by
-// SIGINT. `frames` restricts the replay to a range of stereo frames. Returns "" when the replay ran to the end or was interrupted (frames may still be
+// SIGINT. `frames` restricts the replay to a range of stereo frames. Returns "" when the replay
+// ran to the end or was interrupted (frames may still be
 // lost: see report->lost, report->interrupted), else the reason it could not: a log that cannot
 // be read or an output that cannot be written (the first failed write ends the replay).
+// `progress` (optional) is called after each stereo frame handed to the bridge with the stereo
+// frames so far and the bytes of the input log read up to the end of that frame's event.
+using ReplayProgress = std::function<void(int64_t stereo_frames, int64_t bytes_read)>;
 std::string run_replay(const BridgeConfig &config, const std::string &in_path, const std::string &out_path,
                        ReplayReport *report, const volatile std::sig_atomic_t *stop = nullptr,
-                       const ReplayFrames &frames = ReplayFrames());
+                       const ReplayFrames &frames = ReplayFrames(), const ReplayProgress &progress = {});
 
 }  // namespace lidarflow::bridge

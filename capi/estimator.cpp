@@ -2,10 +2,13 @@
 // lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
 // builds the new frame and result aside and commits them only when everything succeeded, so a
 // failed call leaves the handle exactly as it was.
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
 #include "convert.hpp"
+#include "core/log.hpp"
 #include "guard.hpp"
 #include "handles.hpp"
 
@@ -22,22 +25,23 @@ std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::
 
 const char *format_text(int type) { return type == CV_8UC1 ? "gray" : "colour"; }
 
-// The result the C ABI serves: the last stage's field, continuous, with a confidence plane and
-// zeros wherever the field is not valid (the documented contract of lf_get_result).
+// The result the C ABI serves: the last stage's field, continuous, with a confidence plane; u,
+// v, d0, d1 are NaN and confidence 0 wherever the field is not valid (docs/CONVENTIONS.md).
 std::unique_ptr<Result> make_result(const lidarflow::pipeline::EstimatorResult &r, int64_t t0, int64_t t1) {
     auto out = std::make_unique<Result>();
     const lidarflow::SceneFlowField &f = r.output();
     const cv::Mat1b invalid = f.valid == 0;
-    auto plane = [&](const cv::Mat1f &m) {
+    auto plane = [&](const cv::Mat1f &m, float hole) {
         cv::Mat1f c = m.empty() ? cv::Mat1f::zeros(f.valid.size()) : m.clone();
-        c.setTo(0.0f, invalid);
+        c.setTo(hole, invalid);
         return c;
     };
-    out->field.u = plane(f.u);
-    out->field.v = plane(f.v);
-    out->field.d0 = plane(f.d0);
-    out->field.d1 = plane(f.d1);
-    out->field.confidence = plane(f.confidence);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    out->field.u = plane(f.u, nan);
+    out->field.v = plane(f.v, nan);
+    out->field.d0 = plane(f.d0, nan);
+    out->field.d1 = plane(f.d1, nan);
+    out->field.confidence = plane(f.confidence, 0.0f);
     out->field.valid = (f.valid != 0) / 255;
     out->stage = r.last_stage;
     out->t0_us = t0;
@@ -77,6 +81,10 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         require_non_null(estimator, "estimator");
         require_non_null(left, "left");
         require_non_null(right, "right");
+        char context[80];
+        std::snprintf(context, sizeof context, "estimator %p frame %lld us", static_cast<void *>(estimator),
+                      static_cast<long long>(timestamp_us));
+        const lidarflow::log::Scope log_scope(context);
         const Frame *prev = estimator->previous.get();
         require(!prev || timestamp_us > prev->timestamp_us, ErrorCode::InvalidArgument,
                 "timestamp " + std::to_string(timestamp_us) + " us is not after the previous frame's (" +

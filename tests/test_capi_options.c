@@ -26,7 +26,7 @@ typedef struct key_t_ {
 } key_t_;
 
 static const key_t_ kKeys[] = {
-    {"threads", INT, 1, 256, 0, NONE, 1},
+    {"threads", INT, 1, 256, 0, NONE, NAN}, /* the usable CPUs: test_cpp_api checks it */
     {"use_lidar", BOOL, 0, 1, 0, NONE, 1},
     {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 1},
     {"support_window", INT, 1, 101, 0, ODD, 15},

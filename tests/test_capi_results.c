@@ -419,7 +419,7 @@ static lf_estimator_t *create_and_push(lf_options_t *o, const scene_t *s) {
     return e;
 }
 
-/* Stopping after the sparsification: a sparse result with zeros where invalid, and NaN points. */
+/* Stopping after the sparsification: a sparse result with NaN (confidence 0) where invalid, and NaN points. */
 static void test_sparse_stage(void **state) {
     fixture_t *f = (fixture_t *)*state;
     lf_options_t *o = scene_options(1);
@@ -446,7 +446,7 @@ static void test_sparse_stage(void **state) {
             assert_true(isfinite(pts[3 * i + 2]));
             continue;
         }
-        assert_true(r.u[i] == 0 && r.v[i] == 0 && r.d0[i] == 0 && r.d1[i] == 0 && r.confidence[i] == 0);
+        assert_true(isnan(r.u[i]) && isnan(r.v[i]) && isnan(r.d0[i]) && isnan(r.d1[i]) && r.confidence[i] == 0);
         assert_true(isnan(pts[3 * i]) && isnan(pts[3 * i + 1]) && isnan(pts[3 * i + 2]));
     }
     /* sparsified on 3x3 blocks: at most one match per block, and some survive */

@@ -81,13 +81,29 @@ void expect_flow(const cv::Mat &m, const SceneFlowField &f) {
         }
 }
 
+// .npy flow: (H, W, 2) u, v with NaN holes, validity in valid/ID_10.npy (uint8).
+void expect_flow_npy(const cv::Mat &m, const cv::Mat &valid, const SceneFlowField &f) {
+    assert_int_equal(m.type(), CV_32FC2);
+    assert_int_equal(valid.type(), CV_8UC1);
+    assert_true(m.size() == f.u.size() && valid.size() == f.u.size());
+    for (int y = 0; y < f.u.rows; ++y)
+        for (int x = 0; x < f.u.cols; ++x) {
+            const cv::Vec2f p = m.at<cv::Vec2f>(y, x);
+            assert_int_equal(valid.at<uint8_t>(y, x), f.valid(y, x) ? 1 : 0);
+            if (f.valid(y, x))
+                assert_true(p[0] == f.u(y, x) && p[1] == f.v(y, x));
+            else
+                assert_true(std::isnan(p[0]) && std::isnan(p[1]));
+        }
+}
+
 void test_round_trips(void **) {
     const fs::path dir = test::scratch_dir("io_result_files");
     const SceneFlowField f = sample_field();
     for (io::ResultFormat fmt : {io::ResultFormat::Pfm, io::ResultFormat::Npy, io::ResultFormat::Flo}) {
         const std::vector<std::string> files = io::write_results(dir.string(), "000007", f, fmt);
-        assert_int_equal(files.size(), 3);
         const bool npy = fmt == io::ResultFormat::Npy;
+        assert_int_equal(files.size(), npy ? 4 : 3);
         const auto read = [npy](const std::string &p) { return npy ? io::read_npy(p) : io::read_pfm(p); };
         assert_true(files[0] == (dir / "disp_0" / (npy ? "000007_10.npy" : "000007_10.pfm")).string());
         expect_disparity(read(files[0]), f.d0, f.valid);
@@ -100,6 +116,10 @@ void test_round_trips(void **) {
                     assert_int_equal(back.valid(y, x), f.valid(y, x) ? 1 : 0);
                     if (f.valid(y, x)) assert_true(back.u(y, x) == f.u(y, x) && back.v(y, x) == f.v(y, x));
                 }
+        } else if (npy) {
+            assert_true(files[3] == (dir / "valid" / "000007_10.npy").string());
+            expect_flow_npy(read(files[2]), read(files[3]), f);
+            test::expect_error([&] { io::read_flow_file(files[3]); }, ErrorCode::Format);
         } else {
             expect_flow(read(files[2]), f);
         }

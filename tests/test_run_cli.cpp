@@ -21,7 +21,10 @@
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
 #include "io/result_formats.hpp"
+#include "viz/disparity_color.hpp"
+#include "viz/error_map.hpp"
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
 #include <stdarg.h>
@@ -152,20 +155,23 @@ void test_formats_and_points(void **) {
     const cv::Mat d1_npy = io::read_npy((out / "disp_1" / "000005_10.npy").string());
     const cv::Mat fl_pfm = io::read_pfm((out / "flow" / "000005_10.pfm").string());
     const cv::Mat fl_npy = io::read_npy((out / "flow" / "000005_10.npy").string());
+    const cv::Mat valid_npy = io::read_npy((out / "valid" / "000005_10.npy").string());
     const FlowField fl_flo = io::read_flo((out / "flow" / "000005_10.flo").string());
-    assert_true(d0_npy.size() == cv::Size(320, 96) && fl_npy.type() == CV_32FC3);
+    assert_true(d0_npy.size() == cv::Size(320, 96) && fl_npy.type() == CV_32FC2 && valid_npy.type() == CV_8UC1);
     int valid = 0, holes = 0, with_point = 0;
     for (int y = 0; y < 96; ++y)
         for (int x = 0; x < 320; ++x) {
             const float d = d0_npy.at<float>(y, x), dp = d0_pfm.at<float>(y, x);
-            const cv::Vec3f f = fl_npy.at<cv::Vec3f>(y, x), fp = fl_pfm.at<cv::Vec3f>(y, x);
-            const bool ok = f[2] == 1.0f;
+            const cv::Vec2f f = fl_npy.at<cv::Vec2f>(y, x);
+            const cv::Vec3f fp = fl_pfm.at<cv::Vec3f>(y, x);
+            const bool ok = valid_npy.at<uint8_t>(y, x) == 1;
+            assert_int_equal(ok, fp[2] == 1.0f);
             assert_int_equal(ok, disparity_valid(d0_png(y, x)));
             assert_int_equal(ok, flow_png.valid(y, x));
             assert_int_equal(ok, fl_flo.valid(y, x));
             if (!ok) {
                 ++holes;
-                assert_true(std::isnan(d) && std::isnan(dp) && std::isnan(f[0]) && fp[2] == 0.0f);
+                assert_true(std::isnan(d) && std::isnan(dp) && std::isnan(f[0]) && std::isnan(f[1]) && fp[2] == 0.0f);
                 continue;
             }
             ++valid;
@@ -369,6 +375,56 @@ void test_quiet_and_verbose(void **) {
 
 }  // namespace
 
+// Whether `strip` holds the colour c somewhere.
+bool holds(const cv::Mat &strip, cv::Vec3b c) {
+    for (int y = 0; y < strip.rows; ++y)
+        for (int x = 0; x < strip.cols; ++x)
+            if (strip.at<cv::Vec3b>(y, x) == c) return true;
+    return false;
+}
+
+// kitti --out pictures carry legends below the map (320x96 here): error maps the ten bands of
+// the log scale with the threshold in white, disparities a bar from the colour of 0 to that of
+// its maximum, flow a colour wheel; and the library's messages come with --verbose.
+void test_kitti_pictures_have_legends(void **) {
+    const Scene s = make_scene("cli_kitti_legends");
+    const fs::path out = s.dir / "k";
+    const Result r = run("kitti --root " + q(s.root) + " --lidar velodyne --stage sparse --verbose --out " + q(out), s.dir);
+    if (r.code != 0) fail_msg("kitti --out failed: %s", r.output.c_str());
+    expect_contains(r, "lidarflow: info: 4 of 16 LiDAR points dropped: 2 behind the camera (z <= 0.1 m), 2 outside the 320x96 image");
+    const std::string base = (out / "viz" / "000000").string();
+    for (const char *kind : {"_disp0_error", "_disp1_error", "_flow_error"}) {
+        const cv::Mat p = cv::imread(base + kind + ".png", cv::IMREAD_COLOR);
+        if (p.empty()) fail_msg("no picture %s", kind);
+        assert_true(p.cols >= 320 && p.rows > 96 + 30);
+        const cv::Mat strip = p(cv::Rect(0, 96, p.cols, p.rows - 96));
+        for (double n : {0.0, 1.0 / 16, 1.0 / 8, 1.0 / 4, 1.0 / 2, 1.0, 2.0, 4.0, 8.0, 16.0})
+            if (!holds(strip, viz::log_error_color(n))) fail_msg("%s: band from %g not in the legend", kind, n);
+        assert_true(holds(strip, cv::Vec3b(255, 255, 255)));  // the outlier threshold
+    }
+    for (const char *kind : {"_disp0", "_disp1"}) {
+        const cv::Mat p = cv::imread(base + kind + ".png", cv::IMREAD_COLOR);
+        if (p.empty()) fail_msg("no picture %s", kind);
+        assert_true(p.cols >= 320 && p.rows > 96 + 20);
+        const cv::Mat strip = p(cv::Rect(0, 96, p.cols, p.rows - 96));
+        assert_true(holds(strip, viz::disparity_color(0, 1)) && holds(strip, viz::disparity_color(1, 1)));
+    }
+    const cv::Mat flow = cv::imread(base + "_flow.png", cv::IMREAD_COLOR);
+    assert_true(!flow.empty() && flow.rows > 96 + 20);
+    // The wheel: many hues below the map.
+    const cv::Mat strip = flow(cv::Rect(0, 96, flow.cols, flow.rows - 96));
+    std::vector<int> hues(256, 0);
+    cv::Mat hsv;
+    cv::cvtColor(strip, hsv, cv::COLOR_BGR2HSV_FULL);
+    int distinct = 0;
+    for (int y = 0; y < hsv.rows; ++y)
+        for (int x = 0; x < hsv.cols; ++x) {
+            const cv::Vec3b h = hsv.at<cv::Vec3b>(y, x);
+            if (h[1] > 60 && !hues[h[0]]++) ++distinct;
+        }
+    assert_true(distinct > 100);
+}
+
 int main() {
     const char *cli = std::getenv("LIDARFLOW_CLI");
     if (!cli || !*cli || !fs::exists(cli)) {
@@ -382,6 +438,7 @@ int main() {
         cmocka_unit_test(test_bad_arguments),
         cmocka_unit_test(test_output_names_and_jpeg_inputs),
         cmocka_unit_test(test_quiet_and_verbose),
+        cmocka_unit_test(test_kitti_pictures_have_legends),
     };
     return cmocka_run_group_tests_name("run_cli", tests, nullptr, nullptr);
 }

@@ -10,8 +10,8 @@
 #   tools/dev.sh build       only configure + build (build/)
 #   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
 #   tools/dev.sh test-tsan   build the library with clang 14 + ThreadSanitizer
-#                            (build-tsan/), run the C ABI concurrency suite under it (N handles
-#                            on N threads)
+#                            (build-tsan/), run the C ABI concurrency suites under it (N handles
+#                            on N threads; the log callback replaced while frames run)
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
 #   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
@@ -182,11 +182,13 @@ case "${1:-}" in
         # The library and the suite: CI's clang build of the core (the fuzz step compiles the
         # bridge's decoders and the readers with clang too). Everything else gets its clang build
         # from build-clang; in CI it is built twice by gcc already.
-        cmake --build "$root/build-tsan" -j "$jobs" --target lidarflow test_capi_concurrent
+        cmake --build "$root/build-tsan" -j "$jobs" --target lidarflow test_capi_concurrent test_capi_log
         # OpenMP stays at one thread per handle in the suite: libgomp is not instrumented, so its
         # barriers would be reported as races. The threads under test are the caller's.
         TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" LF_TEST_THREADS=4 LF_TEST_ROUNDS=6 \
-            "$root/build-tsan/tests/test_capi_concurrent" ;;
+            "$root/build-tsan/tests/test_capi_concurrent"
+        # The log callback replaced while frames run on three threads.
+        TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" "$root/build-tsan/tests/test_capi_log" ;;
     fuzz)
         deps
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP

@@ -50,6 +50,7 @@ expect 2 'a shard key needs at least 16 bytes' --shard 0/2 --shard-key "$short_k
 printf '0123456789abcdef0123\n' >"$short_key"
 expect 2 '--shard-key needs --shard K/N with N > 1' --shard-key "$short_key"
 rm -f "$short_key"
+expect 2 '--quiet and --verbose exclude each other' --quiet --verbose
 expect 0 '^usage: lidarflow-lcm-bridge' --help
 expect 0 '^lidarflow-lcm-bridge [0-9]' --queue 0 --version
 
@@ -61,6 +62,7 @@ for name in $names; do
     case "$name" in
         --help | --version) ;;
         --verbose) expect 2 '--queue expects a number' --verbose --queue 0 ;;
+        --quiet) expect 2 '--queue expects a number' --quiet --queue 0 ;;
         *) expect 2 "option $name needs a value" "$name" ;;
     esac
 done

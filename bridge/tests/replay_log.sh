@@ -7,7 +7,9 @@
 #     passes the same check;
 #  3. --frames A:B replays stereo frames A..B only: their pairs, equal to the whole log's;
 #  4. logs with a frame missing (frame_number gap) or a calibration missing (frames before any
-#     calibration) exit 3 and name the frames.
+#     calibration) exit 3 and name the frames;
+#  5. piped, publish-kitti and --replay write progress lines with elapsed time and ETA; --quiet
+#     silences them.
 set -euo pipefail
 : "${LIDARFLOW_CLI:?}" "${LIDARFLOW_BRIDGE:?}" "${LIDARFLOW_LOG_CHECK:?}" "${LIDARFLOW_TEST_TMP:?}"
 tmp="$LIDARFLOW_TEST_TMP/bridge_replay_log"
@@ -16,13 +18,27 @@ fail() { echo "FAIL: $*"; exit 1; }
 "$LIDARFLOW_CLI" synth --out "$tmp/scene" --width 320 --height 96 --frames 2 >/dev/null
 # 2 ids x 2 loops = 4 sequences of 2 frames = 8 frames, 4 results.
 "$LIDARFLOW_CLI" publish-kitti --root "$tmp/scene" --lidar paper --rate 0 --loop 2 \
-    --lcm-url "file://$tmp/in.log?mode=w"
+    --lcm-url "file://$tmp/in.log?mode=w" 2>"$tmp/publish.err"
+cat "$tmp/publish.err"
+grep -q "^publish-kitti: \[1/8\] 000000_10, loop 1  (elapsed .*, ETA .*)$" "$tmp/publish.err" || fail "no first progress line"
+grep -q "^publish-kitti: \[8/8\] 000001_11, loop 2  (elapsed .*, ETA 0.0 s)$" "$tmp/publish.err" || fail "no last progress line"
+"$LIDARFLOW_CLI" publish-kitti --root "$tmp/scene" --lidar paper --rate 0 --quiet \
+    --lcm-url "file://$tmp/quiet.log?mode=w" 2>"$tmp/publish_quiet.err"
+[ ! -s "$tmp/publish_quiet.err" ] || fail "publish-kitti --quiet wrote to stderr"
 opts=(--option matching.min_coarsest_height=16 --option threads=2)
 
 "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/out.log" "${opts[@]}" 2>"$tmp/replay.err" \
     || { rc=$?; cat "$tmp/replay.err"; fail "replay exited $rc"; }
 cat "$tmp/replay.err"
 grep -q "stereo processed 8, dropped 0, missing from the log 0" "$tmp/replay.err" || fail "not every frame processed"
+grep -q "^lidarflow-lcm-bridge: replay: stereo frame 1, [0-9]* % of the log  (elapsed .*, ETA .*)$" "$tmp/replay.err" \
+    || fail "no replay progress line"
+grep -q "^lidarflow-lcm-bridge: replay: stereo frame 8, 100 % of the log  (elapsed .*, ETA 0.0 s)$" "$tmp/replay.err" \
+    || fail "no last replay progress line"
+"$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/quiet_out.log" "${opts[@]}" --quiet 2>"$tmp/quiet.err" \
+    || fail "replay --quiet failed"
+grep -q "replay: stereo frame" "$tmp/quiet.err" && fail "replay --quiet wrote progress lines"
+grep -q "stereo processed 8" "$tmp/quiet.err" || fail "replay --quiet lost its summary"
 "$LIDARFLOW_LOG_CHECK" verify "$tmp/out.log" --inputs "$tmp/in.log" "${opts[@]}" --min-results 4
 
 if command -v lcm-logplayer >/dev/null; then

@@ -94,8 +94,10 @@ typedef struct lf_options lf_options_t;
  * lf_options_set_string. Distances are pixels of the full-resolution left image.
  *
  * general
- *   "threads"          int    [1, 256]   OpenMP threads of this handle (default 1); results do
- *                                        not depend on it
+ *   "threads"          int    [1, 256]   OpenMP threads of this handle (default: the CPUs the
+ *                                        process may run on, at most 256; with
+ *                                        "adaptive_threads" a frame takes only the idle ones);
+ *                                        results do not depend on it
  *   "adaptive_threads" 0/1               each frame uses at most the CPUs other processes leave
  *                                        idle when it starts, at least one (default 1), so a
  *                                        shared machine never runs it slower than one thread;
@@ -438,7 +440,7 @@ typedef struct lf_plane_t {
  * d0    float32 disparity at t0 [px];  d1 float32 disparity at t1 of the same point [px];
  * valid uint8 1 where (u, v, d0, d1) is defined, 0 elsewhere (the dense result of the
  *       interpolation stage is valid everywhere; earlier stages are sparse); u, v, d0, d1 are
- *       0 where valid is 0;
+ *       NaN where valid is 0 (docs/CONVENTIONS.md; 0 in 0.1.0);
  * confidence float32 >= 0, larger is better, 0 where not valid. */
 typedef struct lf_result_buffers_t {
     uint32_t struct_size;    /* sizeof(lf_result_buffers_t) */
@@ -585,6 +587,36 @@ LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_m
  * lf_ function, including those without a handle such as lf_create); valid until that thread's
  * next failed call. Never NULL. One thread at a time per estimator; NULL is thread-safe. */
 LF_API const char *lf_last_error(const lf_estimator_t *estimator);
+
+/* ===================================================================================== */
+/* Log messages                                                                          */
+/* ===================================================================================== */
+
+/* Severity of a library message; numbered as Python's logging levels. */
+typedef enum lf_log_level_t {
+    LF_LOG_DEBUG = 10,   /* detail of a decision, e.g. points the visibility filter removed */
+    LF_LOG_INFO = 20,    /* what the library decided, e.g. LiDAR points outside the image */
+    LF_LOG_WARNING = 30, /* a fallback: e.g. every LiDAR point dropped, no background motion */
+    LF_LOG_ERROR = 40    /* reserved for failures the status codes cannot carry */
+} lf_log_level_t;
+
+/* Receives one message: level (lf_log_level_t), message (NUL-terminated, one line, without a
+ * newline; it names the estimator handle and frame, e.g. "estimator 0x55d0c0a0 frame 2000 us:
+ * 17 of 20 LiDAR points dropped: ...", and is valid only during the call) and the `user`
+ * pointer given to lf_set_log_callback. It may be called from any thread that runs a library
+ * call, concurrently from several, while the library holds none of its locks; it may call
+ * lf_set_log_callback (other lidarflow calls it makes log nothing). It must not unwind (no
+ * C++ exception or longjmp out of it). */
+typedef void (*lf_log_fn)(int32_t level, const char *message, void *user);
+
+/* Sends the library's messages of level >= min_level to fn, process-wide (every handle, every
+ * thread); fn = NULL is silent, the default. Replaces the previous callback. When the call
+ * returns, no call of an earlier callback is running any more (so its `user` may be freed),
+ * except when it is called from inside a callback, which returns at once. The caller owns
+ * `user`; the library only passes it on. Thread-safe, also while other threads push frames.
+ * Errors: LF_ERR_INVALID_ARGUMENT (min_level outside [LF_LOG_DEBUG, LF_LOG_ERROR] with a
+ * non-NULL fn; nothing changes); the message is in lf_last_error(NULL). */
+LF_API int32_t lf_set_log_callback(lf_log_fn fn, int32_t min_level, void *user);
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -24,9 +24,10 @@
 //  - Results are copies that the caller owns (std::vector, or cv::Mat with OpenCV): they stay
 //    valid after the estimator moves on or is destroyed. Only ResultViews borrows (see there).
 //  - Invalid values are NaN: where the latest result is not valid (sparse stages, see
-//    lf_result_buffers_t), u, v, d0 and d1 are NaN in every copy this header returns (the C
-//    ABI writes 0 there); confidence is 0 there, as in the C ABI; 3-D points and motion are NaN
-//    there (as in the C ABI). Raw borrowed views (ResultViews) show the C ABI's values.
+//    lf_result_buffers_t), u, v, d0 and d1 are NaN in every copy this header returns, as the C
+//    ABI gives them (the 0.1.0 library wrote 0 there; this header turns that into NaN too);
+//    confidence is 0 there, as in the C ABI; 3-D points and motion are NaN there (as in the C
+//    ABI). Raw borrowed views (ResultViews) show the C ABI's values. docs/CONVENTIONS.md.
 //  - Thread safety, as in lidarflow.h: distinct objects may be used concurrently; one Options or
 //    Estimator must not be used by two threads at the same time — this includes the member
 //    functions that only read (has_result() excepted, see there), because every C ABI call
@@ -62,7 +63,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -148,6 +152,43 @@ cv::Mat copy_to_mat(const std::vector<T> &values, uint32_t width, uint32_t heigh
 #endif
 
 }  // namespace detail
+
+// Receives the library's messages: level (lf_log_level_t: LF_LOG_DEBUG ... LF_LOG_ERROR) and the
+// text (naming the estimator handle and frame; a copy the handler may keep).
+using LogHandler = std::function<void(int level, const std::string &message)>;
+
+namespace detail {
+struct LogSlot {
+    std::mutex mutex;
+    std::unique_ptr<LogHandler> handler;
+};
+inline LogSlot &log_slot() {
+    static LogSlot slot;
+    return slot;
+}
+inline void log_trampoline(int32_t level, const char *message, void *user) noexcept {
+    try {
+        (*static_cast<LogHandler *>(user))(level, std::string(message));
+    } catch (...) {
+        // An exception must not unwind through the library: the message is lost, the frame goes on.
+    }
+}
+}  // namespace detail
+
+// Sends the library's messages of level >= min_level to `handler`, process-wide (lf_set_log_callback);
+// an empty handler silences them (the default). The handler runs on any thread that runs a
+// library call, concurrently from several, and its exceptions are swallowed. When this returns
+// the previous handler is not running any more and has been destroyed. Thread-safe, but not
+// from inside a handler (it would wait for itself). Throws Error(LF_ERR_INVALID_ARGUMENT) for
+// min_level outside [LF_LOG_DEBUG, LF_LOG_ERROR]; the previous handler then stays.
+inline void set_log_handler(LogHandler handler, int min_level = LF_LOG_INFO) {
+    std::unique_ptr<LogHandler> next = handler ? std::make_unique<LogHandler>(std::move(handler)) : nullptr;
+    detail::LogSlot &slot = detail::log_slot();
+    const std::lock_guard<std::mutex> lock(slot.mutex);
+    detail::check(lf_set_log_callback(next ? &detail::log_trampoline : nullptr, min_level, next.get()),
+                  [] { return lf_last_error(nullptr); });
+    slot.handler = std::move(next);  // the old handler: no call of it runs any more
+}
 
 // Run-time version of the loaded library (lf_version_string / lf_version_number / lf_abi_major).
 // Compare with LF_VERSION_STRING / LF_VERSION_NUMBER / LF_ABI_MAJOR of the headers. Thread-safe.
@@ -569,9 +610,9 @@ struct ObjectMotion {
 };
 
 // Borrowed, read-only views into the estimator's latest result (lf_get_result_views): no copy,
-// the C ABI's values (0, not NaN, where not valid). Valid until the next push, reset, or the
-// destruction of the Estimator (a push that throws keeps them valid); read them only while no
-// other thread calls into that Estimator. Rows are stride_bytes apart.
+// the C ABI's values (NaN where not valid; 0 from a 0.1.0 library). Valid until the next push,
+// reset, or the destruction of the Estimator (a push that throws keeps them valid); read them
+// only while no other thread calls into that Estimator. Rows are stride_bytes apart.
 struct ResultViews {
     uint32_t width = 0, height = 0;
     lf_view_t u{}, v{}, d0{}, d1{}, valid{}, confidence{};

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 
 #include <omp.h>
 
@@ -55,6 +56,12 @@ int own_runnable_threads() {
 }
 
 }  // namespace
+
+int default_threads() {
+    int cpus = usable_cpus();
+    if (cpus <= 0) cpus = static_cast<int>(std::thread::hardware_concurrency());
+    return std::clamp(cpus, 1, 256);  // 256: the "threads" key's upper bound
+}
 
 int threads_for_now(int requested) {
     if (requested <= 1) return std::max(1, requested);

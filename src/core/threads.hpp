@@ -4,6 +4,11 @@
 
 namespace lidarflow {
 
+// The default "threads" of the library, the CLI, Python and the bridge: the CPUs this process
+// may run on (its affinity mask), in [1, 256]. With adaptive threads (threads_for_now) a frame
+// still takes only the CPUs other processes leave idle. Thread-safe; never throws.
+int default_threads();
+
 // How many of `requested` OpenMP threads a frame should use now: the CPUs this process may run
 // on, less the tasks other processes keep runnable at this moment (the kernel's count in
 // /proc/loadavg less this process's own runnable threads), at least 1 and at most `requested`. A team larger than the idle CPUs makes

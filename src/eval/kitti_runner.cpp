@@ -21,6 +21,7 @@
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
 #include "viz/flow_color.hpp"
+#include "viz/legend.hpp"
 
 namespace lidarflow::eval {
 
@@ -76,15 +77,24 @@ void write_viz(const std::string &out, const std::string &id, const SceneFlowFie
     const std::string dir = out + "/viz/" + id;
     const FlowField flow = io::field_flow(f);
     const DisparityMap d0 = io::field_disparity0(f), d1 = io::field_disparity1(f);
-    io::write_image(dir + "_flow.png", viz::flow_to_color(flow));
-    io::write_image(dir + "_disp0.png", viz::disparity_to_color(d0));
-    io::write_image(dir + "_disp1.png", viz::disparity_to_color(d1));
+    // Each picture carries its legend (as `viz` writes them), so it reads on its own: the flow
+    // wheel at the picture's normalisation, disparity colour bars, the error maps' log scale.
+    const viz::FlowColorOptions fo;
+    io::write_image(dir + "_flow.png",
+                    viz::with_flow_legend(viz::flow_to_color(flow, fo), viz::flow_color_scale(flow, fo), fo.style));
+    io::write_image(dir + "_disp0.png",
+                    viz::with_disparity_legend(viz::disparity_to_color(d0), viz::disparity_color_scale(d0)));
+    io::write_image(dir + "_disp1.png",
+                    viz::with_disparity_legend(viz::disparity_to_color(d1), viz::disparity_color_scale(d1)));
     if (!gt) return;
     const GroundTruth &occ = gt->occ;
     const GroundTruth *noc = gt->has_noc ? &gt->noc : nullptr;
-    io::write_image(dir + "_disp0_error.png", viz::disparity_error_image(d0, occ.d0, noc ? noc->d0 : DisparityMap()));
-    io::write_image(dir + "_disp1_error.png", viz::disparity_error_image(d1, occ.d1, noc ? noc->d1 : DisparityMap()));
-    io::write_image(dir + "_flow_error.png", viz::flow_error_image(flow, occ.flow, noc ? noc->flow : FlowField()));
+    io::write_image(dir + "_disp0_error.png", viz::with_error_legend(viz::disparity_error_image(
+                                                  d0, occ.d0, noc ? noc->d0 : DisparityMap())));
+    io::write_image(dir + "_disp1_error.png", viz::with_error_legend(viz::disparity_error_image(
+                                                  d1, occ.d1, noc ? noc->d1 : DisparityMap())));
+    io::write_image(dir + "_flow_error.png",
+                    viz::with_error_legend(viz::flow_error_image(flow, occ.flow, noc ? noc->flow : FlowField())));
 }
 
 std::string fmt(double v, int prec = 2) {

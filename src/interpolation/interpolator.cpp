@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/parallel_errors.hpp"
 #include "interpolation/ego_motion.hpp"
 #include "interpolation/geodesic.hpp"
@@ -515,6 +516,10 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
             }
         res.ego = rigid ? fit_rigid_ego_motion(mx, my, md0, md1, mu, mv, eo, camera)
                         : fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
+        if (!res.ego.valid)
+            log::write(log::Level::Warning, "interpolation: no background motion fits the " + std::to_string(mx.size()) +
+                                                " matches; the frame is interpolated without it (no background "
+                                                "hypothesis, occlusion reasoning or background d1)");
     }
     set.subtract_d0 = o.d1_from_change || res.ego.valid;
     // The zero remainder (pure background) is a hypothesis of its own only with a background

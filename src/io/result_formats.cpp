@@ -164,6 +164,17 @@ cv::Mat3f flow_with_valid(const FlowField &flow) {
     return out;
 }
 
+cv::Mat2f flow_with_nan(const FlowField &flow) {
+    cv::Mat2f out(flow.u.size());
+    for (int y = 0; y < out.rows; ++y)
+        for (int x = 0; x < out.cols; ++x) {
+            const float u = flow.u(y, x), v = flow.v(y, x);
+            const bool ok = flow.valid(y, x) && std::isfinite(u) && std::isfinite(v);
+            out(y, x) = ok ? cv::Vec2f(u, v) : cv::Vec2f(kNaN, kNaN);
+        }
+    return out;
+}
+
 void write_pfm(const std::string &path, const cv::Mat &map) {
     check_float_map(map, path);
     // Scale -1: little-endian data, which is how every PFM reader in use expects it.
@@ -210,9 +221,14 @@ cv::Mat read_pfm(const std::string &path) {
 }
 
 void write_npy(const std::string &path, const cv::Mat &map) {
-    check_float_map(map, path);
-    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(map.rows) + ", " +
-                         std::to_string(map.cols) + (map.channels() == 3 ? ", 3" : "") + "), }";
+    require(!map.empty(), ErrorCode::InvalidArgument, "empty map for " + path);
+    const int type = map.type();
+    require(type == CV_32FC1 || type == CV_32FC2 || type == CV_32FC3 || type == CV_8UC1, ErrorCode::InvalidArgument,
+            path + ": expected a float32 map with 1 to 3 channels or a uint8 map");
+    const bool bytes = type == CV_8UC1;
+    std::string header = std::string("{'descr': '") + (bytes ? "|u1" : "<f4") + "', 'fortran_order': False, 'shape': (" +
+                         std::to_string(map.rows) + ", " + std::to_string(map.cols) +
+                         (map.channels() > 1 ? ", " + std::to_string(map.channels()) : std::string()) + "), }";
     // Magic (6) + version (2) + length (2) + header, padded with spaces and ended by '\n' to a
     // multiple of 64 bytes, as numpy writes it.
     const size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
@@ -224,6 +240,10 @@ void write_npy(const std::string &path, const cv::Mat &map) {
     buf += header;
     const size_t row = static_cast<size_t>(map.cols) * static_cast<size_t>(map.channels());
     for (int y = 0; y < map.rows; ++y) {
+        if (bytes) {
+            buf.append(map.ptr<char>(y), row);
+            continue;
+        }
         const float *src = map.ptr<float>(y);
         for (size_t k = 0; k < row; ++k) put_le32(buf, src[k]);
     }
@@ -248,19 +268,26 @@ cv::Mat read_npy(const std::string &path) {
         return a;
     };
     const size_t d = value_of("descr");
-    require(header.compare(d, 5, "'<f4'") == 0, ErrorCode::Format, path + ": expected little-endian float32 ('<f4')");
+    const bool bytes = header.compare(d, 5, "'|u1'") == 0;
+    require(bytes || header.compare(d, 5, "'<f4'") == 0, ErrorCode::Format,
+            path + ": expected little-endian float32 ('<f4') or uint8 ('|u1')");
     const size_t f = value_of("fortran_order");
     require(header.compare(f, 5, "False") == 0, ErrorCode::Format, path + ": Fortran-order arrays are not read");
     const size_t s = value_of("shape");
     const size_t close = header.find(')', s);
     require(header[s] == '(' && close != std::string::npos, ErrorCode::Format, path + ": bad .npy shape");
     const std::vector<long> dims = parse_shape(header.substr(s + 1, close - s - 1));
-    const bool ok = dims.size() == 2 || (dims.size() == 3 && (dims[2] == 2 || dims[2] == 3));
-    require(ok, ErrorCode::Format, path + ": expected shape (H, W), (H, W, 2) or (H, W, 3)");
+    const bool ok = dims.size() == 2 || (!bytes && dims.size() == 3 && (dims[2] == 2 || dims[2] == 3));
+    require(ok, ErrorCode::Format,
+            path + (bytes ? ": expected a uint8 (H, W) shape" : ": expected shape (H, W), (H, W, 2) or (H, W, 3)"));
     const int channels = dims.size() == 3 ? static_cast<int>(dims[2]) : 1;
-    check_payload(path, dims[1], dims[0], channels, 4, data.size() - 10 - len);
-    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), CV_32FC(channels));
-    read_floats(data, 10 + len, m, true, false, path);
+    check_payload(path, dims[1], dims[0], channels, bytes ? 1 : 4, data.size() - 10 - len);
+    cv::Mat m(static_cast<int>(dims[0]), static_cast<int>(dims[1]), bytes ? CV_8UC1 : CV_32FC(channels));
+    if (bytes)
+        for (int y = 0; y < m.rows; ++y)
+            std::memcpy(m.ptr(y), data.data() + 10 + len + static_cast<size_t>(y) * m.cols, static_cast<size_t>(m.cols));
+    else
+        read_floats(data, 10 + len, m, true, false, path);
     return m;
 }
 
@@ -309,6 +336,7 @@ DisparityMap read_disparity_file(const std::string &path) {
     const std::string ext = lower_extension(path);
     if (ext == ".pfm" || ext == ".npy") {
         const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.depth() == CV_32F, ErrorCode::Format, path + ": a disparity map is float32, this file is uint8");
         require(m.type() == CV_32FC1, ErrorCode::Format,
                 path + ": a disparity map has one channel, this file has " + std::to_string(m.channels()));
         DisparityMap d(m.rows, m.cols);
@@ -329,6 +357,7 @@ FlowField read_flow_file(const std::string &path) {
     if (ext == ".flo") return read_flo(path);
     if (ext == ".pfm" || ext == ".npy") {
         const cv::Mat m = ext == ".pfm" ? read_pfm(path) : read_npy(path);
+        require(m.depth() == CV_32F, ErrorCode::Format, path + ": flow is float32, this file is uint8");
         require(m.channels() >= 2, ErrorCode::Format,
                 path + ": flow has (u, v) or (u, v, valid) per pixel, this file has one channel");
         FlowField f = FlowField::zeros(m.cols, m.rows);
@@ -381,8 +410,9 @@ std::vector<std::string> result_paths(const std::string &out_root, const std::st
     const std::string stem = result_file_stem(id);
     auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
     if (format == ResultFormat::Kitti) return {path("disp_0", "png"), path("disp_1", "png"), path("flow", "png")};
-    const char *disp_ext = format == ResultFormat::Npy ? "npy" : "pfm";
-    return {path("disp_0", disp_ext), path("disp_1", disp_ext), path("flow", result_format_name(format))};
+    if (format == ResultFormat::Npy)  // flow (H, W, 2) with NaN holes, its validity apart
+        return {path("disp_0", "npy"), path("disp_1", "npy"), path("flow", "npy"), path("valid", "npy")};
+    return {path("disp_0", "pfm"), path("disp_1", "pfm"), path("flow", result_format_name(format))};
 }
 
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
@@ -399,10 +429,14 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
     const auto write_map = format == ResultFormat::Npy ? write_npy : write_pfm;
     write_map(d0, disparity_with_nan(field_disparity0(f)));
     write_map(d1, disparity_with_nan(field_disparity1(f)));
-    if (format == ResultFormat::Flo)
+    if (format == ResultFormat::Flo) {
         write_flo(fl, field_flow(f));
-    else
+    } else if (format == ResultFormat::Npy) {
+        write_npy(fl, flow_with_nan(field_flow(f)));
+        write_npy(paths[3], cv::Mat1b(f.valid != 0) / 255);
+    } else {
         write_map(fl, flow_with_valid(field_flow(f)));
+    }
     return paths;
 }
 

@@ -6,10 +6,10 @@
 //    |value| > 1e9 as unknown flow.
 //  - .pfm (Portable Float Map): "Pf" (1 channel) or "PF" (3 channels), little-endian float32
 //    (scale -1), rows stored bottom to top as the format demands.
-//  - .npy (NumPy v1.0): '<f4', C order, shape (H, W) or (H, W, 3).
-// In .pfm and .npy an invalid disparity is NaN; flow is (u, v, valid) per pixel like KITTI's flow
-// PNG, valid in {0, 1} and u = v = NaN where valid is 0, so a reader that ignores the third
-// channel still cannot take a hole for zero motion.
+//  - .npy (NumPy v1.0): '<f4', C order, shape (H, W), (H, W, 2) or (H, W, 3); '|u1' (H, W).
+// In .pfm and .npy an invalid value is NaN (docs/CONVENTIONS.md). .npy flow is (H, W, 2) u, v as
+// OpenCV and numpy users hold it, with validity in a uint8 (H, W) file of its own; .pfm has no
+// two-channel form, so its flow is (u, v, valid) per pixel like KITTI's flow PNG.
 #include <string>
 #include <vector>
 
@@ -35,7 +35,8 @@ std::string result_file_stem(const std::string &name);
 std::string output_name_from_path(const std::string &path);
 
 // Writes OUT/disp_0/STEM.EXT, OUT/disp_1/STEM.EXT and OUT/flow/STEM.EXT (STEM =
-// result_file_stem(id); creating the folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above;
+// result_file_stem(id); creating the folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above,
+// npy also OUT/valid/STEM.npy (uint8, 1 where u, v, d0, d1 are defined; fourth path);
 // flo: the flow as .flo and, since .flo has no one-channel form, the disparities as .pfm.
 // Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
@@ -44,10 +45,10 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
 // Throws like check_output_name.
 std::vector<std::string> result_paths(const std::string &out_root, const std::string &id, ResultFormat format);
 
-// CV_32FC1 or CV_32FC3 maps. Writers create missing parent folders and throw Error: Io when the
+// CV_32FC1 or CV_32FC3 maps (write_npy also CV_32FC2 and CV_8UC1). Writers create missing parent folders and throw Error: Io when the
 // file cannot be written, InvalidArgument for an empty map or another type. Readers throw Io
 // when the file cannot be read and Format for anything but the float32 layouts above (a
-// big-endian PFM is accepted; read_npy also takes (H, W, 2)), for a side larger than
+// big-endian PFM is accepted; read_npy also takes (H, W, 2) and uint8 (H, W)), for a side larger than
 // kMaxImageSide, or for a file whose size differs from what its header announces: checked
 // before anything is allocated.
 void write_pfm(const std::string &path, const cv::Mat &map);
@@ -66,8 +67,10 @@ FlowField read_flo(const std::string &path);
 DisparityMap read_disparity_file(const std::string &path);
 FlowField read_flow_file(const std::string &path);
 
-// The float maps written for a field: disparity with NaN holes, flow as (u, v, valid).
+// The float maps written for a field: disparity with NaN holes, flow as (u, v, valid) or as
+// (u, v) with NaN holes.
 cv::Mat1f disparity_with_nan(const DisparityMap &disp);
 cv::Mat3f flow_with_valid(const FlowField &flow);
+cv::Mat2f flow_with_nan(const FlowField &flow);
 
 }  // namespace lidarflow::io

@@ -2,8 +2,10 @@
 #include "lidar/projection.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/limits.hpp"
 
 namespace lidarflow::lidar {
@@ -31,24 +33,53 @@ public:
     void add(const cv::Vec3d &x_rect) {
         const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
         const double w = p[2];
-        if (!(w > min_depth_)) return;
+        ++seen_;
+        if (!(w > min_depth_)) {
+            ++behind_;
+            return;
+        }
         // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit.
         const double u = std::floor(p[0] / w + 0.5), v = std::floor(p[1] / w + 0.5);
-        if (!(u >= 0 && v >= 0 && u < map_.cols && v < map_.rows)) return;
+        if (!(u >= 0 && v >= 0 && u < map_.cols && v < map_.rows)) {
+            ++outside_;
+            return;
+        }
         // A point so close that its disparity leaves the accepted range is not seen by the
         // right camera of any accepted image either.
         const double dd = fb_ / w;
-        if (!(dd <= kMaxLidarDisparity)) return;
+        if (!(dd <= kMaxLidarDisparity)) {
+            ++too_close_;
+            return;
+        }
         const float d = static_cast<float>(dd);
         float &cell = map_(static_cast<int>(v), static_cast<int>(u));
         if (d > cell) cell = d;
     }
-    SparseLidar result() const { return SparseLidar::from_map(map_); }
+    SparseLidar result() const {
+        SparseLidar out = SparseLidar::from_map(map_);
+        report(out.points.size());
+        return out;
+    }
 
 private:
+    // A wrong calibration shows as points dropped: say how many and why.
+    void report(size_t kept) const {
+        const size_t dropped = behind_ + outside_ + too_close_;
+        const log::Level level = seen_ > 0 && kept == 0 ? log::Level::Warning : log::Level::Info;
+        if (dropped == 0 || !log::enabled(level)) return;
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "%zu of %zu LiDAR points dropped: %zu behind the camera (z <= %g m), %zu outside the %dx%d "
+                      "image, %zu nearer than a disparity of %g px; %zu pixels keep a point",
+                      dropped, seen_, behind_, min_depth_, outside_, map_.cols, map_.rows, too_close_,
+                      static_cast<double>(kMaxLidarDisparity), kept);
+        log::write(level, buf);
+    }
+
     cv::Matx34d P_;
     double fb_, min_depth_;
     DisparityMap map_;
+    size_t seen_ = 0, behind_ = 0, outside_ = 0, too_close_ = 0;
 };
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/pixels.hpp"
 #include "interpolation/ego_motion.hpp"
 
@@ -142,6 +143,9 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     interpolation::EgoMotion motion;
     if (opt.flow.prior_track_step > 0)
         motion = track_rigid_motion(g0, g1, r.sgm0, r.sgm1, camera, opt.flow.prior_track_step, opt.random_seed);
+    if (opt.flow.prior_track_step > 0 && !motion.valid)
+        log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "
+                                        "inverse search starts from zero flow (image-only prior)");
     const SparseLidar none{in.left0.cols, in.left0.rows, {}};
     r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1,
                          opt.use_lidar ? in.lidar0 : none);

@@ -8,6 +8,7 @@
 #include "consistency/consistency.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/log.hpp"
 #include "core/threads.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
@@ -16,6 +17,14 @@ namespace lidarflow::pipeline {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+void report_hidden(const SparseLidar &given, const SparseLidar &kept, const char *which) {
+    const size_t removed = given.points.size() - kept.points.size();
+    if (removed == 0 || !log::enabled(log::Level::Info)) return;
+    log::write(log::Level::Info, "visibility filter: " + std::to_string(removed) + " of " +
+                                     std::to_string(given.points.size()) + " LiDAR points of " + which +
+                                     " hidden from the left camera removed");
+}
 
 double seconds_since(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -197,11 +206,18 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
     const FrameInput frame{input.left0, input.right0, input.left1, input.right1,
                            lidar_in_use(options_, input.lidar0), lidar_in_use(options_, input.lidar1), input.camera};
+    report_hidden(input.lidar0, frame.lidar0, "t0");
+    report_hidden(input.lidar1, frame.lidar1, "t1");
     if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache, threads));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
-    if (size.width >= W && size.height >= H) return drop_stage_fields(run_native(frame, cache, threads));
+    if (size.width >= W && size.height >= H) {
+        log::write(log::Level::Info, "processing_scale " + std::to_string(options_.processing_scale) + " leaves " +
+                                         std::to_string(W) + "x" + std::to_string(H) +
+                                         " at its size: the frame runs at full resolution");
+        return drop_stage_fields(run_native(frame, cache, threads));
+    }
     auto t = Clock::now();
     const FrameInput small = downscale_frame(frame, size);
     const double t_down = seconds_since(t);
@@ -240,6 +256,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                                            cache ? std::move(cache->spare_) : nullptr);
         // The matcher holds the previous t1 pair when it reuses it; otherwise it is dead weight
         // now. A run that throws leaves the cache empty: nothing half-computed is reused.
+        const bool had_t1 = cache && cache->t1_;
         if (cache) cache->t1_.reset();
         matching::MatchPair m;
         if (options_.last_stage == Stage::Matching)
@@ -257,6 +274,10 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
             cache->t1_ = matcher.features_t1();
             cache->last_reused_ = matcher.reused_t0();
             cache->spare_ = matcher.release_t0();
+            if (had_t1 && !cache->last_reused_)
+                log::write(log::Level::Info,
+                           "the previous frame's descriptors were not reused (its t1 images differ from this t0): "
+                           "computed again");
         }
         if (options_.last_stage == Stage::Matching) {
             r.total_seconds = seconds_since(t_total);
@@ -278,6 +299,10 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
                                                             stage_options_.consistency.sgm, frame.camera, both,
                                                             cache ? cache->stereo_t1_.get() : nullptr);
     if (cache) {
+        if (cache->stereo_t1_ && !m.reused_t0)
+            log::write(log::Level::Info,
+                       "the previous frame's stereo disparity was not reused (its t1 images differ from this t0): "
+                       "computed again");
         cache->last_reused_ = m.reused_t0;
         auto next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();

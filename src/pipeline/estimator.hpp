@@ -14,6 +14,7 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "core/threads.hpp"
 #include "interpolation/interpolator.hpp"
 #include "lidar/visibility_filter.hpp"
 #include "matching/decoupled_matcher.hpp"
@@ -34,7 +35,8 @@ struct EstimatorOptions {
     // matcher runs im-only, stages 2-4 get no LiDAR. LiDAR inputs are then ignored.
     bool use_lidar = true;
     Stage last_stage = Stage::Interpolation;
-    int threads = 1;  // OpenMP threads for every stage (num_threads clauses; never global)
+    // OpenMP threads for every stage (num_threads clauses; never global); default: the usable CPUs.
+    int threads = default_threads();
     // Each frame uses at most the CPUs other processes leave idle at its start (at least one;
     // core/threads.hpp). Results never depend on it; false: always `threads`.
     bool adaptive_threads = true;

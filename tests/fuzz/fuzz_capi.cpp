@@ -347,7 +347,8 @@ void check_plane_values(const uint8_t *valid, const float *const planes[5], size
         if (valid[i] > 1) fail(call, 0, "valid is neither 0 nor 1");
         for (int k = 0; k < 5; ++k) {
             const float v = planes[k][i];
-            if (!valid[i] && v != 0) fail(call, 0, "non-zero value where not valid");
+            // Holes: NaN in u, v, d0, d1 (k < 4), 0 confidence.
+            if (!valid[i] && (k < 4 ? !std::isnan(v) : v != 0)) fail(call, 0, "hole is neither NaN nor 0 confidence");
             if (valid[i] && !std::isfinite(v)) fail(call, 0, "non-finite value where valid");
         }
         if (planes[4][i] < 0) fail(call, 0, "negative confidence");

@@ -74,7 +74,7 @@ int run_demo(int argc, char **argv) {
     Args args("demo", argc, argv,
                         {{"out", true, "DIR  output folder (default demo-out)"},
                {"seed", true, "S  scene seed (default 1)"},
-               {"threads", true, "N  OpenMP threads of the estimator (default 2)"},
+               {"threads", true, "N  OpenMP threads of the estimator (default: every usable CPU, fewer while others are busy)"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"}});
     if (args.help_requested()) {
@@ -128,7 +128,7 @@ int run_demo(int argc, char **argv) {
     std::vector<DemoRun> runs;
     for (const bool lidar : {true, false}) {
         pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
-        opt.threads = args.integer("threads", 2);
+        opt.threads = args.integer("threads", opt.threads);
         pipeline::apply_option_assignments(opt, args.list("set"));
         opt.use_lidar = lidar;
         DemoRun r{lidar ? "lidarflow" : "image-only", pipeline::Estimator(opt).run(in), {}, {}};

@@ -71,7 +71,7 @@ int run_kitti_command(int argc, char **argv) {
                {"placements", true, "P    paper: also score P - 1 other placements of the sampling grids per seed (default 1: the paper's only)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
-               {"threads", true, "N    OpenMP threads (default 2)"},
+               {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"scale", true, "S    processing scale in [0.125, 1] (default: the preset's)"},
@@ -96,7 +96,7 @@ int run_kitti_command(int argc, char **argv) {
             ErrorCode::InvalidArgument, "kitti: --points must be > 0 for the paper protocol");
     o.estimator = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     o.estimator.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
-    o.estimator.threads = args.integer("threads", 2);
+    o.estimator.threads = args.integer("threads", o.estimator.threads);
     if (args.has("scale")) o.estimator.processing_scale = args.number("scale", 1.0);
     if (args.has("seed")) {
         const int seed = args.integer("seed", 1);
@@ -117,14 +117,12 @@ int run_kitti_command(int argc, char **argv) {
     require(placements == 1 || o.lidar.protocol == eval::LidarProtocol::Paper, ErrorCode::InvalidArgument,
             "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
 
-    const bool tty = isatty(fileno(stderr)) && verbosity() != Verbosity::Quiet;
-    // On a terminal one line rewritten in place; piped (CI logs, `| tee`) one plain line per step,
-    // so a long run still shows where it is without control characters in the log. Each line
-    // has the time elapsed and, once a frame is done, the time left (frames of every seed and
-    // placement together).
+    // Each line has the time elapsed and, once a frame is done, the time left (frames of every
+    // seed and placement together); piped, one line per step.
+    Progress bar(verbosity() != Verbosity::Quiet, isatty(fileno(stderr)) != 0, 0.0);
     const size_t runs = static_cast<size_t>(seeds) * static_cast<size_t>(placements);
     size_t run_index = 0;
-    const Stopwatch clock;
+    const Progress &clock = bar;
     double step_start = 0;
     std::string step;
     const auto progress = [&](size_t i, size_t n, const std::string &what) {
@@ -133,15 +131,9 @@ int run_kitti_command(int argc, char **argv) {
         step = what;
         step_start = now;
         const size_t done = run_index * n + i, total = runs * n;
-        const std::string eta = done ? format_duration(now / static_cast<double>(done) * static_cast<double>(total - done))
-                                     : std::string("--");
         const std::string counter = runs > 1 ? "[run " + std::to_string(run_index + 1) + "/" + std::to_string(runs) + ", " : "[";
-        if (tty)
-            note("\r\033[K%s%zu/%zu] %s  (elapsed %s, ETA %s)", counter.c_str(), i + 1, n, what.c_str(),
-                 format_duration(now).c_str(), eta.c_str());
-        else
-            note("%s%zu/%zu] %s  (elapsed %s, ETA %s)\n", counter.c_str(), i + 1, n, what.c_str(),
-                 format_duration(now).c_str(), eta.c_str());
+        bar.update(static_cast<double>(done), static_cast<double>(total),
+                   counter + std::to_string(i + 1) + "/" + std::to_string(n) + "] " + what);
     };
     const auto finish_run = [&]() {
         if (!step.empty()) detail("kitti:   %s took %s\n", step.c_str(), format_duration(clock.seconds() - step_start).c_str());
@@ -167,7 +159,7 @@ int run_kitti_command(int argc, char **argv) {
             more.push_back(eval::run_kitti(ok, progress));
             finish_run();
         }
-    if (tty) std::fprintf(stderr, "\r\033[K");
+    bar.finish();
     note("kitti: done in %s\n", format_duration(clock.seconds()).c_str());
 
     std::printf("lidarflow kitti: %zu frame(s), LiDAR %s, stage %s, %d thread(s)\n", rep.timings.size(),

@@ -83,7 +83,7 @@ int run(int argc, char **argv) {
                {"calib-velo", true, "FILE KITTI calib_velo_to_cam.txt (Velodyne -> camera 0), for --velo0/1"},
                {"no-lidar", false, "image-only pipeline (ignore the LiDAR inputs)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
-               {"threads", true, "N    OpenMP threads (default 2)"},
+               {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
@@ -114,7 +114,7 @@ int run(int argc, char **argv) {
             "run: --points needs --calib: metric 3-D points come from the rig's focal length and baseline");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     opt.use_lidar = !args.flag("no-lidar");
-    opt.threads = args.integer("threads", 2);
+    opt.threads = args.integer("threads", opt.threads);
     opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
     pipeline::apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "log.hpp"
 
-#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 
@@ -32,21 +31,6 @@ void detail(const char *format, ...) {
     va_start(ap, format);
     vprint(format, ap);
     va_end(ap);
-}
-
-std::string format_duration(double seconds) {
-    char buf[32];
-    if (!std::isfinite(seconds) || seconds < 0) return "?";
-    if (seconds < 60) {
-        std::snprintf(buf, sizeof buf, "%.1f s", seconds);
-        return buf;
-    }
-    const long s = std::lround(seconds);
-    if (s < 3600)
-        std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
-    else
-        std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
-    return buf;
 }
 
 }  // namespace lidarflow::cli

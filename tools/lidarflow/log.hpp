@@ -6,6 +6,8 @@
 #include <chrono>
 #include <string>
 
+#include "progress.hpp"  // format_duration, Progress
+
 namespace lidarflow::cli {
 
 enum class Verbosity { Quiet, Normal, Verbose };
@@ -17,9 +19,6 @@ inline bool verbose() { return verbosity() == Verbosity::Verbose; }
 // Progress and notes on stderr: note() unless --quiet, detail() with --verbose only.
 void note(const char *format, ...) __attribute__((format(printf, 1, 2)));
 void detail(const char *format, ...) __attribute__((format(printf, 1, 2)));
-
-// "12.3 s", "4:05", "1:02:03": a duration for progress lines.
-std::string format_duration(double seconds);
 
 // Seconds since construction.
 class Stopwatch {

@@ -15,6 +15,7 @@
 #include "heap_policy.hpp"
 #include "log.hpp"
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "lidarflow/lidarflow_version.h"
 
 namespace lidarflow::cli {
@@ -35,6 +36,12 @@ void print_usage(FILE *f) {
     auto cmds = lidarflow::cli::command_registry();
     std::sort(cmds.begin(), cmds.end(), [](const Command &a, const Command &b) { return a.order < b.order; });
     for (const Command &c : cmds) std::fprintf(f, "  %-14s %s\n", c.name, c.summary);
+}
+
+// The core's messages (what the library decided: points dropped, fallbacks), one line each.
+void print_library_message(int32_t level, const char *message, void *) {
+    const char *name = level >= 40 ? "error" : level >= 30 ? "warning" : level >= 20 ? "info" : "debug";
+    std::fprintf(stderr, "lidarflow: %s: %s\n", name, message);
 }
 
 // Takes --quiet and --verbose off argv (after the sub-command's name) and sets the level; both
@@ -58,12 +65,14 @@ int take_verbosity_flags(int argc, char **argv, bool *help) {
     lidarflow::cli::set_verbosity(quiet     ? lidarflow::cli::Verbosity::Quiet
                                   : verbose ? lidarflow::cli::Verbosity::Verbose
                                             : lidarflow::cli::Verbosity::Normal);
+    if (verbose) lidarflow::log::set_sink(print_library_message, static_cast<int>(lidarflow::log::Level::Debug), nullptr);
     return n;
 }
 
 constexpr const char *kVerbosityHelp =
     "  --quiet               only errors (on stderr); nothing else on stdout or stderr\n"
-    "  --verbose             more detail on stderr: settings, per-step timings\n";
+    "  --verbose             more detail on stderr: settings, per-step timings, the library's\n"
+    "                        messages (LiDAR points dropped, fallbacks)\n";
 
 }  // namespace
 

@@ -8,10 +8,14 @@ lidarflow._lib for where it is looked for) and checks its ABI version.
     with lidarflow.Estimator(fx, fy, cx, cy, baseline, options={"threads": 4}) as est:
         est.push(left0, right0, lidar0)
         if est.push(left1, right1, lidar1):
-            flow = est.result()          # dict of numpy arrays u, v, d0, d1, valid, confidence
+            r = est.result()             # numpy arrays: flow (H, W, 2), u, v, d0, d1 (NaN holes), valid, confidence
 
     cal = lidarflow.read_kitti_calibration("calib_cam_to_cam/000002.txt", "calib_velo_to_cam/000002.txt")
     est = lidarflow.Estimator(**cal)     # Velodyne points then go in with lidar_kind="lidar"
+
+The library's messages (points dropped, fallbacks) go to the logging module's "lidarflow"
+logger, silent until logging is configured. Conventions (NaN holes, flow layout, default
+threads): docs/CONVENTIONS.md.
 """
 try:
     import numpy as _numpy  # noqa: F401
@@ -21,6 +25,7 @@ except ImportError as _e:  # a python3 other than Debian's (pyenv, a plain venv)
                       "python3-numpy (or a venv made with /usr/bin/python3 -m venv --system-site-packages)"
                       % (__name__, _sys.executable)) from _e
 from ._lib import ABI_MAJOR, lib as _lib_handle
+from . import _log  # noqa: F401  (routes the library's messages to logging's "lidarflow" logger)
 from .calibration import read_kitti_calibration
 from .estimator import Estimator, LidarflowError
 

@@ -163,6 +163,10 @@ def _load():
                       % (_SONAME, "\n  ".join(errors)))
 
 
+# lf_log_fn: void (*)(int32_t level, const char *message, void *user).
+LOG_FN = ctypes.CFUNCTYPE(None, ctypes.c_int32, ctypes.c_char_p, ctypes.c_void_p)
+
+
 def _declare(lib):
     c = ctypes
     P = c.POINTER
@@ -194,6 +198,7 @@ def _declare(lib):
         "lf_get_object_motion": (i32, [c.c_void_p, P(ObjectMotionBuffers)]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
         "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
+        "lf_set_log_callback": (i32, [LOG_FN, i32, c.c_void_p]),
     }
     for name, (restype, argtypes) in protos.items():
         f = getattr(lib, name)

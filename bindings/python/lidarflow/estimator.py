@@ -118,7 +118,9 @@ class Estimator:
     Estimator(fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None)
       fx, fy, cx, cy [px] and baseline [m] describe the rectified stereo camera;
       lidar_to_camera is an optional 4x4 transform LiDAR frame -> left camera frame (needed for
-      lidar_kind="lidar"); options maps option keys (see lidarflow.h) to values, set in order.
+      lidar_kind="lidar"); options maps option keys (see lidarflow.h) to values, set in order
+      ("threads" defaults to every CPU this process may use, fewer while other processes keep
+      them busy; results do not depend on it).
 
     Each push() after the first computes the scene flow between the previous frame and the new
     one. Use as a context manager or call close(); a forgotten handle is freed by the garbage
@@ -237,8 +239,10 @@ class Estimator:
                 "t0_us": i.t0_us, "t1_us": i.t1_us, "total_seconds": i.total_seconds, "timings": timings}
 
     def result(self, out=None):
-        """The latest result as a dict of (H, W) arrays u, v, d0, d1, confidence (float32) and
-        valid (uint8), written by the library straight into numpy memory (no further copy).
+        """The latest result as a dict of numpy arrays: u, v, d0, d1, confidence (H, W) float32,
+        valid (H, W) uint8 and flow (H, W, 2) float32 (u, v per pixel, OpenCV's layout). u, v,
+        d0, d1 and flow are NaN where valid is 0, confidence 0 (docs/CONVENTIONS.md). The
+        library writes the planes straight into numpy memory; flow is a copy of u and v.
 
         out: None (new arrays), or a dict holding preallocated arrays for any subset of those
         keys (packed rows, any row stride, writeable); only those planes are written, in place,
@@ -248,14 +252,24 @@ class Estimator:
             h = self._h()
             i = _result_info(h)
             shape = (i.height, i.width)
-            out = _out_dict(out, {name: (shape, dtype) for name, dtype in _RESULT_PLANES})
+            planes = {name: (shape, dtype) for name, dtype in _RESULT_PLANES}
+            planes["flow"] = (shape + (2,), np.float32)
+            out = _out_dict(out, planes)
+            if "flow" in out:
+                _plane("flow", out["flow"], shape, np.float32, 2)
+            # u and v in arrays of their own when flow is asked for without them.
+            uv = {name: out[name] if name in out else np.empty(shape, np.float32) for name in ("u", "v")
+                  if name in out or "flow" in out}
             b = _lib.ResultBuffers()
             b.struct_size = ctypes.sizeof(_lib.ResultBuffers)
             b.width, b.height = i.width, i.height
             for name, dtype in _RESULT_PLANES:
-                if name in out:
-                    setattr(b, name, _plane(name, out[name], shape, dtype))
+                if name in out or name in uv:
+                    setattr(b, name, _plane(name, uv.get(name, out.get(name)), shape, dtype))
             _check(lib.lf_get_result(h, ctypes.byref(b)), h)
+            if "flow" in out:
+                out["flow"][..., 0] = uv["u"]
+                out["flow"][..., 1] = uv["v"]
         return out
 
     def points3d(self, out=None):

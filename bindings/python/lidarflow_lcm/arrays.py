@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """numpy views of the lidarflow LCM messages, and messages built from numpy arrays.
 
-    flow_arrays(scene_flow_t)           -> u, v, d0, d1 (float32, NaN where not valid), valid (bool)
+    flow_arrays(scene_flow_t)           -> flow (H, W, 2), u, v, d0, d1 (float32, NaN where not
+                                           valid), valid (bool)
     points3d(scene_flow_t, calibration) -> 3-D points at t0 and t1 and their motion [m]
     stereo_images / lidar_points        -> the inputs as arrays (what the bridge gives the estimator)
     stereo_message / lidar_message / calibration_message / scene_flow_message -> messages to publish
@@ -30,8 +31,9 @@ def _checked(msg, cls):
 
 def flow_arrays(msg):
     """The planes of a scene_flow_t as (height, width) arrays: u, v, d0, d1 float32 in
-    full-resolution pixels (ENCODING_INT16 values times `scale`), NaN where not valid, and
-    valid (bool). With step > 1, plane pixel (i, j) is image pixel (i * step, j * step): see
+    full-resolution pixels (ENCODING_INT16 values times `scale`), NaN where not valid, valid
+    (bool), and flow (height, width, 2) float32, u and v per pixel as Estimator.result() gives
+    them (docs/CONVENTIONS.md). With step > 1, plane pixel (i, j) is image pixel (i * step, j * step): see
     pixel_grid(). MessageError for inconsistent messages."""
     _checked(msg, scene_flow_t)
     shape = (msg.height, msg.width)
@@ -47,6 +49,7 @@ def flow_arrays(msg):
         plane[~valid] = np.nan
         out[name] = plane
     out["valid"] = valid
+    out["flow"] = np.stack((out["u"], out["v"]), axis=-1)
     return out
 
 

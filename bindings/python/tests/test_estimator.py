@@ -55,7 +55,7 @@ def accuracy(r, tu=3, tv=1, d=10):
 
 
 def same(a, b):
-    return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    return a.keys() == b.keys() and all(np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a)
 
 
 class RoundTrip(unittest.TestCase):
@@ -99,6 +99,15 @@ class RoundTrip(unittest.TestCase):
         self.assertTrue((big_valid[:, W:] == 9).all())
         self.assertEqual(set(ret), {"u", "valid"})  # only the planes asked for
 
+    def test_flow_is_h_w_2(self):
+        f = self.ref["flow"]
+        self.assertEqual((f.shape, f.dtype), ((H, W, 2), np.float32))
+        np.testing.assert_array_equal(f[..., 0], self.ref["u"])
+        np.testing.assert_array_equal(f[..., 1], self.ref["v"])
+        out = {"flow": np.full((H, W, 2), -7.0, np.float32)}
+        self.assertEqual(set(self.est.result(out=out)), {"flow"})  # u and v only as scratch
+        np.testing.assert_array_equal(out["flow"], f)
+
     def test_points3d(self):
         p = self.est.points3d()
         self.assertEqual(p["points"].shape, (H, W, 3))
@@ -109,6 +118,29 @@ class RoundTrip(unittest.TestCase):
         # the plane moves 3 px right, 1 px down at 5 m: 0.15 m, 0.05 m, 0 m
         np.testing.assert_allclose(np.median(p["motion"][ok], axis=0), [0.15, 0.05, 0.0], atol=0.01)
         self.assertTrue(np.isnan(p["points"][~ok]).all())
+
+    def test_holes_are_nan(self):
+        # Sparse stage: holes. u, v, d0, d1 and flow are NaN there, confidence 0; valid says where.
+        r = run_pair(self.scene, self.lidar, options={"last_stage": "sparse"})
+        hole = r["valid"] == 0
+        self.assertGreater(hole.mean(), 0.5)
+        self.assertGreater((~hole).sum(), 10)
+        for name in ("u", "v", "d0", "d1"):
+            self.assertTrue(np.isnan(r[name][hole]).all(), name)
+            self.assertTrue(np.isfinite(r[name][~hole]).all(), name)
+        self.assertTrue(np.isnan(r["flow"][hole]).all())
+        self.assertTrue((r["confidence"][hole] == 0).all())
+
+    def test_library_messages_reach_logging(self):
+        # Points behind the camera and outside the image are dropped, and the library says so
+        # through logging's "lidarflow" logger, naming the frame.
+        pts = np.array([[0.0, 0.0, 5.0], [0.1, 0.0, -2.0], [-100.0, 0.0, 5.0], [100.0, 0.0, 5.0]], np.float32)
+        with lidarflow.Estimator(options=dict(FAST, last_stage="matching"), **CAL) as est:
+            with self.assertLogs("lidarflow", level="INFO") as logs:
+                est.push(self.scene[0], self.scene[1], pts, timestamp=41, lidar_kind="camera")
+        text = "\n".join(logs.output)
+        self.assertIn("3 of 4 LiDAR points dropped", text)
+        self.assertIn("frame 41 us", text)
 
     def test_padded_input_rows_and_colour_orders(self):
         padded = [np.zeros((H, W + 24), np.uint8) for _ in range(4)]
@@ -255,7 +287,8 @@ class BadInput(unittest.TestCase):
         ro.flags.writeable = False
         self.assertValueError("read-only", self.est.result, out={"u": ro})
         self.assertValueError("packed rows", self.est.result, out={"u": np.zeros((H, 2 * W), np.float32)[:, ::2]})
-        self.assertValueError("unknown keys", self.est.result, out={"flow": np.zeros((H, W), np.float32)})
+        self.assertValueError("unknown keys", self.est.result, out={"uv": np.zeros((H, W), np.float32)})
+        self.assertValueError("(64, 160, 2)", self.est.result, out={"flow": np.zeros((H, W), np.float32)})
         self.assertValueError("dict", self.est.result, out=[np.zeros((H, W), np.float32)])
         self.assertValueError("(64, 160, 3)", self.est.points3d, out={"points": np.zeros((H, W), np.float32)})
 

@@ -337,6 +337,10 @@ class FlowArrays(unittest.TestCase):
             self.assertTrue(np.isnan(a[name][valid == 0]).all())
         np.testing.assert_array_equal(a["valid"], valid == 1)
         self.assertEqual(a["valid"].dtype, bool)
+        # flow: (H, W, 2) float32 as lidarflow.Estimator.result() gives it, NaN holes.
+        self.assertEqual((a["flow"].shape, a["flow"].dtype), (u.shape + (2,), np.float32))
+        np.testing.assert_array_equal(a["flow"][..., 0], a["u"])
+        np.testing.assert_array_equal(a["flow"][..., 1], a["v"])
 
     def test_int16_quantises_saturates_and_subsamples(self):
         u, v, d0, d1, valid = self.planes(h=9, w=11, seed=1)

@@ -5,6 +5,8 @@
 // (LIDARFLOW_WITH_LCM); the messages are the lidarflow LCM types (lcm_types/).
 #include <lcm/lcm.h>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -16,6 +18,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "log.hpp"
 #include "eval/kitti_runner.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
@@ -252,8 +255,14 @@ int run(int argc, char **argv) {
     const Channels ch{args.str("stereo-channel", "LIDARFLOW_STEREO"), args.str("lidar-channel", "LIDARFLOW_LIDAR"),
                       args.str("calib-channel", "LIDARFLOW_CALIB")};
 
+    // Loading and publishing can take minutes (--rate, --loop): lines with elapsed time and ETA,
+    // piped at most one every 2 s besides the first and the last.
+    Progress load_bar(verbosity() != Verbosity::Quiet, isatty(fileno(stderr)) != 0, 2.0);
     std::vector<Clip> clips;
     for (const std::string &id : ids) {
+        load_bar.update(static_cast<double>(clips.size()), static_cast<double>(ids.size()),
+                        "publish-kitti: loading [" + std::to_string(clips.size() + 1) + "/" + std::to_string(ids.size()) +
+                            "] " + id);
         Clip c;
         c.id = id;
         c.camera = io::read_calib_cam_to_cam(layout.calib_cam_to_cam(id)).camera;
@@ -274,6 +283,7 @@ int run(int argc, char **argv) {
                         "takes one --lidar-to-camera): publish them separately, or use --lidar-type lidar_t");
         clips.push_back(std::move(c));
     }
+    load_bar.finish();
 
     const std::string url = args.str("lcm-url", "");
     lcm_t *lcm = lcm_create(url.empty() ? nullptr : url.c_str());
@@ -292,6 +302,8 @@ int run(int argc, char **argv) {
     const auto wall_start = std::chrono::steady_clock::now();
     int64_t frames = 0, sweeps = 0;
     int32_t sequence = 0;
+    const int64_t total = static_cast<int64_t>(clips.size()) * 2 * loops;
+    Progress bar(verbosity() != Verbosity::Quiet, isatty(fileno(stderr)) != 0, 2.0);
     for (int loop = 0; loop < loops; ++loop)
         for (const Clip &c : clips) {
             const pipeline::FrameInput &in = c.frame.input;
@@ -313,9 +325,13 @@ int run(int argc, char **argv) {
                 publish_stereo(lcm, ch, t == 0 ? in.left0 : in.left1, t == 0 ? in.right0 : in.right1, utime, sequence,
                                frames);
                 ++frames;
+                bar.update(static_cast<double>(frames), static_cast<double>(total),
+                           "publish-kitti: [" + std::to_string(frames) + "/" + std::to_string(total) + "] " + c.id +
+                               (t == 0 ? "_10" : "_11") + (loops > 1 ? ", loop " + std::to_string(loop + 1) : ""));
             }
             ++sequence;
         }
+    bar.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     std::printf("published %lld stereo frames, %lld LiDAR sweeps, %d calibrations (%zu ids x %d loops) in %.2f s\n",
                 static_cast<long long>(frames), static_cast<long long>(sweeps), sequence, clips.size(), loops, seconds);

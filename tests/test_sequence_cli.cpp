@@ -180,21 +180,23 @@ void test_sequence_equals_c_abi_stream(void **) {
         const cv::Mat d0 = io::read_npy((f.clean / "disp_0" / (name(k) + ".npy")).string());
         const cv::Mat d1 = io::read_npy((f.clean / "disp_1" / (name(k) + ".npy")).string());
         const cv::Mat fl = io::read_npy((f.clean / "flow" / (name(k) + ".npy")).string());
-        assert_true(d0.size() == p.d0.size() && fl.type() == CV_32FC3);
+        const cv::Mat ok = io::read_npy((f.clean / "valid" / (name(k) + ".npy")).string());
+        assert_true(d0.size() == p.d0.size() && fl.type() == CV_32FC2 && ok.type() == CV_8UC1);
         long valid = 0;
         for (int y = 0; y < d0.rows; ++y)
             for (int x = 0; x < d0.cols; ++x) {
-                const cv::Vec3f w = fl.at<cv::Vec3f>(y, x);
+                const cv::Vec2f w = fl.at<cv::Vec2f>(y, x);
                 const float a = d0.at<float>(y, x), b = d1.at<float>(y, x);
+                const bool seq_valid = ok.at<uint8_t>(y, x) != 0;
                 if (p.valid(y, x)) {
                     ++valid;
                     if (!same_float(a, p.d0(y, x)) || !same_float(b, p.d1(y, x)) || !same_float(w[0], p.u(y, x)) ||
-                        !same_float(w[1], p.v(y, x)) || w[2] != 1.0f)
+                        !same_float(w[1], p.v(y, x)) || !seq_valid)
                         fail_msg("pair %d, pixel (%d, %d): sequence (%g %g %g %g) != C ABI (%g %g %g %g)", k, x, y,
                                  static_cast<double>(w[0]), static_cast<double>(w[1]), static_cast<double>(a),
                                  static_cast<double>(b), static_cast<double>(p.u(y, x)), static_cast<double>(p.v(y, x)),
                                  static_cast<double>(p.d0(y, x)), static_cast<double>(p.d1(y, x)));
-                } else if (!std::isnan(a) || !std::isnan(b) || w[2] != 0.0f) {
+                } else if (!std::isnan(a) || !std::isnan(b) || !std::isnan(w[0]) || !std::isnan(w[1]) || seq_valid) {
                     fail_msg("pair %d, pixel (%d, %d): valid in the sequence only", k, x, y);
                 }
             }

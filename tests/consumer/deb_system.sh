@@ -34,6 +34,7 @@ mount -t proc proc "$work/root/proc"
 mkdir -p "$work/root/tmp/lidarflow-debs" "$work/root/tmp/consumer"
 cp "$packages"/*.deb "$work/root/tmp/lidarflow-debs/"
 cp -r "$src"/. "$work/root/tmp/consumer/"
+cp "$src/../../README.md" "$src/../readme_drives.sh" "$work/root/tmp/consumer/"
 
 chroot "$work/root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LC_ALL=C.UTF-8 \
     bash -euo pipefail -s <<'SCRATCH'
@@ -64,6 +65,9 @@ cmake -S lcm_types -B /tmp/lcm-cmake >/dev/null && cmake --build /tmp/lcm-cmake 
 site=/usr/lib/python3/dist-packages
 ls "$site"/lidarflow/__pycache__/*.pyc >/dev/null 2>&1 || fail "postinst did not byte-compile lidarflow"
 /usr/bin/python3 -c "import lidarflow, lidarflow_lcm; print('import lidarflow:', lidarflow.Estimator.__name__, lidarflow.__version__)"
+
+# The README's drives block as written: lidarflow sequence and lidarflow_dask of the packages.
+bash /tmp/consumer/readme_drives.sh --check-installed /tmp/consumer/README.md
 
 # python3-lidarflow with the Python packages that depend on it (python3-lidarflow-*).
 py_pkgs="$(dpkg-query -W -f='${Package}\n' 'python3-lidarflow*' | sort -u)"

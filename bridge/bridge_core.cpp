@@ -13,6 +13,7 @@
 #include <cstdarg>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
@@ -124,6 +125,9 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         return nullptr;
     }
     std::unique_ptr<Bridge> b(new Bridge(config, lcm));
+    std::random_device random;
+    while (b->instance_id_ == 0)
+        b->instance_id_ = static_cast<int64_t>(static_cast<uint64_t>(random()) << 32 | static_cast<uint64_t>(random()));
     if (b->config_.shard_auth_channel.empty()) b->config_.shard_auth_channel = config.status_channel + "_MAC";
     if (lf_options_create(&b->options_) != LF_OK) {
         *error = std::string("estimator options: ") + lf_last_error(nullptr);
@@ -165,7 +169,7 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
         channels.push_back({&config.status_channel, &Bridge::on_status});
         channels.push_back({&config.flow_channel, &Bridge::on_flow});
-        if (!config.shard_key.empty()) channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});
+        channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});  // MACs or receipts
     }
     for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
@@ -178,7 +182,11 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     b->counters_.queue_capacity = config.queue_capacity;
     b->start_seconds_ = monotonic_seconds();
     // A shard that never sends a status is dead from shard_timeout_ after this one's start.
-    if (b->shard_timeout_ > 0) b->shards_.assign(static_cast<size_t>(config.shard_count), {b->start_seconds_, false, {}});
+    if (b->shard_timeout_ > 0) {
+        ShardWatch fresh;
+        fresh.last_heartbeat = b->start_seconds_;
+        b->shards_.assign(static_cast<size_t>(config.shard_count), fresh);
+    }
     b->next_status_ = b->start_seconds_ + config.status_period_s;
     b->worker_ = std::thread(&Bridge::worker_loop, b.get());
     return b;
@@ -288,25 +296,57 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
         b->warned_foreign_split_ = true;
         return;
     }
-    if (f.shard_index == b->config_.shard_index) return;  // our own, looped back
+    if (f.shard_index == b->config_.shard_index && f.instance_id == b->instance_id_) return;  // our own, looped back
+    if (f.shard_index == b->config_.shard_index) {
+        // Another process claims this one's index: only the others can tell which is genuine
+        // (with a key, a status without a MAC is no claim).
+        if (!b->config_.shard_key.empty()) return;
+        ++b->counters_.shard_index_conflicts;
+        b->log("a status of shard %d/%d from another process (instance %016" PRIx64 "): is this index claimed twice?",
+               f.shard_index, f.shard_count, static_cast<uint64_t>(f.instance_id));
+        return;
+    }
     if (b->config_.shard_key.empty()) {
-        b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+        b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
         return;
     }
     const double now = monotonic_seconds();
     for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
         if (it->mac == mac) {
             b->received_macs_.erase(it);
-            b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+            b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
             return;
         }
-    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.uptime_seconds, std::move(mac), now});
+    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.uptime_seconds, f.instance_id, std::move(mac), now});
     b->expire_macs_locked(now);
 }
 
-// A status that counts (authenticated with --shard-key): the shard is alive.
-void Bridge::apply_status_locked(int32_t shard, int64_t utime, double uptime_s) {
+// A status that counts (authenticated with --shard-key): the shard is alive, if it comes from
+// the process holding the index. The first process heard holds it; another one takes it over
+// only once the holder is silent for the timeout (a restart), and never one heard claiming the
+// index while the holder lived (a second process or a forger: it must not keep the index alive).
+void Bridge::apply_status_locked(int32_t shard, int64_t utime, int64_t instance) {
     ShardWatch &w = shards_[static_cast<size_t>(shard)];
+    const double now = monotonic_seconds();
+    if (instance != w.holder) {
+        const bool holder_alive = w.holder != 0 && !w.dead && now - w.last_heartbeat <= shard_timeout_;
+        const bool rejected = std::find(w.rejected.begin(), w.rejected.end(), instance) != w.rejected.end();
+        if (holder_alive || rejected) {
+            ++counters_.shard_index_conflicts;
+            if (!rejected) {
+                w.rejected.push_back(instance);
+                if (w.rejected.size() > 16) w.rejected.pop_front();
+            }
+            log("shard %d/%d: a status of instance %016" PRIx64 " while %016" PRIx64
+                " holds the index: a second process or a forger, ignored from now on",
+                shard, config_.shard_count, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+            return;
+        }
+        if (w.holder != 0)
+            log("shard %d/%d: now held by a new process (instance %016" PRIx64 ", was %016" PRIx64 ")", shard,
+                config_.shard_count, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+        w.holder = instance;
+    }
     if (!config_.shard_key.empty()) {
         // A genuine status recorded and sent again must not keep a dead shard alive.
         if (w.have_status_utime && utime <= w.status_utime) {
@@ -318,17 +358,6 @@ void Bridge::apply_status_locked(int32_t shard, int64_t utime, double uptime_s) 
         w.have_status_utime = true;
         w.status_utime = utime;
     }
-    const double now = monotonic_seconds();
-    // Its process's start on its own clock: two processes claiming one index differ there.
-    const double start_us = static_cast<double>(utime) - 1e6 * uptime_s;
-    if (w.have_instance && !w.dead && now - w.last_heartbeat <= shard_timeout_ &&
-        std::fabs(start_us - w.instance_start_us) > 1e6) {
-        ++counters_.shard_index_conflicts;
-        log("shard %d/%d: statuses of two processes (started %.1f s apart): is the index claimed twice?", shard,
-            config_.shard_count, std::fabs(start_us - w.instance_start_us) / 1e6);
-    }
-    w.have_instance = true;
-    w.instance_start_us = start_us;
     w.last_heartbeat = now;
     if (w.dead) {
         // A restarted shard starts from nothing: what it had is already counted.
@@ -344,11 +373,8 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     int64_t utime = 0;
     if (!scene_flow_utime(rbuf->data, rbuf->data_size, &utime)) return;
     std::unique_lock<std::mutex> lock(b->mutex_);
-    if (b->config_.shard_key.empty()) {
-        for (size_t k = 0; k < b->shards_.size(); ++k) b->apply_flow_locked(static_cast<int32_t>(k), utime);
-        return;
-    }
-    // Only the shard that owns the pair settles it: the MAC must be that shard's.
+    // Only the shard that owns the pair settles it: the MAC (with a key), or else the receipt
+    // of the process holding that shard, must follow the result.
     int32_t owner = -1;
     for (size_t k = 0; k < b->shards_.size() && owner < 0; ++k) {
         const std::deque<int64_t> &p = b->shards_[k].pending;
@@ -356,18 +382,38 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     }
     if (owner < 0) return;  // settles nothing
     lock.unlock();
-    std::vector<uint8_t> mac = shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count,
-                                                 b->config_.flow_channel, rbuf->data, rbuf->data_size);
+    const bool keyed = !b->config_.shard_key.empty();
+    std::vector<uint8_t> mac =
+        keyed ? shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count, b->config_.flow_channel,
+                                  rbuf->data, rbuf->data_size)
+              : shard_receipt_message(owner, b->config_.shard_count, 0, b->config_.flow_channel, rbuf->data,
+                                      rbuf->data_size);
     lock.lock();
     const double now = monotonic_seconds();
     for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
         if (it->mac == mac) {
+            const int64_t instance = it->instance;
             b->received_macs_.erase(it);
-            b->apply_flow_locked(owner, utime);
+            if (keyed) b->apply_flow_locked(owner, utime);
+            else b->apply_receipt_locked(owner, utime, instance);
             return;
         }
-    b->awaiting_mac_.push_back({false, owner, utime, 0, std::move(mac), now});
+    b->awaiting_mac_.push_back({false, owner, utime, 0, 0, std::move(mac), now});
     b->expire_macs_locked(now);
+}
+
+// A result with its receipt (no key): it settles the pair only when the process that sent it
+// holds the owner's index (or no status of the owner was heard yet).
+void Bridge::apply_receipt_locked(int32_t shard, int64_t utime, int64_t instance) {
+    const ShardWatch &w = shards_[static_cast<size_t>(shard)];
+    if (w.holder != 0 && instance != w.holder) {
+        ++counters_.shard_results_ignored;
+        log("a result for shard %d/%d's pair ending at %" PRId64 " from instance %016" PRIx64 ", not its holder %016" PRIx64
+            ": ignored",
+            shard, config_.shard_count, utime, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+        return;
+    }
+    apply_flow_locked(shard, utime);
 }
 
 void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
@@ -379,19 +425,29 @@ void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
 void Bridge::on_mac(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     auto *b = static_cast<Bridge *>(self);
     const auto *d = static_cast<const uint8_t *>(rbuf->data);
-    if (rbuf->data_size != 48 || std::memcmp(d, "LFMAC\x01\0\0", 8) != 0) return;  // not a MAC message
+    // A MAC with a key, a receipt without: the other kind is no proof here.
+    const bool keyed = !b->config_.shard_key.empty();
+    if (rbuf->data_size != 48 || std::memcmp(d, keyed ? "LFMAC\x01\0\0" : "LFRCP\x01\0\0", 8) != 0) return;
     std::vector<uint8_t> mac(d, d + rbuf->data_size);
+    int64_t instance = 0;
+    if (!keyed) {
+        uint64_t u = 0;
+        for (int i = 0; i < 8; ++i) u = u << 8 | mac[16 + i];
+        instance = static_cast<int64_t>(u);
+        std::fill(mac.begin() + 16, mac.begin() + 24, 0);  // matched without it, then checked
+    }
     std::lock_guard<std::mutex> lock(b->mutex_);
     const double now = monotonic_seconds();
     for (auto it = b->awaiting_mac_.begin(); it != b->awaiting_mac_.end(); ++it)
         if (it->mac == mac) {
             const AwaitingMac m = std::move(*it);
             b->awaiting_mac_.erase(it);
-            if (m.status) b->apply_status_locked(m.shard, m.utime, m.uptime_s);
-            else b->apply_flow_locked(m.shard, m.utime);
+            if (m.status) b->apply_status_locked(m.shard, m.utime, m.instance);
+            else if (keyed) b->apply_flow_locked(m.shard, m.utime);
+            else b->apply_receipt_locked(m.shard, m.utime, instance);
             return;
         }
-    b->received_macs_.push_back({std::move(mac), now});
+    b->received_macs_.push_back({std::move(mac), instance, now});
     b->expire_macs_locked(now);
 }
 
@@ -403,9 +459,15 @@ void Bridge::expire_macs_locked(double now) {
     while (!awaiting_mac_.empty() &&
            (now - awaiting_mac_.front().arrival > kMacWaitS || awaiting_mac_.size() > kMaxWaiting)) {
         const AwaitingMac &m = awaiting_mac_.front();
-        ++counters_.shard_messages_refused;
-        log("a %s claiming shard %d/%d (utime %" PRId64 ") has no valid MAC (--shard-key): ignored",
-            m.status ? "status" : "result", m.shard, config_.shard_count, m.utime);
+        if (config_.shard_key.empty()) {
+            ++counters_.shard_results_ignored;
+            log("a result for shard %d/%d's pair ending at %" PRId64 " came without a receipt from that shard: ignored",
+                m.shard, config_.shard_count, m.utime);
+        } else {
+            ++counters_.shard_messages_refused;
+            log("a %s claiming shard %d/%d (utime %" PRId64 ") has no valid MAC (--shard-key): ignored",
+                m.status ? "status" : "result", m.shard, config_.shard_count, m.utime);
+        }
         awaiting_mac_.pop_front();
     }
     while (!received_macs_.empty() &&
@@ -414,9 +476,13 @@ void Bridge::expire_macs_locked(double now) {
 }
 
 void Bridge::publish_mac(const std::string &channel, const void *payload, size_t size) {
-    if (config_.shard_key.empty() || config_.shard_count < 2) return;
+    if (config_.shard_count < 2) return;
+    // Without a key only results get a receipt: a status names its process itself.
+    if (config_.shard_key.empty() && channel != config_.flow_channel) return;
     const std::vector<uint8_t> m =
-        shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
+        config_.shard_key.empty()
+            ? shard_receipt_message(config_.shard_index, config_.shard_count, instance_id_, channel, payload, size)
+            : shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
     if (m.empty() || lcm_publish(lcm_, config_.shard_auth_channel.c_str(), m.data(), static_cast<unsigned>(m.size())) != 0)
         log("publishing the MAC of a message on %s failed", channel.c_str());
 }
@@ -444,6 +510,27 @@ std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, in
     if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), in.data(), in.size(), out.data() + 16, &len) ||
         len != 32)
         return {};
+    return out;
+}
+
+std::vector<uint8_t> shard_receipt_message(int32_t index, int32_t count, int64_t instance, const std::string &channel,
+                                           const void *payload, size_t size) {
+    std::vector<uint8_t> out(48);
+    std::memcpy(out.data(), "LFRCP\x01\0\0", 8);
+    for (int i = 0; i < 4; ++i) {
+        out[8 + i] = static_cast<uint8_t>(static_cast<uint32_t>(index) >> (24 - 8 * i));
+        out[12 + i] = static_cast<uint8_t>(static_cast<uint32_t>(count) >> (24 - 8 * i));
+    }
+    for (int i = 0; i < 8; ++i) out[16 + i] = static_cast<uint8_t>(static_cast<uint64_t>(instance) >> (56 - 8 * i));
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int len = 0;
+    EVP_MD_CTX *ctx = EVP_MD_CTX_new();
+    const bool ok = ctx && EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr) == 1 &&
+                    EVP_DigestUpdate(ctx, channel.c_str(), channel.size() + 1) == 1 &&
+                    EVP_DigestUpdate(ctx, payload, size) == 1 && EVP_DigestFinal_ex(ctx, digest, &len) == 1 && len == 32;
+    EVP_MD_CTX_free(ctx);
+    if (!ok) return {};
+    std::memcpy(out.data() + 24, digest, 24);
     return out;
 }
 
@@ -971,6 +1058,11 @@ void Bridge::publish_status() {
     s.shard_count = config_.shard_count;
     s.shards_dead = c.shards_dead;
     s.pairs_lost_dead_shard = c.pairs_lost_dead_shard;
+    s.instance_id = instance_id_;
+    s.shard_index_conflicts = c.shard_index_conflicts;
+    s.shard_results_ignored = c.shard_results_ignored;
+    s.shard_messages_refused = c.shard_messages_refused;
+    s.pairs_lost_calibration_change = c.pairs_lost_calibration_change;
     s.lidar_received = c.lidar_received;
     s.lidar_malformed = c.lidar_malformed;
     s.lidar_rejected = c.lidar_rejected;

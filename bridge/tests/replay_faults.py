@@ -227,6 +227,9 @@ class ReplayFaults(unittest.TestCase):
                                   r"result, the calibration changed" % frame_number)
         self.assertIn("0 results", err)
         self.assertIn("pairs lost to a calibration change 2", err)
+        with ll.LogReader(self.out) as out:  # and in status_t
+            status = [ll.status_t.decode(e.data) for e in out if e.channel == ll.CHANNELS["status"]]
+        self.assertEqual(status[-1].pairs_lost_calibration_change, 2)
 
     # A flood of bad messages is not a flood of lines: 10 per kind and 10 s, then a count.
     def test_log_lines_rate_limited(self):

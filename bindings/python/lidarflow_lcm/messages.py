@@ -404,6 +404,9 @@ class status_t(_Message):
                     + [("queue_depth", "int32_t", None), ("queue_capacity", "int32_t", None), ("busy", "int8_t", None),
                        ("shard_index", "int32_t", None), ("shard_count", "int32_t", None),
                        ("shards_dead", "int32_t", None), ("pairs_lost_dead_shard", "int64_t", None)]
+                    + [(name, "int64_t", None) for name in (
+                        "instance_id", "shard_index_conflicts", "shard_results_ignored", "shard_messages_refused",
+                        "pairs_lost_calibration_change")]
                     + [(name, "float", None) for name in (
                         "latency_last_ms", "latency_mean_ms", "latency_max_ms", "compute_last_ms", "compute_mean_ms")]
                     + [("last_error", "string", None)])

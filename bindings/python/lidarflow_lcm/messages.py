@@ -307,7 +307,8 @@ class lidar_t(_Message):
         n = min(a.size for a in xyz) if all(a.ndim == 1 for a in xyz) else 0
         if n == 0:
             return
-        p = np.stack([a[:n].astype(np.float64) for a in xyz], axis=1)
+        with np.errstate(invalid="ignore"):  # a signalling NaN warns in the cast; it is refused below
+            p = np.stack([a[:n].astype(np.float64) for a in xyz], axis=1)
         bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
         if bad.size:
             _fail(t, "point %d is not finite", bad[0])

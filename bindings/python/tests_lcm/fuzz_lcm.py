@@ -13,6 +13,7 @@ deleted, repeated or spliced ranges, truncation) and feeds it to:
 - LogReader (strict=False: LogWarning only; strict=True: LogFormatError only) and
   read_messages (MessageError too); the events read, written again by LogWriter, read back
   equal.
+Any other exception or warning is a finding.
 An input that takes more than --hang-seconds (default 10) is a hang; the process runs under an
 address-space limit (--memory-mib, default 4096), so unbounded allocation is a MemoryError,
 itself a finding. A finding is written to --findings (default: the current folder) as
@@ -193,6 +194,8 @@ def run(args):
         raise Hang("no result within %g s" % args.hang_seconds)
 
     signal.signal(signal.SIGALRM, on_alarm)
+    # A warning (numpy's RuntimeWarning, say) is a finding too; only LogWarning is documented.
+    warnings.simplefilter("error")
     rng = random.Random(args.seed)
     messages = message_seeds()
     logs = log_seeds(messages)

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import tempfile
 import unittest
+import warnings
 
 import numpy as np
 
@@ -286,6 +287,17 @@ class Malformed(unittest.TestCase):
         raw[-1] = ord("x")
         with self.assertRaisesRegex(ll.MessageError, "not NUL-terminated"):
             ll.status_t.decode(bytes(raw))
+
+    # A signalling NaN among the points is refused without a numpy RuntimeWarning on the way
+    # (found by fuzz_lcm.py, which takes any warning for a finding).
+    def test_signalling_nan_point_refused_without_warning(self):
+        raw = bytearray(ll.lidar_message(np.array([[1, 2, 3]], np.float32), utime=1).encode())
+        at = bytes(raw).find(bytes.fromhex("3f800000"))  # x = 1.0f, big-endian
+        raw[at:at + 4] = bytes.fromhex("7f800001")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with self.assertRaisesRegex(ll.MessageError, "point 0 is not finite"):
+                ll.decode(bytes(raw))
 
     def test_random_corruption_is_an_error_or_a_faithful_message(self):
         # Flipped bytes either fail with MessageError or give a message that encodes back to

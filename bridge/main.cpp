@@ -82,8 +82,9 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
     for (const std::string &line : r.notes) std::fprintf(stderr, "lidarflow-lcm-bridge: note: %s\n", line.c_str());
     for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
     if (r.interrupted)
-        std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",
-                     (long long)r.stereo_not_replayed);
+        std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %s%lld stereo frame(s) not replayed%s\n",
+                     r.not_replayed_counted ? "" : "at least ", (long long)r.stereo_not_replayed,
+                     r.not_replayed_counted ? "" : " (the rest of the log was not counted: exit within a second)");
     std::fprintf(stderr,
                  "lidarflow-lcm-bridge: replayed %s -> %s in %.1f s: %lld events (stereo %lld, lidar %lld, "
                  "calibration %lld, other channels %lld, left out); stereo processed %lld, dropped %lld, missing "

@@ -233,11 +233,17 @@ class ReplayFaults(unittest.TestCase):
         took = time.monotonic() - sent
         self.assertEqual(p.returncode, 3, err)
         self.assertLess(took, 1.0, "%s %.1f s in: exit %.2f s after the signal" % (sig.name, after_s, took))
-        m = re.search(r"LOST: interrupted, (\d+) stereo frame\(s\) not replayed", err)
+        # The count of frames left stops after 0.3 s ("at least"): a long rest of the log must
+        # not hold the exit up.
+        m = re.search(r"LOST: interrupted, (at least )?(\d+) stereo frame\(s\) not replayed", err)
         self.assertIsNotNone(m, err)
+        sys.stderr.write("%s %.1f s in: exit %.3f s after it; %s\n" % (sig.name, after_s, took, m.group(0)))
         processed = self.summary(err)[1]
         dropped = int(re.search(r"stereo processed \d+, dropped (\d+)", err).group(1))
-        self.assertEqual(processed + dropped + int(m.group(1)), frames, err)
+        if m.group(1):
+            self.assertLessEqual(processed + dropped + int(m.group(2)), frames, err)
+        else:
+            self.assertEqual(processed + dropped + int(m.group(2)), frames, err)
         with ll.LogReader(self.out, strict=True) as out:
             events = list(out)
         self.assertEqual(events[-1].channel, ll.CHANNELS["status"])
@@ -260,7 +266,6 @@ class ReplayFaults(unittest.TestCase):
         for sig, after_s in ((signal.SIGINT, 0.4), (signal.SIGTERM, 0.9), (signal.SIGINT, 1.7), (signal.SIGTERM, 2.6)):
             seen.append(self.interrupt(log, sig, after_s, 300))
         self.assertGreater(max(p for p, _ in seen), 0, seen)
-        sys.stderr.write("signal to exit: %s s\n" % ", ".join("%.3f" % t for _, t in seen))
 
     # Logs cut inside their last event (its header, channel name or data), as a crash of the
     # logger leaves them: the whole events before are replayed, the cut one is a note (exit 0:

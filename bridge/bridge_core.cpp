@@ -94,7 +94,8 @@ struct Bridge::Frame {
     double received_seconds = 0;
 };
 
-Bridge::Bridge(const BridgeConfig &config, lcm_t *lcm) : config_(config), lcm_(lcm) {}
+Bridge::Bridge(const BridgeConfig &config, lcm_t *lcm)
+    : config_(config), lcm_(lcm), pairing_(config.pair_buffer, config.lidar_buffer, config.lidar_tolerance_us) {}
 
 std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, std::string *error) {
     if (!lcm) {
@@ -646,25 +647,22 @@ void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
         log("malformed message on %s (%u bytes), dropped: %s", channel, rbuf->data_size, err.c_str());
         return;
     }
-    std::deque<WaitingImage> &mine = waiting_[side], &other = waiting_[1 - side];
-    const auto partner = std::find_if(other.begin(), other.end(), [&](const WaitingImage &w) { return w.utime == utime; });
-    if (partner == other.end()) {
-        const auto twin = std::find_if(mine.begin(), mine.end(), [&](const WaitingImage &w) { return w.utime == utime; });
-        if (twin != mine.end()) {
-            // Two images of one camera at one time: the later one cannot be told apart, so it
-            // has no partner of its own.
-            ++counters_.stereo_received;
-            ++counters_.dropped_unpaired;
-            log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
-            return;
-        }
-        mine.push_back({utime, now, std::vector<uint8_t>(d, d + rbuf->data_size)});
-        while (static_cast<int>(mine.size()) > config_.pair_buffer)
-            drop_unpaired_locked(side, "more images waiting than --pair-buffer");
+    std::vector<uint8_t> other_bytes;
+    std::vector<FramePairing::Unpaired> unpaired;
+    const FramePairing::ImageOutcome outcome =
+        pairing_.offer_image(side, utime, now, d, rbuf->data_size, &other_bytes, &unpaired);
+    if (outcome == FramePairing::ImageOutcome::Twin) {
+        // Two images of one camera at one time: the later one cannot be told apart, so it
+        // has no partner of its own.
+        ++counters_.stereo_received;
+        ++counters_.dropped_unpaired;
+        log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
         return;
     }
-    const std::vector<uint8_t> other_bytes = std::move(partner->bytes);
-    other.erase(partner);
+    if (outcome == FramePairing::ImageOutcome::Waiting) {
+        count_unpaired_locked(unpaired);
+        return;
+    }
     lock.unlock();
     auto frame = std::make_unique<Frame>();
     const std::string pair_err =
@@ -683,23 +681,24 @@ void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
     accept_locked(std::move(frame));
 }
 
-// Called with mutex_ held: the oldest image waiting on `side` leaves without a partner.
-void Bridge::drop_unpaired_locked(int side, const char *why) {
-    const WaitingImage &w = waiting_[side].front();
-    ++counters_.stereo_received;
-    ++counters_.dropped_unpaired;
-    log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", w.utime,
-        (side == 0 ? config_.left_channel : config_.right_channel).c_str(),
-        (side == 0 ? config_.right_channel : config_.left_channel).c_str(), why);
-    waiting_[side].pop_front();
+// Called with mutex_ held: images that left the pairing without a partner, each counted as a
+// stereo message received and dropped.
+void Bridge::count_unpaired_locked(const std::vector<FramePairing::Unpaired> &unpaired) {
+    for (const FramePairing::Unpaired &u : unpaired) {
+        ++counters_.stereo_received;
+        ++counters_.dropped_unpaired;
+        log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", u.utime,
+            (u.side == 0 ? config_.left_channel : config_.right_channel).c_str(),
+            (u.side == 0 ? config_.right_channel : config_.left_channel).c_str(), u.why);
+    }
 }
 
 void Bridge::expire_unpaired() {
     const double deadline = monotonic_seconds() - config_.pair_wait_ms / 1000.0;
     std::lock_guard<std::mutex> lock(mutex_);
-    for (int side = 0; side < 2; ++side)
-        while (!waiting_[side].empty() && waiting_[side].front().arrival < deadline)
-            drop_unpaired_locked(side, "waited --pair-wait-ms");
+    std::vector<FramePairing::Unpaired> unpaired;
+    pairing_.expire_images(deadline, &unpaired);
+    count_unpaired_locked(unpaired);
 }
 
 // Called with mutex_ held for every decodable stereo frame: shard filter, calibration, order,
@@ -722,22 +721,22 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     }
     if (config_.fixed_calibration) {
         frame->calibration = config_.calibration;
-    } else if (!have_calibration_) {
-        ++counters_.dropped_no_calibration;
-        if (!warned_no_calibration_)
-            log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
-                config_.calibration_channel.c_str());
-        warned_no_calibration_ = true;
-        return;
     } else {
-        if ((calibration_width_ && calibration_width_ != m.width) ||
-            (calibration_height_ && calibration_height_ != m.height)) {
-            ++counters_.dropped_calibration_mismatch;
-            log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
-                m.height, calibration_width_, calibration_height_);
+        const FramePairing::CalibrationOutcome cal = pairing_.calibration_for(m.width, m.height, &frame->calibration);
+        if (cal == FramePairing::CalibrationOutcome::None) {
+            ++counters_.dropped_no_calibration;
+            if (!warned_no_calibration_)
+                log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
+                    config_.calibration_channel.c_str());
+            warned_no_calibration_ = true;
             return;
         }
-        frame->calibration = channel_calibration_;
+        if (cal == FramePairing::CalibrationOutcome::SizeMismatch) {
+            ++counters_.dropped_calibration_mismatch;
+            log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
+                m.height, pairing_.calibration_width(), pairing_.calibration_height());
+            return;
+        }
     }
     if (have_last_ && m.sequence == last_sequence_ && m.utime <= last_utime_) {
         ++counters_.dropped_out_of_order;
@@ -788,9 +787,7 @@ void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
             err.c_str());
         return;
     }
-    lidar_.push_back(std::move(sweep));
-    while (static_cast<int>(lidar_.size()) > config_.lidar_buffer) lidar_.pop_front();
-    counters_.lidar_buffered = static_cast<int32_t>(lidar_.size());
+    counters_.lidar_buffered = static_cast<int32_t>(pairing_.add_lidar(std::move(sweep)));
     cv_.notify_all();
 }
 
@@ -816,27 +813,9 @@ void Bridge::handle_calibration(const lcm_recv_buf_t *rbuf) {
         return;
     }
     if (config_.fixed_calibration) return;  // --calib wins
-    if (!have_calibration_ || !same_calibration(cal, channel_calibration_) || w != calibration_width_ ||
-        h != calibration_height_)
+    if (pairing_.set_calibration(cal, w, h))
         log("calibration: fx %.3f fy %.3f cx %.3f cy %.3f baseline %.5f m, images %dx%d%s", cal.fx, cal.fy, cal.cx,
             cal.cy, cal.baseline, w, h, w ? "" : " (any size)");
-    have_calibration_ = true;
-    channel_calibration_ = cal;
-    calibration_width_ = w;
-    calibration_height_ = h;
-}
-
-std::shared_ptr<const LidarSweep> Bridge::find_lidar_locked(int64_t utime) const {
-    std::shared_ptr<const LidarSweep> best;
-    int64_t best_dt = 0;
-    for (const auto &s : lidar_) {
-        const int64_t dt = s->utime > utime ? s->utime - utime : utime - s->utime;
-        if (dt <= config_.lidar_tolerance_us && (!best || dt < best_dt)) {
-            best = s;
-            best_dt = dt;
-        }
-    }
-    return best;
 }
 
 void Bridge::worker_loop() {
@@ -851,13 +830,13 @@ void Bridge::worker_loop() {
         // A sweep may arrive after its frame; wait a little for it, but only when a LiDAR
         // stream exists at all (image-only setups would pay the wait on every frame).
         const int64_t utime = frame->stereo.msg().utime;
-        std::shared_ptr<const LidarSweep> sweep = find_lidar_locked(utime);
+        std::shared_ptr<const LidarSweep> sweep = pairing_.lidar_for(utime);
         const auto deadline = std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
             std::chrono::duration<double>(frame->received_seconds + config_.lidar_wait_ms / 1000.0)));
         while (!sweep && !stop_worker_ && counters_.lidar_received > 0 &&
                cv_.wait_until(lock, deadline) != std::cv_status::timeout)
-            sweep = find_lidar_locked(utime);
-        if (!sweep) sweep = find_lidar_locked(utime);
+            sweep = pairing_.lidar_for(utime);
+        if (!sweep) sweep = pairing_.lidar_for(utime);
         if (stop_worker_) {
             ++counters_.dropped_shutdown;
             counters_.busy = false;
@@ -1136,8 +1115,9 @@ void Bridge::stop() {
         std::lock_guard<std::mutex> lock(mutex_);
         counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
         queue_.clear();
-        for (int side = 0; side < 2; ++side)
-            while (!waiting_[side].empty()) drop_unpaired_locked(side, "the bridge stopped");
+        std::vector<FramePairing::Unpaired> unpaired;
+        pairing_.drop_all_images("the bridge stopped", &unpaired);
+        count_unpaired_locked(unpaired);
         counters_.queue_depth = 0;
         counters_.busy = false;
     }

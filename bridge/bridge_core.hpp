@@ -28,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "frame_pairing.hpp"
 #include "lidarflow/lidarflow.h"
 #include "wire.hpp"
 
@@ -170,7 +171,7 @@ private:
     static void on_left(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_right(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     void handle_image(int side, const lcm_recv_buf_t *rbuf);
-    void drop_unpaired_locked(int side, const char *why);
+    void count_unpaired_locked(const std::vector<FramePairing::Unpaired> &unpaired);
     void expire_unpaired();
     void accept_locked(std::unique_ptr<Frame> frame);
     void count_transport_gap(int64_t frame_number);
@@ -178,7 +179,6 @@ private:
     void handle_calibration(const lcm_recv_buf_t *rbuf);
     void worker_loop();
     void process(Frame &frame, std::shared_ptr<const LidarSweep> sweep);
-    std::shared_ptr<const LidarSweep> find_lidar_locked(int64_t utime) const;
     void flush_outbox();
     void publish_status();
     void log(const char *format, ...) __attribute__((format(printf, 2, 3)));       // rate-limited
@@ -210,10 +210,7 @@ private:
     mutable std::mutex mutex_;        // everything below
     std::condition_variable cv_;      // queue, LiDAR arrivals, stop
     std::deque<std::unique_ptr<Frame>> queue_;
-    std::deque<std::shared_ptr<const LidarSweep>> lidar_;
-    bool have_calibration_ = false;   // from the channel
-    lf_calibration_t channel_calibration_{};
-    int32_t calibration_width_ = 0, calibration_height_ = 0;
+    FramePairing pairing_;            // camera images, LiDAR sweeps and the channel's calibration
     bool warned_no_calibration_ = false;
     bool have_last_ = false;          // the last accepted frame, for the order check
     bool have_frame_number_ = false;  // the last decodable stereo message, for transport gaps
@@ -222,13 +219,6 @@ private:
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
-    // Images of the left (0) and right (1) channel waiting for their partner, oldest first.
-    struct WaitingImage {
-        int64_t utime;
-        double arrival;
-        std::vector<uint8_t> bytes;
-    };
-    std::deque<WaitingImage> waiting_[2];
     // --shard watch (shard_timeout_ > 0): every other shard's last heartbeat and the t1 times of
     // its pairs for which no result was seen yet (bounded; the newest kept).
     struct ShardWatch {

@@ -358,6 +358,16 @@ class FlowArrays(unittest.TestCase):
         xs, ys = ll.pixel_grid(m)
         self.assertEqual((xs[3, 5], ys[3, 5]), (10, 6))
 
+    # A huge int16 scale overflows float32 to inf, as in the bridge's decoder, without numpy's
+    # RuntimeWarning (found by fuzz_lcm.py).
+    def test_int16_scale_overflow_is_inf_without_warning(self):
+        m = ll.scene_flow_message(*([np.full((1, 2), 3.0, np.float32)] * 4), np.ones((1, 2), bool), encoding="int16")
+        m.scale = 1e38
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            a = ll.flow_arrays(ll.scene_flow_t.decode(m.encode()))
+        self.assertTrue(np.all(np.isinf(a["u"])))
+
     def test_inconsistent_message_refused(self):
         m = ll.scene_flow_message(*self.planes())
         m.valid_size += 1

@@ -318,7 +318,7 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
             b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
             return;
         }
-    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.uptime_seconds, f.instance_id, std::move(mac), now});
+    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.instance_id, std::move(mac), now});
     b->expire_macs_locked(now);
 }
 
@@ -399,7 +399,7 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
             else b->apply_receipt_locked(owner, utime, instance);
             return;
         }
-    b->awaiting_mac_.push_back({false, owner, utime, 0, 0, std::move(mac), now});
+    b->awaiting_mac_.push_back({false, owner, utime, 0, std::move(mac), now});
     b->expire_macs_locked(now);
 }
 

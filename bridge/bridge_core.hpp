@@ -236,7 +236,6 @@ private:
         bool status;                  // else a result
         int32_t shard;
         int64_t utime;                // status_t.utime, or the result's t1 utime
-        double uptime_s;
         int64_t instance;             // status_t.instance_id
         std::vector<uint8_t> mac;     // the expected MAC message, or receipt with instance 0
         double arrival;

@@ -13,6 +13,7 @@
 #include <cstdarg>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
@@ -93,7 +94,8 @@ struct Bridge::Frame {
     double received_seconds = 0;
 };
 
-Bridge::Bridge(const BridgeConfig &config, lcm_t *lcm) : config_(config), lcm_(lcm) {}
+Bridge::Bridge(const BridgeConfig &config, lcm_t *lcm)
+    : config_(config), lcm_(lcm), pairing_(config.pair_buffer, config.lidar_buffer, config.lidar_tolerance_us) {}
 
 std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, std::string *error) {
     if (!lcm) {
@@ -124,6 +126,9 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         return nullptr;
     }
     std::unique_ptr<Bridge> b(new Bridge(config, lcm));
+    std::random_device random;
+    while (b->instance_id_ == 0)
+        b->instance_id_ = static_cast<int64_t>(static_cast<uint64_t>(random()) << 32 | static_cast<uint64_t>(random()));
     if (b->config_.shard_auth_channel.empty()) b->config_.shard_auth_channel = config.status_channel + "_MAC";
     if (lf_options_create(&b->options_) != LF_OK) {
         *error = std::string("estimator options: ") + lf_last_error(nullptr);
@@ -165,7 +170,7 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         b->shard_timeout_ = config.shard_timeout_s < 0 ? 3 * config.status_period_s : config.shard_timeout_s;
         channels.push_back({&config.status_channel, &Bridge::on_status});
         channels.push_back({&config.flow_channel, &Bridge::on_flow});
-        if (!config.shard_key.empty()) channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});
+        channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});  // MACs or receipts
     }
     for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
@@ -178,7 +183,11 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
     b->counters_.queue_capacity = config.queue_capacity;
     b->start_seconds_ = monotonic_seconds();
     // A shard that never sends a status is dead from shard_timeout_ after this one's start.
-    if (b->shard_timeout_ > 0) b->shards_.assign(static_cast<size_t>(config.shard_count), {b->start_seconds_, false, {}});
+    if (b->shard_timeout_ > 0) {
+        ShardWatch fresh;
+        fresh.last_heartbeat = b->start_seconds_;
+        b->shards_.assign(static_cast<size_t>(config.shard_count), fresh);
+    }
     b->next_status_ = b->start_seconds_ + config.status_period_s;
     b->worker_ = std::thread(&Bridge::worker_loop, b.get());
     return b;
@@ -288,25 +297,57 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
         b->warned_foreign_split_ = true;
         return;
     }
-    if (f.shard_index == b->config_.shard_index) return;  // our own, looped back
+    if (f.shard_index == b->config_.shard_index && f.instance_id == b->instance_id_) return;  // our own, looped back
+    if (f.shard_index == b->config_.shard_index) {
+        // Another process claims this one's index: only the others can tell which is genuine
+        // (with a key, a status without a MAC is no claim).
+        if (!b->config_.shard_key.empty()) return;
+        ++b->counters_.shard_index_conflicts;
+        b->log("a status of shard %d/%d from another process (instance %016" PRIx64 "): is this index claimed twice?",
+               f.shard_index, f.shard_count, static_cast<uint64_t>(f.instance_id));
+        return;
+    }
     if (b->config_.shard_key.empty()) {
-        b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+        b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
         return;
     }
     const double now = monotonic_seconds();
     for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
         if (it->mac == mac) {
             b->received_macs_.erase(it);
-            b->apply_status_locked(f.shard_index, f.utime, f.uptime_seconds);
+            b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
             return;
         }
-    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.uptime_seconds, std::move(mac), now});
+    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.instance_id, std::move(mac), now});
     b->expire_macs_locked(now);
 }
 
-// A status that counts (authenticated with --shard-key): the shard is alive.
-void Bridge::apply_status_locked(int32_t shard, int64_t utime, double uptime_s) {
+// A status that counts (authenticated with --shard-key): the shard is alive, if it comes from
+// the process holding the index. The first process heard holds it; another one takes it over
+// only once the holder is silent for the timeout (a restart), and never one heard claiming the
+// index while the holder lived (a second process or a forger: it must not keep the index alive).
+void Bridge::apply_status_locked(int32_t shard, int64_t utime, int64_t instance) {
     ShardWatch &w = shards_[static_cast<size_t>(shard)];
+    const double now = monotonic_seconds();
+    if (instance != w.holder) {
+        const bool holder_alive = w.holder != 0 && !w.dead && now - w.last_heartbeat <= shard_timeout_;
+        const bool rejected = std::find(w.rejected.begin(), w.rejected.end(), instance) != w.rejected.end();
+        if (holder_alive || rejected) {
+            ++counters_.shard_index_conflicts;
+            if (!rejected) {
+                w.rejected.push_back(instance);
+                if (w.rejected.size() > 16) w.rejected.pop_front();
+            }
+            log("shard %d/%d: a status of instance %016" PRIx64 " while %016" PRIx64
+                " holds the index: a second process or a forger, ignored from now on",
+                shard, config_.shard_count, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+            return;
+        }
+        if (w.holder != 0)
+            log("shard %d/%d: now held by a new process (instance %016" PRIx64 ", was %016" PRIx64 ")", shard,
+                config_.shard_count, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+        w.holder = instance;
+    }
     if (!config_.shard_key.empty()) {
         // A genuine status recorded and sent again must not keep a dead shard alive.
         if (w.have_status_utime && utime <= w.status_utime) {
@@ -318,17 +359,6 @@ void Bridge::apply_status_locked(int32_t shard, int64_t utime, double uptime_s) 
         w.have_status_utime = true;
         w.status_utime = utime;
     }
-    const double now = monotonic_seconds();
-    // Its process's start on its own clock: two processes claiming one index differ there.
-    const double start_us = static_cast<double>(utime) - 1e6 * uptime_s;
-    if (w.have_instance && !w.dead && now - w.last_heartbeat <= shard_timeout_ &&
-        std::fabs(start_us - w.instance_start_us) > 1e6) {
-        ++counters_.shard_index_conflicts;
-        log("shard %d/%d: statuses of two processes (started %.1f s apart): is the index claimed twice?", shard,
-            config_.shard_count, std::fabs(start_us - w.instance_start_us) / 1e6);
-    }
-    w.have_instance = true;
-    w.instance_start_us = start_us;
     w.last_heartbeat = now;
     if (w.dead) {
         // A restarted shard starts from nothing: what it had is already counted.
@@ -344,11 +374,8 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     int64_t utime = 0;
     if (!scene_flow_utime(rbuf->data, rbuf->data_size, &utime)) return;
     std::unique_lock<std::mutex> lock(b->mutex_);
-    if (b->config_.shard_key.empty()) {
-        for (size_t k = 0; k < b->shards_.size(); ++k) b->apply_flow_locked(static_cast<int32_t>(k), utime);
-        return;
-    }
-    // Only the shard that owns the pair settles it: the MAC must be that shard's.
+    // Only the shard that owns the pair settles it: the MAC (with a key), or else the receipt
+    // of the process holding that shard, must follow the result.
     int32_t owner = -1;
     for (size_t k = 0; k < b->shards_.size() && owner < 0; ++k) {
         const std::deque<int64_t> &p = b->shards_[k].pending;
@@ -356,18 +383,38 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     }
     if (owner < 0) return;  // settles nothing
     lock.unlock();
-    std::vector<uint8_t> mac = shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count,
-                                                 b->config_.flow_channel, rbuf->data, rbuf->data_size);
+    const bool keyed = !b->config_.shard_key.empty();
+    std::vector<uint8_t> mac =
+        keyed ? shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count, b->config_.flow_channel,
+                                  rbuf->data, rbuf->data_size)
+              : shard_receipt_message(owner, b->config_.shard_count, 0, b->config_.flow_channel, rbuf->data,
+                                      rbuf->data_size);
     lock.lock();
     const double now = monotonic_seconds();
     for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
         if (it->mac == mac) {
+            const int64_t instance = it->instance;
             b->received_macs_.erase(it);
-            b->apply_flow_locked(owner, utime);
+            if (keyed) b->apply_flow_locked(owner, utime);
+            else b->apply_receipt_locked(owner, utime, instance);
             return;
         }
     b->awaiting_mac_.push_back({false, owner, utime, 0, std::move(mac), now});
     b->expire_macs_locked(now);
+}
+
+// A result with its receipt (no key): it settles the pair only when the process that sent it
+// holds the owner's index (or no status of the owner was heard yet).
+void Bridge::apply_receipt_locked(int32_t shard, int64_t utime, int64_t instance) {
+    const ShardWatch &w = shards_[static_cast<size_t>(shard)];
+    if (w.holder != 0 && instance != w.holder) {
+        ++counters_.shard_results_ignored;
+        log("a result for shard %d/%d's pair ending at %" PRId64 " from instance %016" PRIx64 ", not its holder %016" PRIx64
+            ": ignored",
+            shard, config_.shard_count, utime, static_cast<uint64_t>(instance), static_cast<uint64_t>(w.holder));
+        return;
+    }
+    apply_flow_locked(shard, utime);
 }
 
 void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
@@ -379,19 +426,29 @@ void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
 void Bridge::on_mac(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     auto *b = static_cast<Bridge *>(self);
     const auto *d = static_cast<const uint8_t *>(rbuf->data);
-    if (rbuf->data_size != 48 || std::memcmp(d, "LFMAC\x01\0\0", 8) != 0) return;  // not a MAC message
+    // A MAC with a key, a receipt without: the other kind is no proof here.
+    const bool keyed = !b->config_.shard_key.empty();
+    if (rbuf->data_size != 48 || std::memcmp(d, keyed ? "LFMAC\x01\0\0" : "LFRCP\x01\0\0", 8) != 0) return;
     std::vector<uint8_t> mac(d, d + rbuf->data_size);
+    int64_t instance = 0;
+    if (!keyed) {
+        uint64_t u = 0;
+        for (int i = 0; i < 8; ++i) u = u << 8 | mac[16 + i];
+        instance = static_cast<int64_t>(u);
+        std::fill(mac.begin() + 16, mac.begin() + 24, 0);  // matched without it, then checked
+    }
     std::lock_guard<std::mutex> lock(b->mutex_);
     const double now = monotonic_seconds();
     for (auto it = b->awaiting_mac_.begin(); it != b->awaiting_mac_.end(); ++it)
         if (it->mac == mac) {
             const AwaitingMac m = std::move(*it);
             b->awaiting_mac_.erase(it);
-            if (m.status) b->apply_status_locked(m.shard, m.utime, m.uptime_s);
-            else b->apply_flow_locked(m.shard, m.utime);
+            if (m.status) b->apply_status_locked(m.shard, m.utime, m.instance);
+            else if (keyed) b->apply_flow_locked(m.shard, m.utime);
+            else b->apply_receipt_locked(m.shard, m.utime, instance);
             return;
         }
-    b->received_macs_.push_back({std::move(mac), now});
+    b->received_macs_.push_back({std::move(mac), instance, now});
     b->expire_macs_locked(now);
 }
 
@@ -403,9 +460,15 @@ void Bridge::expire_macs_locked(double now) {
     while (!awaiting_mac_.empty() &&
            (now - awaiting_mac_.front().arrival > kMacWaitS || awaiting_mac_.size() > kMaxWaiting)) {
         const AwaitingMac &m = awaiting_mac_.front();
-        ++counters_.shard_messages_refused;
-        log("a %s claiming shard %d/%d (utime %" PRId64 ") has no valid MAC (--shard-key): ignored",
-            m.status ? "status" : "result", m.shard, config_.shard_count, m.utime);
+        if (config_.shard_key.empty()) {
+            ++counters_.shard_results_ignored;
+            log("a result for shard %d/%d's pair ending at %" PRId64 " came without a receipt from that shard: ignored",
+                m.shard, config_.shard_count, m.utime);
+        } else {
+            ++counters_.shard_messages_refused;
+            log("a %s claiming shard %d/%d (utime %" PRId64 ") has no valid MAC (--shard-key): ignored",
+                m.status ? "status" : "result", m.shard, config_.shard_count, m.utime);
+        }
         awaiting_mac_.pop_front();
     }
     while (!received_macs_.empty() &&
@@ -414,9 +477,13 @@ void Bridge::expire_macs_locked(double now) {
 }
 
 void Bridge::publish_mac(const std::string &channel, const void *payload, size_t size) {
-    if (config_.shard_key.empty() || config_.shard_count < 2) return;
+    if (config_.shard_count < 2) return;
+    // Without a key only results get a receipt: a status names its process itself.
+    if (config_.shard_key.empty() && channel != config_.flow_channel) return;
     const std::vector<uint8_t> m =
-        shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
+        config_.shard_key.empty()
+            ? shard_receipt_message(config_.shard_index, config_.shard_count, instance_id_, channel, payload, size)
+            : shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
     if (m.empty() || lcm_publish(lcm_, config_.shard_auth_channel.c_str(), m.data(), static_cast<unsigned>(m.size())) != 0)
         log("publishing the MAC of a message on %s failed", channel.c_str());
 }
@@ -444,6 +511,27 @@ std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, in
     if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), in.data(), in.size(), out.data() + 16, &len) ||
         len != 32)
         return {};
+    return out;
+}
+
+std::vector<uint8_t> shard_receipt_message(int32_t index, int32_t count, int64_t instance, const std::string &channel,
+                                           const void *payload, size_t size) {
+    std::vector<uint8_t> out(48);
+    std::memcpy(out.data(), "LFRCP\x01\0\0", 8);
+    for (int i = 0; i < 4; ++i) {
+        out[8 + i] = static_cast<uint8_t>(static_cast<uint32_t>(index) >> (24 - 8 * i));
+        out[12 + i] = static_cast<uint8_t>(static_cast<uint32_t>(count) >> (24 - 8 * i));
+    }
+    for (int i = 0; i < 8; ++i) out[16 + i] = static_cast<uint8_t>(static_cast<uint64_t>(instance) >> (56 - 8 * i));
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int len = 0;
+    EVP_MD_CTX *ctx = EVP_MD_CTX_new();
+    const bool ok = ctx && EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr) == 1 &&
+                    EVP_DigestUpdate(ctx, channel.c_str(), channel.size() + 1) == 1 &&
+                    EVP_DigestUpdate(ctx, payload, size) == 1 && EVP_DigestFinal_ex(ctx, digest, &len) == 1 && len == 32;
+    EVP_MD_CTX_free(ctx);
+    if (!ok) return {};
+    std::memcpy(out.data() + 24, digest, 24);
     return out;
 }
 
@@ -559,25 +647,22 @@ void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
         log("malformed message on %s (%u bytes), dropped: %s", channel, rbuf->data_size, err.c_str());
         return;
     }
-    std::deque<WaitingImage> &mine = waiting_[side], &other = waiting_[1 - side];
-    const auto partner = std::find_if(other.begin(), other.end(), [&](const WaitingImage &w) { return w.utime == utime; });
-    if (partner == other.end()) {
-        const auto twin = std::find_if(mine.begin(), mine.end(), [&](const WaitingImage &w) { return w.utime == utime; });
-        if (twin != mine.end()) {
-            // Two images of one camera at one time: the later one cannot be told apart, so it
-            // has no partner of its own.
-            ++counters_.stereo_received;
-            ++counters_.dropped_unpaired;
-            log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
-            return;
-        }
-        mine.push_back({utime, now, std::vector<uint8_t>(d, d + rbuf->data_size)});
-        while (static_cast<int>(mine.size()) > config_.pair_buffer)
-            drop_unpaired_locked(side, "more images waiting than --pair-buffer");
+    std::vector<uint8_t> other_bytes;
+    std::vector<FramePairing::Unpaired> unpaired;
+    const FramePairing::ImageOutcome outcome =
+        pairing_.offer_image(side, utime, now, d, rbuf->data_size, &other_bytes, &unpaired);
+    if (outcome == FramePairing::ImageOutcome::Twin) {
+        // Two images of one camera at one time: the later one cannot be told apart, so it
+        // has no partner of its own.
+        ++counters_.stereo_received;
+        ++counters_.dropped_unpaired;
+        log("image %" PRId64 " on %s: a second one of that time, dropped as unpaired", utime, channel);
         return;
     }
-    const std::vector<uint8_t> other_bytes = std::move(partner->bytes);
-    other.erase(partner);
+    if (outcome == FramePairing::ImageOutcome::Waiting) {
+        count_unpaired_locked(unpaired);
+        return;
+    }
     lock.unlock();
     auto frame = std::make_unique<Frame>();
     const std::string pair_err =
@@ -596,23 +681,24 @@ void Bridge::handle_image(int side, const lcm_recv_buf_t *rbuf) {
     accept_locked(std::move(frame));
 }
 
-// Called with mutex_ held: the oldest image waiting on `side` leaves without a partner.
-void Bridge::drop_unpaired_locked(int side, const char *why) {
-    const WaitingImage &w = waiting_[side].front();
-    ++counters_.stereo_received;
-    ++counters_.dropped_unpaired;
-    log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", w.utime,
-        (side == 0 ? config_.left_channel : config_.right_channel).c_str(),
-        (side == 0 ? config_.right_channel : config_.left_channel).c_str(), why);
-    waiting_[side].pop_front();
+// Called with mutex_ held: images that left the pairing without a partner, each counted as a
+// stereo message received and dropped.
+void Bridge::count_unpaired_locked(const std::vector<FramePairing::Unpaired> &unpaired) {
+    for (const FramePairing::Unpaired &u : unpaired) {
+        ++counters_.stereo_received;
+        ++counters_.dropped_unpaired;
+        log("image %" PRId64 " on %s has no partner on %s (%s): dropped as unpaired", u.utime,
+            (u.side == 0 ? config_.left_channel : config_.right_channel).c_str(),
+            (u.side == 0 ? config_.right_channel : config_.left_channel).c_str(), u.why);
+    }
 }
 
 void Bridge::expire_unpaired() {
     const double deadline = monotonic_seconds() - config_.pair_wait_ms / 1000.0;
     std::lock_guard<std::mutex> lock(mutex_);
-    for (int side = 0; side < 2; ++side)
-        while (!waiting_[side].empty() && waiting_[side].front().arrival < deadline)
-            drop_unpaired_locked(side, "waited --pair-wait-ms");
+    std::vector<FramePairing::Unpaired> unpaired;
+    pairing_.expire_images(deadline, &unpaired);
+    count_unpaired_locked(unpaired);
 }
 
 // Called with mutex_ held for every decodable stereo frame: shard filter, calibration, order,
@@ -635,22 +721,22 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     }
     if (config_.fixed_calibration) {
         frame->calibration = config_.calibration;
-    } else if (!have_calibration_) {
-        ++counters_.dropped_no_calibration;
-        if (!warned_no_calibration_)
-            log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
-                config_.calibration_channel.c_str());
-        warned_no_calibration_ = true;
-        return;
     } else {
-        if ((calibration_width_ && calibration_width_ != m.width) ||
-            (calibration_height_ && calibration_height_ != m.height)) {
-            ++counters_.dropped_calibration_mismatch;
-            log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
-                m.height, calibration_width_, calibration_height_);
+        const FramePairing::CalibrationOutcome cal = pairing_.calibration_for(m.width, m.height, &frame->calibration);
+        if (cal == FramePairing::CalibrationOutcome::None) {
+            ++counters_.dropped_no_calibration;
+            if (!warned_no_calibration_)
+                log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
+                    config_.calibration_channel.c_str());
+            warned_no_calibration_ = true;
             return;
         }
-        frame->calibration = channel_calibration_;
+        if (cal == FramePairing::CalibrationOutcome::SizeMismatch) {
+            ++counters_.dropped_calibration_mismatch;
+            log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
+                m.height, pairing_.calibration_width(), pairing_.calibration_height());
+            return;
+        }
     }
     if (have_last_ && m.sequence == last_sequence_ && m.utime <= last_utime_) {
         ++counters_.dropped_out_of_order;
@@ -701,9 +787,7 @@ void Bridge::handle_lidar(const lcm_recv_buf_t *rbuf) {
             err.c_str());
         return;
     }
-    lidar_.push_back(std::move(sweep));
-    while (static_cast<int>(lidar_.size()) > config_.lidar_buffer) lidar_.pop_front();
-    counters_.lidar_buffered = static_cast<int32_t>(lidar_.size());
+    counters_.lidar_buffered = static_cast<int32_t>(pairing_.add_lidar(std::move(sweep)));
     cv_.notify_all();
 }
 
@@ -729,27 +813,9 @@ void Bridge::handle_calibration(const lcm_recv_buf_t *rbuf) {
         return;
     }
     if (config_.fixed_calibration) return;  // --calib wins
-    if (!have_calibration_ || !same_calibration(cal, channel_calibration_) || w != calibration_width_ ||
-        h != calibration_height_)
+    if (pairing_.set_calibration(cal, w, h))
         log("calibration: fx %.3f fy %.3f cx %.3f cy %.3f baseline %.5f m, images %dx%d%s", cal.fx, cal.fy, cal.cx,
             cal.cy, cal.baseline, w, h, w ? "" : " (any size)");
-    have_calibration_ = true;
-    channel_calibration_ = cal;
-    calibration_width_ = w;
-    calibration_height_ = h;
-}
-
-std::shared_ptr<const LidarSweep> Bridge::find_lidar_locked(int64_t utime) const {
-    std::shared_ptr<const LidarSweep> best;
-    int64_t best_dt = 0;
-    for (const auto &s : lidar_) {
-        const int64_t dt = s->utime > utime ? s->utime - utime : utime - s->utime;
-        if (dt <= config_.lidar_tolerance_us && (!best || dt < best_dt)) {
-            best = s;
-            best_dt = dt;
-        }
-    }
-    return best;
 }
 
 void Bridge::worker_loop() {
@@ -764,13 +830,13 @@ void Bridge::worker_loop() {
         // A sweep may arrive after its frame; wait a little for it, but only when a LiDAR
         // stream exists at all (image-only setups would pay the wait on every frame).
         const int64_t utime = frame->stereo.msg().utime;
-        std::shared_ptr<const LidarSweep> sweep = find_lidar_locked(utime);
+        std::shared_ptr<const LidarSweep> sweep = pairing_.lidar_for(utime);
         const auto deadline = std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
             std::chrono::duration<double>(frame->received_seconds + config_.lidar_wait_ms / 1000.0)));
         while (!sweep && !stop_worker_ && counters_.lidar_received > 0 &&
                cv_.wait_until(lock, deadline) != std::cv_status::timeout)
-            sweep = find_lidar_locked(utime);
-        if (!sweep) sweep = find_lidar_locked(utime);
+            sweep = pairing_.lidar_for(utime);
+        if (!sweep) sweep = pairing_.lidar_for(utime);
         if (stop_worker_) {
             ++counters_.dropped_shutdown;
             counters_.busy = false;
@@ -986,6 +1052,11 @@ void Bridge::publish_status() {
     s.shard_count = config_.shard_count;
     s.shards_dead = c.shards_dead;
     s.pairs_lost_dead_shard = c.pairs_lost_dead_shard;
+    s.instance_id = instance_id_;
+    s.shard_index_conflicts = c.shard_index_conflicts;
+    s.shard_results_ignored = c.shard_results_ignored;
+    s.shard_messages_refused = c.shard_messages_refused;
+    s.pairs_lost_calibration_change = c.pairs_lost_calibration_change;
     s.lidar_received = c.lidar_received;
     s.lidar_malformed = c.lidar_malformed;
     s.lidar_rejected = c.lidar_rejected;
@@ -1059,8 +1130,9 @@ void Bridge::stop() {
         std::lock_guard<std::mutex> lock(mutex_);
         counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
         queue_.clear();
-        for (int side = 0; side < 2; ++side)
-            while (!waiting_[side].empty()) drop_unpaired_locked(side, "the bridge stopped");
+        std::vector<FramePairing::Unpaired> unpaired;
+        pairing_.drop_all_images("the bridge stopped", &unpaired);
+        count_unpaired_locked(unpaired);
         counters_.queue_depth = 0;
         counters_.busy = false;
     }

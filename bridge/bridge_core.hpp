@@ -28,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "frame_pairing.hpp"
 #include "lidarflow/lidarflow.h"
 #include "wire.hpp"
 
@@ -72,8 +73,10 @@ struct BridgeConfig {
     // --shard-key: a key shared by the shards (raw bytes, >= 16). Each shard then follows every
     // status_t and scene_flow_t it publishes with a MAC message (shard_mac_message) on
     // shard_auth_channel, and its watch takes another shard's status, and a result as settling
-    // a pair, only with a valid MAC from the shard that owns it. "" = no key: the watch trusts
-    // anyone on the bus (see docs/LCM.md).
+    // a pair, only with a valid MAC from the shard that owns it. "" = no key: each result is
+    // followed by a receipt naming the process (shard_receipt_message) instead, and the watch
+    // tells processes apart by status_t.instance_id but trusts anyone on the bus who copies
+    // them (see docs/LCM.md).
     std::string shard_key;
     std::string shard_auth_channel;  // "" = status_channel + "_MAC"
     FlowEncoding encoding = FlowEncoding::Int16;
@@ -96,19 +99,21 @@ struct Counters {
     int64_t skipped_other_shard = 0;       // --shard: frames only other shards need
     int32_t shards_dead = 0;               // --shard: other shards without a recent status
     int64_t pairs_lost_dead_shard = 0;     // their pairs without a result (this shard's share)
-    // --shard watch: statuses and results of other shards ignored for want of a valid MAC (with
-    // --shard-key: none within a second, a wrong one, or a replayed status), and statuses that
-    // showed one shard index held by two processes (their start times differ while both are
-    // heard). Not in status_t.
+    // --shard watch (status_t has the same meaning): statuses and results of other shards
+    // ignored for want of a valid MAC (with --shard-key: none within a second, a wrong one, or a
+    // replayed status); statuses of a shard index from a process (instance) other than the one
+    // holding it, or from one once heard doing so; results for another shard's pair without a
+    // receipt from the process holding that shard within a second (without a key).
     int64_t shard_messages_refused = 0;
     int64_t shard_index_conflicts = 0;
+    int64_t shard_results_ignored = 0;
     int64_t lidar_received = 0, lidar_malformed = 0, lidar_rejected = 0;
     // LiDAR-frame sweeps whose transform the estimator did not carry (it changed within a
     // pair): moved by the bridge, one float cast (wire.hpp, LidarSweep). Not in status_t.
     int64_t lidar_moved_by_bridge = 0;
     // Frame pairs not computed because the calibration changed between their two frames (the
     // estimator starts over with the new camera). Pairs, not stereo messages: not part of the
-    // accounting identity. Not in status_t (a new field would change the type's fingerprint).
+    // accounting identity.
     int64_t pairs_lost_calibration_change = 0;
     int64_t calibration_received = 0, calibration_malformed = 0;
     int32_t queue_depth = 0, queue_capacity = 0, max_queue_depth = 0;
@@ -149,6 +154,8 @@ public:
     void publish_status_now() { publish_status(); }
 
     Counters counters() const;
+    // This process's status_t.instance_id: random, drawn at create(), never 0. Any thread.
+    int64_t instance_id() const { return instance_id_; }
     // True when no frame is queued or being worked on and no result awaits publication.
     bool idle() const;
 
@@ -167,7 +174,7 @@ private:
     static void on_left(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     static void on_right(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
     void handle_image(int side, const lcm_recv_buf_t *rbuf);
-    void drop_unpaired_locked(int side, const char *why);
+    void count_unpaired_locked(const std::vector<FramePairing::Unpaired> &unpaired);
     void expire_unpaired();
     void accept_locked(std::unique_ptr<Frame> frame);
     void count_transport_gap(int64_t frame_number);
@@ -175,7 +182,6 @@ private:
     void handle_calibration(const lcm_recv_buf_t *rbuf);
     void worker_loop();
     void process(Frame &frame, std::shared_ptr<const LidarSweep> sweep);
-    std::shared_ptr<const LidarSweep> find_lidar_locked(int64_t utime) const;
     void flush_outbox();
     void publish_status();
     void log(const char *format, ...) __attribute__((format(printf, 2, 3)));       // rate-limited
@@ -186,6 +192,7 @@ private:
 
     BridgeConfig config_;
     lcm_t *lcm_;
+    int64_t instance_id_ = 0;
     // log(): per format, lines in the current window and those not shown.
     static constexpr int kLogBurst = 10;
     static constexpr double kLogWindowS = 10.0;
@@ -206,10 +213,7 @@ private:
     mutable std::mutex mutex_;        // everything below
     std::condition_variable cv_;      // queue, LiDAR arrivals, stop
     std::deque<std::unique_ptr<Frame>> queue_;
-    std::deque<std::shared_ptr<const LidarSweep>> lidar_;
-    bool have_calibration_ = false;   // from the channel
-    lf_calibration_t channel_calibration_{};
-    int32_t calibration_width_ = 0, calibration_height_ = 0;
+    FramePairing pairing_;            // camera images, LiDAR sweeps and the channel's calibration
     bool warned_no_calibration_ = false;
     bool have_last_ = false;          // the last accepted frame, for the order check
     bool have_frame_number_ = false;  // the last decodable stereo message, for transport gaps
@@ -218,42 +222,38 @@ private:
     int32_t last_sequence_ = 0;
     int64_t last_utime_ = 0;
     bool stop_worker_ = false;
-    // Images of the left (0) and right (1) channel waiting for their partner, oldest first.
-    struct WaitingImage {
-        int64_t utime;
-        double arrival;
-        std::vector<uint8_t> bytes;
-    };
-    std::deque<WaitingImage> waiting_[2];
     // --shard watch (shard_timeout_ > 0): every other shard's last heartbeat and the t1 times of
     // its pairs for which no result was seen yet (bounded; the newest kept).
     struct ShardWatch {
         double last_heartbeat = 0;
         bool dead = false;
         std::deque<int64_t> pending;
-        bool have_instance = false;   // the start time (utime - uptime) of its latest status
-        double instance_start_us = 0;
+        int64_t holder = 0;             // instance_id of the process holding the index; 0: none yet
+        std::deque<int64_t> rejected;   // instances heard claiming it while another held it
         bool have_status_utime = false;  // --shard-key: the latest authenticated status's utime
         int64_t status_utime = 0;
     };
-    // --shard-key: messages waiting for their MAC, and MACs waiting for their message.
+    // Messages waiting for their MAC (--shard-key) or receipt (results without a key), and
+    // MACs and receipts waiting for their message.
     struct AwaitingMac {
         bool status;                  // else a result
         int32_t shard;
         int64_t utime;                // status_t.utime, or the result's t1 utime
-        double uptime_s;
-        std::vector<uint8_t> mac;     // the expected MAC message
+        int64_t instance;             // status_t.instance_id
+        std::vector<uint8_t> mac;     // the expected MAC message, or receipt with instance 0
         double arrival;
     };
     std::deque<AwaitingMac> awaiting_mac_;
     struct ReceivedMac {
-        std::vector<uint8_t> mac;
+        std::vector<uint8_t> mac;     // a receipt's with its instance set to 0
+        int64_t instance;             // a receipt's sender; 0 for a MAC
         double arrival;
     };
     std::deque<ReceivedMac> received_macs_;
     static void on_mac(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
-    void apply_status_locked(int32_t shard, int64_t utime, double uptime_s);
+    void apply_status_locked(int32_t shard, int64_t utime, int64_t instance);
     void apply_flow_locked(int32_t shard, int64_t utime);
+    void apply_receipt_locked(int32_t shard, int64_t utime, int64_t instance);
     void expire_macs_locked(double now);
     void publish_mac(const std::string &channel, const void *payload, size_t size);
     double shard_timeout_ = 0;
@@ -293,6 +293,13 @@ double monotonic_seconds();
 // shard mac v1\0" index count channel "\0" payload) (32 bytes). Empty when libcrypto fails.
 std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, int32_t count,
                                        const std::string &channel, const void *payload, size_t size);
+// The receipt that follows a shard's result on `channel` without --shard-key: 8 bytes
+// "LFRCP\x01\0\0", shard index and count (int32, big-endian), the publishing process's
+// instance_id (int64, big-endian), and the first 24 bytes of SHA-256(channel "\0" payload).
+// Anyone can make one: it names the process, it does not authenticate it. Empty when libcrypto
+// fails.
+std::vector<uint8_t> shard_receipt_message(int32_t index, int32_t count, int64_t instance, const std::string &channel,
+                                           const void *payload, size_t size);
 // Reads a --shard-key file into *key; "" or what is wrong (missing, shorter than 16 bytes).
 std::string read_shard_key(const std::string &path, std::string *key);
 

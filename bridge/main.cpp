@@ -104,8 +104,9 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
     for (const std::string &line : r.notes) std::fprintf(stderr, "lidarflow-lcm-bridge: note: %s\n", line.c_str());
     for (const std::string &line : r.lost) std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: %s\n", line.c_str());
     if (r.interrupted)
-        std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %lld stereo frame(s) not replayed\n",
-                     (long long)r.stereo_not_replayed);
+        std::fprintf(stderr, "lidarflow-lcm-bridge: LOST: interrupted, %s%lld stereo frame(s) not replayed%s\n",
+                     r.not_replayed_counted ? "" : "at least ", (long long)r.stereo_not_replayed,
+                     r.not_replayed_counted ? "" : " (the rest of the log was not counted: exit within a second)");
     std::fprintf(stderr,
                  "lidarflow-lcm-bridge: replayed %s -> %s in %.1f s: %lld events (stereo %lld, lidar %lld, "
                  "calibration %lld, other channels %lld, left out); stereo processed %lld, dropped %lld, missing "
@@ -395,14 +396,15 @@ int main(int argc, char **argv) {
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
                      "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
                      "shards dead %d, their pairs lost %lld; pairs lost to a calibration change %lld; shard messages "
-                     "refused (no valid MAC) %lld, shard index conflicts %lld\n",
+                     "refused (no valid MAC) %lld, shard index conflicts %lld, shard results ignored %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
                      (long long)c.dropped_stale, (long long)c.dropped_out_of_order, (long long)c.dropped_no_calibration,
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown, (long long)c.dropped_unpaired,
                      (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
                      c.shards_dead, (long long)c.pairs_lost_dead_shard, (long long)c.pairs_lost_calibration_change,
-                     (long long)c.shard_messages_refused, (long long)c.shard_index_conflicts);
+                     (long long)c.shard_messages_refused, (long long)c.shard_index_conflicts,
+                     (long long)c.shard_results_ignored);
     }
     lcm_destroy(lcm);
     return rc;

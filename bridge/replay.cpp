@@ -38,14 +38,22 @@ public:
     }
     void pop() { pending_.pop_front(); }
     // Events on `channel` not yet handed over: the pending ones, then the rest of the log (read
-    // header by header, data left out).
-    int64_t count_rest(const std::string &channel) {
+    // header by header, data left out) until `deadline` [monotonic s]: *complete is false when
+    // the count stopped there (a signal must end the replay within a second, whatever is left).
+    int64_t count_rest(const std::string &channel, double deadline, bool *complete) {
         int64_t n = 0;
         for (const Pending &p : pending_) n += !p.fed && p.event->channel == channel;
         pending_.clear();
         LogEvent e;
-        while (!eof_ && log_->next(&e, [](const std::string &, void *) { return false; }, nullptr))
+        *complete = true;
+        for (int64_t k = 0; !eof_; ++k) {
+            if (k % 256 == 0 && monotonic_seconds() > deadline) {
+                *complete = false;
+                break;
+            }
+            if (!log_->next(&e, [](const std::string &, void *) { return false; }, nullptr)) break;
             n += e.channel == channel;
+        }
         eof_ = true;
         return n;
     }
@@ -296,7 +304,9 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             }
         }
         // Interrupted: the stereo frames not handed over, counted without reading their data.
-        if (interrupted) report->stereo_not_replayed += reader.count_rest(config.stereo_channel);
+        if (interrupted)
+            report->stereo_not_replayed +=
+                reader.count_rest(config.stereo_channel, monotonic_seconds() + 0.3, &report->not_replayed_counted);
         if (bridge) {
             bridge->stop();  // publishes what is left and the final status
             // run_once() is done after stop(); deliver the memq queue to the writers directly.

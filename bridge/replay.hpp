@@ -30,6 +30,7 @@ struct ReplayReport {
     int64_t flows_written = 0, status_written = 0;
     bool interrupted = false;         // `stop` was set
     int64_t stereo_not_replayed = 0;  // left when interrupted
+    bool not_replayed_counted = true; // false: the count stopped short (at least that many)
     int64_t lookahead_cut = 0;        // stereo frames whose LiDAR look-ahead stopped at a bound (notes)
     int64_t lookahead_peak_bytes = 0; // the most data read ahead for one frame
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)

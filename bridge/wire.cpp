@@ -66,9 +66,9 @@ constexpr int kLidarFixed = 141;
 // calibration_t: utime 8, width 4, height 4, 5 doubles = 56.
 constexpr int kCalibrationFixed = 56;
 // status_t: utime 8, uptime 8, 19 int64 counters 152, queue_depth 4, queue_capacity 4, busy 1,
-// shard_index 4, shard_count 4, shards_dead 4, pairs_lost_dead_shard 8, 5 floats 20, length of
-// last_error 4 = 221.
-constexpr int kStatusFixed = 221;
+// shard_index 4, shard_count 4, shards_dead 4, pairs_lost_dead_shard 8, instance_id and 4 int64
+// counters 40, 5 floats 20, length of last_error 4 = 261.
+constexpr int kStatusFixed = 261;
 // scene_flow_t: utime 8, utime0 8, sequence 4, lidar_flags 1, lidar_utime0 8, lidar_utime1 8,
 // last_stage 1, image_width 4, image_height 4, step 1, width 4, height 4, encoding 1, scale 4,
 // compute_seconds 4, plane_size 4, valid_size 4 = 72.

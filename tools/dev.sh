@@ -14,6 +14,9 @@
 #                            on N threads; the log callback replaced while frames run)
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
+#   tools/dev.sh fuzz-python [EXECUTIONS]  the mutation fuzzer of the Python LCM decoders and log
+#                            reader (bindings/python/tests_lcm/fuzz_lcm.py; default 10^6
+#                            executions); fails on a finding, left in build/fuzz-lcm-findings/
 #   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
 #   tools/dev.sh bridge-rate [PRESET] [HZ] [LOOPS]  build, then play the KITTI frames of
 #                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
@@ -194,6 +197,12 @@ case "${1:-}" in
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP
         shift
         fuzz "${1:-60}" "${@:2}" ;;
+    fuzz-python)
+        deps
+        # Debian's python3 (with python3-numpy from deps), not another one first on PATH.
+        py=/usr/bin/python3; [ -x "$py" ] || py=python3
+        PYTHONDONTWRITEBYTECODE=1 "$py" "$root/bindings/python/tests_lcm/fuzz_lcm.py" --executions "${2:-1000000}" \
+            --findings "$root/build/fuzz-lcm-findings" ;;
     package)
         deps
         packages=(lintian); deps  # only this verb checks the packages

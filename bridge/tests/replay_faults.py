@@ -2,8 +2,9 @@
 """lidarflow-lcm-bridge --replay on bad logs and faults (CTest: bridge_replay_faults).
 
 Every log is built here, small (three 160x64 frames), with lidarflow_lcm's writer, then broken
-on purpose: event headers with impossible lengths, garbage in the middle, absurd log times, a
-calibration that changes before every frame, an output that cannot be written. The replay must
+on purpose: event headers with impossible lengths, garbage in the middle, logs cut inside an
+event, absurd log times, a calibration that changes before every frame, an output that cannot
+be written, SIGINT / SIGTERM at several moments. The replay must
 never crash, hang or exit 0 with frames unaccounted for; where it reads events, it reads the
 same ones as lidarflow_lcm's LogReader.
 """
@@ -211,6 +212,87 @@ class ReplayFaults(unittest.TestCase):
             with ll.LogReader(self.out, strict=True) as out:  # whole events only
                 self.assertGreater(sum(1 for _ in out), 0)
 
+    # A signal at several moments: while the replay hands over a long LiDAR prelude (before the
+    # first frame), and at several times into the frames (the replay then waits for the worker's
+    # result of a frame: mid-frame). Each time: exit 3 within a second of the signal, every frame
+    # processed, dropped at the stop or counted as not replayed, and OUT.log whole events only
+    # (strict reading), its last a status.
+    def interrupt(self, log, sig, after_s, frames):
+        args = [BRIDGE, "--replay", log, "--out", self.out] + OPTIONS
+        if os.path.exists(self.out):
+            os.remove(self.out)
+        p = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
+        # From when OUT.log exists: the handlers are set before it is opened (earlier, the
+        # process is still loading and a signal ends it the default way).
+        while not os.path.exists(self.out) and p.poll() is None:
+            time.sleep(0.01)
+        time.sleep(after_s)
+        sent = time.monotonic()
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=30)
+        took = time.monotonic() - sent
+        self.assertEqual(p.returncode, 3, err)
+        self.assertLess(took, 1.0, "%s %.1f s in: exit %.2f s after the signal" % (sig.name, after_s, took))
+        # The count of frames left stops after 0.3 s ("at least"): a long rest of the log must
+        # not hold the exit up.
+        m = re.search(r"LOST: interrupted, (at least )?(\d+) stereo frame\(s\) not replayed", err)
+        self.assertIsNotNone(m, err)
+        sys.stderr.write("%s %.1f s in: exit %.3f s after it; %s\n" % (sig.name, after_s, took, m.group(0)))
+        processed = self.summary(err)[1]
+        dropped = int(re.search(r"stereo processed \d+, dropped (\d+)", err).group(1))
+        if m.group(1):
+            self.assertLessEqual(processed + dropped + int(m.group(2)), frames, err)
+        else:
+            self.assertEqual(processed + dropped + int(m.group(2)), frames, err)
+        with ll.LogReader(self.out, strict=True) as out:
+            events = list(out)
+        self.assertEqual(events[-1].channel, ll.CHANNELS["status"])
+        final = ll.status_t.decode(events[-1].data)
+        self.assertEqual(final.stereo_processed, processed)
+        return processed, took
+
+    def test_signal_before_the_first_frame(self):
+        sweep = ll.lidar_message(np.array([[10, 10, 6], [50, 20, 6]], np.float32), utime=0).encode()
+        events = [(CALIB, calibration(), 0)] + [(LIDAR, sweep, 1 + i) for i in range(200000)]
+        events += [(STEREO, stereo(i), 1000000 + 100000 * i) for i in range(3)]
+        log = self.write("prelude.log", events_bytes(events))
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            processed, _ = self.interrupt(log, sig, 0.5, 3)
+            self.assertEqual(processed, 0)
+
+    def test_signal_mid_frame(self):
+        log = self.write("frames.log", events_bytes(good_events(300)))
+        seen = []
+        for sig, after_s in ((signal.SIGINT, 0.4), (signal.SIGTERM, 0.9), (signal.SIGINT, 1.7), (signal.SIGTERM, 2.6)):
+            seen.append(self.interrupt(log, sig, after_s, 300))
+        self.assertGreater(max(p for p, _ in seen), 0, seen)
+
+    # Logs cut inside their last event (its header, channel name or data), as a crash of the
+    # logger leaves them: the whole events before are replayed, the cut one is a note (exit 0:
+    # no whole event lost), and the Python reader sees the same frames.
+    def test_truncated_logs(self):
+        whole = events_bytes(good_events(3))
+        last = len(events_bytes(good_events(2)))
+        for name, cut in (("header", last + 10), ("channel", last + HEADER.size + 3), ("data", len(whole) - 100)):
+            self.assertLess(last, cut)
+            log = self.write("cut_%s.log" % name, whole[:cut])
+            rc, err = self.replay(log)
+            self.assertEqual(rc, 0, name)
+            self.assertRegex(err, r"note: log: .*(torn tail|\d+ bytes of an event header)", name)
+            self.assertEqual(self.summary(err), (2, 2), name)
+            self.assertEqual(self.python_stereo_events(log), 2, name)
+            with ll.LogReader(self.out, strict=True) as out:
+                self.assertGreater(sum(1 for e in out if e.channel == ll.CHANNELS["flow"]), 0, name)
+
+    # An output the kernel refuses even to root: exit 1 with the reason, no output written.
+    def test_unwritable_output(self):
+        if not os.path.exists("/proc/version"):
+            self.skipTest("no /proc")
+        log = self.write("in.log", events_bytes(good_events(1)))
+        rc, err = self.replay(log, out="/proc/version")
+        self.assertEqual(rc, 1)
+        self.assertIn("/proc/version", err)
+
     # A calibration that changes before every frame: no pair can be computed; each one lost is
     # counted and listed (it used to be exit 0 with 0 results and no word).
     def test_calibration_change_breaks_pairs(self):
@@ -227,6 +309,9 @@ class ReplayFaults(unittest.TestCase):
                                   r"result, the calibration changed" % frame_number)
         self.assertIn("0 results", err)
         self.assertIn("pairs lost to a calibration change 2", err)
+        with ll.LogReader(self.out) as out:  # and in status_t
+            status = [ll.status_t.decode(e.data) for e in out if e.channel == ll.CHANNELS["status"]]
+        self.assertEqual(status[-1].pairs_lost_calibration_change, 2)
 
     # A flood of bad messages is not a flood of lines: 10 per kind and 10 s, then a count.
     def test_log_lines_rate_limited(self):

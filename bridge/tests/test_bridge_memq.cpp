@@ -430,15 +430,42 @@ void test_lidar_transform_change_within_pair(void **) {
     assert_accounted(rig.bridge->counters());
 }
 
-// A heartbeat of shard k/n on the status channel.
-void send_shard_status(Rig &rig, int32_t k, int32_t n) {
+// The instance_id of the process playing shard k in these tests.
+int64_t shard_instance(int32_t k) { return 0x5eed0000 + k; }
+
+// A heartbeat of shard k/n on the status channel, from `instance` (default: shard k's).
+void send_shard_status(Rig &rig, int32_t k, int32_t n, int64_t instance = 0) {
     lidarflow_status_t st;
     std::memset(&st, 0, sizeof st);
     st.shard_index = k;
     st.shard_count = n;
+    st.instance_id = instance ? instance : shard_instance(k);
     char empty[] = "";
     st.last_error = empty;
     assert_int_equal(lidarflow_status_t_publish(rig.lcm, "LIDARFLOW_STATUS", &st), 0);
+}
+
+// A result naming pair t1 `utime` (only utime is read; the planes are empty) on the flow
+// channel, followed by the receipt of shard `receipt_shard`/3 from `instance` (none when
+// receipt_shard < 0). Returns the result's bytes.
+std::vector<uint8_t> send_flow(Rig &rig, int64_t utime, int32_t receipt_shard, int64_t instance) {
+    lidarflow_scene_flow_t flow;
+    std::memset(&flow, 0, sizeof flow);
+    flow.utime = utime;
+    flow.step = 1;
+    // Empty planes still need valid pointers: lcm-gen's encoder memcpy()s 0 bytes from them, and
+    // memcpy from NULL is undefined (UBSan stops there).
+    uint8_t no_bytes[1] = {0};
+    flow.u = flow.v = flow.d0 = flow.d1 = flow.valid = no_bytes;
+    std::vector<uint8_t> b(static_cast<size_t>(lidarflow_scene_flow_t_encoded_size(&flow)));
+    assert_int_equal(lidarflow_scene_flow_t_encode(b.data(), 0, (int)b.size(), &flow), (int)b.size());
+    assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_FLOW", b.data(), (unsigned)b.size()), 0);
+    if (receipt_shard >= 0) {
+        const std::vector<uint8_t> r = shard_receipt_message(receipt_shard, 3, instance, "LIDARFLOW_FLOW", b.data(), b.size());
+        assert_int_equal(r.size(), 48);
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", r.data(), (unsigned)r.size()), 0);
+    }
+    return b;
 }
 
 // Runs the bridge for `seconds`, shard 1 of 3 sending heartbeats if asked.
@@ -471,15 +498,7 @@ void test_dead_shards(void **) {
         rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
     };
     for (int64_t n = 0; n <= 5; ++n) frame(n);  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
-    lidarflow_scene_flow_t flow;  // shard 2's result of pair 4 -> 5 (only utime is read)
-    std::memset(&flow, 0, sizeof flow);
-    flow.utime = 5000;
-    flow.step = 1;
-    // Empty planes still need valid pointers: lcm-gen's encoder memcpy()s 0 bytes from them, and
-    // memcpy from NULL is undefined (UBSan stops there).
-    uint8_t no_bytes[1] = {0};
-    flow.u = flow.v = flow.d0 = flow.d1 = flow.valid = no_bytes;
-    assert_int_equal(lidarflow_scene_flow_t_publish(rig.lcm, "LIDARFLOW_FLOW", &flow), 0);
+    send_flow(rig, 5000, 2, shard_instance(2));  // shard 2's result of pair 4 -> 5, with its receipt
     send_shard_status(rig, 1, 2);  // another split: ignored
     shard2_alive = false;
     run_for(rig, 0.5, true);
@@ -516,15 +535,29 @@ void test_dead_shards(void **) {
     assert_int_equal(c.stereo_received, c.stereo_processed + c.dropped() + c.skipped_other_shard);
 }
 
+// The latest status this bridge (shard 0/3) published, after stop().
+StatusMessage own_final_status(Rig &rig) {
+    while (lcm_handle_timeout(rig.lcm, 50) > 0) {
+    }
+    StatusMessage last, st;
+    for (const auto &b : rig.statuses)
+        if (decode_status(b.data(), b.size(), st).empty() && st.fields.instance_id == rig.bridge->instance_id())
+            last = st;
+    assert_int_equal(last.fields.instance_id, rig.bridge->instance_id());
+    return last;
+}
+
 // A status of shard k/n with the given utime and uptime, followed by its MAC message under
 // `key` when one is given ("" = none).
-std::vector<uint8_t> keyed_status(Rig &rig, int32_t k, int32_t n, int64_t utime, double uptime, const std::string &key) {
+std::vector<uint8_t> keyed_status(Rig &rig, int32_t k, int32_t n, int64_t utime, double uptime, const std::string &key,
+                                  int64_t instance = 0) {
     lidarflow_status_t st;
     std::memset(&st, 0, sizeof st);
     st.utime = utime;
     st.uptime_seconds = uptime;
     st.shard_index = k;
     st.shard_count = n;
+    st.instance_id = instance ? instance : shard_instance(k);
     char empty[] = "";
     st.last_error = empty;
     std::vector<uint8_t> b(static_cast<size_t>(lidarflow_status_t_encoded_size(&st)));
@@ -621,10 +654,13 @@ void test_keyed_shards(void **) {
         own += std::find(macs.begin(), macs.end(), want) != macs.end();
     }
     assert_true(own >= 5);
+    const StatusMessage last = own_final_status(rig);
+    assert_int_equal(last.fields.shard_messages_refused, rig.bridge->counters().shard_messages_refused);
 }
 
-// Without a key: statuses of one shard index from two processes (different start times, both
-// heard) are counted as a conflict.
+// Without a key: statuses of one shard index from two processes (two instance_ids, one start
+// time: the instance tells them apart, not the clock) are counted as a conflict, every one after
+// the first process's; so is another process claiming this bridge's own index.
 void test_shard_index_claimed_twice(void **) {
     BridgeConfig config;
     config.shard_index = 0;
@@ -633,15 +669,123 @@ void test_shard_index_claimed_twice(void **) {
     config.shard_timeout_s = 1;
     Rig rig(config, true);
     for (int i = 0; i < 4; ++i) {
-        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 5.0 + 0.1 * i, "");  // started at 5 s
-        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 1.0 + 0.1 * i, "");  // started at 9 s
-        keyed_status(rig, 2, 3, 10000000 + 100000 * i, 3.0 + 0.1 * i, "");  // one process
+        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 5.0 + 0.1 * i, "");               // holds index 1
+        keyed_status(rig, 1, 3, 10000000 + 100000 * i, 5.0 + 0.1 * i, "", 0x7777);       // a second process
+        keyed_status(rig, 2, 3, 10000000 + 100000 * i, 3.0 + 0.1 * i, "");               // one process
         for (int k = 0; k < 5; ++k) rig.bridge->run_once(5);
     }
+    keyed_status(rig, 0, 3, 10500000, 1.0, "", 0x7778);  // this bridge's index, another process
+    for (int k = 0; k < 5; ++k) rig.bridge->run_once(5);
     const Counters c = rig.bridge->counters();
-    assert_int_equal(c.shard_index_conflicts, 7);
+    assert_int_equal(c.shard_index_conflicts, 5);
     assert_int_equal(c.shards_dead, 0);
     assert_int_equal(c.shard_messages_refused, 0);
+    assert_int_not_equal(rig.bridge->instance_id(), 0);
+}
+
+// Without a key, shard 2 dies while a forger keeps publishing statuses as shard 2 (with its own
+// instance_id, and the dead shard's start time) faster than the timeout. The forger started
+// while shard 2 lived, so its statuses are conflicts and never keep the index alive: shard 2 is
+// declared dead and its pairs counted as lost, here and in status_t.
+void test_forged_status_keeps_no_shard_alive(void **) {
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 1.0;  // heartbeats every ~50 ms: room for a loaded machine
+    Rig rig(config);  // no calibration: the frames are dropped, the pairs still watched
+    bool shard2_alive = true;
+    auto beat = [&] {
+        send_shard_status(rig, 1, 3);
+        if (shard2_alive) send_shard_status(rig, 2, 3);
+    };
+    for (int64_t n = 0; n <= 5; ++n) {  // pairs ending at 2 and 5 are shard 2's
+        beat();
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    }
+    const int64_t forger = 0x0f0f0f0f;
+    auto run = [&](double seconds) {
+        const double end = monotonic_seconds() + seconds;
+        while (monotonic_seconds() < end) {
+            beat();
+            send_shard_status(rig, 2, 3, forger);
+            for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+        }
+    };
+    run(0.3);  // the forger beside the live shard 2
+    Counters c = rig.bridge->counters();
+    assert_true(c.shard_index_conflicts >= 1);
+    assert_int_equal(c.shards_dead, 0);
+    shard2_alive = false;
+    run(1.8);  // shard 2 killed; the forger goes on
+    c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);
+    assert_int_equal(c.pairs_lost_dead_shard, 2);  // 1 -> 2, 4 -> 5
+    for (int64_t n = 6; n <= 8; ++n) {            // 7 -> 8: shard 2's, lost as it happens
+        beat();
+        send_shard_status(rig, 2, 3, forger);
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    }
+    c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);
+    assert_int_equal(c.pairs_lost_dead_shard, 3);
+    rig.bridge->stop();
+    const StatusMessage last = own_final_status(rig);
+    assert_int_equal(last.fields.shards_dead, 1);
+    assert_int_equal(last.fields.pairs_lost_dead_shard, 3);
+    assert_int_equal(last.fields.shard_index_conflicts, rig.bridge->counters().shard_index_conflicts);
+    assert_true(last.fields.shard_index_conflicts >= 10);
+}
+
+// Without a key, results settle another shard's pair only with a receipt from the process that
+// holds the owning shard: a forged all-invalid result with a pair's utime (no receipt, a receipt
+// from another process, or one naming another shard) leaves the pair pending, counted in
+// shard_results_ignored, and lost when its shard dies.
+void test_forged_result_settles_nothing(void **) {
+    BridgeConfig config;
+    config.shard_index = 0;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = 0.05;
+    config.shard_timeout_s = 1.0;  // heartbeats every ~50 ms: room for a loaded machine
+    Rig rig(config);
+    bool shard1_alive = true, shard2_alive = true;
+    auto beat = [&] {
+        if (shard1_alive) send_shard_status(rig, 1, 3);
+        if (shard2_alive) send_shard_status(rig, 2, 3);
+    };
+    for (int64_t n = 0; n <= 5; ++n) {  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
+        beat();
+        rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 1000 * n, 0, n));
+    }
+    send_flow(rig, 5000, -1, 0);                      // shard 2's pair, no receipt
+    send_flow(rig, 2000, 2, 0x0f0f0f0f);              // shard 2's pair, a receipt from another process
+    send_flow(rig, 1000, 2, shard_instance(2));       // shard 1's pair, shard 2's receipt
+    send_flow(rig, 4000, 1, shard_instance(1));       // shard 1's pair from shard 1: settled
+    auto run = [&](double seconds) {
+        const double end = monotonic_seconds() + seconds;
+        while (monotonic_seconds() < end) {
+            beat();
+            for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
+        }
+    };
+    shard2_alive = false;
+    run(1.8);  // past the timeout and the second a result waits for its receipt
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);
+    assert_int_equal(c.pairs_lost_dead_shard, 2);  // 1 -> 2, 4 -> 5: the forged results settled nothing
+    assert_int_equal(c.shard_results_ignored, 3);
+    shard1_alive = false;
+    run(1.5);
+    c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 2);
+    assert_int_equal(c.pairs_lost_dead_shard, 3);  // + 0 -> 1; 3 -> 4 had shard 1's result
+    rig.bridge->stop();
+    const StatusMessage last = own_final_status(rig);
+    assert_int_equal(last.fields.shard_results_ignored, 3);
+    assert_int_equal(last.fields.pairs_lost_dead_shard, 3);
+    assert_int_equal(last.fields.shard_messages_refused, 0);
 }
 
 // A gray bot_core.image_t of the scene (a camera per channel).
@@ -1169,6 +1313,8 @@ int main(void) {
         cmocka_unit_test(test_dead_shards),
         cmocka_unit_test(test_keyed_shards),
         cmocka_unit_test(test_shard_index_claimed_twice),
+        cmocka_unit_test(test_forged_status_keeps_no_shard_alive),
+        cmocka_unit_test(test_forged_result_settles_nothing),
         cmocka_unit_test(test_left_right_channels),
         cmocka_unit_test(test_missing_lidar_stream),
         cmocka_unit_test(test_malformed_messages),

@@ -84,6 +84,7 @@ std::vector<uint8_t> status(int32_t string_length, const std::string &text) {
     w.i64(__lidarflow_status_t_get_hash()).i64(11).f64(2.5);
     for (int i = 0; i < 19; ++i) w.i64(100 + i);
     w.i32(3).i32(4).i8(1).i32(2).i32(3).i32(1).i64(7);
+    w.i64(-5).i64(21).i64(22).i64(23).i64(24);  // instance_id, the shard watch's and calibration counters
     for (int i = 0; i < 5; ++i) w.f32(1.5f * i);
     w.i32(string_length);
     w.b.insert(w.b.end(), text.begin(), text.end());
@@ -225,6 +226,11 @@ void test_status_string(void **) {
     assert_int_equal(s.fields.shard_count, 3);
     assert_int_equal(s.fields.shards_dead, 1);
     assert_int_equal(s.fields.pairs_lost_dead_shard, 7);
+    assert_int_equal(s.fields.instance_id, -5);
+    assert_int_equal(s.fields.shard_index_conflicts, 21);
+    assert_int_equal(s.fields.shard_results_ignored, 22);
+    assert_int_equal(s.fields.shard_messages_refused, 23);
+    assert_int_equal(s.fields.pairs_lost_calibration_change, 24);
     assert_true(s.fields.compute_mean_ms == 6.0f);
     assert_null(s.fields.last_error);
 

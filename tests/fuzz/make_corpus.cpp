@@ -20,6 +20,7 @@
 #include "io/calib.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
+#include "io/result_formats.hpp"
 #include "io/velodyne.hpp"
 #include "log_reader.hpp"
 #include "wire.hpp"
@@ -271,6 +272,40 @@ void ply_seeds() {
     points[1].object_motion = cv::Vec3f(0, 0, 0.8f);
     io::write_ply(tmp.string(), points);
     save("fuzz_io_ply", "two_points_object_motion", file_bytes(tmp));
+    fs::remove(tmp);
+}
+
+// The float result files `lidarflow run --format pfm|npy|flo` writes and `viz` reads, 3x2 px,
+// each behind the byte that makes fuzz_io_result_files pick its reader (0 pfm, 1 npy, 2 flo).
+void result_file_seeds() {
+    const fs::path tmp = fs::temp_directory_path() / "lidarflow_make_corpus.result";
+    auto seed = [&](uint8_t reader, const std::string &name) {
+        std::vector<uint8_t> b = file_bytes(tmp);
+        b.insert(b.begin(), reader);
+        save("fuzz_io_result_files", name, b);
+    };
+    cv::Mat1f disp(2, 3);
+    cv::Mat3f flow(2, 3);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 3; ++x) {
+            disp(y, x) = x == 1 && y == 0 ? std::nanf("") : 10.5f + x - y;
+            flow(y, x) = cv::Vec3f(1.25f * x, -0.5f * y, 1);
+        }
+    io::write_pfm(tmp.string(), disp);
+    seed(0, "disparity_pfm");
+    io::write_pfm(tmp.string(), flow);
+    seed(0, "flow_pfm");
+    io::write_npy(tmp.string(), disp);
+    seed(1, "disparity_npy");
+    io::write_npy(tmp.string(), flow);
+    seed(1, "flow_npy");
+    FlowField f = FlowField::zeros(3, 2);
+    f.u(0, 0) = 2.5f;
+    f.valid(0, 0) = 1;
+    f.v(1, 2) = -1;
+    f.valid(1, 2) = 1;
+    io::write_flo(tmp.string(), f);
+    seed(2, "flow_flo");
     fs::remove(tmp);
 }
 
@@ -540,6 +575,7 @@ int main(int argc, char **argv) {
         lcm_seeds();
         kitti_seeds();
         ply_seeds();
+        result_file_seeds();
         capi_seeds();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "make_corpus: %s\n", e.what());

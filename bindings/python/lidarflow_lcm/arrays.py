@@ -43,8 +43,9 @@ def flow_arrays(msg):
         raw = bytes(getattr(msg, name))
         if msg.encoding == scene_flow_t.ENCODING_FLOAT32:
             plane = np.frombuffer(raw, "<f4").astype(np.float32)
-        else:  # float32 product, as the bridge's own decoder computes it
-            plane = np.frombuffer(raw, "<i2").astype(np.float32) * np.float32(msg.scale)
+        else:  # float32 product, as the bridge's own decoder computes it (inf past float's range)
+            with np.errstate(over="ignore"):
+                plane = np.frombuffer(raw, "<i2").astype(np.float32) * np.float32(msg.scale)
         plane = plane.reshape(shape)
         plane[~valid] = np.nan
         out[name] = plane

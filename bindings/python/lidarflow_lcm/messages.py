@@ -307,7 +307,8 @@ class lidar_t(_Message):
         n = min(a.size for a in xyz) if all(a.ndim == 1 for a in xyz) else 0
         if n == 0:
             return
-        p = np.stack([a[:n].astype(np.float64) for a in xyz], axis=1)
+        with np.errstate(invalid="ignore"):  # a signalling NaN warns in the cast; it is refused below
+            p = np.stack([a[:n].astype(np.float64) for a in xyz], axis=1)
         bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
         if bad.size:
             _fail(t, "point %d is not finite", bad[0])
@@ -404,6 +405,9 @@ class status_t(_Message):
                     + [("queue_depth", "int32_t", None), ("queue_capacity", "int32_t", None), ("busy", "int8_t", None),
                        ("shard_index", "int32_t", None), ("shard_count", "int32_t", None),
                        ("shards_dead", "int32_t", None), ("pairs_lost_dead_shard", "int64_t", None)]
+                    + [(name, "int64_t", None) for name in (
+                        "instance_id", "shard_index_conflicts", "shard_results_ignored", "shard_messages_refused",
+                        "pairs_lost_calibration_change")]
                     + [(name, "float", None) for name in (
                         "latency_last_ms", "latency_mean_ms", "latency_max_ms", "compute_last_ms", "compute_mean_ms")]
                     + [("last_error", "string", None)])

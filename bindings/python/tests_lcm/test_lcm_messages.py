@@ -10,6 +10,7 @@ import subprocess
 import sys
 import tempfile
 import unittest
+import warnings
 
 import numpy as np
 
@@ -298,6 +299,17 @@ class Malformed(unittest.TestCase):
         with self.assertRaisesRegex(ll.MessageError, "not NUL-terminated"):
             ll.status_t.decode(bytes(raw))
 
+    # A signalling NaN among the points is refused without a numpy RuntimeWarning on the way
+    # (found by fuzz_lcm.py, which takes any warning for a finding).
+    def test_signalling_nan_point_refused_without_warning(self):
+        raw = bytearray(ll.lidar_message(np.array([[1, 2, 3]], np.float32), utime=1).encode())
+        at = bytes(raw).find(bytes.fromhex("3f800000"))  # x = 1.0f, big-endian
+        raw[at:at + 4] = bytes.fromhex("7f800001")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with self.assertRaisesRegex(ll.MessageError, "point 0 is not finite"):
+                ll.decode(bytes(raw))
+
     def test_random_corruption_is_an_error_or_a_faithful_message(self):
         # Flipped bytes either fail with MessageError or give a message that encodes back to
         # exactly the corrupted bytes (the corruption hit a value, not the structure).
@@ -360,6 +372,16 @@ class FlowArrays(unittest.TestCase):
         self.assertLessEqual(np.abs(a["d1"] - d1[::2, ::2]).max(), 1 / 128)
         xs, ys = ll.pixel_grid(m)
         self.assertEqual((xs[3, 5], ys[3, 5]), (10, 6))
+
+    # A huge int16 scale overflows float32 to inf, as in the bridge's decoder, without numpy's
+    # RuntimeWarning (found by fuzz_lcm.py).
+    def test_int16_scale_overflow_is_inf_without_warning(self):
+        m = ll.scene_flow_message(*([np.full((1, 2), 3.0, np.float32)] * 4), np.ones((1, 2), bool), encoding="int16")
+        m.scale = 1e38
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            a = ll.flow_arrays(ll.scene_flow_t.decode(m.encode()))
+        self.assertTrue(np.all(np.isinf(a["u"])))
 
     def test_inconsistent_message_refused(self):
         m = ll.scene_flow_message(*self.planes())

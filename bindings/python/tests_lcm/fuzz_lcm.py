@@ -64,6 +64,10 @@ def message_seeds():
         ll.status_t(utime=99, uptime_seconds=1.5, stereo_received=3, shard_index=1, shard_count=3,
                     instance_id=-12345, shard_results_ignored=2, latency_mean_ms=float("nan"), last_error="bad frame"),
         ll.status_t(),
+        ll.ego_motion_t(utime=200, utime0=100, sequence=1, state=ll.ego_motion_t.STATE_OK, inliers=900, candidates=1000,
+                        transform=[0.6, -0.8, 0, 0.1, 0.8, 0.6, 0, -0.2, 0, 0, 1, -0.9, 0, 0, 0, 1]),
+        ll.ego_motion_t(utime=300, utime0=200, state=ll.ego_motion_t.STATE_NOT_RUN,
+                        transform=[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]),
     ]
     u = rng.normal(0, 3, (4, 6)).astype(np.float32)
     valid = rng.random((4, 6)) > 0.3

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <initializer_list>
+#include <tuple>
 #include <vector>
 
 #include "core/points3d.hpp"
@@ -60,6 +62,28 @@ void write_struct(T *dst, const T &src) {
     T tmp = src;
     tmp.struct_size = dst->struct_size;
     std::memcpy(dst, &tmp, sizeof(T));
+}
+
+// The per-pixel walk of lf_get_points3d and lf_get_object_motion: each pixel's triangulated
+// scene point (ok = false where there is none) goes to `pixel(x, q, ok)`, which fills row
+// buffers; `planes` (caller plane, row buffer, bytes per row) are copied out row by row.
+template <typename PerPixel>
+void walk_points(const Result &r, const lidarflow::StereoCamera &cam,
+                 std::initializer_list<std::tuple<const lf_plane_t *, const void *, size_t>> planes, PerPixel pixel) {
+    const int w = r.field.u.cols, h = r.field.u.rows;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            lidarflow::ScenePoint3 q;
+            const bool ok = r.field.valid(y, x) &&
+                            lidarflow::triangulate_scene_flow(cam, x, y, r.field.u(y, x), r.field.v(y, x),
+                                                              r.field.d0(y, x), r.field.d1(y, x), &q);
+            pixel(x, q, ok);
+        }
+        for (const auto &[plane, row, bytes] : planes)
+            if (plane->data)
+                std::memcpy(static_cast<unsigned char *>(plane->data) + static_cast<uint64_t>(y) * plane->stride_bytes,
+                            row, bytes);
+    }
 }
 
 }  // namespace
@@ -155,37 +179,28 @@ LF_API int32_t lf_get_points3d(lf_estimator_t *estimator, const lf_points3d_buff
         check_plane(b.motion, b.width, 3 * sizeof(float), "motion");
         check_plane(b.valid, b.width, 1, "valid");
 
-        const lidarflow::StereoCamera &cam = estimator->calibration.camera;
-        const int w = r.field.u.cols, h = r.field.u.rows;
+        const size_t w = static_cast<size_t>(r.field.u.cols);
         const float nan = std::numeric_limits<float>::quiet_NaN();
-        std::vector<float> points(3 * static_cast<size_t>(w)), motion(points.size());
-        std::vector<unsigned char> valid(static_cast<size_t>(w));
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                lidarflow::ScenePoint3 q;
-                const bool ok = r.field.valid(y, x) &&
-                                lidarflow::triangulate_scene_flow(cam, x, y, r.field.u(y, x), r.field.v(y, x),
-                                                                  r.field.d0(y, x), r.field.d1(y, x), &q);
-                valid[x] = ok ? 1 : 0;
-                float *p = &points[3 * x], *m = &motion[3 * x];
-                if (!ok) {
-                    p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
-                    continue;
-                }
-                p[0] = static_cast<float>(q.x);
-                p[1] = static_cast<float>(q.y);
-                p[2] = static_cast<float>(q.z);
-                m[0] = static_cast<float>(q.dx);
-                m[1] = static_cast<float>(q.dy);
-                m[2] = static_cast<float>(q.dz);
-            }
-            auto row = [&](const lf_plane_t &pl) {
-                return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;
-            };
-            if (b.points.data) std::memcpy(row(b.points), points.data(), points.size() * sizeof(float));
-            if (b.motion.data) std::memcpy(row(b.motion), motion.data(), motion.size() * sizeof(float));
-            if (b.valid.data) std::memcpy(row(b.valid), valid.data(), valid.size());
-        }
+        std::vector<float> points(3 * w), motion(3 * w);
+        std::vector<unsigned char> valid(w);
+        walk_points(r, estimator->calibration.camera,
+                    {{&b.points, points.data(), points.size() * sizeof(float)},
+                     {&b.motion, motion.data(), motion.size() * sizeof(float)},
+                     {&b.valid, valid.data(), valid.size()}},
+                    [&](int x, const lidarflow::ScenePoint3 &q, bool ok) {
+                        valid[x] = ok ? 1 : 0;
+                        float *p = &points[3 * x], *m = &motion[3 * x];
+                        if (!ok) {
+                            p[0] = p[1] = p[2] = m[0] = m[1] = m[2] = nan;
+                            return;
+                        }
+                        p[0] = static_cast<float>(q.x);
+                        p[1] = static_cast<float>(q.y);
+                        p[2] = static_cast<float>(q.z);
+                        m[0] = static_cast<float>(q.dx);
+                        m[1] = static_cast<float>(q.dy);
+                        m[2] = static_cast<float>(q.dz);
+                    });
         return static_cast<int32_t>(LF_OK);
     });
 }
@@ -225,32 +240,22 @@ LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_m
         require(r.ego_state == lidarflow::pipeline::EgoState::Ok, ErrorCode::BadState,
                 std::string("no object motion: the ego-motion is ") + lidarflow::pipeline::ego_state_text(r.ego_state));
 
-        const lidarflow::StereoCamera &cam = estimator->calibration.camera;
-        const int w = r.field.u.cols, h = r.field.u.rows;
+        const size_t w = static_cast<size_t>(r.field.u.cols);
         const float nan = std::numeric_limits<float>::quiet_NaN();
-        std::vector<float> motion(3 * static_cast<size_t>(w));
-        std::vector<unsigned char> valid(static_cast<size_t>(w));
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                lidarflow::ScenePoint3 q;
-                double m[3] = {0, 0, 0};
-                const bool ok = r.field.valid(y, x) &&
-                                lidarflow::triangulate_scene_flow(cam, x, y, r.field.u(y, x), r.field.v(y, x),
-                                                                  r.field.d0(y, x), r.field.d1(y, x), &q);
-                if (ok) lidarflow::object_motion(q, r.ego.R, r.ego.t, m);
-                // Same validity as lf_get_points3d: every written value fits a float.
-                const bool fits = ok && std::fabs(m[0]) <= std::numeric_limits<float>::max() &&
-                                  std::fabs(m[1]) <= std::numeric_limits<float>::max() &&
-                                  std::fabs(m[2]) <= std::numeric_limits<float>::max();
-                valid[x] = fits ? 1 : 0;
-                for (int c = 0; c < 3; ++c) motion[3 * x + c] = fits ? static_cast<float>(m[c]) : nan;
-            }
-            auto row = [&](const lf_plane_t &pl) {
-                return static_cast<unsigned char *>(pl.data) + static_cast<uint64_t>(y) * pl.stride_bytes;
-            };
-            if (b.motion.data) std::memcpy(row(b.motion), motion.data(), motion.size() * sizeof(float));
-            if (b.valid.data) std::memcpy(row(b.valid), valid.data(), valid.size());
-        }
+        std::vector<float> motion(3 * w);
+        std::vector<unsigned char> valid(w);
+        walk_points(r, estimator->calibration.camera,
+                    {{&b.motion, motion.data(), motion.size() * sizeof(float)}, {&b.valid, valid.data(), valid.size()}},
+                    [&](int x, const lidarflow::ScenePoint3 &q, bool ok) {
+                        double m[3] = {0, 0, 0};
+                        if (ok) lidarflow::object_motion(q, r.ego.R, r.ego.t, m);
+                        // Same validity as lf_get_points3d: every written value fits a float.
+                        const bool fits = ok && std::fabs(m[0]) <= std::numeric_limits<float>::max() &&
+                                          std::fabs(m[1]) <= std::numeric_limits<float>::max() &&
+                                          std::fabs(m[2]) <= std::numeric_limits<float>::max();
+                        valid[x] = fits ? 1 : 0;
+                        for (int c = 0; c < 3; ++c) motion[3 * x + c] = fits ? static_cast<float>(m[c]) : nan;
+                    });
         return static_cast<int32_t>(LF_OK);
     });
 }

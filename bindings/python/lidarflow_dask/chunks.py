@@ -109,11 +109,15 @@ def chunk_log_path(chunk):
 
 
 def write_atomically(path, data):
-    """Writes `data` (bytes) to a unique temporary name beside `path`, syncs, renames it over."""
+    """Writes `data` (bytes, or a function that writes to the binary file it is given) to a
+    unique temporary name beside `path`, syncs, renames it over `path`."""
     tmp = "%s.tmp.%s.%d.%s" % (path, socket.gethostname(), os.getpid(), uuid.uuid4().hex[:8])
     try:
         with open(tmp, "wb") as f:
-            f.write(data)
+            if callable(data):
+                data(f)
+            else:
+                f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)

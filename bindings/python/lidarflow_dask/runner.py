@@ -147,28 +147,24 @@ def prepare(sources, settings):
 def merge(source, out):
     """Concatenates a log source's chunk logs in chunk order into OUT/<name>.log (atomically):
     the scene_flow_t results and their ego_motion_t with their log times, renumbered. The chunks'
-    status messages are left out: their counters are a chunk's, not the log's. Returns (results, chunks missing)."""
-    path = source.result_log(out)
-    tmp = "%s.tmp.%d" % (path, os.getpid())
+    status messages are left out: their counters are a chunk's, not the log's. Returns (results,
+    chunks missing)."""
     results, missing = 0, []
-    try:
-        with open(tmp, "wb") as f:
-            w = LogWriter(f)
-            for c in source.chunks:
-                log = ch.chunk_log_path(c)
-                if not os.path.exists(log):
-                    missing.append(c)
-                    continue
-                with LogReader(log, channels=(ch.FLOW_CHANNEL, ch.EGO_CHANNEL), strict=True) as r:
-                    for e in r:
-                        w.write(e.channel, e.data, e.utime)
-                        results += e.channel == ch.FLOW_CHANNEL
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+
+    def fill(f):
+        nonlocal results
+        w = LogWriter(f)
+        for c in source.chunks:
+            log = ch.chunk_log_path(c)
+            if not os.path.exists(log):
+                missing.append(c)
+                continue
+            with LogReader(log, channels=(ch.FLOW_CHANNEL, ch.EGO_CHANNEL), strict=True) as r:
+                for e in r:
+                    w.write(e.channel, e.data, e.utime)
+                    results += e.channel == ch.FLOW_CHANNEL
+
+    ch.write_atomically(source.result_log(out), fill)
     return results, missing
 
 

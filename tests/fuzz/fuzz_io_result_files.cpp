@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // The float result-file readers of `lidarflow viz` (src/io/result_formats.cpp: .pfm, .npy, .flo)
 // on any file. The first input byte picks the reader (its extension), the rest is the file. Each
-// reader either throws lidarflow::Error or returns a map of the float layout it documents whose
-// values fill exactly the bytes after the header: never more than the file holds.
+// reader either throws lidarflow::Error or returns a map of a layout it documents (float32 with 1
+// to 3 channels; .npy also uint8 with one, the validity files) whose values fill the bytes after
+// the header: never more than the file holds.
 #include <cstdint>
 #include <cstdlib>
 #include <string>
@@ -36,9 +37,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         } else {
             const cv::Mat m = which == 0 ? lidarflow::io::read_pfm(path) : lidarflow::io::read_npy(path);
             const int c = m.channels();
-            if (m.depth() != CV_32F || (which == 0 && c != 1 && c != 3) || (which == 1 && (c < 1 || c > 3)))
+            const bool npy_validity = which == 1 && m.depth() == CV_8U && c == 1;
+            if (!npy_validity &&
+                (m.depth() != CV_32F || (which == 0 && c != 1 && c != 3) || (which == 1 && (c < 1 || c > 3))))
                 std::abort();
-            check_fits(m.total() * static_cast<size_t>(c) * 4, file_size);
+            check_fits(m.total() * m.elemSize(), file_size);
         }
     } catch (const lidarflow::Error &) {
     }

@@ -118,7 +118,7 @@ def prepare(sources, settings):
             raise SourceError("%s and %s would both write %s/%s: give sources distinct names"
                               % (names[s.name], s.path, settings.out, s.name))
         names[s.name] = s.path
-    todo, done_pairs = [], 0
+    pending, done_pairs = [], 0
     for s in sources:
         d = ch.state_dir(settings.out, s.name)
         os.makedirs(d, exist_ok=True)
@@ -140,8 +140,8 @@ def prepare(sources, settings):
                 with open(ch.marker_path(c)) as f:
                     done_pairs += json.load(f)["pairs"]
             else:
-                todo.append(c)
-    return todo, done_pairs
+                pending.append(c)
+    return pending, done_pairs
 
 
 def merge(source, out):
@@ -193,17 +193,17 @@ class Report:
         self.add({"chunk": chunk, "host": "?", "rc": -1, "pairs": 0, "seconds": 0.0, "message": why})
 
 
-def run_serial(todo, report):
-    for c in todo:
+def run_serial(pending, report):
+    for c in pending:
         report.add(ch.run_chunk(c))
 
 
-def run_dask(todo, report, client, progress_bar):
+def run_dask(pending, report, client, progress_bar):
     from distributed import as_completed, progress
     # pure=False: a rerun after a failure is a new task, not the cached failed one.
-    futures = client.map(ch.run_chunk, todo, pure=False, key=["lidarflow-%s-%s" % (c["name"], ch.chunk_key(c))
-                                                              for c in todo])
-    chunk_of = {f.key: c for f, c in zip(futures, todo)}
+    futures = client.map(ch.run_chunk, pending, pure=False, key=["lidarflow-%s-%s" % (c["name"], ch.chunk_key(c))
+                                                              for c in pending])
+    chunk_of = {f.key: c for f, c in zip(futures, pending)}
     if progress_bar:
         progress(futures)
         print(file=report.stream)
@@ -232,7 +232,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
     the LCM sources' result logs. Returns (exit status, summary dict); prints the summary."""
     t0 = time.monotonic()
     sources = [Source(p, settings) for p in source_paths]
-    todo, done_before = prepare(sources, settings)
+    pending, done_before = prepare(sources, settings)
     kinds = {s.kind for s in sources}
     if client is None:
         why = ch.check_tools(kinds, settings.bin_dir)
@@ -248,16 +248,16 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
         if bad:
             raise ClusterError("; ".join("worker %s: %s" % kv for kv in sorted(bad.items())))
     print("lidarflow_dask: %d source(s), %d chunk(s) of up to %d frames, %d to compute (%d complete), %s"
-          % (len(sources), sum(len(s.chunks) for s in sources), settings.chunk, len(todo),
-             sum(len(s.chunks) for s in sources) - len(todo),
+          % (len(sources), sum(len(s.chunks) for s in sources), settings.chunk, len(pending),
+             sum(len(s.chunks) for s in sources) - len(pending),
              "serial" if client is None else "on %d Dask worker(s)" % len(client.scheduler_info()["workers"])),
           file=stream, flush=True)
     report = Report(stream, lines=client is None or not progress_bar)
-    if todo:
+    if pending:
         if client is None:
-            run_serial(todo, report)
+            run_serial(pending, report)
         else:
-            run_dask(todo, report, client, progress_bar)
+            run_dask(pending, report, client, progress_bar)
     computed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.results}
     for s in sources:
         if s.kind == "lcm" and (not os.path.exists(s.result_log(settings.out)) or
@@ -265,13 +265,13 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
             merge(s, settings.out)
     seconds = time.monotonic() - t0
     pairs = sum(r["pairs"] for r in report.results)
-    summary = {"sources": len(sources), "chunks": len(todo), "pairs": pairs, "pairs_complete_before": done_before,
+    summary = {"sources": len(sources), "chunks": len(pending), "pairs": pairs, "pairs_complete_before": done_before,
                "failed": [(describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
                "pairs_per_second": pairs / seconds if seconds > 0 else 0.0}
     for what, why in summary["failed"]:
         print("FAILED: %s: %s" % (what, why.replace("\n", "\n    ")), file=stream)
     print("lidarflow_dask: %d pairs computed in %.1f s (%.2f pairs/s), %d complete before; %d of %d chunks failed%s"
-          % (pairs, seconds, summary["pairs_per_second"], done_before, len(report.failed), len(todo),
+          % (pairs, seconds, summary["pairs_per_second"], done_before, len(report.failed), len(pending),
              " (rerun the command to retry them)" if report.failed else ""), file=stream, flush=True)
     return (1 if report.failed else 0), summary
 

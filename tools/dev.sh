@@ -14,6 +14,8 @@
 #                            on N threads; the log callback replaced while frames run)
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
+#   tools/dev.sh fuzz-runs [RUNS] [TARGET...]  the same, each for RUNS executions in one process
+#                            (default 10^7, the campaign bar)
 #   tools/dev.sh fuzz-python [EXECUTIONS]  the mutation fuzzer of the Python LCM decoders and log
 #                            reader (bindings/python/tests_lcm/fuzz_lcm.py; default 10^6
 #                            executions); fails on a finding, left in build/fuzz-lcm-findings/
@@ -72,22 +74,23 @@ run_tests() {  # run_tests DIR [ctest args...]
     ctest --test-dir "$root/$dir" --output-on-failure -j "$jobs" "$@"
 }
 
-# fuzz_one DIR TARGET SECONDS: one libFuzzer run; its exit status goes to fuzz-logs/TARGET.rc.
+# fuzz_one DIR TARGET LIMIT: one libFuzzer run for LIMIT (-max_total_time=S or -runs=N); its exit
+# status goes to fuzz-logs/TARGET.rc.
 fuzz_one() {
-    local dir="$1" t="$2" seconds="$3" rc=0
+    local dir="$1" t="$2" limit="$3" rc=0
     # -timeout: a C ABI program of 24 calls on images of at most 64x48 px takes well under a
     # second; 60 s means a hang. ASAN_OPTIONS: leaks are findings too (tests/lsan.supp: glibc's).
-    ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS="suppressions=$root/tests/lsan.supp" "$dir/tests/fuzz/$t" -max_total_time="$seconds" -timeout=60 \
+    ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS="suppressions=$root/tests/lsan.supp" "$dir/tests/fuzz/$t" "$limit" -timeout=60 \
         -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$dir/findings/$t-" \
         "$dir/corpus/$t" "$root/tests/fuzz/corpus/$t" >"$dir/fuzz-logs/$t.log" 2>&1 || rc=$?
     echo "$rc" >"$dir/fuzz-logs/$t.rc"
 }
 
-# fuzz SECONDS [TARGET...]: each target (default: all of tests/fuzz) for SECONDS, one per core at a
-# time, from its committed seeds (tests/fuzz/corpus/T) plus what earlier runs found
+# fuzz LIMIT [TARGET...]: each target (default: all of tests/fuzz) for LIMIT (a libFuzzer flag:
+# -max_total_time=S or -runs=N), one per core at a time, from its committed seeds (tests/fuzz/corpus/T) plus what earlier runs found
 # (build-fuzz/corpus/T). Findings land in build-fuzz/findings/; logs in build-fuzz/fuzz-logs/.
 fuzz() {
-    local seconds="$1"; shift
+    local limit="$1"; shift
     local dir="$root/build-fuzz" targets=("$@") failed=()
     [ ${#targets[@]} -gt 0 ] || targets=(fuzz_targets)
     CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -104,13 +107,13 @@ fuzz() {
     fi
     mkdir -p "$dir/findings" "$dir/fuzz-logs"
     # libFuzzer runs one thread per target: the targets run side by side, one per core, each for
-    # its own SECONDS (a target's result file says how it ended; its log what it found).
+    # its own LIMIT (a target's result file says how it ended; its log what it found).
     local running=0
     for t in "${targets[@]}"; do
         mkdir -p "$dir/corpus/$t"
         rm -f "$dir/fuzz-logs/$t.rc"
         while [ "$running" -ge "$jobs" ]; do wait -n || true; running=$((running - 1)); done
-        fuzz_one "$dir" "$t" "$seconds" &
+        fuzz_one "$dir" "$t" "$limit" &
         running=$((running + 1))
     done
     wait || true
@@ -192,11 +195,12 @@ case "${1:-}" in
             "$root/build-tsan/tests/test_capi_concurrent"
         # The log callback replaced while frames run on three threads.
         TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" "$root/build-tsan/tests/test_capi_log" ;;
-    fuzz)
+    fuzz|fuzz-runs)
         deps
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP
-        shift
-        fuzz "${1:-60}" "${@:2}" ;;
+        verb="$1"; shift
+        if [ "$verb" = fuzz ]; then fuzz "-max_total_time=${1:-60}" "${@:2}"
+        else fuzz "-runs=${1:-10000000}" "${@:2}"; fi ;;
     fuzz-python)
         deps
         # Debian's python3 (with python3-numpy from deps), not another one first on PATH.

@@ -205,7 +205,7 @@ int run_sequence(int argc, char **argv) {
                {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
-               {"threads", true, "N    OpenMP threads (default 2)"},
+               {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
                {"skip-existing", false, "do not recompute a pair whose result files all exist (counted as skipped)"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
@@ -218,7 +218,7 @@ int run_sequence(int argc, char **argv) {
     const std::vector<io::ResultFormat> formats =
         parse_formats(args.has("format") ? args.list("format") : std::vector<std::string>{"kitti"}, "sequence");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
-    opt.threads = args.integer("threads", 2);
+    opt.threads = args.integer("threads", opt.threads);
     std::vector<std::string> assignments;
     std::vector<std::string> given = args.all("option");
     for (const std::string &a : args.all("set")) given.push_back(a);

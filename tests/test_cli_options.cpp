@@ -67,7 +67,7 @@ void test_options_lists_every_key_with_its_default(void **) {
     }
     assert_int_equal(rows, keys.size());
     assert_true(contains(r.output, "threads") && contains(r.output, "[1, 256]"));
-    assert_true(contains(r.output, "default | balanced | fast"));
+    assert_true(contains(r.output, "default | paper | balanced | fast"));
     assert_true(contains(r.output, "(0, 10000]"));  // an open bound
 }
 

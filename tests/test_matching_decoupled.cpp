@@ -17,6 +17,7 @@
 #include "eval/metrics.hpp"
 #include "matching/decoupled_matcher.hpp"
 #include "pipeline/estimator.hpp"
+#include "stereo/guided_sgm.hpp"
 #include "synth/scene.hpp"
 #include "synth_fields.hpp"
 #include "test_support.hpp"
@@ -49,15 +50,25 @@ matching::MatchingOptions decoupled_options() {
     return o;
 }
 
-// d0 is the SGM disparity of the t0 pair (the LiDAR measurement on its pixels), d1 the SGM
-// disparity of the t1 pair at the flow target; the backward field holds the same roles at t1.
+// d0 is the guided SGM disparity of the t0 pair with its LiDAR points (the measurement on their
+// pixels), d1 that of the t1 pair at the flow target; the backward field holds the same roles
+// at t1. Without guided_stereo, both disparities are OpenCV's StereoSGBM.
 void fields_hold_stereo_and_flow(void **) {
     const synth::SynthScene s = scene();
     const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
     const consistency::SgmOptions sgm;
     const matching::DecoupledResult r = matching::match_decoupled(in, decoupled_options(), sgm, s.camera, true);
-    assert_true(same_mat(r.sgm0, consistency::compute_sgm_disparity(s.left0, s.right0, sgm)));
-    assert_true(same_mat(r.sgm1, consistency::compute_sgm_disparity(s.left1, s.right1, sgm)));
+    stereo::GuidedSgmOptions g = decoupled_options().stereo;
+    g.num_disparities = sgm.num_disparities;
+    g.threads = 2;
+    assert_true(same_mat(r.sgm0, stereo::guided_sgm(s.left0, s.right0, s.lidar0, g)));
+    assert_true(same_mat(r.sgm1, stereo::guided_sgm(s.left1, s.right1, s.lidar1, g)));
+    assert_false(same_mat(r.sgm0, stereo::guided_sgm(s.left0, s.right0, SparseLidar{s.left0.cols, s.left0.rows, {}}, g)));
+    matching::MatchingOptions plain = decoupled_options();
+    plain.guided_stereo = false;
+    const matching::DecoupledResult p = matching::match_decoupled(in, plain, sgm, s.camera, false);
+    assert_true(same_mat(p.sgm0, consistency::compute_sgm_disparity(s.left0, s.right0, sgm)));
+    assert_true(same_mat(p.sgm1, consistency::compute_sgm_disparity(s.left1, s.right1, sgm)));
     const DisparityMap lidar0 = s.lidar0.to_map();
     int valid = 0;
     for (int y = 0; y < s.left0.rows; ++y)
@@ -154,6 +165,21 @@ void presets_do_not_depend_on_threads(void **) {
     }
 }
 
+// The `paper` preset is the paper's design, as `default` is: the same options, the same result.
+void paper_preset_is_the_papers_design(void **) {
+    const synth::SynthScene s = scene();
+    EstimatorOptions paper = EstimatorOptions::preset("paper"), def = EstimatorOptions::preset("default");
+    assert_true(paper.matching.method == matching::MatchMethod::PatchMatch);
+    assert_false(paper.matching.guided_stereo);
+    for (EstimatorOptions *o : {&paper, &def}) {
+        o->threads = 2;
+        o->matching.min_coarsest_height = 16;
+    }
+    assert_true(same_field(Estimator(paper).run(frame_of(s)).dense, Estimator(def).run(frame_of(s)).dense));
+    assert_true(EstimatorOptions::preset("realtime").matching.guided_stereo);
+    assert_true(EstimatorOptions::preset("fast").matching.guided_stereo);
+}
+
 // A stream hands the t1 disparity to the next frame: reused, and the result is a lone run's.
 void stream_reuses_the_newer_disparity(void **) {
     const synth::SynthScene a = scene(320, 96, 5);
@@ -221,7 +247,7 @@ int main() {
         cmocka_unit_test(fields_hold_stereo_and_flow),   cmocka_unit_test(rigid_prior_acts),
         cmocka_unit_test(bad_inputs_are_refused),        cmocka_unit_test(realtime_is_accurate),
         cmocka_unit_test(presets_do_not_depend_on_threads), cmocka_unit_test(stream_reuses_the_newer_disparity),
-        cmocka_unit_test(threads_follow_the_idle_cpus),
+        cmocka_unit_test(threads_follow_the_idle_cpus),  cmocka_unit_test(paper_preset_is_the_papers_design),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

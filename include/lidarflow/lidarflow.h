@@ -105,10 +105,13 @@ typedef struct lf_options lf_options_t;
  *                                        and frames either way
  *   "preset"           string "default"  resets every option except "threads" to the preset:
  *                                        "default" (reference accuracy, the paper's matcher),
+ *                                        "paper" (the paper's design, identical to "default":
+ *                                        the name to ask for when reproducing the paper),
  *                                        "balanced" (matcher levels below full resolution
  *                                        thinned: thin_from_level 1; backward_grid_step 6,
  *                                        fb_search_radius 2), "fast" (matching.method
- *                                        "decoupled" at processing_scale 0.65, DIS patches 6 /
+ *                                        "decoupled" with matching.guided_stereo 1 at
+ *                                        processing_scale 0.65, DIS patches 6 /
  *                                        stride 2) or "realtime" ("decoupled" at 0.55, stage 4
  *                                        with 20 px superpixels and 128 neighbours: about 1.5x
  *                                        the time of OpenCV's SGBM + DIS); set it first, then
@@ -148,6 +151,24 @@ typedef struct lf_options lf_options_t;
  *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement
  *   "matching.flow_prior_track_step"  int [0, 256]  (decoupled) grid step [px] of the tracks
  *                                                   the rigid start flow is fitted to (0 = off)
+ *   "matching.guided_stereo"          0/1           (decoupled) stereo of both pairs by the
+ *                                                   library's SGM with each pair's LiDAR points
+ *                                                   in its data cost (1 in "fast", "realtime")
+ *                                                   instead of OpenCV's StereoSGBM (0)
+ *   guided SGM (matching.guided_stereo 1): census 9x7 costs, 8 or 4 paths
+ *   "stereo.p1"               int   [0, 255]     penalty of a 1 px step (default 10)
+ *   "stereo.p2"               int   [1, 1023]    penalty of a larger step (default 120), > p1
+ *   "stereo.adaptive_p2"      0/1                P2 divided by the intensity step (default 1)
+ *   "stereo.paths"            int   4 or 8       aggregation paths (default 8)
+ *   "stereo.uniqueness_ratio" int   [0, 99]      [%] margin of the best cost (default 10)
+ *   "stereo.lidar_slope"      float [0, 64]      LiDAR cost per px of |d - d_lidar| (default 4)
+ *   "stereo.lidar_cap"        int   [0, 192]     largest LiDAR cost (default 40; census 0..63)
+ *   "stereo.lidar_radius"     int   [0, 32]      [px] a point guides pixels this near of its
+ *                                                intensity (default 3), less with distance
+ *   "stereo.lidar_intensity"  int   [0, 255]     intensity tolerance of that spread (default 12)
+ *   "lidar.cell"              int   [0, 64]      stages 2-4 see at most one LiDAR point per
+ *                                                cell x cell px of the processing frame
+ *                                                (default 0 = every point; stage 1 sees all)
  *   "matching.support_windows"  0/1  "matching.const1" 0/1  "matching.const2" 0/1
  *                                    windows and the two constraints (need use_lidar; const1
  *                                    and const2 need support_windows)

@@ -15,3 +15,17 @@
 #ifndef LIDARFLOW_AVX2_CLONES
 #define LIDARFLOW_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
 #endif
+
+// LIDARFLOW_V3_CLONES: as above for integer kernels that also need the POPCNT instruction
+// (GCC's "avx2" clone calls a library routine for __builtin_popcountll). Integer only: the
+// Haswell clone may contract float expressions into FMA, which would change float results.
+#if defined(__SANITIZE_THREAD__)
+#define LIDARFLOW_V3_CLONES
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define LIDARFLOW_V3_CLONES
+#endif
+#endif
+#ifndef LIDARFLOW_V3_CLONES
+#define LIDARFLOW_V3_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif

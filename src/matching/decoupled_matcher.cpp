@@ -12,6 +12,7 @@
 #include "core/log.hpp"
 #include "core/pixels.hpp"
 #include "interpolation/ego_motion.hpp"
+#include "stereo/guided_sgm.hpp"
 
 namespace lidarflow::matching {
 namespace {
@@ -121,8 +122,25 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
 
 }  // namespace
 
-bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r) const {
-    return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r);
+namespace {
+
+bool same_points(const SparseLidar &a, const SparseLidar &b) {
+    if (a.points.size() != b.points.size()) return false;
+    for (size_t i = 0; i < a.points.size(); ++i)
+        if (a.points[i].x != b.points[i].x || a.points[i].y != b.points[i].y ||
+            a.points[i].disparity != b.points[i].disparity)
+            return false;
+    return true;
+}
+
+}  // namespace
+
+bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &points) const {
+    return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r) && same_points(lidar, points);
+}
+
+SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {
+    return opt.guided_stereo && opt.use_lidar ? lidar : SparseLidar{lidar.width, lidar.height, {}};
 }
 
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,
@@ -133,9 +151,16 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
             ErrorCode::SizeMismatch, "decoupled matcher: the four images must be non-empty and of one size");
     DecoupledResult r;
     auto t = Clock::now();
-    r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0);
-    r.sgm0 = r.reused_t0 ? t0_reuse->disparity : consistency::compute_sgm_disparity(in.left0, in.right0, sgm);
-    r.sgm1 = consistency::compute_sgm_disparity(in.left1, in.right1, sgm);
+    const SparseLidar guide0 = stereo_guide(in.lidar0, opt), guide1 = stereo_guide(in.lidar1, opt);
+    stereo::GuidedSgmOptions g = opt.stereo;
+    g.num_disparities = sgm.num_disparities;
+    g.threads = opt.threads;
+    auto disparity = [&](const cv::Mat &l, const cv::Mat &rt, const SparseLidar &guide) {
+        return opt.guided_stereo ? stereo::guided_sgm(l, rt, guide, g) : consistency::compute_sgm_disparity(l, rt, sgm);
+    };
+    r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0, guide0);
+    r.sgm0 = r.reused_t0 ? t0_reuse->disparity : disparity(in.left0, in.right0, guide0);
+    r.sgm1 = disparity(in.left1, in.right1, guide1);
     r.seconds_stereo = seconds_since(t);
 
     t = Clock::now();

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // Stage 1, decoupled design: the 4-D scene-flow search split into what each part needs.
-//  - d0 and d1 from semi-global stereo matching (OpenCV StereoSGBM) of each stereo pair; the
-//    t0 disparity is also stage 2's SGM reference, so it is computed once for both stages.
+//  - d0 and d1 from semi-global stereo matching of each stereo pair: the project's SGM with the
+//    pair's LiDAR points in its data cost (guided_stereo), or OpenCV StereoSGBM; the t0
+//    disparity is also stage 2's SGM reference, so it is computed once for both stages.
 //  - (u, v) from dense inverse search (OpenCV DISOpticalFlow) between the left images, t0 -> t1
 //    (and t1 -> t0 for the round-trip check of stage 2b).
 //  - d1 of a pixel is the t1 disparity at its flow target (nearest pixel).
-// LiDAR enters at the pixels it measures (d0 := the measurement) and, through stages 2-4, as
-// the anchor of the interpolation. Each part runs at O(pixels x range) with small, cache-resident
+// LiDAR enters the stereo cost (guided), at the pixels it measures (d0 := the measurement) and,
+// through stages 2-4, as the anchor of the interpolation. Each part runs at O(pixels x range) with small, cache-resident
 // working sets, instead of PatchMatch over 128-byte descriptors in four dimensions.
 #include <memory>
 
@@ -28,21 +29,28 @@ struct DecoupledResult {
     DisparityMap sgm0;        // SGM disparity of (I_l^0, I_r^0), invalid < 0
     DisparityMap sgm1;        // SGM disparity of (I_l^1, I_r^1), invalid < 0
     bool reused_t0 = false;   // sgm0 came from the caller's t0_reuse
-    double seconds_stereo = 0;  // both pairs' SGM
+    double seconds_stereo = 0;  // both pairs' stereo
     double seconds_flow = 0;    // rigid prior, then both directions' DIS
 };
 
-// What a stream may hand from one frame to the next: the newer pair's SGM disparity (frame k's
-// t1 pair is frame k+1's t0 pair). Immutable once made.
+// What a stream may hand from one frame to the next: the newer pair's stereo disparity (frame
+// k's t1 pair is frame k+1's t0 pair). Immutable once made.
 struct DecoupledStereo {
     cv::Mat left, right;  // deep copies of the pair it describes
+    SparseLidar lidar;    // the points that guided it (none for StereoSGBM)
     DisparityMap disparity;
-    bool matches(const cv::Mat &l, const cv::Mat &r) const;
+    // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
+    bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };
+
+// The points that guide the stereo of a pair: `lidar` when opt.guided_stereo and opt.use_lidar,
+// else none (of lidar's size).
+SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt);
 
 // Runs the decoupled stage 1 on the images of `in` (all one size, 8-bit gray or BGR). `sgm` are
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
-// pixel-identical to (left0, right0), supplies the t0 disparity. Throws lidarflow::Error for bad
+// pixel-identical to (left0, right0) (and, for guided stereo, made with the same lidar0),
+// supplies the t0 disparity. Throws lidarflow::Error for bad
 // inputs. Deterministic; OpenCV's own thread pool does the parallel work.
 // `camera` (all zero = unknown) is the rig at the images' resolution.
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,

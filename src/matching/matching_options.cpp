@@ -82,6 +82,7 @@ void MatchingOptions::validate() const {
     check(flow.refine_iterations >= 0 && flow.refine_iterations <= 100,
           "flow.refine_iterations must be in [0, 100]");
     check(flow.prior_track_step >= 0 && flow.prior_track_step <= 256, "flow.prior_track_step must be in [0, 256]");
+    stereo.validate();
     check(use_lidar || (!support_window && !const1 && !const2),
           "support_window / const1 / const2 need use_lidar");
     check(support_window || (!const1 && !const2), "const1 / const2 act inside support windows: "

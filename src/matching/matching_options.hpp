@@ -47,6 +47,7 @@
 #include "features/dense_sift.hpp"
 #include "matching/cost_cases.hpp"
 #include "matching/patch_cost.hpp"
+#include "stereo/guided_sgm.hpp"
 
 namespace lidarflow::matching {
 
@@ -78,6 +79,11 @@ const char *variant_name(MatchVariant v);
 struct MatchingOptions {
     MatchMethod method = MatchMethod::PatchMatch;
     FlowSearchOptions flow;  // decoupled design only
+    // Decoupled design only: the stereo of both pairs by the project's SGM with the LiDAR term
+    // (stereo/guided_sgm.hpp; its range and threads are set by the matcher) instead of OpenCV's
+    // StereoSGBM, which takes no prior.
+    bool guided_stereo = false;
+    stereo::GuidedSgmOptions stereo;
 
     // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least
     // min_coarsest_height px high (and up to max_levels levels in total).

@@ -10,6 +10,7 @@
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/threads.hpp"
+#include "lidar/binning.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -126,6 +127,7 @@ void EstimatorOptions::validate() const {
     require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "threads must be in [1, 256]");
     require(last_stage >= Stage::Matching && last_stage <= Stage::Interpolation, ErrorCode::InvalidArgument,
             "last_stage out of range");
+    require(lidar_cell >= 0 && lidar_cell <= 64, ErrorCode::InvalidArgument, "lidar_cell must be in [0, 64]");
     require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
             ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");
     lidar_visibility.validate();
@@ -134,7 +136,7 @@ void EstimatorOptions::validate() const {
 
 EstimatorOptions EstimatorOptions::preset(const std::string &name) {
     EstimatorOptions o;
-    if (name == "default") return o;
+    if (name == "default" || name == "paper") return o;
     if (name == "balanced") {
         o.matching.thin_from_level = 1;  // every level below full resolution thinned
         // A coarser backward grid with a wider round-trip search (matching_options.hpp).
@@ -145,6 +147,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
     if (name == "fast" || name == "realtime") {
         // Stage 1 decoupled (stereo and flow searched apart) on the reduced frame.
         o.matching.method = matching::MatchMethod::Decoupled;
+        o.matching.guided_stereo = true;  // the LiDAR in the stereo cost
         // The reduced frame is DIS's finest level: it searches down to it itself.
         o.matching.flow.finest_scale = 0;
         // Variational refinement smooths flow across motion boundaries, where the round-trip
@@ -164,7 +167,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         }
         return o;
     }
-    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, balanced, fast, realtime)");
+    throw Error(ErrorCode::InvalidArgument, "unknown preset '" + name + "' (default, paper, balanced, fast, realtime)");
 }
 
 const SceneFlowField &EstimatorResult::output() const {
@@ -244,7 +247,9 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r);
-        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
+        if (options_.last_stage != Stage::Matching)
+            run_stages_2_to_4(frame, lidar::bin_points(lidar0, options_.lidar_cell),
+                              lidar::bin_points(lidar1, options_.lidar_cell), sgm, threads, r);
         r.total_seconds = seconds_since(t_total);
         return r;
     }
@@ -286,7 +291,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     }
     release_openmp_workers();  // stage 2 starts with OpenCV's SGBM
 
-    run_stages_2_to_4(frame, lidar0, lidar1, DisparityMap(), threads, r);
+    run_stages_2_to_4(frame, lidar::bin_points(lidar0, options_.lidar_cell),
+                      lidar::bin_points(lidar1, options_.lidar_cell), DisparityMap(), threads, r);
     r.total_seconds = seconds_since(t_total);
     return r;
 }
@@ -295,7 +301,8 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
                                       StreamCache *cache, int threads, EstimatorResult &r) const {
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
-    matching::DecoupledResult m = matching::match_decoupled(mi, matching_options(stage_options_, threads),
+    const matching::MatchingOptions mo = matching_options(stage_options_, threads);
+    matching::DecoupledResult m = matching::match_decoupled(mi, mo,
                                                             stage_options_.consistency.sgm, frame.camera, both,
                                                             cache ? cache->stereo_t1_.get() : nullptr);
     if (cache) {
@@ -307,6 +314,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
         auto next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();
         next->right = frame.right1.clone();
+        next->lidar = matching::stereo_guide(lidar1, mo);
         next->disparity = m.sgm1;
         cache->stereo_t1_ = std::move(next);
     }

@@ -56,6 +56,10 @@ struct EstimatorOptions {
     // LiDAR's position) are removed from lidar0 and lidar1 before every stage, at the input's
     // resolution (lidar/visibility_filter.hpp).
     lidar::VisibilityFilterOptions lidar_visibility;
+    // Stages 2-4 see at most one LiDAR point per lidar_cell x lidar_cell px of the processing
+    // frame (lidar/binning.hpp; <= 1 = every point); stage 1 always reads every point. Their
+    // cost then does not grow with a dense scan's ~20k points.
+    int lidar_cell = 0;
     matching::MatchingOptions matching;
     consistency::ConsistencyOptions consistency;
     interpolation::InterpolationOptions interpolation;

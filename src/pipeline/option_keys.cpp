@@ -60,6 +60,7 @@ const OptionKey kKeys[] = {
     {"lidar.visibility_ratio", OptionKeyType::Float, 0, 10, false, Extra::None, LF_FLOAT_FIELD(lidar_visibility.ratio)},
     {"lidar.visibility_margin", OptionKeyType::Float, 0, kMaxLidarDisparity, false, Extra::None,
      LF_FLOAT_FIELD(lidar_visibility.margin)},
+    {"lidar.cell", OptionKeyType::Int, 0, 64, false, Extra::None, LF_INT_FIELD(lidar_cell)},
     // stage 1
     {"matching.method", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     {"matching.flow_finest_scale", OptionKeyType::Int, 0, 8, false, Extra::None, LF_INT_FIELD(matching.flow.finest_scale)},
@@ -71,6 +72,18 @@ const OptionKey kKeys[] = {
      LF_INT_FIELD(matching.flow.refine_iterations)},
     {"matching.flow_prior_track_step", OptionKeyType::Int, 0, 256, false, Extra::None,
      LF_INT_FIELD(matching.flow.prior_track_step)},
+    {"matching.guided_stereo", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.guided_stereo)},
+    {"stereo.p1", OptionKeyType::Int, 0, 255, false, Extra::None, LF_INT_FIELD(matching.stereo.p1)},
+    {"stereo.p2", OptionKeyType::Int, 1, 1023, false, Extra::None, LF_INT_FIELD(matching.stereo.p2)},
+    {"stereo.adaptive_p2", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.stereo.adaptive_p2)},
+    {"stereo.paths", OptionKeyType::Int, 4, 8, false, Extra::None, LF_INT_FIELD(matching.stereo.paths)},
+    {"stereo.uniqueness_ratio", OptionKeyType::Int, 0, 99, false, Extra::None,
+     LF_INT_FIELD(matching.stereo.uniqueness_ratio)},
+    {"stereo.lidar_slope", OptionKeyType::Float, 0, 64, false, Extra::None, LF_FLOAT_FIELD(matching.stereo.lidar_slope)},
+    {"stereo.lidar_cap", OptionKeyType::Int, 0, 192, false, Extra::None, LF_INT_FIELD(matching.stereo.lidar_cap)},
+    {"stereo.lidar_radius", OptionKeyType::Int, 0, 32, false, Extra::None, LF_INT_FIELD(matching.stereo.lidar_radius)},
+    {"stereo.lidar_intensity", OptionKeyType::Int, 0, 255, false, Extra::None,
+     LF_INT_FIELD(matching.stereo.lidar_intensity)},
     {"matching.support_windows", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.support_window)},
     {"matching.const1", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const1)},
     {"matching.const2", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.const2)},
@@ -243,7 +256,7 @@ std::vector<OptionKeyDescription> describe_option_keys() {
         case OptionKeyType::String: d.type = "string"; break;
         }
         if (k.type != OptionKeyType::String) d.bounds = bounds_text(k);
-        else if (is_key(k, "preset")) d.bounds = "default | balanced | fast | realtime";
+        else if (is_key(k, "preset")) d.bounds = "default | paper | balanced | fast | realtime";
         else if (is_key(k, "matching.method")) d.bounds = "patchmatch | decoupled";
         else if (is_key(k, "last_stage")) d.bounds = "matching | consistency | sparse | interpolation";
         else d.bounds = "a file path, or \"\"";

@@ -75,7 +75,7 @@ int run_demo(int argc, char **argv) {
                         {{"out", true, "DIR  output folder (default demo-out)"},
                {"seed", true, "S  scene seed (default 1)"},
                {"threads", true, "N  OpenMP threads of the estimator (default: every usable CPU, fewer while others are busy)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
+               {"preset", true, "NAME speed/accuracy preset: default | paper | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());

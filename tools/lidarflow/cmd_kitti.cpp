@@ -72,7 +72,7 @@ int run_kitti_command(int argc, char **argv) {
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"ablation", false, "run and score every variant of Table I (and Table II)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
+               {"preset", true, "NAME speed/accuracy preset: default | paper | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"scale", true, "S    processing scale in [0.125, 1] (default: the preset's)"},
                {"seed", true, "N    random seed of the matcher and the interpolation (default 1)"},

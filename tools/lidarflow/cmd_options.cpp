@@ -21,7 +21,7 @@ int list_options(int argc, char **argv) {
     for (const pipeline::OptionKeyDescription &d : pipeline::describe_option_keys())
         std::printf("%-40s %-7s %-32s %s\n", d.name.c_str(), d.type.c_str(),
                     d.bounds.empty() ? "-" : d.bounds.c_str(), d.defaults.c_str());
-    std::printf("\npresets (key \"preset\", CLI --preset): default, balanced, fast, realtime; set it before other keys.\n"
+    std::printf("\npresets (key \"preset\", CLI --preset): default, paper, balanced, fast, realtime; set it before other keys.\n"
                 "Use: lidarflow run|kitti|demo --set KEY=VALUE,..; lf_options_set_* in C; options={...} in "
                 "Python; --option KEY=VALUE in lidarflow-lcm-bridge.\n");
     return 0;

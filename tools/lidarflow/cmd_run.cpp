@@ -84,7 +84,7 @@ int run(int argc, char **argv) {
                {"no-lidar", false, "image-only pipeline (ignore the LiDAR inputs)"},
                {"stage", true, "S    stop after matching|consistency|sparse|interpolation (default)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
-               {"preset", true, "NAME speed/accuracy preset: default | balanced | fast | realtime"},
+               {"preset", true, "NAME speed/accuracy preset: default | paper | balanced | fast | realtime"},
                {"set", true, "K=V,.. any option key of the C ABI (lidarflow.h), after the preset"},
                {"out", true, "DIR  output folder (disp_0/, disp_1/, flow/, viz/)"},
                {"id", true, "NAME output file name (default: left0's, 000002_10.png -> 000002); 6 digits write ID_10.EXT as KITTI does, other names NAME.EXT"},

@@ -1,0 +1,378 @@
+// SPDX-License-Identifier: MIT
+#include "stereo/guided_sgm.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <omp.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/cpu_dispatch.hpp"
+#include "core/error.hpp"
+#include "core/limits.hpp"
+
+namespace lidarflow::stereo {
+namespace {
+
+constexpr int kCensusHalfW = 4, kCensusHalfH = 3;  // 9x7 window: 62 bits
+constexpr uint16_t kBig = 0x3FFF;                  // path sentinel: + P1 still fits 16 bits
+
+cv::Mat1b to_gray(const cv::Mat &m) {
+    if (m.channels() == 1) return m;
+    cv::Mat1b g;
+    cv::cvtColor(m, g, m.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+    return g;
+}
+
+// Census signatures of one row: bit k set when neighbour k of the 9x7 window is darker than
+// the centre. `rows` are the window's 7 rows of the padded image (kCensusHalfW replicated
+// pixels each side), so the loop over x has no border case and vectorises.
+LIDARFLOW_V3_CLONES
+void census_row(const uint8_t *const *rows, int w, uint64_t *out) {
+    const uint8_t *centre = rows[kCensusHalfH] + kCensusHalfW;
+    std::fill(out, out + w, 0);
+    for (int k = 0; k < 2 * kCensusHalfH + 1; ++k)
+        for (int j = 0; j < 2 * kCensusHalfW + 1; ++j) {
+            if (k == kCensusHalfH && j == kCensusHalfW) continue;
+            const uint8_t *n = rows[k] + j;
+            for (int x = 0; x < w; ++x) out[x] = (out[x] << 1) | static_cast<uint64_t>(n[x] < centre[x]);
+        }
+}
+
+// Census signatures of the image, the window clamped at the border (replicated pixels).
+cv::Mat census(const cv::Mat1b &g, int threads) {
+    const int h = g.rows, w = g.cols;
+    cv::Mat1b padded;
+    cv::copyMakeBorder(g, padded, kCensusHalfH, kCensusHalfH, kCensusHalfW, kCensusHalfW, cv::BORDER_REPLICATE);
+    cv::Mat sig(h, w, CV_64F);  // 8 bytes per pixel, read as uint64
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        const uint8_t *rows[2 * kCensusHalfH + 1];
+        for (int k = 0; k < 2 * kCensusHalfH + 1; ++k) rows[k] = padded.ptr<uint8_t>(y + k);
+        census_row(rows, w, sig.ptr<uint64_t>(y));
+    }
+    return sig;
+}
+
+// One row of data costs: cost[x * D + d] = Hamming(left x, right x - d) (the right image's
+// column 0 stands in left of the image) + the LiDAR penalty. Integer only.
+LIDARFLOW_V3_CLONES
+void row_costs(const uint64_t *cl, const uint64_t *cr, const int16_t *prior16, const uint8_t *weight, int w, int D,
+               int slope16, int cap, uint8_t *cost) {
+    for (int x = 0; x < w; ++x) {
+        uint8_t *c = cost + static_cast<size_t>(x) * D;
+        const uint64_t l = cl[x];
+        const int lim = std::min(D, x + 1);
+        for (int d = 0; d < lim; ++d) c[d] = static_cast<uint8_t>(__builtin_popcountll(l ^ cr[x - d]));
+        const uint8_t edge = static_cast<uint8_t>(__builtin_popcountll(l ^ cr[0]));
+        for (int d = lim; d < D; ++d) c[d] = edge;
+        const int wt = weight[x];
+        if (wt == 0) continue;
+        const int p16 = prior16[x];
+        for (int d = 0; d < D; ++d) {
+            const int pen = std::min((slope16 * std::abs(16 * d - p16)) >> 8, cap);
+            c[d] = static_cast<uint8_t>(std::min(255, c[d] + (wt * pen + 127) / 255));
+        }
+    }
+}
+
+// One step along a path: cur = cost + min(prev, prev(d +- 1) + P1, min(prev) + P2) - min(prev),
+// added into sum (or stored there when `first`). prev has a sentinel at [-1] and [D]. Returns
+// min(cur).
+template <bool First>
+inline uint16_t path_step(const uint8_t *__restrict c, const uint16_t *__restrict prev, uint16_t prev_min, uint16_t p1,
+                          uint16_t p2, uint16_t *__restrict cur, uint16_t *__restrict sum, int D) {
+    const uint16_t jump = static_cast<uint16_t>(prev_min + p2);
+    uint16_t m = kBig;
+    for (int d = 0; d < D; ++d) {
+        uint16_t v = std::min<uint16_t>(prev[d], static_cast<uint16_t>(std::min(prev[d - 1], prev[d + 1]) + p1));
+        v = std::min(v, jump);
+        const uint16_t out = static_cast<uint16_t>(c[d] + v - prev_min);
+        cur[d] = out;
+        m = std::min(m, out);
+        if (First)
+            sum[d] = out;
+        else
+            sum[d] = static_cast<uint16_t>(sum[d] + out);
+    }
+    return m;
+}
+
+struct Penalties {
+    uint16_t p1, p2;
+    bool adaptive;
+    uint16_t p2_at(int step) const {  // step: |I(p) - I(p - r)|
+        if (!adaptive) return p2;
+        return static_cast<uint16_t>(std::max<int>(p1 + 1, p2 * 8 / (8 + step)));
+    }
+};
+
+// A path buffer of n pixels: D + 2 values each, sentinels at both ends, zeros inside (the first
+// pixel of a path then takes its data cost alone).
+struct PathRow {
+    std::vector<uint16_t> v;
+    std::vector<uint16_t> min;
+    int stride;
+    PathRow(int n, int D) : v(static_cast<size_t>(n) * (D + 2), 0), min(n, 0), stride(D + 2) {
+        for (int i = 0; i < n; ++i) {
+            v[static_cast<size_t>(i) * stride] = kBig;
+            v[static_cast<size_t>(i) * stride + D + 1] = kBig;
+        }
+    }
+    uint16_t *at(int i) { return v.data() + static_cast<size_t>(i) * stride + 1; }
+};
+
+// Both directions along each row; the first writes the sums.
+LIDARFLOW_V3_CLONES
+void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, const Penalties &pen, uint16_t *sum,
+                      uint16_t *a, uint16_t *b) {
+    // a, b: D + 2 values with sentinels; a starts as zeros.
+    uint16_t *prev = a, *cur = b, prev_min = 0;
+    for (int x = 0; x < w; ++x) {
+        const uint16_t p2 = pen.p2_at(x ? std::abs(img[x] - img[x - 1]) : 0);
+        prev_min = path_step<true>(cost + static_cast<size_t>(x) * D, prev, prev_min, pen.p1, p2, cur,
+                                   sum + static_cast<size_t>(x) * D, D);
+        std::swap(prev, cur);
+    }
+    std::fill(prev, prev + D, 0);
+    prev_min = 0;
+    for (int x = w - 1; x >= 0; --x) {
+        const uint16_t p2 = pen.p2_at(x + 1 < w ? std::abs(img[x] - img[x + 1]) : 0);
+        prev_min = path_step<false>(cost + static_cast<size_t>(x) * D, prev, prev_min, pen.p1, p2, cur,
+                                    sum + static_cast<size_t>(x) * D, D);
+        std::swap(prev, cur);
+    }
+}
+
+// The vertical and (with 8 paths) diagonal paths entering row y from row y - dir, for columns
+// [x0, x1). prev*: row y - dir's paths; cur*: row y's.
+LIDARFLOW_V3_CLONES
+void column_paths(const uint8_t *cost, const uint8_t *img, const uint8_t *img_prev, int w, int D, const Penalties &pen,
+                  bool diagonals, bool first_row, PathRow &pv, PathRow &cv_, PathRow &pa, PathRow &ca, PathRow &pb,
+                  PathRow &cb, uint16_t *sum, int x0, int x1) {
+    for (int x = x0; x < x1; ++x) {
+        const uint8_t *c = cost + static_cast<size_t>(x) * D;
+        uint16_t *s = sum + static_cast<size_t>(x) * D;
+        if (first_row) {
+            for (PathRow *r : {&cv_, &ca, &cb}) {
+                if (r != &cv_ && !diagonals) continue;
+                uint16_t *o = r->at(x), m = kBig;
+                for (int d = 0; d < D; ++d) {
+                    o[d] = c[d];
+                    m = std::min<uint16_t>(m, c[d]);
+                    s[d] = static_cast<uint16_t>(s[d] + c[d]);
+                }
+                r->min[x] = m;
+            }
+            continue;
+        }
+        cv_.min[x] = path_step<false>(c, pv.at(x), pv.min[x], pen.p1, pen.p2_at(std::abs(img[x] - img_prev[x])),
+                                      cv_.at(x), s, D);
+        if (!diagonals) continue;
+        // Diagonal from (x - 1, y - dir); the first column starts a path.
+        if (x > 0)
+            ca.min[x] = path_step<false>(c, pa.at(x - 1), pa.min[x - 1], pen.p1,
+                                         pen.p2_at(std::abs(img[x] - img_prev[x - 1])), ca.at(x), s, D);
+        else {
+            uint16_t *o = ca.at(x), m = kBig;
+            for (int d = 0; d < D; ++d) {
+                o[d] = c[d];
+                m = std::min<uint16_t>(m, c[d]);
+                s[d] = static_cast<uint16_t>(s[d] + c[d]);
+            }
+            ca.min[x] = m;
+        }
+        if (x + 1 < w)
+            cb.min[x] = path_step<false>(c, pb.at(x + 1), pb.min[x + 1], pen.p1,
+                                         pen.p2_at(std::abs(img[x] - img_prev[x + 1])), cb.at(x), s, D);
+        else {
+            uint16_t *o = cb.at(x), m = kBig;
+            for (int d = 0; d < D; ++d) {
+                o[d] = c[d];
+                m = std::min<uint16_t>(m, c[d]);
+                s[d] = static_cast<uint16_t>(s[d] + c[d]);
+            }
+            cb.min[x] = m;
+        }
+    }
+}
+
+// Per pixel of one row: the disparity of the smallest sum (the smallest d on ties), or -1 when
+// a sum more than 1 px away is within the uniqueness margin or the right image's winner at
+// x - d (read from the same sums) differs by more than lr_max_diff. Keys pack sum << 9 | d, so
+// one integer minimum gives both. `keys`: w values of scratch.
+LIDARFLOW_V3_CLONES
+void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_diff, uint32_t *keys, int16_t *best) {
+    std::fill(keys, keys + w, UINT32_MAX);
+    for (int x = 0; x < w; ++x) {
+        const uint16_t *s = S + static_cast<size_t>(x) * D;
+        const int lim = std::min(D, x + 1);
+        uint32_t k = UINT32_MAX;
+        uint32_t *r = keys + x;  // the right image's pixel x - d is r[-d]
+        for (int d = 0; d < lim; ++d) {
+            const uint32_t key = (static_cast<uint32_t>(s[d]) << 9) | static_cast<uint32_t>(d);
+            k = std::min(k, key);
+            r[-d] = std::min(r[-d], key);
+        }
+        const int b = static_cast<int>(k & 511u), bs = static_cast<int>(k >> 9);
+        uint32_t other = UINT32_MAX;
+        for (int d = 0; d < b - 1; ++d) other = std::min<uint32_t>(other, s[d]);
+        for (int d = b + 2; d < lim; ++d) other = std::min<uint32_t>(other, s[d]);
+        best[x] = static_cast<int16_t>(uint64_t{other} * (100 - uniqueness) < uint64_t{100} * bs ? -1 : b);
+    }
+    if (lr_max_diff < 0) return;
+    for (int x = 0; x < w; ++x)
+        if (best[x] >= 0 && std::abs(static_cast<int>(keys[x - best[x]] & 511u) - best[x]) > lr_max_diff) best[x] = -1;
+}
+
+void check_inputs(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
+    opt.validate();
+    require(!left.empty() && !right.empty(), ErrorCode::InvalidArgument, "guided SGM: empty image");
+    require(left.depth() == CV_8U && (left.channels() == 1 || left.channels() == 3 || left.channels() == 4),
+            ErrorCode::InvalidArgument, "guided SGM: images must be 8-bit gray, BGR or BGRA");
+    require(left.size() == right.size() && left.type() == right.type(), ErrorCode::SizeMismatch,
+            "guided SGM: left and right images differ in size or type");
+    require(left.cols <= kMaxImageSide && left.rows <= kMaxImageSide, ErrorCode::InvalidArgument,
+            "guided SGM: images larger than " + std::to_string(kMaxImageSide) + " px a side");
+    lidar.validate(left.cols, left.rows, "guided SGM: lidar");
+}
+
+}  // namespace
+
+void GuidedSgmOptions::validate() const {
+    require(num_disparities >= 16 && num_disparities <= 512 && num_disparities % 16 == 0, ErrorCode::InvalidArgument,
+            "guided SGM: num_disparities must be a multiple of 16 in [16, 512]");
+    require(p1 >= 0 && p1 <= 255 && p2 > p1 && p2 <= 1023, ErrorCode::InvalidArgument,
+            "guided SGM: penalties must satisfy 0 <= p1 <= 255, p1 < p2 <= 1023");
+    require(paths == 4 || paths == 8, ErrorCode::InvalidArgument, "guided SGM: paths must be 4 or 8");
+    require(uniqueness_ratio >= 0 && uniqueness_ratio < 100, ErrorCode::InvalidArgument,
+            "guided SGM: uniqueness_ratio must be in [0, 100)");
+    require(lr_max_diff <= 1024, ErrorCode::InvalidArgument, "guided SGM: lr_max_diff must be <= 1024");
+    require(speckle_window >= 0 && speckle_window <= 1000000 && speckle_range >= 0 && speckle_range <= 1024,
+            ErrorCode::InvalidArgument, "guided SGM: speckle_window in [0, 1e6], speckle_range in [0, 1024]");
+    require(std::isfinite(lidar_slope) && lidar_slope >= 0 && lidar_slope <= 64, ErrorCode::InvalidArgument,
+            "guided SGM: lidar_slope must be in [0, 64]");
+    require(lidar_cap >= 0 && lidar_cap <= 192, ErrorCode::InvalidArgument, "guided SGM: lidar_cap must be in [0, 192]");
+    require(lidar_radius >= 0 && lidar_radius <= 32, ErrorCode::InvalidArgument,
+            "guided SGM: lidar_radius must be in [0, 32]");
+    require(lidar_intensity >= 0 && lidar_intensity <= 255, ErrorCode::InvalidArgument,
+            "guided SGM: lidar_intensity must be in [0, 255]");
+    require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "guided SGM: threads must be in [1, 256]");
+}
+
+LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
+    const int h = gray.rows, w = gray.cols, r = opt.lidar_radius;
+    LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
+    cv::Mat1i dist(h, w, r + 1);  // Chebyshev distance to the point that set the prior
+    for (const LidarPoint &pt : lidar.points) {
+        const int c = gray(pt.y, pt.x);
+        for (int y = std::max(0, pt.y - r); y <= std::min(h - 1, pt.y + r); ++y)
+            for (int x = std::max(0, pt.x - r); x <= std::min(w - 1, pt.x + r); ++x) {
+                const int dd = std::max(std::abs(x - pt.x), std::abs(y - pt.y));
+                if (dd > 0 && std::abs(gray(y, x) - c) > opt.lidar_intensity) continue;
+                // The nearest point wins; of equally near ones the larger disparity (the nearer
+                // surface), so the order of the points does not matter.
+                if (dd > dist(y, x) || (dd == dist(y, x) && pt.disparity <= p.disparity(y, x))) continue;
+                dist(y, x) = dd;
+                p.disparity(y, x) = pt.disparity;
+                p.weight(y, x) = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
+            }
+    }
+    return p;
+}
+
+DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
+                        const GuidedSgmOptions &opt) {
+    check_inputs(left, right, lidar, opt);
+    const cv::Mat1b gl = to_gray(left), gr = to_gray(right);
+    const int h = gl.rows, w = gl.cols, D = opt.num_disparities, T = opt.threads;
+    const cv::Mat cl = census(gl, T), cr = census(gr, T);
+    const LidarPrior prior = densify_lidar(gl, lidar, opt);
+    cv::Mat1s prior16(h, w, static_cast<int16_t>(0));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (prior.weight(y, x))
+                prior16(y, x) = static_cast<int16_t>(std::lround(std::min(prior.disparity(y, x), 2047.0f) * 16));
+    const int slope16 = static_cast<int>(std::lround(opt.lidar_slope * 16));
+
+    // Every buffer is allocated here, before the parallel regions (their bodies cannot throw).
+    const size_t plane = static_cast<size_t>(w) * D;
+    std::unique_ptr<uint8_t[]> cost(new uint8_t[plane * h]);  // every element is written
+    std::unique_ptr<uint16_t[]> sum(new uint16_t[plane * h]);
+    std::vector<std::vector<uint32_t>> wta_scratch(T, std::vector<uint32_t>(w));
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int y = 0; y < h; ++y)
+        row_costs(cl.ptr<uint64_t>(y), cr.ptr<uint64_t>(y), prior16.ptr<int16_t>(y), prior.weight.ptr<uint8_t>(y), w, D,
+                  slope16, opt.lidar_cap, cost.get() + plane * y);
+
+    const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};
+    std::vector<std::vector<uint16_t>> scratch(T, std::vector<uint16_t>(2 * (D + 2), 0));
+    for (auto &s : scratch) s[0] = s[D + 1] = s[D + 2] = s[2 * D + 3] = kBig;
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        std::vector<uint16_t> &s = scratch[static_cast<size_t>(omp_get_thread_num())];
+        std::fill(s.begin() + 1, s.begin() + D + 1, 0);
+        horizontal_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), w, D, pen, sum.get() + plane * y, s.data() + 1,
+                         s.data() + D + 3);
+    }
+
+    const bool diag = opt.paths == 8;
+    for (int dir : {1, -1}) {
+        PathRow pv(w, D), cv_(w, D), pa(w, D), ca(w, D), pb(w, D), cb(w, D);
+        const int y_first = dir > 0 ? 0 : h - 1;
+#pragma omp parallel num_threads(T)
+        {
+            PathRow *P[3] = {&pv, &pa, &pb}, *C[3] = {&cv_, &ca, &cb};
+            for (int i = 0; i < h; ++i) {
+                const int y = dir > 0 ? i : h - 1 - i;
+                const uint8_t *img_prev = gl.ptr<uint8_t>(y == y_first ? y : y - dir);
+#pragma omp for schedule(static)
+                for (int t = 0; t < T; ++t)  // one equal share of the columns per thread
+                    column_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), img_prev, w, D, pen, diag, y == y_first,
+                                 *P[0], *C[0], *P[1], *C[1], *P[2], *C[2], sum.get() + plane * y, w * t / T,
+                                 w * (t + 1) / T);
+                for (int k = 0; k < 3; ++k) std::swap(P[k], C[k]);  // every thread alike, after the barrier
+            }
+        }
+    }
+    cost.reset();
+
+    // Winner takes all, uniqueness, left-right check, then the sub-pixel vertex.
+    cv::Mat1s disp16(h, w, static_cast<int16_t>(-16));
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        const uint16_t *S = sum.get() + plane * y;
+        int16_t *out = disp16.ptr<int16_t>(y);
+        std::vector<uint32_t> &keys = wta_scratch[static_cast<size_t>(omp_get_thread_num())];
+        row_winners(S, w, D, opt.uniqueness_ratio, opt.lr_max_diff, keys.data(), out);
+        for (int x = 0; x < w; ++x) {
+            const int best = out[x];
+            if (best < 0) {
+                out[x] = -16;
+                continue;
+            }
+            const uint16_t *s = S + static_cast<size_t>(x) * D;
+            int v16 = best * 16;
+            if (best > 0 && best + 1 < std::min(D, x + 1)) {  // the parabola's vertex through three sums
+                const int a = s[best - 1], c = s[best + 1], den = a + c - 2 * s[best];
+                if (den > 0) v16 = static_cast<int>(std::lround(16.0 * best + 8.0 * (a - c) / den));
+            }
+            out[x] = static_cast<int16_t>(std::clamp(v16, 0, 16 * x));
+        }
+    }
+    if (opt.speckle_window > 0) cv::filterSpeckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range);
+    DisparityMap d(h, w, kInvalidDisparity);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (disp16(y, x) >= 0) d(y, x) = disp16(y, x) / 16.0f;
+    return d;
+}
+
+}  // namespace lidarflow::stereo

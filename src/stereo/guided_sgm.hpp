@@ -1,0 +1,64 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+// Semi-global stereo matching with a LiDAR term in its data cost (the decoupled stage 1's
+// stereo). OpenCV's StereoSGBM takes no prior, so the project has its own SGM:
+//  - data cost: Hamming distance of 9x7 census signatures (0..63, one popcount per candidate);
+//  - LiDAR term: at and around each LiDAR pixel, + weight * min(slope * |d - d_lidar|, cap),
+//    on a map densified within `lidar_radius` px over pixels of similar intensity, the weight
+//    falling with the distance to the point (guided stereo matching in its additive form);
+//  - smoothness: P1 for a one-pixel step, P2 (divided by the intensity step along the path, at
+//    least P1 + 1) for larger ones; 16-bit path costs with the previous pixel's minimum
+//    subtracted, so they stay below cost + P2;
+//  - 4 paths (both directions of rows and columns) or 8 (and the diagonals);
+//  - winner takes all over the summed paths, uniqueness margin, parabola sub-pixel, a left-right
+//    check with the right image's disparities read from the same sums, and OpenCV's speckle
+//    filter.
+// Integer throughout: results do not depend on the thread count or the ISA. Cost model and
+// floor: docs/ARCHITECTURE.md, "Guided SGM".
+#include <opencv2/core.hpp>
+
+#include "core/lidar.hpp"
+#include "core/maps.hpp"
+
+namespace lidarflow::stereo {
+
+struct GuidedSgmOptions {
+    int num_disparities = 128;  // search range [0, num_disparities), multiple of 16, <= 512
+    int p1 = 10;                // penalty of a 1 px disparity step along a path (census units)
+    int p2 = 120;               // penalty of a larger step, before the intensity division
+    bool adaptive_p2 = true;    // P2 / (1 + |I(p) - I(p - r)| / 8), at least P1 + 1
+    int paths = 8;              // 4 or 8
+    int uniqueness_ratio = 10;  // [%] margin of the best sum over those more than 1 px away
+    int lr_max_diff = 1;        // left-right tolerance [px]; < 0 disables the check
+    int speckle_window = 100;   // regions smaller than this become invalid; 0 = off
+    int speckle_range = 2;      // disparity step [px] that splits speckle regions
+    // LiDAR term (no effect without points).
+    float lidar_slope = 4.0f;   // cost per px of |d - d_lidar| at full weight
+    int lidar_cap = 40;         // largest LiDAR penalty (census costs are 0..63)
+    int lidar_radius = 3;       // [px] around each point; 0 = the point's pixel only
+    int lidar_intensity = 12;   // a neighbour is guided when |I(q) - I(point)| <= this (0..255)
+    int threads = 1;            // OpenMP threads; results do not depend on it
+
+    // Throws lidarflow::Error(InvalidArgument) naming the first bad field.
+    void validate() const;
+};
+
+// The per-pixel prior: disparity and weight (0 = none, 255 = full) of the nearest LiDAR point
+// within `lidar_radius` px whose intensity the pixel shares. `gray` is the left image (8-bit,
+// one channel); the points live in it. Returns {prior (CV_32F), weight (CV_8U)}.
+struct LidarPrior {
+    cv::Mat1f disparity;
+    cv::Mat1b weight;
+};
+LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt);
+
+// Disparity of the rectified pair (8-bit gray or BGR, one size) with the LiDAR points of the
+// left image (may be empty: image-only SGM). Returns a new map, kInvalidDisparity where the
+// checks reject a pixel or the disparity would point left of I_r. Throws lidarflow::Error:
+// InvalidArgument for empty or non-8-bit images, bad options or images over 16384 px a side;
+// SizeMismatch when the images or the LiDAR's size differ. Memory: ~3 bytes per pixel and
+// disparity. Thread-safe (no shared state).
+DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
+                        const GuidedSgmOptions &opt);
+
+}  // namespace lidarflow::stereo

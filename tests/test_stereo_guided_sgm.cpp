@@ -1,0 +1,185 @@
+// SPDX-License-Identifier: MIT
+// The project's SGM with a LiDAR term (stereo/guided_sgm.hpp) and the thinning of dense scans
+// for stages 2-4 (lidar/binning.hpp): a textured pair at a known disparity, a textureless
+// square that only the LiDAR can place, determinism over threads, refused inputs.
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.hpp"
+#include "lidar/binning.hpp"
+#include "stereo/guided_sgm.hpp"
+#include "synth_fields.hpp"
+#include "test_support.hpp"
+
+using namespace lidarflow;
+
+namespace {
+
+constexpr int kW = 200, kH = 100;
+
+// A random texture (blurred noise, so that census windows see gradients, not single pixels).
+cv::Mat1b texture(int w, int h, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<int> v(0, 255);
+    cv::Mat1b m(h, w);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) m(y, x) = static_cast<uint8_t>(v(rng));
+    cv::GaussianBlur(m, m, cv::Size(3, 3), 0.8);
+    return m;
+}
+
+// Left and right views of a textured plane at disparity `bg`, with, when square > 0, a flat
+// (textureless) square of that side at disparity `fg` in the middle.
+void scene(int bg, int fg, int square, cv::Mat1b &left, cv::Mat1b &right) {
+    const cv::Mat1b t = texture(kW + 64, kH, 7);
+    left.create(kH, kW);
+    right.create(kH, kW);
+    const int x0 = kW / 2 - square / 2, y0 = kH / 2 - square / 2;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            left(y, x) = t(y, x + 32);
+            right(y, x) = t(y, x + 32 + bg);  // the right image sees the plane bg px further right
+        }
+    if (square <= 0) return;
+    for (int y = y0; y < y0 + square; ++y)
+        for (int x = x0; x < x0 + square; ++x) {
+            left(y, x) = 128;
+            right(y, x - fg) = 128;
+        }
+}
+
+double share_near(const DisparityMap &d, cv::Rect r, float value, float tol) {
+    int n = 0, good = 0;
+    for (int y = r.y; y < r.y + r.height; ++y)
+        for (int x = r.x; x < r.x + r.width; ++x) {
+            ++n;
+            if (disparity_valid(d(y, x)) && std::fabs(d(y, x) - value) <= tol) ++good;
+        }
+    return static_cast<double>(good) / n;
+}
+
+stereo::GuidedSgmOptions options(int threads = 2) {
+    stereo::GuidedSgmOptions o;
+    o.num_disparities = 48;
+    o.threads = threads;
+    return o;
+}
+
+// A textured plane is matched at its disparity almost everywhere right of the search range.
+void textured_plane(void **) {
+    cv::Mat1b l, r;
+    scene(12, 0, 0, l, r);
+    const SparseLidar none{kW, kH, {}};
+    const DisparityMap d = stereo::guided_sgm(l, r, none, options());
+    const double share = share_near(d, cv::Rect(48, 5, kW - 53, kH - 10), 12.0f, 0.5f);
+    std::printf("textured plane: %.3f of the pixels at 12 +- 0.5 px\n", share);
+    assert_true(share > 0.97);
+}
+
+// In a textureless square every disparity costs the same: image-only SGM cannot place it, the
+// LiDAR points inside can, and the smoothness term carries them across the square.
+void lidar_places_a_textureless_square(void **) {
+    cv::Mat1b l, r;
+    scene(8, 24, 40, l, r);
+    const cv::Rect inner(kW / 2 - 16, kH / 2 - 16, 32, 32);
+    SparseLidar lidar{kW, kH, {}};
+    for (int y = kH / 2 - 15; y <= kH / 2 + 15; y += 10)  // 16 points, 10 px apart
+        for (int x = kW / 2 - 15; x <= kW / 2 + 15; x += 10) lidar.points.push_back({x, y, 24.0f});
+    const DisparityMap image_only = stereo::guided_sgm(l, r, SparseLidar{kW, kH, {}}, options());
+    const DisparityMap guided = stereo::guided_sgm(l, r, lidar, options());
+    const double before = share_near(image_only, inner, 24.0f, 1.0f), after = share_near(guided, inner, 24.0f, 1.0f);
+    std::printf("textureless square at 24 +- 1 px: %.3f image-only, %.3f with 16 LiDAR points\n", before, after);
+    assert_true(before < 0.5);
+    assert_true(after > 0.9);
+    // The background keeps its disparity: the points guide their own surface only.
+    assert_true(share_near(guided, cv::Rect(52, 5, 40, 20), 8.0f, 0.5f) > 0.95);
+}
+
+// Integer arithmetic throughout: one, two or three threads give the same map bit for bit.
+void threads_do_not_change_the_result(void **) {
+    cv::Mat1b l, r;
+    scene(8, 24, 40, l, r);
+    SparseLidar lidar{kW, kH, {{100, 50, 24.0f}, {30, 20, 8.0f}}};
+    const DisparityMap one = stereo::guided_sgm(l, r, lidar, options(1));
+    for (int t : {2, 3}) assert_true(test::same_mat(one, stereo::guided_sgm(l, r, lidar, options(t))));
+    stereo::GuidedSgmOptions four = options(2);
+    four.paths = 4;
+    const DisparityMap d4 = stereo::guided_sgm(l, r, lidar, four);
+    four.threads = 3;
+    assert_true(test::same_mat(d4, stereo::guided_sgm(l, r, lidar, four)));
+}
+
+// A densified prior: the point's own pixel at full weight, neighbours of another intensity none.
+void prior_stays_on_its_surface(void **) {
+    cv::Mat1b g(20, 20, static_cast<uint8_t>(50));
+    g(cv::Rect(10, 0, 10, 20)) = 200;
+    stereo::GuidedSgmOptions o = options();
+    o.lidar_radius = 3;
+    const stereo::LidarPrior p = stereo::densify_lidar(g, SparseLidar{20, 20, {{9, 10, 5.0f}}}, o);
+    assert_int_equal(p.weight(10, 9), 255);
+    assert_float_equal(p.disparity(10, 9), 5.0f, 0);
+    assert_true(p.weight(10, 7) > 0 && p.weight(10, 7) < 255);
+    assert_int_equal(p.weight(10, 10), 0);  // across the intensity edge
+    assert_int_equal(p.weight(10, 5), 0);   // beyond the radius
+}
+
+void bad_inputs_are_refused(void **) {
+    cv::Mat1b l, r;
+    scene(8, 0, 0, l, r);
+    const SparseLidar none{kW, kH, {}};
+    assert_true(test::throws_code(ErrorCode::SizeMismatch, [&] {
+        stereo::guided_sgm(l, r(cv::Rect(0, 0, kW - 1, kH)), none, options());
+    }));
+    assert_true(test::throws_code(ErrorCode::InvalidArgument,
+                                  [&] { stereo::guided_sgm(cv::Mat(), cv::Mat(), none, options()); }));
+    assert_true(test::throws_code(ErrorCode::SizeMismatch,
+                                  [&] { stereo::guided_sgm(l, r, SparseLidar{kW + 1, kH, {{1, 1, 2.0f}}}, options()); }));
+    stereo::GuidedSgmOptions bad = options();
+    bad.num_disparities = 40;
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
+    bad = options();
+    bad.paths = 6;
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
+    bad = options();
+    bad.lidar_slope = NAN;
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
+}
+
+// Binning keeps at most one point per cell, whatever the scan's density, and leaves a sparse
+// input (no two points in one cell) unchanged.
+void binning_bounds_the_points(void **) {
+    SparseLidar dense{64, 32, {}};
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) dense.points.push_back({x, y, static_cast<float>(x % 7)});
+    for (int cell : {2, 4, 8}) {
+        const SparseLidar b = lidar::bin_points(dense, cell);
+        assert_int_equal(b.points.size(), static_cast<size_t>((64 / cell) * (32 / cell)));
+    }
+    const SparseLidar b4 = lidar::bin_points(dense, 4);  // the pixel nearest the centre, nearer surface on ties
+    for (const LidarPoint &p : b4.points) {
+        assert_true(p.x % 4 == 1 || p.x % 4 == 2);
+        assert_true(p.y % 4 == 1 || p.y % 4 == 2);
+    }
+    const SparseLidar sparse{64, 32, {{1, 1, 3.0f}, {20, 9, 4.0f}, {40, 30, 5.0f}}};
+    const SparseLidar same = lidar::bin_points(sparse, 8);
+    assert_int_equal(same.points.size(), 3);
+    assert_int_equal(lidar::bin_points(dense, 0).points.size(), dense.points.size());
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(textured_plane),
+        cmocka_unit_test(lidar_places_a_textureless_square),
+        cmocka_unit_test(threads_do_not_change_the_result),
+        cmocka_unit_test(prior_stays_on_its_surface),
+        cmocka_unit_test(bad_inputs_are_refused),
+        cmocka_unit_test(binning_bounds_the_points),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

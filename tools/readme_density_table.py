@@ -25,12 +25,16 @@ def kitti_sf(cli, root, preset, threads, extra):
     """Mean over frames of the final SF outliers (per-frame means when --seeds is given)."""
     cmd = [cli, "kitti", "--root", root, "--preset", preset, "--threads", str(threads), "--no-viz"] + extra
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    m = re.search(r"^Interpolation: LiDAR-Flow\s+(.*)$", out, re.M)
-    if not m:
-        sys.exit("readme_density_table: no per-frame SF line in:\n" + out)
-    per_frame = [float(a) for a in re.findall(r"([\d.]+) / [\d.]+", m.group(1))]
-    # the last pair is the pooled figure; the frames come before it
-    return statistics.mean(per_frame[:-1])
+    if "--seeds" in extra:  # per frame, the mean over the seeds: the last column of that block
+        block = out.split("Over ", 1)[-1]
+        per_frame = [float(v) for v in re.findall(r"^Interpolation: LiDAR-Flow\s+\d{6}.*?([\d.]+) \+-[\d.]+\s*$",
+                                                   block, re.M)]
+    else:  # per frame (occ / noc), then the pooled pair
+        m = re.search(r"^Interpolation: LiDAR-Flow\s+(.*)$", out, re.M)
+        per_frame = [float(a) for a in re.findall(r"([\d.]+) / [\d.]+", m.group(1))][:-1] if m else []
+    if not per_frame:
+        sys.exit("readme_density_table: no per-frame SF in:\n" + out)
+    return statistics.mean(per_frame)
 
 
 def time_ratio(bench, root, preset, threads):

@@ -47,14 +47,7 @@ bool same(const cv::Mat &a, const cv::Mat &b) {
            (a.empty() || cv::norm(a.reshape(1), b.reshape(1), cv::NORM_INF) == 0);
 }
 
-bool same_lidar(const SparseLidar &a, const SparseLidar &b) {
-    if (a.points.size() != b.points.size()) return false;
-    for (size_t i = 0; i < a.points.size(); ++i)
-        if (a.points[i].x != b.points[i].x || a.points[i].y != b.points[i].y ||
-            a.points[i].disparity != b.points[i].disparity)
-            return false;
-    return true;
-}
+bool same_lidar(const SparseLidar &a, const SparseLidar &b) { return a.points == b.points; }
 
 void test_same_seed_is_bit_identical(void **) {
     SynthConfig c = small(7);

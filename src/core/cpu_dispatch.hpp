@@ -17,8 +17,9 @@
 #endif
 
 // LIDARFLOW_V3_CLONES: as above for integer kernels that also need the POPCNT instruction
-// (GCC's "avx2" clone calls a library routine for __builtin_popcountll). Integer only: the
-// Haswell clone may contract float expressions into FMA, which would change float results.
+// (GCC's "avx2" clone calls a library routine for __builtin_popcountll; x86-64-v3 is AVX2 +
+// POPCNT + FMA, picked by CPU features, where an "arch=haswell" clone is picked by CPU model).
+// Integer only: that clone may contract float expressions into FMA, changing float results.
 #if defined(__SANITIZE_THREAD__)
 #define LIDARFLOW_V3_CLONES
 #elif defined(__has_feature)

@@ -12,6 +12,9 @@ struct LidarPoint {
     int x = 0, y = 0;      // pixel in the image the scan is aligned to
     float disparity = 0;   // d = fx * B / z [px]
 };
+inline bool operator==(const LidarPoint &a, const LidarPoint &b) {
+    return a.x == b.x && a.y == b.y && a.disparity == b.disparity;
+}
 
 struct SparseLidar {
     int width = 0, height = 0;  // size of the image the points live in

@@ -122,21 +122,8 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
 
 }  // namespace
 
-namespace {
-
-bool same_points(const SparseLidar &a, const SparseLidar &b) {
-    if (a.points.size() != b.points.size()) return false;
-    for (size_t i = 0; i < a.points.size(); ++i)
-        if (a.points[i].x != b.points[i].x || a.points[i].y != b.points[i].y ||
-            a.points[i].disparity != b.points[i].disparity)
-            return false;
-    return true;
-}
-
-}  // namespace
-
-bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &points) const {
-    return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r) && same_points(lidar, points);
+bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &guide) const {
+    return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r) && lidar.points == guide.points;
 }
 
 SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {

@@ -8,8 +8,9 @@
 //    (and t1 -> t0 for the round-trip check of stage 2b).
 //  - d1 of a pixel is the t1 disparity at its flow target (nearest pixel).
 // LiDAR enters the stereo cost (guided), at the pixels it measures (d0 := the measurement) and,
-// through stages 2-4, as the anchor of the interpolation. Each part runs at O(pixels x range) with small, cache-resident
-// working sets, instead of PatchMatch over 128-byte descriptors in four dimensions.
+// through stages 2-4, as the anchor of the interpolation. Each part runs at O(pixels x range)
+// with small, cache-resident working sets, instead of PatchMatch over 128-byte descriptors in
+// four dimensions.
 #include <memory>
 
 #include <opencv2/core.hpp>
@@ -49,9 +50,8 @@ SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt);
 
 // Runs the decoupled stage 1 on the images of `in` (all one size, 8-bit gray or BGR). `sgm` are
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
-// pixel-identical to (left0, right0) (and, for guided stereo, made with the same lidar0),
-// supplies the t0 disparity. Throws lidarflow::Error for bad
-// inputs. Deterministic; OpenCV's own thread pool does the parallel work.
+// pixel-identical to (left0, right0) and made with the same guiding points (stereo_guide of
+// lidar0), supplies the t0 disparity. Throws lidarflow::Error for bad inputs. Deterministic.
 // `camera` (all zero = unknown) is the rig at the images' resolution.
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,
                                 const consistency::SgmOptions &sgm, const StereoCamera &camera, bool backward,

@@ -247,9 +247,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r);
-        if (options_.last_stage != Stage::Matching)
-            run_stages_2_to_4(frame, lidar::bin_points(lidar0, options_.lidar_cell),
-                              lidar::bin_points(lidar1, options_.lidar_cell), sgm, threads, r);
+        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
         r.total_seconds = seconds_since(t_total);
         return r;
     }
@@ -291,8 +289,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     }
     release_openmp_workers();  // stage 2 starts with OpenCV's SGBM
 
-    run_stages_2_to_4(frame, lidar::bin_points(lidar0, options_.lidar_cell),
-                      lidar::bin_points(lidar1, options_.lidar_cell), DisparityMap(), threads, r);
+    run_stages_2_to_4(frame, lidar0, lidar1, DisparityMap(), threads, r);
     r.total_seconds = seconds_since(t_total);
     return r;
 }
@@ -325,8 +322,11 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
     return m.sgm0;
 }
 
-void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
+void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &all0, const SparseLidar &all1,
                                   const DisparityMap &sgm, int threads, EstimatorResult &r) const {
+    // Stages 2-4 see the points thinned to lidar_cell (every point when it is off).
+    const SparseLidar lidar0 = lidar::bin_points(all0, options_.lidar_cell);
+    const SparseLidar lidar1 = lidar::bin_points(all1, options_.lidar_cell);
     // Stages 2-3.
     auto t = Clock::now();
     consistency::ConsistencyResult c =

@@ -129,12 +129,13 @@ struct PathRow {
     uint16_t *at(int i) { return v.data() + static_cast<size_t>(i) * stride + 1; }
 };
 
-// Both directions along each row; the first writes the sums.
+// Both directions along each row; the first writes the sums. a, b: two path buffers of one
+// pixel (PathRow::at); each direction starts from zeros (its first pixel takes its data cost).
 LIDARFLOW_V3_CLONES
 void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, const Penalties &pen, uint16_t *sum,
                       uint16_t *a, uint16_t *b) {
-    // a, b: D + 2 values with sentinels; a starts as zeros.
     uint16_t *prev = a, *cur = b, prev_min = 0;
+    std::fill(prev, prev + D, 0);
     for (int x = 0; x < w; ++x) {
         const uint16_t p2 = pen.p2_at(x ? std::abs(img[x] - img[x - 1]) : 0);
         prev_min = path_step<true>(cost + static_cast<size_t>(x) * D, prev, prev_min, pen.p1, p2, cur,
@@ -152,55 +153,27 @@ void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, con
 }
 
 // The vertical and (with 8 paths) diagonal paths entering row y from row y - dir, for columns
-// [x0, x1). prev*: row y - dir's paths; cur*: row y's.
+// [x0, x1). prev*: row y - dir's paths; cur*: row y's. A path that starts here (the first row,
+// a diagonal from outside the image) continues from `zero`, which gives it its data cost alone.
 LIDARFLOW_V3_CLONES
 void column_paths(const uint8_t *cost, const uint8_t *img, const uint8_t *img_prev, int w, int D, const Penalties &pen,
-                  bool diagonals, bool first_row, PathRow &pv, PathRow &cv_, PathRow &pa, PathRow &ca, PathRow &pb,
-                  PathRow &cb, uint16_t *sum, int x0, int x1) {
+                  bool diagonals, bool first_row, PathRow &zero, PathRow &pv, PathRow &cv_, PathRow &pa, PathRow &ca,
+                  PathRow &pb, PathRow &cb, uint16_t *sum, int x0, int x1) {
     for (int x = x0; x < x1; ++x) {
         const uint8_t *c = cost + static_cast<size_t>(x) * D;
         uint16_t *s = sum + static_cast<size_t>(x) * D;
-        if (first_row) {
-            for (PathRow *r : {&cv_, &ca, &cb}) {
-                if (r != &cv_ && !diagonals) continue;
-                uint16_t *o = r->at(x), m = kBig;
-                for (int d = 0; d < D; ++d) {
-                    o[d] = c[d];
-                    m = std::min<uint16_t>(m, c[d]);
-                    s[d] = static_cast<uint16_t>(s[d] + c[d]);
-                }
-                r->min[x] = m;
-            }
-            continue;
-        }
-        cv_.min[x] = path_step<false>(c, pv.at(x), pv.min[x], pen.p1, pen.p2_at(std::abs(img[x] - img_prev[x])),
-                                      cv_.at(x), s, D);
+        // One step from column `from` of the previous row's path `prev` into `cur`.
+        auto step = [&](PathRow &prev, int from, PathRow &cur) {
+            const bool start = first_row || from < 0 || from >= w;
+            const int at = start ? 0 : from;
+            PathRow &p = start ? zero : prev;
+            cur.min[x] = path_step<false>(c, p.at(at), p.min[at], pen.p1,
+                                          pen.p2_at(start ? 0 : std::abs(img[x] - img_prev[from])), cur.at(x), s, D);
+        };
+        step(pv, x, cv_);
         if (!diagonals) continue;
-        // Diagonal from (x - 1, y - dir); the first column starts a path.
-        if (x > 0)
-            ca.min[x] = path_step<false>(c, pa.at(x - 1), pa.min[x - 1], pen.p1,
-                                         pen.p2_at(std::abs(img[x] - img_prev[x - 1])), ca.at(x), s, D);
-        else {
-            uint16_t *o = ca.at(x), m = kBig;
-            for (int d = 0; d < D; ++d) {
-                o[d] = c[d];
-                m = std::min<uint16_t>(m, c[d]);
-                s[d] = static_cast<uint16_t>(s[d] + c[d]);
-            }
-            ca.min[x] = m;
-        }
-        if (x + 1 < w)
-            cb.min[x] = path_step<false>(c, pb.at(x + 1), pb.min[x + 1], pen.p1,
-                                         pen.p2_at(std::abs(img[x] - img_prev[x + 1])), cb.at(x), s, D);
-        else {
-            uint16_t *o = cb.at(x), m = kBig;
-            for (int d = 0; d < D; ++d) {
-                o[d] = c[d];
-                m = std::min<uint16_t>(m, c[d]);
-                s[d] = static_cast<uint16_t>(s[d] + c[d]);
-            }
-            cb.min[x] = m;
-        }
+        step(pa, x - 1, ca);
+        step(pb, x + 1, cb);
     }
 }
 
@@ -313,17 +286,15 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
                   slope16, opt.lidar_cap, cost.get() + plane * y);
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};
-    std::vector<std::vector<uint16_t>> scratch(T, std::vector<uint16_t>(2 * (D + 2), 0));
-    for (auto &s : scratch) s[0] = s[D + 1] = s[D + 2] = s[2 * D + 3] = kBig;
+    std::vector<PathRow> scratch(T, PathRow(2, D));
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
-        std::vector<uint16_t> &s = scratch[static_cast<size_t>(omp_get_thread_num())];
-        std::fill(s.begin() + 1, s.begin() + D + 1, 0);
-        horizontal_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), w, D, pen, sum.get() + plane * y, s.data() + 1,
-                         s.data() + D + 3);
+        PathRow &s = scratch[static_cast<size_t>(omp_get_thread_num())];
+        horizontal_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), w, D, pen, sum.get() + plane * y, s.at(0), s.at(1));
     }
 
     const bool diag = opt.paths == 8;
+    PathRow zero(1, D);  // read only
     for (int dir : {1, -1}) {
         PathRow pv(w, D), cv_(w, D), pa(w, D), ca(w, D), pb(w, D), cb(w, D);
         const int y_first = dir > 0 ? 0 : h - 1;
@@ -336,7 +307,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
 #pragma omp for schedule(static)
                 for (int t = 0; t < T; ++t)  // one equal share of the columns per thread
                     column_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), img_prev, w, D, pen, diag, y == y_first,
-                                 *P[0], *C[0], *P[1], *C[1], *P[2], *C[2], sum.get() + plane * y, w * t / T,
+                                 zero, *P[0], *C[0], *P[1], *C[1], *P[2], *C[2], sum.get() + plane * y, w * t / T,
                                  w * (t + 1) / T);
                 for (int k = 0; k < 3; ++k) std::swap(P[k], C[k]);  // every thread alike, after the barrier
             }

@@ -188,11 +188,12 @@ void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_dif
         const uint16_t *s = S + static_cast<size_t>(x) * D;
         const int lim = std::min(D, x + 1);
         uint32_t k = UINT32_MAX;
-        uint32_t *r = keys + x;  // the right image's pixel x - d is r[-d]
-        for (int d = 0; d < lim; ++d) {
+        uint32_t *r = keys + x - (lim - 1);  // r[e]: the right image's pixel x - d, d = lim - 1 - e
+        for (int e = 0; e < lim; ++e) {      // (in this order the loop vectorises)
+            const int d = lim - 1 - e;
             const uint32_t key = (static_cast<uint32_t>(s[d]) << 9) | static_cast<uint32_t>(d);
             k = std::min(k, key);
-            r[-d] = std::min(r[-d], key);
+            r[e] = std::min(r[e], key);
         }
         const int b = static_cast<int>(k & 511u), bs = static_cast<int>(k >> 9);
         uint32_t other = UINT32_MAX;
@@ -241,21 +242,36 @@ void GuidedSgmOptions::validate() const {
 }
 
 LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
-    const int h = gray.rows, w = gray.cols, r = opt.lidar_radius;
+    const int h = gray.rows, w = gray.cols, r = opt.lidar_radius, T = opt.threads;
     LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
-    cv::Mat1i dist(h, w, r + 1);  // Chebyshev distance to the point that set the prior
-    for (const LidarPoint &pt : lidar.points) {
-        const int c = gray(pt.y, pt.x);
-        for (int y = std::max(0, pt.y - r); y <= std::min(h - 1, pt.y + r); ++y)
-            for (int x = std::max(0, pt.x - r); x <= std::min(w - 1, pt.x + r); ++x) {
-                const int dd = std::max(std::abs(x - pt.x), std::abs(y - pt.y));
-                if (dd > 0 && std::abs(gray(y, x) - c) > opt.lidar_intensity) continue;
-                // The nearest point wins; of equally near ones the larger disparity (the nearer
-                // surface), so the order of the points does not matter.
-                if (dd > dist(y, x) || (dd == dist(y, x) && pt.disparity <= p.disparity(y, x))) continue;
-                dist(y, x) = dd;
-                p.disparity(y, x) = pt.disparity;
-                p.weight(y, x) = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
+    // The points bucketed by row, so that each output row is written by one thread.
+    std::vector<int> first(static_cast<size_t>(h) + 1, 0), order(lidar.points.size());
+    for (const LidarPoint &pt : lidar.points) ++first[static_cast<size_t>(pt.y) + 1];
+    for (int y = 0; y < h; ++y) first[y + 1] += first[y];
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (size_t i = 0; i < lidar.points.size(); ++i) order[fill[lidar.points[i].y]++] = static_cast<int>(i);
+    std::vector<std::vector<int>> dist(T, std::vector<int>(w));  // Chebyshev distance of the point that set it
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        std::vector<int> &dr = dist[static_cast<size_t>(omp_get_thread_num())];
+        std::fill(dr.begin(), dr.end(), r + 1);
+        float *disp = p.disparity.ptr<float>(y);
+        uint8_t *weight = p.weight.ptr<uint8_t>(y);
+        const uint8_t *g = gray.ptr<uint8_t>(y);
+        for (int py = std::max(0, y - r); py <= std::min(h - 1, y + r); ++py)
+            for (int i = first[py]; i < first[py + 1]; ++i) {
+                const LidarPoint &pt = lidar.points[static_cast<size_t>(order[i])];
+                const int c = gray(pt.y, pt.x);
+                for (int x = std::max(0, pt.x - r); x <= std::min(w - 1, pt.x + r); ++x) {
+                    const int dd = std::max(std::abs(x - pt.x), std::abs(y - pt.y));
+                    if (dd > 0 && std::abs(g[x] - c) > opt.lidar_intensity) continue;
+                    // The nearest point wins; of equally near ones the larger disparity (the
+                    // nearer surface), so the order of the points does not matter.
+                    if (dd > dr[x] || (dd == dr[x] && pt.disparity <= disp[x])) continue;
+                    dr[x] = dd;
+                    disp[x] = pt.disparity;
+                    weight[x] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
+                }
             }
     }
     return p;
@@ -268,11 +284,6 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     const int h = gl.rows, w = gl.cols, D = opt.num_disparities, T = opt.threads;
     const cv::Mat cl = census(gl, T), cr = census(gr, T);
     const LidarPrior prior = densify_lidar(gl, lidar, opt);
-    cv::Mat1s prior16(h, w, static_cast<int16_t>(0));
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            if (prior.weight(y, x))
-                prior16(y, x) = static_cast<int16_t>(std::lround(std::min(prior.disparity(y, x), 2047.0f) * 16));
     const int slope16 = static_cast<int>(std::lround(opt.lidar_slope * 16));
 
     // Every buffer is allocated here, before the parallel regions (their bodies cannot throw).
@@ -280,10 +291,16 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     std::unique_ptr<uint8_t[]> cost(new uint8_t[plane * h]);  // every element is written
     std::unique_ptr<uint16_t[]> sum(new uint16_t[plane * h]);
     std::vector<std::vector<uint32_t>> wta_scratch(T, std::vector<uint32_t>(w));
+    std::vector<std::vector<int16_t>> prior16(T, std::vector<int16_t>(w));  // the row's prior in 1/16 px
 #pragma omp parallel for num_threads(T) schedule(static)
-    for (int y = 0; y < h; ++y)
-        row_costs(cl.ptr<uint64_t>(y), cr.ptr<uint64_t>(y), prior16.ptr<int16_t>(y), prior.weight.ptr<uint8_t>(y), w, D,
-                  slope16, opt.lidar_cap, cost.get() + plane * y);
+    for (int y = 0; y < h; ++y) {
+        int16_t *p16 = prior16[static_cast<size_t>(omp_get_thread_num())].data();
+        const float *pd = prior.disparity.ptr<float>(y);
+        for (int x = 0; x < w; ++x)
+            p16[x] = static_cast<int16_t>(std::lround(std::clamp(pd[x], 0.0f, 2047.0f) * 16));
+        row_costs(cl.ptr<uint64_t>(y), cr.ptr<uint64_t>(y), p16, prior.weight.ptr<uint8_t>(y), w, D, slope16,
+                  opt.lidar_cap, cost.get() + plane * y);
+    }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};
     std::vector<PathRow> scratch(T, PathRow(2, D));

@@ -106,6 +106,30 @@ void rigid_prior_acts(void **) {
     assert_true(cv::countNonZero(c.forward.valid) > 0);
 }
 
+// The rigid choice takes, per pixel, either DIS's flow or the rigid prior's (never a mix), and
+// only where the t0 disparity exists; off, the flow is DIS's alone.
+void rigid_choice_picks_one_of_two_flows(void **) {
+    const synth::SynthScene s = scene(640, 192, 2);
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    matching::MatchingOptions on = decoupled_options(), off = on;
+    assert_int_equal(on.flow.rigid_choice_radius, 1);
+    off.flow.rigid_choice_radius = 0;
+    const consistency::SgmOptions sgm;
+    const auto a = matching::match_decoupled(in, on, sgm, s.camera, false);
+    const auto b = matching::match_decoupled(in, off, sgm, s.camera, false);
+    int changed = 0;
+    for (int y = 0; y < s.left0.rows; ++y)
+        for (int x = 0; x < s.left0.cols; ++x) {
+            if (!a.forward.valid(y, x) || !b.forward.valid(y, x)) continue;
+            if (a.forward.u(y, x) == b.forward.u(y, x) && a.forward.v(y, x) == b.forward.v(y, x)) continue;
+            ++changed;
+            assert_true(disparity_valid(a.sgm0(y, x)));
+        }
+    std::printf("rigid choice: %d of %d pixels take the rigid flow\n", changed, s.left0.rows * s.left0.cols);
+    assert_true(changed > 0);
+    assert_true(same_mat(a.sgm0, b.sgm0));
+}
+
 // Bad inputs are errors, not crashes.
 void bad_inputs_are_refused(void **) {
     const synth::SynthScene s = scene();
@@ -248,6 +272,7 @@ int main() {
         cmocka_unit_test(bad_inputs_are_refused),        cmocka_unit_test(realtime_is_accurate),
         cmocka_unit_test(presets_do_not_depend_on_threads), cmocka_unit_test(stream_reuses_the_newer_disparity),
         cmocka_unit_test(threads_follow_the_idle_cpus),  cmocka_unit_test(paper_preset_is_the_papers_design),
+        cmocka_unit_test(rigid_choice_picks_one_of_two_flows),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -151,6 +151,11 @@ typedef struct lf_options lf_options_t;
  *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement
  *   "matching.flow_prior_track_step"  int [0, 256]  (decoupled) grid step [px] of the tracks
  *                                                   the rigid start flow is fitted to (0 = off)
+ *   "matching.flow_rigid_choice_radius" int [0, 16] (decoupled) per pixel, the rigid start
+ *                                                   flow instead of DIS's where its photometric
+ *                                                   error over a (2r+1)^2 box is lower and the
+ *                                                   pixel has a disparity (0 = off; "fast",
+ *                                                   "realtime": 1)
  *   "matching.guided_stereo"          0/1           (decoupled) stereo of both pairs by the
  *                                                   library's SGM with each pair's LiDAR points
  *                                                   in its data cost (1 in "fast", "realtime")

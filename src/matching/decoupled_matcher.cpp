@@ -80,6 +80,32 @@ cv::Mat2f rigid_flow(const interpolation::EgoMotion &m, const DisparityMap &d) {
     return prior;
 }
 
+// Sum of |from - to warped back by flow| over (2r + 1)^2 boxes (a target outside `to` reads 0:
+// an error of `from` itself). `from`, `to`: 8-bit gray.
+cv::Mat1f warp_error(const cv::Mat &from, const cv::Mat &to, const cv::Mat2f &flow, int r) {
+    cv::Mat2f map(flow.size());
+    for (int y = 0; y < flow.rows; ++y)
+        for (int x = 0; x < flow.cols; ++x) map(y, x) = flow(y, x) + cv::Vec2f(static_cast<float>(x), static_cast<float>(y));
+    cv::Mat warped, diff;
+    cv::remap(to, warped, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::absdiff(from, warped, diff);
+    cv::Mat1f e;
+    cv::boxFilter(diff, e, CV_32F, cv::Size(2 * r + 1, 2 * r + 1), cv::Point(-1, -1), false);
+    return e;
+}
+
+// DIS's flow, or the rigid prior where that explains the images better and rests on a measured
+// disparity (the static scene's exact motion from its depth; DIS drifts on weak texture).
+cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, const cv::Mat2f &rigid,
+                       const DisparityMap &d, int r) {
+    if (r <= 0 || rigid.empty()) return dis;
+    const cv::Mat1f ed = warp_error(from, to, dis, r), er = warp_error(from, to, rigid, r);
+    for (int y = 0; y < dis.rows; ++y)
+        for (int x = 0; x < dis.cols; ++x)
+            if (disparity_valid(d(y, x)) && er(y, x) < ed(y, x)) dis(y, x) = rigid(y, x);
+    return dis;
+}
+
 cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o,
                                cv::Mat2f initial = cv::Mat2f()) {
     cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
@@ -159,12 +185,15 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
         log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "
                                         "inverse search starts from zero flow (image-only prior)");
     const SparseLidar none{in.left0.cols, in.left0.rows, {}};
-    r.forward = assemble(dense_inverse_search(g0, g1, opt.flow, rigid_flow(motion, r.sgm0)), r.sgm0, r.sgm1,
-                         opt.use_lidar ? in.lidar0 : none);
+    const int rc = opt.flow.rigid_choice_radius;
+    const cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
+    r.forward = assemble(choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc),
+                         r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none);
     if (backward) {
         const interpolation::EgoMotion back = motion.valid ? motion.inverse() : motion;
-        r.backward = assemble(dense_inverse_search(g1, g0, opt.flow, rigid_flow(back, r.sgm1)), r.sgm1, r.sgm0,
-                              opt.use_lidar ? in.lidar1 : none);
+        const cv::Mat2f prior1 = rigid_flow(back, r.sgm1);
+        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1, r.sgm1, rc),
+                              r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none);
     }
     r.seconds_flow = seconds_since(t);
     return r;

@@ -69,6 +69,10 @@ struct FlowSearchOptions {
     // tracks and the stereo disparities: DIS's coarse levels then need not find large motion
     // of the near background on their own. The grid step of the tracks [px], 0 = off.
     int prior_track_step = 0;
+    // Per pixel, keep the rigid prior's flow instead of DIS's where its photometric error over
+    // a (2r + 1)^2 box is lower and the stereo (or LiDAR) disparity it comes from exists: the
+    // static scene's exact motion from its measured depth (0 = off; needs prior_track_step).
+    int rigid_choice_radius = 0;
 };
 
 enum class MatchVariant { ImageOnly, ImLidar, ImLidarWin, ImLidarWinConst1, Full };

@@ -154,6 +154,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // check then cannot see the error.
         o.matching.flow.refine_iterations = 0;
         o.matching.flow.prior_track_step = 12;
+        o.matching.flow.rigid_choice_radius = 1;  // the rigid prior's flow where it fits better
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         if (name == "fast") {  // denser DIS patches on a larger frame

@@ -106,6 +106,43 @@ void rigid_prior_acts(void **) {
     assert_true(cv::countNonZero(c.forward.valid) > 0);
 }
 
+// Without a t1 scan, the t1 stereo is guided by the t0 points carried by the camera's motion:
+// they land where the t1 camera sees them at its depth (movers aside). With a t1 scan, or the
+// option off, the t1 guide is the scan (or nothing).
+void t0_points_carried_to_t1(void **) {
+    const synth::SynthScene s = scene(640, 192, 2);
+    const SparseLidar none{s.left0.cols, s.left0.rows, {}};
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, none};
+    const consistency::SgmOptions sgm;
+    const matching::DecoupledResult r = matching::match_decoupled(in, decoupled_options(), sgm, s.camera, false);
+    assert_true(r.guide1.points.size() > s.lidar0.points.size() / 2);
+    size_t right = 0;
+    for (const LidarPoint &p : r.guide1.points)
+        if (std::fabs(p.disparity - s.camera.disparity_from_depth(s.depth_left1(p.y, p.x))) <= 1.0f) ++right;
+    assert_true(right >= r.guide1.points.size() * 8 / 10);
+    stereo::GuidedSgmOptions g = decoupled_options().stereo;
+    g.num_disparities = sgm.num_disparities;
+    g.threads = 2;
+    assert_true(same_mat(r.sgm1, stereo::guided_sgm(s.left1, s.right1, r.guide1, g)));
+    // The carried guide makes the t1 disparity better than the images alone.
+    matching::MatchingOptions off = decoupled_options();
+    off.carry_lidar = false;
+    const matching::DecoupledResult o = matching::match_decoupled(in, off, sgm, s.camera, false);
+    assert_true(o.guide1.points.empty());
+    auto wrong = [&](const DisparityMap &d) {
+        int n = 0;
+        for (int y = 0; y < d.rows; ++y)
+            for (int x = 0; x < d.cols; ++x)
+                n += !disparity_valid(d(y, x)) ||
+                     std::fabs(d(y, x) - s.camera.disparity_from_depth(s.depth_left1(y, x))) > 3.0f;
+        return n;
+    };
+    assert_true(wrong(r.sgm1) < wrong(o.sgm1));
+    const matching::MatchInput with_t1{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    assert_true(matching::match_decoupled(with_t1, decoupled_options(), sgm, s.camera, false).guide1.points ==
+                s.lidar1.points);
+}
+
 // The rigid choice takes, per pixel, either DIS's flow or the rigid prior's (never a mix), and
 // only where the t0 disparity exists; off, the flow is DIS's alone.
 void rigid_choice_picks_one_of_two_flows(void **) {
@@ -272,7 +309,7 @@ int main() {
         cmocka_unit_test(bad_inputs_are_refused),        cmocka_unit_test(realtime_is_accurate),
         cmocka_unit_test(presets_do_not_depend_on_threads), cmocka_unit_test(stream_reuses_the_newer_disparity),
         cmocka_unit_test(threads_follow_the_idle_cpus),  cmocka_unit_test(paper_preset_is_the_papers_design),
-        cmocka_unit_test(rigid_choice_picks_one_of_two_flows),
+        cmocka_unit_test(rigid_choice_picks_one_of_two_flows), cmocka_unit_test(t0_points_carried_to_t1),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

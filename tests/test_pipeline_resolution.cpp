@@ -5,11 +5,14 @@
 #include <cmath>
 #include <utility>
 
+#include <opencv2/imgproc.hpp>
+
 #include "eval/metrics.hpp"
 #include "lidar/visibility_filter.hpp"
 #include "pipeline/estimator.hpp"
 #include "pipeline/resolution.hpp"
 #include "synth/scene.hpp"
+#include "synth_fields.hpp"
 #include "test_support.hpp"
 
 using namespace lidarflow;
@@ -102,6 +105,34 @@ void upscale_scales_values_and_keeps_holes(void **) {
     restore_lidar_d0(big, SparseLidar{8, 6, {{1, 1, 7.25f}, {6, 2, 9.0f}}});
     assert_true(big.d0(1, 1) == 7.25f);
     assert_true(big.d0(2, 6) == 0.0f);  // invalid pixels stay untouched
+}
+
+// A depth edge between two small pixels: blended without the images, each full pixel takes the
+// side whose intensity it has with them; a jump below the edge step still blends.
+void upscale_keeps_edges_the_image_shows(void **) {
+    SceneFlowField s = SceneFlowField::zeros(4, 1);
+    s.valid.setTo(1);
+    const float d[4] = {10, 10, 30, 30};
+    for (int x = 0; x < 4; ++x) s.d0(0, x) = d[x];
+    cv::Mat small(1, 4, CV_8UC1), full(2, 8, CV_8UC1);
+    for (int x = 0; x < 4; ++x) small.at<uchar>(0, x) = x < 2 ? 40 : 200;
+    for (int x = 0; x < 8; ++x) full.at<uchar>(0, x) = full.at<uchar>(1, x) = x < 4 ? 40 : 200;
+    const SceneFlowField blend = upscale_field(s, 8, 2);
+    const EdgeGuide guide(small, full, 3.0f);
+    const SceneFlowField edge = upscale_field(s, 8, 2, &guide);
+    assert_float_equal(blend.d0(0, 3), 2 * (10 + 0.25 * 20), 1e-4);  // small x = 1.25: mid-air
+    assert_float_equal(edge.d0(0, 3), 20.0, 1e-4);
+    assert_float_equal(edge.d0(0, 4), 60.0, 1e-4);
+    const EdgeGuide off(small, full, 0.0f), coarse(small, full, 25.0f);
+    assert_true(test::same_field(upscale_field(s, 8, 2, &off), blend));
+    assert_true(test::same_field(upscale_field(s, 8, 2, &coarse), blend));
+    // BGR images give the same choice; guides of another size are refused.
+    cv::Mat small3, full3;
+    cv::cvtColor(small, small3, cv::COLOR_GRAY2BGR);
+    cv::cvtColor(full, full3, cv::COLOR_GRAY2BGR);
+    const EdgeGuide bgr(small3, full3, 3.0f);
+    assert_true(test::same_field(upscale_field(s, 8, 2, &bgr), edge));
+    assert_true(test::throws_code(ErrorCode::SizeMismatch, [&] { upscale_field(s, 16, 4, &guide); }));
 }
 
 void half_resolution_estimator(void **) {
@@ -204,6 +235,7 @@ int main() {
         cmocka_unit_test(downscale_rejects_bad_input),
         cmocka_unit_test(upscale_scales_values_and_keeps_holes),
         cmocka_unit_test(half_resolution_estimator),
+        cmocka_unit_test(upscale_keeps_edges_the_image_shows),
         cmocka_unit_test(hidden_lidar_point_is_not_used),
     };
     return cmocka_run_group_tests_name("pipeline_resolution", tests, nullptr, nullptr);

@@ -121,6 +121,12 @@ typedef struct lf_options lf_options_t;
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
  *                                        (default 1; "fast" 0.65, "realtime" 0.55)
+ *   "upscale_edge_step" float [0, 64]    bringing results back from processing_scale < 1:
+ *                                        where d0, u or v jumps by more than this [px of
+ *                                        the processing frame] between the 4 nearest
+ *                                        pixels, a pixel takes the one nearest in
+ *                                        intensity instead of their blend (default 3;
+ *                                        0 = always blend)
  *   "last_stage"       string            stop after "matching", "consistency", "sparse" or
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and
@@ -160,6 +166,10 @@ typedef struct lf_options lf_options_t;
  *                                                   library's SGM with each pair's LiDAR points
  *                                                   in its data cost (1 in "fast", "realtime")
  *                                                   instead of OpenCV's StereoSGBM (0)
+ *   "matching.carry_lidar"            0/1           (decoupled, guided) where the input has
+ *                                                   no t1 scan, the t1 stereo is guided by
+ *                                                   the t0 points carried into t1 by the
+ *                                                   camera's motion (default 1)
  *   guided SGM (matching.guided_stereo 1): census 9x7 costs, 8 or 4 paths
  *   "stereo.p1"               int   [0, 255]     penalty of a 1 px step (default 10)
  *   "stereo.p2"               int   [1, 1023]    penalty of a larger step (default 120), > p1

@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
+#include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/pixels.hpp"
 #include "interpolation/ego_motion.hpp"
@@ -28,34 +30,97 @@ cv::Mat gray(const cv::Mat &m) {
     return g;
 }
 
-// The dominant rigid motion t0 -> t1, fitted to sparse tracks on a grid and the stereo
-// disparities at both ends (invalid when they support none).
-interpolation::EgoMotion track_rigid_motion(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0,
-                                            const DisparityMap &d1, const StereoCamera &camera, int step, uint64_t seed) {
+// Grid pixels with a t0 disparity and where pyramidal Lucas-Kanade finds them at t1.
+struct Tracks {
     std::vector<cv::Point2f> from, to;
+};
+
+Tracks track_grid(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0, int step) {
+    Tracks t, all;
     for (int y = step / 2; y < g0.rows; y += step)
         for (int x = step / 2; x < g0.cols; x += step)
-            if (disparity_valid(d0(y, x))) from.emplace_back(static_cast<float>(x), static_cast<float>(y));
-    if (from.size() < 16) return {};
+            if (disparity_valid(d0(y, x))) all.from.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    if (all.from.size() < 16) return t;
     std::vector<uchar> ok;
     std::vector<float> err;
-    cv::calcOpticalFlowPyrLK(g0, g1, from, to, ok, err, cv::Size(15, 15), 4);
+    cv::calcOpticalFlowPyrLK(g0, g1, all.from, all.to, ok, err, cv::Size(15, 15), 4);
+    for (size_t i = 0; i < all.from.size(); ++i)
+        if (ok[i] && std::isfinite(all.to[i].x) && std::isfinite(all.to[i].y)) {
+            t.from.push_back(all.from[i]);
+            t.to.push_back(all.to[i]);
+        }
+    return t;
+}
+
+// The dominant rigid motion t0 -> t1, fitted to the tracks and the stereo disparities at both
+// ends (invalid when they support none).
+interpolation::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap &d0, const DisparityMap &d1,
+                                            const StereoCamera &camera, uint64_t seed) {
     std::vector<float> xs, ys, d0s, d1s, us, vs;
-    for (size_t i = 0; i < from.size(); ++i) {
-        if (!ok[i]) continue;
-        const int tx = static_cast<int>(std::lround(to[i].x)), ty = static_cast<int>(std::lround(to[i].y));
-        if (tx < 0 || ty < 0 || tx >= g0.cols || ty >= g0.rows || !disparity_valid(d1(ty, tx))) continue;
-        xs.push_back(from[i].x);
-        ys.push_back(from[i].y);
-        d0s.push_back(d0(static_cast<int>(from[i].y), static_cast<int>(from[i].x)));
+    for (size_t i = 0; i < tr.from.size(); ++i) {
+        const int tx = static_cast<int>(std::lround(tr.to[i].x)), ty = static_cast<int>(std::lround(tr.to[i].y));
+        if (tx < 0 || ty < 0 || tx >= d1.cols || ty >= d1.rows || !disparity_valid(d1(ty, tx))) continue;
+        xs.push_back(tr.from[i].x);
+        ys.push_back(tr.from[i].y);
+        d0s.push_back(d0(static_cast<int>(tr.from[i].y), static_cast<int>(tr.from[i].x)));
         d1s.push_back(d1(ty, tx));
-        us.push_back(to[i].x - from[i].x);
-        vs.push_back(to[i].y - from[i].y);
+        us.push_back(tr.to[i].x - tr.from[i].x);
+        vs.push_back(tr.to[i].y - tr.from[i].y);
     }
     interpolation::EgoMotionOptions eo;
     eo.seed = static_cast<unsigned>(seed);
     return camera.valid() ? interpolation::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
                           : interpolation::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
+}
+
+// The camera's motion t0 -> t1 from the tracks and the t0 disparities alone (perspective-n-point
+// with RANSAC), before any t1 stereo exists; invalid when too few tracks agree on one motion.
+interpolation::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, const StereoCamera &camera) {
+    interpolation::EgoMotion m;
+    if (!camera.valid()) return m;
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+    for (size_t i = 0; i < tr.from.size(); ++i) {
+        const float d = d0(static_cast<int>(tr.from[i].y), static_cast<int>(tr.from[i].x));
+        if (!(d > 0.5f)) continue;  // too far to place in depth
+        const double z = camera.depth_from_disparity(d);
+        object.emplace_back(static_cast<float>((tr.from[i].x - camera.cx) * z / camera.fx),
+                            static_cast<float>((tr.from[i].y - camera.cy) * z / camera.fy), static_cast<float>(z));
+        image.push_back(tr.to[i]);
+    }
+    const interpolation::EgoMotionOptions eo;
+    if (static_cast<int>(object.size()) < eo.min_inliers) return m;
+    const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    // OpenCV's RANSAC draws from a fixed seed: the pose is deterministic.
+    if (!cv::solvePnPRansac(object, image, k, cv::noArray(), rvec, tvec, false, eo.hypotheses, eo.flow_inlier, 0.99,
+                            inliers, cv::SOLVEPNP_EPNP) ||
+        static_cast<int>(inliers.size()) < std::max(eo.min_inliers, static_cast<int>(eo.min_inlier_share * object.size())))
+        return m;
+    cv::Matx33d r;
+    cv::Rodrigues(rvec, r);
+    for (int i = 0; i < 9; ++i) m.R[i] = r.val[i];
+    for (int i = 0; i < 3; ++i) m.t[i] = tvec.at<double>(i);
+    m.camera = camera;
+    m.calibrated = m.valid = true;
+    m.inliers = static_cast<int>(inliers.size());
+    m.candidates = static_cast<int>(object.size());
+    return m;
+}
+
+// The t0 points where the motion carries them at t1 (the nearest of several on one pixel);
+// points on movers land wrong, which the capped LiDAR term lets the images outvote.
+SparseLidar carry_points(const SparseLidar &lidar0, const interpolation::EgoMotion &m) {
+    SparseLidar carried{lidar0.width, lidar0.height, {}};
+    for (const LidarPoint &p : lidar0.points) {
+        float d1 = 0, u = 0, v = 0;
+        if (!m.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v)) continue;
+        const long x = std::lround(p.x + u), y = std::lround(p.y + v);
+        if (x >= 0 && y >= 0 && x < carried.width && y < carried.height && d1 > 0 && d1 <= kMaxLidarDisparity)
+            carried.points.push_back({static_cast<int>(x), static_cast<int>(y), d1});
+    }
+    return SparseLidar::from_map(carried.to_map());
 }
 
 // The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
@@ -173,14 +238,25 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     };
     r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0, guide0);
     r.sgm0 = r.reused_t0 ? t0_reuse->disparity : disparity(in.left0, in.right0, guide0);
-    r.sgm1 = disparity(in.left1, in.right1, guide1);
     r.seconds_stereo = seconds_since(t);
 
     t = Clock::now();
     const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
+    const Tracks tracks = opt.flow.prior_track_step > 0 ? track_grid(g0, g1, r.sgm0, opt.flow.prior_track_step) : Tracks{};
+    double seconds_tracks = seconds_since(t);
+
+    t = Clock::now();
+    r.guide1 = guide1;
+    if (opt.carry_lidar && guide1.points.empty() && !guide0.points.empty()) {
+        const interpolation::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
+        if (pose.valid) r.guide1 = carry_points(guide0, pose);
+    }
+    r.sgm1 = disparity(in.left1, in.right1, r.guide1);
+    r.seconds_stereo += seconds_since(t);
+
+    t = Clock::now();
     interpolation::EgoMotion motion;
-    if (opt.flow.prior_track_step > 0)
-        motion = track_rigid_motion(g0, g1, r.sgm0, r.sgm1, camera, opt.flow.prior_track_step, opt.random_seed);
+    if (opt.flow.prior_track_step > 0) motion = track_rigid_motion(tracks, r.sgm0, r.sgm1, camera, opt.random_seed);
     if (opt.flow.prior_track_step > 0 && !motion.valid)
         log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "
                                         "inverse search starts from zero flow (image-only prior)");
@@ -195,7 +271,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
         r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1, r.sgm1, rc),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none);
     }
-    r.seconds_flow = seconds_since(t);
+    r.seconds_flow = seconds_tracks + seconds_since(t);
     return r;
 }
 

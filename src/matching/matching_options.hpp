@@ -87,6 +87,9 @@ struct MatchingOptions {
     // (stereo/guided_sgm.hpp; its range and threads are set by the matcher) instead of OpenCV's
     // StereoSGBM, which takes no prior.
     bool guided_stereo = false;
+    // Decoupled and guided only: where the input has no t1 scan, the t1 stereo is guided by the
+    // t0 points carried into t1 by the camera's motion (fitted to tracks and the t0 disparity).
+    bool carry_lidar = true;
     stereo::GuidedSgmOptions stereo;
 
     // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least

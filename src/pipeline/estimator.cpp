@@ -130,6 +130,8 @@ void EstimatorOptions::validate() const {
     require(lidar_cell >= 0 && lidar_cell <= 64, ErrorCode::InvalidArgument, "lidar_cell must be in [0, 64]");
     require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
             ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");
+    require(std::isfinite(upscale_edge_step) && upscale_edge_step >= 0 && upscale_edge_step <= 64,
+            ErrorCode::InvalidArgument, "upscale_edge_step must be in [0, 64]");
     lidar_visibility.validate();
     matching_options(*this, threads).validate();
 }
@@ -228,8 +230,10 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     EstimatorResult r = drop_stage_fields(run_native(small, cache, threads));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
+    const EdgeGuide edges0(small.left0, frame.left0, options_.upscale_edge_step);
+    const EdgeGuide edges1(small.left1, frame.left1, r.backward.u.empty() ? 0.0f : options_.upscale_edge_step);
     for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
-        *f = upscale_field(*f, W, H);  // empty fields stay empty
+        *f = upscale_field(*f, W, H, f == &r.backward ? &edges1 : &edges0);  // empty fields stay empty
         if (options_.use_lidar && f != &r.backward) restore_lidar_d0(*f, frame.lidar0);
     }
     r.timings.push_back({"upscale", seconds_since(t)});
@@ -312,7 +316,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
         auto next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();
         next->right = frame.right1.clone();
-        next->lidar = matching::stereo_guide(lidar1, mo);
+        next->lidar = m.guide1;
         next->disparity = m.sgm1;
         cache->stereo_t1_ = std::move(next);
     }

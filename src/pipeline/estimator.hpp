@@ -45,6 +45,10 @@ struct EstimatorOptions {
     // search ranges (matching.max_flow, max_disparity, min_coarsest_height and the SGM range)
     // are taken at full resolution and scaled with it; the other pixel options are not.
     double processing_scale = 1.0;
+    // Bringing the results back from processing_scale < 1: where d0, u or v jumps by more than
+    // this [px of the processing frame] between the four nearest pixels, a pixel takes the one
+    // nearest in intensity rather than their blend (pipeline/resolution.hpp); 0 = always blend.
+    float upscale_edge_step = 3.0f;
     // Whether EstimatorResult holds every stage's field, or only output()'s (the others stay
     // empty, and are not brought back to full resolution at processing_scale < 1: that took
     // 0.12-0.14 s of the `fast` preset's ~0.8 s per KITTI pair for five fields nobody read).

@@ -46,6 +46,7 @@ const OptionKey kKeys[] = {
     {"preset", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     {"use_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
     {"processing_scale", OptionKeyType::Float, 0.125, 1, false, Extra::None, LF_FLOAT_FIELD(processing_scale)},
+    {"upscale_edge_step", OptionKeyType::Float, 0, 64, false, Extra::None, LF_FLOAT_FIELD(upscale_edge_step)},
     {"last_stage", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     // The paper has one support window: the matcher's and the consistency check's are the same.
     {"support_window", OptionKeyType::Int, 1, 101, false, Extra::Odd,
@@ -75,6 +76,7 @@ const OptionKey kKeys[] = {
     {"matching.flow_rigid_choice_radius", OptionKeyType::Int, 0, 16, false, Extra::None,
      LF_INT_FIELD(matching.flow.rigid_choice_radius)},
     {"matching.guided_stereo", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.guided_stereo)},
+    {"matching.carry_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.carry_lidar)},
     {"stereo.p1", OptionKeyType::Int, 0, 255, false, Extra::None, LF_INT_FIELD(matching.stereo.p1)},
     {"stereo.p2", OptionKeyType::Int, 1, 1023, false, Extra::None, LF_INT_FIELD(matching.stereo.p2)},
     {"stereo.adaptive_p2", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.stereo.adaptive_p2)},

@@ -63,7 +63,50 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     return out;
 }
 
-SceneFlowField upscale_field(const SceneFlowField &small, int width, int height) {
+namespace {
+
+cv::Mat1f gray_intensity(const cv::Mat &m) {
+    cv::Mat g = m;
+    if (m.channels() == 3) cv::cvtColor(m, g, cv::COLOR_BGR2GRAY);
+    if (m.channels() == 4) cv::cvtColor(m, g, cv::COLOR_BGRA2GRAY);
+    cv::Mat1f f;
+    g.convertTo(f, CV_32F);
+    return f;
+}
+
+}  // namespace
+
+EdgeGuide::EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, float edge_step)
+    : small(edge_step > 0 ? gray_intensity(small_image) : cv::Mat1f()),
+      full(edge_step > 0 ? gray_intensity(full_image) : cv::Mat1f()), step(edge_step) {}
+
+namespace {
+
+// The corner (0..3: (y0,x0), (y0,x1), (y1,x0), (y1,x1)) a pixel at an edge takes, or -1 to blend.
+int edge_corner(const SceneFlowField &s, const EdgeGuide &g, int x, int y, int x0, int x1, int y0, int y1) {
+    const int cy[4] = {y0, y0, y1, y1}, cx[4] = {x0, x1, x0, x1};
+    float spread = 0;
+    for (const cv::Mat1f *m : {&s.d0, &s.u, &s.v}) {
+        float lo = (*m)(y0, x0), hi = lo;
+        for (int c = 1; c < 4; ++c) {
+            lo = std::min(lo, (*m)(cy[c], cx[c]));
+            hi = std::max(hi, (*m)(cy[c], cx[c]));
+        }
+        spread = std::max(spread, hi - lo);
+    }
+    if (spread <= g.step) return -1;
+    int best = 0;
+    float nearest = std::abs(g.small(y0, x0) - g.full(y, x));
+    for (int c = 1; c < 4; ++c) {
+        const float e = std::abs(g.small(cy[c], cx[c]) - g.full(y, x));
+        if (e < nearest) nearest = e, best = c;
+    }
+    return best;
+}
+
+}  // namespace
+
+SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges) {
     if (small.u.empty()) return {};
     const int w = small.width(), h = small.height();
     require(width >= w && height >= h, ErrorCode::InvalidArgument, "upscale_field: target smaller than the field");
@@ -72,6 +115,10 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height)
     const cv::Mat1f *in[5] = {&small.u, &small.v, &small.d0, &small.d1, &small.confidence};
     cv::Mat1f *res[5] = {&out.u, &out.v, &out.d0, &out.d1, &out.confidence};
     const float gain[5] = {rx, ry, rx, rx, 1.0f};
+    const bool edge = edges && edges->step > 0;
+    if (edge)
+        require(edges->small.size() == small.d0.size() && edges->full.size() == cv::Size(width, height),
+                ErrorCode::SizeMismatch, "upscale_field: the edge guide's images differ in size from the fields");
     for (int y = 0; y < height; ++y) {
         const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
         const int y0 = std::min(std::max(0, h - 2), static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);
@@ -82,6 +129,13 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height)
             const int x0 = std::min(std::max(0, w - 2), static_cast<int>(fx)), x1 = std::min(w - 1, x0 + 1);
             const float ax = fx - x0;
             if (small.valid(y0, x0) && small.valid(y0, x1) && small.valid(y1, x0) && small.valid(y1, x1)) {
+                const int c = edge ? edge_corner(small, *edges, x, y, x0, x1, y0, y1) : -1;
+                if (c >= 0) {
+                    const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;
+                    for (int k = 0; k < 5; ++k) (*res[k])(y, x) = gain[k] * (*in[k])(ys, xs);
+                    out.valid(y, x) = 1;
+                    continue;
+                }
                 for (int c = 0; c < 5; ++c) {
                     const cv::Mat1f &m = *in[c];
                     const float top = m(y0, x0) + ax * (m(y0, x1) - m(y0, x0));

@@ -26,7 +26,15 @@ FrameInput downscale_frame(const FrameInput &frame, cv::Size size);
 // around it when all four are valid, else the value of the nearest small pixel when that one is
 // valid, else stays invalid; flow and disparities are multiplied by the size ratio. An empty
 // field stays empty. Throws InvalidArgument for a target smaller than `small`.
-SceneFlowField upscale_field(const SceneFlowField &small, int width, int height);
+// With `edges`, a pixel whose four small pixels differ by more than edges->step in d0, u or v
+// takes the one of the four nearest it in intensity instead of their blend: a blend across a
+// depth or motion edge is a surface in mid-air.
+struct EdgeGuide {
+    cv::Mat1f small, full;  // gray intensities of the field's image at the small and full size
+    float step = 0;         // [small px]; 0 blends everywhere
+    EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, float step);
+};
+SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges = nullptr);
 
 // Restores the measured d0 at the LiDAR pixels of an upscaled field where it is valid (the small
 // grid averaged them with their neighbours). Points must lie inside the field.

@@ -112,6 +112,34 @@ void lidar_anchors_are_honoured(void **) {
     assert_int_equal(off.lidar_anchored_geometry, 0);
 }
 
+// The superpixel size follows the LiDAR's density between min_superpixel_size and region_size:
+// sparse points (or none, or the rule off) keep region_size; run() reports the size it used.
+void superpixels_shrink_with_dense_lidar(void **) {
+    interpolation::InterpolationOptions o;
+    o.superpixels.region_size = 20;
+    const cv::Size image(400, 100);  // 40000 px
+    assert_int_equal(interpolation::superpixel_size(o, 20000, image), 20);  // off by default
+    o.lidar_points_per_superpixel = 2;
+    assert_int_equal(interpolation::superpixel_size(o, 0, image), 20);
+    assert_int_equal(interpolation::superpixel_size(o, 88, image), 20);      // 30 px
+    assert_int_equal(interpolation::superpixel_size(o, 320, image), 16);     // 2 points per 16 x 16 px
+    assert_int_equal(interpolation::superpixel_size(o, 20000, image), 10);  // 2 px: the floor
+    o.min_superpixel_size = 40;  // a floor above the largest size: the largest
+    assert_int_equal(interpolation::superpixel_size(o, 20000, image), 20);
+
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField ms = test::sample_matches(s.truth, 0.05, 0.05, 12), md = test::sample_matches(s.truth, 0.05, 0.05, 12);
+    interpolation::InterpolationOptions a;
+    a.superpixels.region_size = 20;
+    a.lidar_points_per_superpixel = 2;
+    const SparseLidar sparse = lidar_grid(s.truth, ms, 40), dense = lidar_grid(s.truth, md, 4);
+    const interpolation::InterpolationResult rs = interpolation::RobustInterpolator(a).run(ms, sparse, s.image);
+    const interpolation::InterpolationResult rd = interpolation::RobustInterpolator(a).run(md, dense, s.image);
+    assert_int_equal(rs.superpixel_size, 20);
+    assert_int_equal(rd.superpixel_size, interpolation::superpixel_size(a, dense.points.size(), s.image.size()));
+    assert_true(rd.superpixel_size < 20 && rd.num_superpixels > rs.num_superpixels);
+}
+
 // A patch of the ground where matching failed coherently (every match there wrong the same
 // way, as in a shadow): the superpixel holding a LiDAR point there is fixed with use_lidar
 // (the wrong majority's models are rejected by the anchor) and stays wrong without.
@@ -321,6 +349,9 @@ void rejects_invalid_input(void **) {
     expect_error(with([](O &o) { o.superpixels.region_size = 2; }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.lidar_disparity_tolerance = 0; }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.edges.contrast_gain = 0; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_points_per_superpixel = std::nanf(""); }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_points_per_superpixel = -1; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.min_superpixel_size = 3; }), ErrorCode::InvalidArgument);
 }
 
 // The optional SED model: a missing file is an I/O error, a file that is not a model a
@@ -380,6 +411,7 @@ int main(void) {
         cmocka_unit_test(deterministic_for_any_thread_count),
         cmocka_unit_test(rejects_invalid_input),
         cmocka_unit_test(sed_model_errors),
+        cmocka_unit_test(superpixels_shrink_with_dense_lidar),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

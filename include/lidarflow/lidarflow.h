@@ -236,7 +236,13 @@ typedef struct lf_options lf_options_t;
  *   "consistency.sparsify_support" int odd [1, 63]
  * stage 4: LiDAR-supported robust interpolation
  *   "interpolation.use_lidar"   0/1               LiDAR anchors
- *   "interpolation.superpixel_size" int [4, 512]
+ *   "interpolation.superpixel_size" int [4, 512]   (the largest, with dense LiDAR below)
+ *   "interpolation.lidar_points_per_superpixel" float [0, 10000] a dense scan gets smaller
+ *                                                 superpixels: sqrt(this / LiDAR points per
+ *                                                 pixel), down to min_superpixel_size (default
+ *                                                 0 = always superpixel_size; "fast",
+ *                                                 "realtime": 2)
+ *   "interpolation.min_superpixel_size" int [4, 512] (default 10)
  *   "interpolation.num_neighbors" int [1, 4096]  geodesic nearest matches per superpixel
  *                                                 (default 256)
  *   "interpolation.iterations"  int   [0, 1000]

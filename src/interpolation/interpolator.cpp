@@ -134,6 +134,11 @@ void validate_options(const InterpolationOptions &o) {
     // configuration fails at construction, not on the first frame.
     require(o.superpixels.region_size >= 4 && o.superpixels.region_size <= 512, ErrorCode::InvalidArgument,
             "interpolation: superpixels.region_size must be in [4, 512]");
+    require(std::isfinite(o.lidar_points_per_superpixel) && o.lidar_points_per_superpixel >= 0.0f &&
+                o.lidar_points_per_superpixel <= 10000.0f,
+            ErrorCode::InvalidArgument, "interpolation: lidar_points_per_superpixel must be in [0, 10000]");
+    require(o.min_superpixel_size >= 4 && o.min_superpixel_size <= 512, ErrorCode::InvalidArgument,
+            "interpolation: min_superpixel_size must be in [4, 512]");
     require(std::isfinite(o.superpixels.compactness) && o.superpixels.compactness > 0.0f,
             ErrorCode::InvalidArgument, "interpolation: superpixels.compactness must be > 0");
     require(o.superpixels.iterations >= 1 && o.superpixels.iterations <= 100, ErrorCode::InvalidArgument,
@@ -862,6 +867,15 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
 
 }  // namespace
 
+int superpixel_size(const InterpolationOptions &o, size_t lidar_points, cv::Size image) {
+    const int largest = o.superpixels.region_size;
+    if (o.lidar_points_per_superpixel <= 0 || lidar_points == 0 || image.area() <= 0) return largest;
+    const double per_pixel = static_cast<double>(lidar_points) / image.area();
+    const double size = std::sqrt(o.lidar_points_per_superpixel / per_pixel);
+    return size >= largest ? largest
+                           : std::max(std::min(o.min_superpixel_size, largest), static_cast<int>(std::lround(size)));
+}
+
 RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
     validate_options(options_);
     if (options_.edges.method == EdgeMethod::StructuredForest)
@@ -875,13 +889,16 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
     InterpolationOptions this_call = options_;
     if (threads > 0) this_call.num_threads = threads;
-    const InterpolationOptions &o = this_call;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
+    this_call.superpixels.region_size =
+        superpixel_size(this_call, this_call.use_lidar ? lidar0.points.size() : 0, image.size());
+    const InterpolationOptions &o = this_call;
     validate_lidar(lidar1, image.size(), "t1 LiDAR");
     validate_hint(geometry_hint, image.size());
     const int w = image.cols, h = image.rows;
     InterpolationResult res;
+    res.superpixel_size = o.superpixels.region_size;
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
     const Superpixels sp = segment(image, sed_.get(), o, res);
     const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);

@@ -36,6 +36,12 @@ struct InterpolationOptions {
     bool use_lidar = true;
     EdgeMapOptions edges;          // set edges.method = StructuredForest + sed_model_path for SED
     SuperpixelOptions superpixels; // region_size ~ sqrt(superpixel area)
+    // A dense scan supports smaller superpixels (each still holds LiDAR points): the size is
+    // sqrt(lidar_points_per_superpixel / points per pixel) of run()'s lidar0, between
+    // min_superpixel_size and superpixels.region_size (which sparse LiDAR, or none, keeps).
+    // 0 = always region_size (the paper's design).
+    float lidar_points_per_superpixel = 0.0f;
+    int min_superpixel_size = 10;
     float edge_gain = 3.0f;        // geodesic step cost 1 + edge_gain * edge (>= 0)
     // K geodesic nearest matches per anchor (>= 1). The hypotheses are drawn from, and scored
     // on, these K matches; at stage 3's ~6 % density fewer cover too few superpixels to outvote
@@ -165,6 +171,10 @@ struct InterpolationTimings {
     double edges_s = 0, superpixels_s = 0, geodesic_s = 0, models_s = 0, output_s = 0, total_s = 0;
 };
 
+// The superpixel size run() uses for lidar_points LiDAR points on an image of this size
+// (InterpolationOptions::lidar_points_per_superpixel).
+int superpixel_size(const InterpolationOptions &o, size_t lidar_points, cv::Size image);
+
 struct InterpolationResult {
     // Dense field: valid = 1 everywhere, d0/d1 >= 0, confidence in [0, 1] = weighted inlier
     // share of the pixel's superpixel models over its neighbourhood (averaged over channels).
@@ -172,6 +182,7 @@ struct InterpolationResult {
     cv::Mat1f edges;          // the edge map used
     cv::Mat1i superpixels;    // superpixel label per pixel
     int num_superpixels = 0;
+    int superpixel_size = 0;  // the region size used (options, LiDAR density)
     int lidar_anchored_geometry = 0;  // superpixels whose d0 model is LiDAR-anchored
     int lidar_anchored_motion = 0;    // superpixels whose u, v, d1 models are LiDAR-anchored
     int hint_seeds = 0;               // geometry-hint pixels used as d0 seeds

@@ -159,6 +159,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.matching.flow.rigid_choice_radius = 1;  // the rigid prior's flow where it fits better
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
+        o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
         if (name == "fast") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;
             o.matching.flow.patch_size = 6;

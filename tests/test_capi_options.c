@@ -28,7 +28,7 @@ typedef struct key_t_ {
 static const key_t_ kKeys[] = {
     {"threads", INT, 1, 256, 0, NONE, NAN}, /* the usable CPUs: test_cpp_api checks it */
     {"use_lidar", BOOL, 0, 1, 0, NONE, 1},
-    {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 1},
+    {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 0.65}, /* the "default" preset's */
     {"support_window", INT, 1, 101, 0, ODD, 15},
     {"lidar.visibility_filter", BOOL, 0, 1, 0, NONE, 1},
     {"lidar.visibility_half_width", INT, 0, 64, 0, NONE, 6},
@@ -304,7 +304,16 @@ static void test_named_presets(void **state) {
     assert_true(get_number(o, "matching.min_coarsest_height") == get_number(fresh, "matching.min_coarsest_height"));
     assert_true(fabs(get_number(o, "processing_scale") - 0.65) < 1e-12);
     assert_true(get_number(o, "matching.thin_from_level") == get_number(fresh, "matching.thin_from_level"));
+    assert_true(get_number(o, "matching.flow_patch_size") == get_number(fresh, "matching.flow_patch_size"));
+
+    /* paper: the paper's design (PatchMatch stage 1 at full size), not the default's. */
+    assert_int_equal(lf_options_set_string(o, "preset", "paper"), LF_OK);
+    assert_int_equal(lf_options_get_string(o, "matching.method", &m), LF_OK);
+    assert_string_equal(m, "patchmatch");
+    assert_true(get_number(o, "processing_scale") == 1.0);
+    assert_true(get_number(o, "matching.guided_stereo") == 0.0);
     assert_true(get_number(o, "matching.flow_patch_size") != get_number(fresh, "matching.flow_patch_size"));
+    assert_true(get_number(o, "threads") == 4.0);
 
     assert_int_equal(lf_options_set_int(o, "matching.iterations", 5), LF_OK); /* after the preset */
     assert_true(get_number(o, "matching.iterations") == 5.0);
@@ -331,14 +340,14 @@ static void test_named_presets(void **state) {
     assert_string_equal(method, "patchmatch"); /* a refused value changes nothing */
 
     /* An estimator accepts every preset. */
-    static const char *names[] = {"default", "balanced", "fast", "realtime"};
+    static const char *names[] = {"default", "paper", "balanced", "fast", "realtime"};
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     cal.fx = cal.fy = 700;
     cal.cx = 320;
     cal.cy = 240;
     cal.baseline = 0.5;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < 5; ++i) {
         assert_int_equal(lf_options_set_string(o, "preset", names[i]), LF_OK);
         lf_estimator_t *h = NULL;
         assert_int_equal(lf_create(o, &cal, &h), LF_OK);

@@ -226,19 +226,23 @@ void presets_do_not_depend_on_threads(void **) {
     }
 }
 
-// The `paper` preset is the paper's design, as `default` is: the same options, the same result.
+// The `paper` preset is the paper's design (the field defaults: the same result); `default` is
+// the decoupled design with the LiDAR-guided stereo, and `fast` the same under its earlier name.
 void paper_preset_is_the_papers_design(void **) {
     const synth::SynthScene s = scene();
-    EstimatorOptions paper = EstimatorOptions::preset("paper"), def = EstimatorOptions::preset("default");
+    EstimatorOptions paper = EstimatorOptions::preset("paper"), fields;
     assert_true(paper.matching.method == matching::MatchMethod::PatchMatch);
     assert_false(paper.matching.guided_stereo);
-    for (EstimatorOptions *o : {&paper, &def}) {
+    for (EstimatorOptions *o : {&paper, &fields}) {
         o->threads = 2;
         o->matching.min_coarsest_height = 16;
     }
-    assert_true(same_field(Estimator(paper).run(frame_of(s)).dense, Estimator(def).run(frame_of(s)).dense));
+    assert_true(same_field(Estimator(paper).run(frame_of(s)).dense, Estimator(fields).run(frame_of(s)).dense));
+    EstimatorOptions def = EstimatorOptions::preset("default"), fast = EstimatorOptions::preset("fast");
+    assert_true(def.matching.method == matching::MatchMethod::Decoupled && def.matching.guided_stereo);
     assert_true(EstimatorOptions::preset("realtime").matching.guided_stereo);
-    assert_true(EstimatorOptions::preset("fast").matching.guided_stereo);
+    def.threads = fast.threads = 2;
+    assert_true(same_field(Estimator(def).run(frame_of(s)).dense, Estimator(fast).run(frame_of(s)).dense));
 }
 
 // A stream hands the t1 disparity to the next frame: reused, and the result is a lone run's.

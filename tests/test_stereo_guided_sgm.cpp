@@ -127,6 +127,16 @@ void prior_stays_on_its_surface(void **) {
     assert_int_equal(p.weight(10, 5), 0);   // beyond the radius
 }
 
+// A featureless pair ties at every disparity: no pixel gets one (not disparity 0), while one
+// LiDAR point still places the pixels its prior reaches.
+void featureless_pair_has_no_disparity(void **) {
+    const cv::Mat1b flat(kH, kW, uchar(90));
+    const DisparityMap d = stereo::guided_sgm(flat, flat, SparseLidar{kW, kH, {}}, options());
+    assert_int_equal(cv::countNonZero(d >= 0.0f), 0);
+    const DisparityMap g = stereo::guided_sgm(flat, flat, SparseLidar{kW, kH, {{kW / 2, kH / 2, 12.0f}}}, options());
+    assert_true(g(kH / 2, kW / 2) >= 11.0f && g(kH / 2, kW / 2) <= 13.0f);
+}
+
 void bad_inputs_are_refused(void **) {
     cv::Mat1b l, r;
     scene(8, 0, 0, l, r);
@@ -179,6 +189,7 @@ int main() {
         cmocka_unit_test(threads_do_not_change_the_result),
         cmocka_unit_test(prior_stays_on_its_surface),
         cmocka_unit_test(bad_inputs_are_refused),
+        cmocka_unit_test(featureless_pair_has_no_disparity),
         cmocka_unit_test(binning_bounds_the_points),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

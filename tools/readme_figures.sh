@@ -34,8 +34,8 @@ tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 if [ "$kitti" = 1 ]; then
     [ -n "${LIDARFLOW_KITTI_DIR:-}" ] || { echo "readme_figures: --kitti needs LIDARFLOW_KITTI_DIR"; exit 2; }
-    runs=("ablation:--lidar paper --ablation --seeds 8" "velodyne:--lidar velodyne --seeds 8"
-          "placements:--lidar paper --placements 8 --seeds 2")
+    runs=("ablation:--preset paper --lidar paper --ablation --seeds 8" "velodyne:--preset paper --lidar velodyne --seeds 8"
+          "placements:--preset paper --lidar paper --placements 8 --seeds 2")
     for r in "${runs[@]}"; do
         echo "readme_figures: lidarflow kitti ${r#*:}"
         # shellcheck disable=SC2086  # the run's options are words

@@ -104,23 +104,24 @@ typedef struct lf_options lf_options_t;
  *                                        0 = always "threads". Idle workers sleep between stages
  *                                        and frames either way
  *   "preset"           string "default"  resets every option except "threads" to the preset:
- *                                        "default" (reference accuracy, the paper's matcher),
- *                                        "paper" (the paper's design, identical to "default":
- *                                        the name to ask for when reproducing the paper),
- *                                        "balanced" (matcher levels below full resolution
- *                                        thinned: thin_from_level 1; backward_grid_step 6,
- *                                        fb_search_radius 2), "fast" (matching.method
- *                                        "decoupled" with matching.guided_stereo 1 at
- *                                        processing_scale 0.65, DIS patches 6 /
- *                                        stride 2) or "realtime" ("decoupled" at 0.55, stage 4
- *                                        with 20 px superpixels and 128 neighbours: about 1.5x
- *                                        the time of OpenCV's SGBM + DIS); set it first, then
- *                                        any key it should not decide
+ *                                        "default" (matching.method "decoupled": the LiDAR-
+ *                                        guided SGM stereo and DIS flow at processing_scale
+ *                                        0.65, DIS patches 6 / stride 2, superpixels sized
+ *                                        by the LiDAR's density; about 3x the time of
+ *                                        OpenCV's SGBM + DIS), "fast" (the same as
+ *                                        "default"), "realtime" ("decoupled" at 0.55, stage 4
+ *                                        with 20 px superpixels and 128 neighbours: about
+ *                                        1.5x), "paper" (the paper's design: PatchMatch
+ *                                        stage 1 at full size, every key's field default
+ *                                        below where no preset value is named; about 15x)
+ *                                        or "balanced" ("paper" with thin_from_level 1,
+ *                                        backward_grid_step 6, fb_search_radius 2); set it
+ *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
- *                                        (default 1; "fast" 0.65, "realtime" 0.55)
+ *                                        (default 0.65; "realtime" 0.55, "paper" 1)
  *   "upscale_edge_step" float [0, 64]    bringing results back from processing_scale < 1:
  *                                        where d0, u or v jumps by more than this [px of
  *                                        the processing frame] between the 4 nearest
@@ -131,8 +132,9 @@ typedef struct lf_options lf_options_t;
  *                                        "interpolation" (default: the dense result)
  *   "support_window"   int odd [1, 101]  side of the LiDAR support window of matching and
  *                                        consistency check (default 15)
- * The stage keys below default to the values the core is tuned with (the paper's settings,
- * measured on KITTI); read them with lf_options_get_int / lf_options_get_float.
+ * "default" below is the "default" preset's value; "paper" differs from it in the keys that
+ * name its value (the decoupled stage 1's keys are unused there). The values are measured on
+ * KITTI; read them with lf_options_get_int / lf_options_get_float.
  * LiDAR input: points the left camera cannot see (a nearer object hides them from the camera;
  * the LiDAR, mounted elsewhere, sees past its edge) are removed before every stage. A point
  * of disparity d is hidden when a point of its window has a disparity above
@@ -144,8 +146,8 @@ typedef struct lf_options lf_options_t;
  *   "lidar.visibility_ratio"       float [0, 10]     (default 0.05)
  *   "lidar.visibility_margin"      float [0, 16384]  [px of disparity] (default 1)
  * stage 1: LiDAR-supported matching
- *   "matching.method"           string "patchmatch" (the paper's joint 4-D search, default) or
- *                                    "decoupled": d0 and d1 by semi-global stereo matching of
+ *   "matching.method"           string "patchmatch" (the paper's joint 4-D search, "paper") or
+ *                                    "decoupled" (default): d0 and d1 by semi-global matching of
  *                                    each pair, (u, v) by dense inverse search (DIS) started
  *                                    from the tracked rigid background motion. The keys below
  *                                    marked (decoupled) apply to it only; the others to
@@ -160,12 +162,11 @@ typedef struct lf_options lf_options_t;
  *   "matching.flow_rigid_choice_radius" int [0, 16] (decoupled) per pixel, the rigid start
  *                                                   flow instead of DIS's where its photometric
  *                                                   error over a (2r+1)^2 box is lower and the
- *                                                   pixel has a disparity (0 = off; "fast",
- *                                                   "realtime": 1)
+ *                                                   pixel has a disparity (default 1; 0 = off)
  *   "matching.guided_stereo"          0/1           (decoupled) stereo of both pairs by the
  *                                                   library's SGM with each pair's LiDAR points
- *                                                   in its data cost (1 in "fast", "realtime")
- *                                                   instead of OpenCV's StereoSGBM (0)
+ *                                                   in its data cost (default 1) instead of
+ *                                                   OpenCV's StereoSGBM (0)
  *   "matching.carry_lidar"            0/1           (decoupled, guided) where the input has
  *                                                   no t1 scan, the t1 stereo is guided by
  *                                                   the t0 points carried into t1 by the
@@ -240,8 +241,7 @@ typedef struct lf_options lf_options_t;
  *   "interpolation.lidar_points_per_superpixel" float [0, 10000] a dense scan gets smaller
  *                                                 superpixels: sqrt(this / LiDAR points per
  *                                                 pixel), down to min_superpixel_size (default
- *                                                 0 = always superpixel_size; "fast",
- *                                                 "realtime": 2)
+ *                                                 2; "paper" 0 = always superpixel_size)
  *   "interpolation.min_superpixel_size" int [4, 512] (default 10)
  *   "interpolation.num_neighbors" int [1, 4096]  geodesic nearest matches per superpixel
  *                                                 (default 256)

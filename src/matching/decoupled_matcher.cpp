@@ -179,9 +179,22 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
     dis->setPatchStride(o.patch_stride);
     dis->setGradientDescentIterations(o.descent_iterations);
     dis->setVariationalRefinementIterations(o.refine_iterations);
-    cv::Mat2f flow = std::move(initial);  // DIS starts from a given flow of the right size
-    dis->calc(from, to, flow);
-    return flow;
+    // OpenCV's DIS refuses images under 12 px a side (and patches wider than the image): a small
+    // frame is searched inside a replicated border and cropped back.
+    const int side = std::max(16, 2 * o.patch_size);
+    const int px = std::max(0, side - from.cols), py = std::max(0, side - from.rows);
+    if (px == 0 && py == 0) {
+        cv::Mat2f flow = std::move(initial);  // DIS starts from a given flow of the right size
+        dis->calc(from, to, flow);
+        return flow;
+    }
+    cv::Mat a, b;
+    cv::Mat2f flow;
+    cv::copyMakeBorder(from, a, 0, py, 0, px, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(to, b, 0, py, 0, px, cv::BORDER_REPLICATE);
+    if (!initial.empty()) cv::copyMakeBorder(initial, flow, 0, py, 0, px, cv::BORDER_REPLICATE);
+    dis->calc(a, b, flow);
+    return flow(cv::Rect(0, 0, from.cols, from.rows)).clone();
 }
 
 // One direction's 4-vectors: d0 from the reference pair's disparity (the LiDAR measurement where

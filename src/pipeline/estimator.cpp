@@ -137,8 +137,8 @@ void EstimatorOptions::validate() const {
 }
 
 EstimatorOptions EstimatorOptions::preset(const std::string &name) {
-    EstimatorOptions o;
-    if (name == "default" || name == "paper") return o;
+    EstimatorOptions o;  // the field defaults are the paper's design
+    if (name == "paper") return o;
     if (name == "balanced") {
         o.matching.thin_from_level = 1;  // every level below full resolution thinned
         // A coarser backward grid with a wider round-trip search (matching_options.hpp).
@@ -146,7 +146,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         o.consistency.fb_search_radius = 2;
         return o;
     }
-    if (name == "fast" || name == "realtime") {
+    if (name == "default" || name == "fast" || name == "realtime") {
         // Stage 1 decoupled (stereo and flow searched apart) on the reduced frame.
         o.matching.method = matching::MatchMethod::Decoupled;
         o.matching.guided_stereo = true;  // the LiDAR in the stereo cost
@@ -160,7 +160,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
-        if (name == "fast") {  // denser DIS patches on a larger frame
+        if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;
             o.matching.flow.patch_size = 6;
             o.matching.flow.patch_stride = 2;

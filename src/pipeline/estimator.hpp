@@ -71,13 +71,15 @@ struct EstimatorOptions {
     // Throws Error(InvalidArgument) naming the first bad field.
     void validate() const;
 
-    // Named speed/accuracy trade-offs (everything else at its default; the README's preset
-    // table has the measured curve):
-    //  "default"  the reference settings (the paper's PatchMatch stage 1);
-    //  "balanced" every matcher level below full resolution thinned (thin_from_level 1), the
-    //             backward direction on a 6 px grid (round-trip search radius 2);
-    //  "fast"     the decoupled stage 1 (SGM + DIS from the rigid prior) at 0.65 size, DIS
-    //             patches of 6 px every 2 px;
+    // Named speed/accuracy trade-offs. The field defaults above are the paper's design; the
+    // presets (the README's preset table has the measured curve):
+    //  "paper"    the paper's design (PatchMatch stage 1 with the LiDAR), the field defaults;
+    //  "balanced" the paper's design with every matcher level below full resolution thinned
+    //             (thin_from_level 1), the backward direction on a 6 px grid (radius 2);
+    //  "default"  the decoupled stage 1 (LiDAR-guided SGM + DIS from the rigid prior, t1
+    //             stereo guided by the carried scan) at 0.65 size, DIS patches of 6 px every
+    //             2 px, superpixels sized by the LiDAR's density;
+    //  "fast"     the same as "default" (the name earlier configurations use);
     //  "realtime" the decoupled stage 1 at 0.55 size, stage 4 with 20 px superpixels and 128
     //             neighbours.
     // Throws Error(InvalidArgument) for another name.

@@ -15,7 +15,7 @@ namespace lidarflow::pipeline {
 
 // What the options object holds: the estimator settings plus the names of the string keys.
 struct OptionValues {
-    EstimatorOptions estimator;
+    EstimatorOptions estimator = EstimatorOptions::preset("default");
     std::string preset = "default";
 };
 

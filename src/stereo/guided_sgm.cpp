@@ -199,7 +199,10 @@ void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_dif
         uint32_t other = UINT32_MAX;
         for (int d = 0; d < b - 1; ++d) other = std::min<uint32_t>(other, s[d]);
         for (int d = b + 2; d < lim; ++d) other = std::min<uint32_t>(other, s[d]);
-        best[x] = static_cast<int16_t>(uint64_t{other} * (100 - uniqueness) < uint64_t{100} * bs ? -1 : b);
+        // A tie is not unique (a featureless image ties everywhere), nor is a winner with no rival
+        // to compare (the first columns).
+        best[x] = static_cast<int16_t>(
+            other == UINT32_MAX || uint64_t{other} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
     }
     if (lr_max_diff < 0) return;
     for (int x = 0; x < w; ++x)

@@ -110,7 +110,7 @@ c++ "${strict[@]}" "$work/hpp_opencv.cpp" -o "$work/hpp_opencv" \
 LD_LIBRARY_PATH="$libdir" "$work/hpp_opencv" || { echo "lidarflow.hpp with OpenCV failed"; exit 1; }
 # The C++ example (examples/cpp: lidarflow.hpp and OpenCV) built with pkg-config and with CMake
 # find_package(lidarflow); both write the synthetic scene's flow with cv::writeOpticalFlow, read
-# it back, and find the true motion.
+# it back, and find the true motion (the example's exit status: within 0.5 px of it).
 c++ -std=c++17 -Wall -Wextra "$root/examples/cpp/lidarflow_flow.cpp" -o "$work/cpp_example_pc" \
     $(pkg-config --cflags --libs lidarflow opencv4)
 cmake -S "$root/examples/cpp" -B "$work/cpp-cmake-build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
@@ -119,7 +119,7 @@ for exe in "$work/cpp_example_pc" "$work/cpp-cmake-build/lidarflow_flow"; do
     out="$work/$(basename "$exe")-out"
     LD_LIBRARY_PATH="$libdir" "$exe" --out "$out" > "$work/cpp_example.log" ||
         { cat "$work/cpp_example.log"; echo "$exe failed"; exit 1; }
-    grep -q "mean flow u 4.00 px (truth 4)" "$work/cpp_example.log" && [ -s "$out/synthetic.flo" ] ||
+    grep -q "mean flow u [0-9.]* px (truth 4)" "$work/cpp_example.log" && [ -s "$out/synthetic.flo" ] ||
         { cat "$work/cpp_example.log"; echo "$exe: no true motion or no synthetic.flo"; exit 1; }
     echo "$exe: wrote $out/synthetic.flo with the true motion"
 done
@@ -240,8 +240,10 @@ if [ "$mode" = prefix ]; then
         > "$work/readme_install.log" 2>&1 || { cat "$work/readme_install.log"; echo "README install commands failed"; exit 1; }
     # capi_example twice (pkg-config, CMake), python_example once: each with the true motion
     # (the C++ example's line, should the README run it too, says "(C++)" and is not counted).
-    [ "$(grep "mean flow u 4.00 px (truth 4)" "$work/readme_install.log" | grep -vc "(C++)")" -eq 2 ] &&
-        grep -q "mean u 4.00 px (truth 4)" "$work/readme_install.log" ||
+    # "true": within 0.5 px of the 4 px motion.
+    near_truth() { grep -v "(C++)" "$work/readme_install.log" | grep -oE "$1 [0-9.-]+ px \(truth 4\)" |
+        awk '{ v = $(NF - 3); if (v > 3.5 && v < 4.5) n++ } END { print n + 0 }'; }
+    [ "$(near_truth "mean flow u")" -eq 2 ] && [ "$(near_truth "mean u")" -eq 1 ] ||
         { cat "$work/readme_install.log"; echo "README examples did not print the true motion"; exit 1; }
     echo "README install commands: ok"
 fi

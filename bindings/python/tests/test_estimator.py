@@ -316,13 +316,14 @@ class Presets(unittest.TestCase):
             est.push(scene[2], scene[3], lidar)
             default = est.result()
         results = {}
-        for name in ("balanced", "fast"):
+        for name in ("paper", "balanced", "fast"):
             with lidarflow.Estimator(options={"preset": name, "threads": 2}, **CAL) as est:
                 self.assertFalse(est.push(scene[0], scene[1], lidar))
                 self.assertTrue(est.push(scene[2], scene[3], lidar))
                 results[name] = est.result()
-        self.assertFalse(same(results["fast"], default))
-        self.assertFalse(same(results["balanced"], results["fast"]))
+        self.assertTrue(same(results["fast"], default))  # one design, two names
+        self.assertFalse(same(results["paper"], default))
+        self.assertFalse(same(results["balanced"], default))
         for r in results.values():
             self.assertGreater(accuracy(r), 0.9)
         with self.assertRaises(lidarflow.LidarflowError) as cm:

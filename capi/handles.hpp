@@ -41,7 +41,7 @@ struct Result {
     int64_t t0_us = 0, t1_us = 0;
     std::vector<pipeline::StageTime> timings;
     double total_seconds = 0;
-    interpolation::EgoMotion ego;  // stage 4's background motion (pipeline::EstimatorResult::ego)
+    motion::EgoMotion ego;  // stage 4's background motion (pipeline::EstimatorResult::ego)
     pipeline::EgoState ego_state = pipeline::EgoState::NotRun;
 };
 

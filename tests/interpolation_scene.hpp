@@ -12,7 +12,7 @@
 
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 
 namespace lidarflow::test {
 
@@ -141,7 +141,7 @@ struct MotionSamples {
 };
 
 // Largest prediction errors of model m on samples p: d1 [px] and flow end point [px].
-inline void max_errors(const interpolation::EgoMotion &m, const MotionSamples &p, double &e_d1, double &e_fl) {
+inline void max_errors(const motion::EgoMotion &m, const MotionSamples &p, double &e_d1, double &e_fl) {
     e_d1 = e_fl = 0;
     for (size_t i = 0; i < p.x.size(); ++i) {
         float d1, u, v;

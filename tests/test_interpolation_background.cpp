@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Stage 4 background models: the ego-motion fit (interpolation/ego_motion.hpp) recovers a known
+// Stage 4 background models: the ego-motion fit (motion/ego_motion.hpp) recovers a known
 // camera motion from exact and from outlier-ridden matches; the interpolator with it is not
 // worse than without on the piecewise-planar scene; the geometry hint fills match holes only
 // where LiDAR vouches for it; and the options of both are validated.
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 #include "interpolation/interpolator.hpp"
 #include "interpolation_scene.hpp"
 
@@ -66,7 +66,7 @@ Truth make_points(const Rig &r, int n, uint64_t seed) {
 void ego_motion_exact_matches(void **) {
     const Rig rig;
     const Truth fit = make_points(rig, 2000, 1), held = make_points(rig, 500, 2);
-    const interpolation::EgoMotion m = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const motion::EgoMotion m = motion::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_true(m.valid);
     assert_true(m.inliers >= 1990);
     double e_d1, e_fl;
@@ -92,7 +92,7 @@ void ego_motion_robust_to_outliers(void **) {
         fit.d1[i] = std::max(1.0f, fit.d1[i] + off());
         ++bad;
     }
-    const interpolation::EgoMotion m = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const motion::EgoMotion m = motion::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_true(m.valid);
     const int good = static_cast<int>(fit.x.size()) - bad;
     assert_true(m.inliers >= good - 20 && m.inliers <= good + bad / 10);
@@ -103,7 +103,7 @@ void ego_motion_robust_to_outliers(void **) {
     assert_true(e_d1 < 0.2);
     assert_true(e_fl < 0.5);
     // Deterministic for a fixed seed.
-    const interpolation::EgoMotion again = interpolation::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
+    const motion::EgoMotion again = motion::fit_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {});
     assert_int_equal(again.inliers, m.inliers);
     for (int k = 0; k < 4; ++k) assert_true(again.a[k] == m.a[k] && again.bx[k] == m.bx[k] && again.by[k] == m.by[k]);
 }
@@ -111,7 +111,7 @@ void ego_motion_robust_to_outliers(void **) {
 void ego_motion_needs_support(void **) {
     const Rig rig;
     const Truth few = make_points(rig, 20, 6);  // fewer than min_inliers
-    assert_false(interpolation::fit_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}).valid);
+    assert_false(motion::fit_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}).valid);
     // Pure noise has no dominant motion.
     test::TestRng rng(7);
     Truth noise = make_points(rig, 1000, 8);
@@ -120,7 +120,7 @@ void ego_motion_needs_support(void **) {
         noise.v[i] = static_cast<float>(80 * rng.uniform() - 40);
         noise.d1[i] = static_cast<float>(1 + 100 * rng.uniform());
     }
-    const interpolation::EgoMotion m = interpolation::fit_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {});
+    const motion::EgoMotion m = motion::fit_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {});
     assert_false(m.valid);
     float d1, u, v;
     m.predict(10, 20, 30, d1, u, v);  // invalid model: static, no change

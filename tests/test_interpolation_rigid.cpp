@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 #include "interpolation/interpolator.hpp"
 #include "interpolation_scene.hpp"
 
@@ -34,8 +34,8 @@ StereoCamera kitti_camera() {
 
 // The true motion as an EgoMotion (exact rotation, not a linearisation): a car turning while
 // driving forward.
-interpolation::EgoMotion true_motion(const StereoCamera &cam) {
-    interpolation::EgoMotion m;
+motion::EgoMotion true_motion(const StereoCamera &cam) {
+    motion::EgoMotion m;
     m.valid = m.calibrated = true;
     m.camera = cam;
     const double w[3] = {0.004, -0.015, 0.002};
@@ -54,7 +54,7 @@ interpolation::EgoMotion true_motion(const StereoCamera &cam) {
 
 using Points = test::MotionSamples;
 
-Points make_points(const interpolation::EgoMotion &truth, int n, uint64_t seed) {
+Points make_points(const motion::EgoMotion &truth, int n, uint64_t seed) {
     test::TestRng rng(seed);
     Points p;
     for (int i = 0; i < n; ++i) {
@@ -69,9 +69,9 @@ Points make_points(const interpolation::EgoMotion &truth, int n, uint64_t seed) 
 
 void rigid_fit_exact(void **) {
     const StereoCamera cam = kitti_camera();
-    const interpolation::EgoMotion truth = true_motion(cam);
+    const motion::EgoMotion truth = true_motion(cam);
     const Points fit = make_points(truth, 2000, 1), held = make_points(truth, 500, 2);
-    const interpolation::EgoMotion m = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const motion::EgoMotion m = motion::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_true(m.valid && m.calibrated);
     assert_int_equal(m.inliers, 2000);
     double e_d1, e_fl;
@@ -83,22 +83,22 @@ void rigid_fit_exact(void **) {
     for (int k = 0; k < 9; ++k) assert_true(std::fabs(m.R[k] - truth.R[k]) < 1e-5);
     // The inverse motion takes every point back to where it was; a point the motion puts behind
     // the camera is reported; only rigid models have an inverse.
-    const interpolation::EgoMotion back = truth.inverse();
+    const motion::EgoMotion back = truth.inverse();
     for (size_t i = 0; i < held.x.size(); ++i) {
         float d0, u, v;
         assert_true(back.predict(held.x[i] + held.u[i], held.y[i] + held.v[i], held.d1[i], d0, u, v));
         assert_true(std::fabs(d0 - held.d0[i]) < 1e-3 && std::fabs(held.u[i] + u) < 1e-3 && std::fabs(held.v[i] + v) < 1e-3);
     }
-    interpolation::EgoMotion away = truth;
+    motion::EgoMotion away = truth;
     away.t[2] = -100;  // 100 m forward: a point 50 m ahead ends up behind the camera
     float d1, u, v;
     assert_false(away.predict(610, 175, 720 * 0.54 / 50, d1, u, v));
-    assert_false(interpolation::EgoMotion{}.inverse().valid);
+    assert_false(motion::EgoMotion{}.inverse().valid);
 }
 
 void rigid_fit_robust_and_deterministic(void **) {
     const StereoCamera cam = kitti_camera();
-    const interpolation::EgoMotion truth = true_motion(cam);
+    const motion::EgoMotion truth = true_motion(cam);
     Points fit = make_points(truth, 3000, 3);
     const Points held = make_points(truth, 500, 4);
     test::TestRng rng(5);
@@ -116,7 +116,7 @@ void rigid_fit_robust_and_deterministic(void **) {
         fit.u[i] += static_cast<float>(0.4 * (rng.uniform() - 0.5));
         fit.d1[i] += static_cast<float>(0.2 * (rng.uniform() - 0.5));
     }
-    const interpolation::EgoMotion m = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const motion::EgoMotion m = motion::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_true(m.valid);
     const int good = static_cast<int>(fit.x.size()) - bad;
     double e_d1, e_fl;
@@ -125,15 +125,15 @@ void rigid_fit_robust_and_deterministic(void **) {
                 m.inliers, e_d1, e_fl);
     assert_true(m.inliers >= good - 20 && m.inliers <= good + bad / 20);
     assert_true(e_d1 < 0.1 && e_fl < 0.2);
-    const interpolation::EgoMotion again = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
+    const motion::EgoMotion again = motion::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, {}, cam);
     assert_int_equal(again.inliers, m.inliers);
     for (int k = 0; k < 9; ++k) assert_true(again.R[k] == m.R[k]);
     for (int k = 0; k < 3; ++k) assert_true(again.t[k] == m.t[k]);
     // The hypotheses are scored in parallel: the same model, bit for bit, on any thread count.
     for (int threads : {2, 3, 7}) {
-        interpolation::EgoMotionOptions o;
+        motion::EgoMotionOptions o;
         o.threads = threads;
-        const interpolation::EgoMotion par = interpolation::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, o, cam);
+        const motion::EgoMotion par = motion::fit_rigid_ego_motion(fit.x, fit.y, fit.d0, fit.d1, fit.u, fit.v, o, cam);
         assert_int_equal(par.inliers, m.inliers);
         for (int k = 0; k < 9; ++k) assert_true(par.R[k] == m.R[k]);
         for (int k = 0; k < 3; ++k) assert_true(par.t[k] == m.t[k]);
@@ -142,16 +142,16 @@ void rigid_fit_robust_and_deterministic(void **) {
 
 void rigid_fit_refuses(void **) {
     const StereoCamera cam = kitti_camera();
-    const interpolation::EgoMotion truth = true_motion(cam);
+    const motion::EgoMotion truth = true_motion(cam);
     const Points p = make_points(truth, 500, 6);
     // No camera: nothing to triangulate with.
-    assert_false(interpolation::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, p.u, p.v, {}, StereoCamera{}).valid);
+    assert_false(motion::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, p.u, p.v, {}, StereoCamera{}).valid);
     // Too few matches.
     const Points few = make_points(truth, 20, 7);
-    assert_false(interpolation::fit_rigid_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}, cam).valid);
+    assert_false(motion::fit_rigid_ego_motion(few.x, few.y, few.d0, few.d1, few.u, few.v, {}, cam).valid);
     // Mismatched array lengths are refused, not read out of bounds.
     std::vector<float> shorter(p.u.begin(), p.u.end() - 1);
-    assert_false(interpolation::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, shorter, p.v, {}, cam).valid);
+    assert_false(motion::fit_rigid_ego_motion(p.x, p.y, p.d0, p.d1, shorter, p.v, {}, cam).valid);
     // Pure noise has no dominant motion.
     test::TestRng rng(8);
     Points noise = p;
@@ -160,7 +160,7 @@ void rigid_fit_refuses(void **) {
         noise.v[i] = static_cast<float>(80 * rng.uniform() - 40);
         noise.d1[i] = static_cast<float>(1 + 100 * rng.uniform());
     }
-    assert_false(interpolation::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
+    assert_false(motion::fit_rigid_ego_motion(noise.x, noise.y, noise.d0, noise.d1, noise.u, noise.v, {}, cam).valid);
 }
 
 // The rig of the street scenes below (320x160) and its motion: 0.5 m straight ahead.
@@ -171,8 +171,8 @@ StereoCamera street_camera() {
     return c;
 }
 
-interpolation::EgoMotion driving_forward(const StereoCamera &cam) {
-    interpolation::EgoMotion ego;
+motion::EgoMotion driving_forward(const StereoCamera &cam) {
+    motion::EgoMotion ego;
     ego.valid = ego.calibrated = true;
     ego.camera = cam;
     ego.t[2] = -0.5;
@@ -189,7 +189,7 @@ struct StreetScene {
 
 // A plain 320x160 wall image, an all-valid zero truth for the scene to fill, the street rig;
 // returns the camera's motion.
-interpolation::EgoMotion start_street(StreetScene &c) {
+motion::EgoMotion start_street(StreetScene &c) {
     const int w = 320, h = 160;
     c.cam = street_camera();
     c.image = cv::Mat(h, w, CV_8UC3, cv::Scalar(170, 150, 120));
@@ -230,7 +230,7 @@ struct OcclusionCase : StreetScene {
 
 OcclusionCase occlusion_case() {
     OcclusionCase c;
-    const interpolation::EgoMotion ego = start_street(c);
+    const motion::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
     const cv::Rect post(150, 30, 30, 110);
     c.image(post).setTo(cv::Scalar(30, 40, 200));
@@ -308,7 +308,7 @@ struct StaticCase : StreetScene {
 
 StaticCase static_case() {
     StaticCase c;
-    const interpolation::EgoMotion ego = start_street(c);
+    const motion::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
     c.patch = cv::Rect(20, 50, 48, 48);
     c.car = cv::Rect(150, 70, 21, 21);  // 5 m ahead, within ~14 px of the principal point
@@ -372,9 +372,9 @@ struct Lidar1Case : StreetScene {
 
 Lidar1Case lidar1_case() {
     Lidar1Case c;
-    const interpolation::EgoMotion ego = start_street(c);
+    const motion::EgoMotion ego = start_street(c);
     const int w = c.image.cols, h = c.image.rows;
-    interpolation::EgoMotion box_motion = ego;
+    motion::EgoMotion box_motion = ego;
     box_motion.t[0] = 1.0;  // its own 1 m to the side, on top of the camera's motion
     c.block = cv::Rect(20, 40, 80, 80);
     c.box = cv::Rect(200, 50, 50, 50);

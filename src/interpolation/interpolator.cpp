@@ -16,12 +16,16 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/parallel_errors.hpp"
-#include "interpolation/ego_motion.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/piecewise_model.hpp"
+#include "motion/ego_motion.hpp"
 
 namespace lidarflow::interpolation {
+
+using motion::EgoMotion;
+using motion::EgoMotionOptions;
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -519,8 +523,8 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
                 md0.push_back(rigid && o.ego_lidar_depth ? seeds.d0[i] : seeds.d0_match[i]);
                 md1.push_back(seeds.d1[i]), mu.push_back(seeds.u[i]), mv.push_back(seeds.v[i]);
             }
-        res.ego = rigid ? fit_rigid_ego_motion(mx, my, md0, md1, mu, mv, eo, camera)
-                        : fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
+        res.ego = rigid ? motion::fit_rigid_ego_motion(mx, my, md0, md1, mu, mv, eo, camera)
+                        : motion::fit_ego_motion(mx, my, md0, md1, mu, mv, eo);
         if (!res.ego.valid)
             log::write(log::Level::Warning, "interpolation: no background motion fits the " + std::to_string(mx.size()) +
                                                 " matches; the frame is interpolated without it (no background "

@@ -27,7 +27,7 @@
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
 #include "interpolation/edge_map.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 #include "interpolation/superpixels.hpp"
 
 namespace lidarflow::interpolation {
@@ -83,7 +83,7 @@ struct InterpolationOptions {
     // small on the road), so extrapolating it into holes is much safer, and d1 inherits the
     // LiDAR support of d0 where LiDAR is used.
     bool d1_from_change = true;
-    // Fit the dominant rigid motion (ego-motion; interpolation/ego_motion.hpp) to all matches
+    // Fit the dominant rigid motion (ego-motion; motion/ego_motion.hpp) to all matches
     // and interpolate only what it does not explain; d1, u, v then follow the dense d0 into
     // match-free regions. Falls back to d1_from_change when no dominant motion is found. Its
     // gain is limited where the matches lie only on distant surfaces (forward translation then
@@ -148,7 +148,7 @@ struct InterpolationOptions {
     // Knobs of the fit (ranges checked at construction: hypotheses in [1, 100000], inlier
     // thresholds finite > 0, min_inlier_share in [0, 1], min_inliers in [0, 10^8],
     // joint_rounds in [0, 100]); its seed is replaced by random_seed.
-    EgoMotionOptions ego;
+    motion::EgoMotionOptions ego;
     // Geometry hint (run()'s optional dense disparity, e.g. the SGM of stage 2a): where the
     // matches leave holes, hint pixels on a grid become extra d0-only seeds with a lower
     // weight. They are never anchors, so LiDAR still rejects any model that disagrees with
@@ -189,7 +189,7 @@ struct InterpolationResult {
     int occluded_seeds = 0;           // matches given the background motion as hidden at t1
     int static_d1_seeds = 0;          // matches given the background d1 as static points
     int lidar1_points = 0;            // t1 LiDAR points used as d0 measurements at t0
-    EgoMotion ego;                    // the background model used (valid = false: none)
+    motion::EgoMotion ego;            // the background model used (valid = false: none)
     InterpolationTimings timings;
 };
 

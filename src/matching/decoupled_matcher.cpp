@@ -13,7 +13,7 @@
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/pixels.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 #include "stereo/guided_sgm.hpp"
 
 namespace lidarflow::matching {
@@ -54,7 +54,7 @@ Tracks track_grid(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0, 
 
 // The dominant rigid motion t0 -> t1, fitted to the tracks and the stereo disparities at both
 // ends (invalid when they support none).
-interpolation::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap &d0, const DisparityMap &d1,
+motion::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap &d0, const DisparityMap &d1,
                                             const StereoCamera &camera, uint64_t seed) {
     std::vector<float> xs, ys, d0s, d1s, us, vs;
     for (size_t i = 0; i < tr.from.size(); ++i) {
@@ -67,16 +67,16 @@ interpolation::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap
         us.push_back(tr.to[i].x - tr.from[i].x);
         vs.push_back(tr.to[i].y - tr.from[i].y);
     }
-    interpolation::EgoMotionOptions eo;
+    motion::EgoMotionOptions eo;
     eo.seed = static_cast<unsigned>(seed);
-    return camera.valid() ? interpolation::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
-                          : interpolation::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
+    return camera.valid() ? motion::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
+                          : motion::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
 }
 
 // The camera's motion t0 -> t1 from the tracks and the t0 disparities alone (perspective-n-point
 // with RANSAC), before any t1 stereo exists; invalid when too few tracks agree on one motion.
-interpolation::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, const StereoCamera &camera) {
-    interpolation::EgoMotion m;
+motion::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, const StereoCamera &camera) {
+    motion::EgoMotion m;
     if (!camera.valid()) return m;
     std::vector<cv::Point3f> object;
     std::vector<cv::Point2f> image;
@@ -88,7 +88,7 @@ interpolation::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, 
                             static_cast<float>((tr.from[i].y - camera.cy) * z / camera.fy), static_cast<float>(z));
         image.push_back(tr.to[i]);
     }
-    const interpolation::EgoMotionOptions eo;
+    const motion::EgoMotionOptions eo;
     if (static_cast<int>(object.size()) < eo.min_inliers) return m;
     const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
     cv::Mat rvec, tvec;
@@ -111,7 +111,7 @@ interpolation::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, 
 
 // The t0 points where the motion carries them at t1 (the nearest of several on one pixel);
 // points on movers land wrong, which the capped LiDAR term lets the images outvote.
-SparseLidar carry_points(const SparseLidar &lidar0, const interpolation::EgoMotion &m) {
+SparseLidar carry_points(const SparseLidar &lidar0, const motion::EgoMotion &m) {
     SparseLidar carried{lidar0.width, lidar0.height, {}};
     for (const LidarPoint &p : lidar0.points) {
         float d1 = 0, u = 0, v = 0;
@@ -126,7 +126,7 @@ SparseLidar carry_points(const SparseLidar &lidar0, const interpolation::EgoMoti
 // The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
 // has none; empty when m is invalid. DIS resamples it down its pyramid, so it is predicted on a
 // 2 px grid and resized (a 4 px grid cost 0.2 points).
-cv::Mat2f rigid_flow(const interpolation::EgoMotion &m, const DisparityMap &d) {
+cv::Mat2f rigid_flow(const motion::EgoMotion &m, const DisparityMap &d) {
     if (!m.valid) return {};
     constexpr int kStep = 2;
     cv::Mat2f coarse((d.rows + kStep - 1) / kStep, (d.cols + kStep - 1) / kStep);
@@ -261,14 +261,14 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     t = Clock::now();
     r.guide1 = guide1;
     if (opt.carry_lidar && guide1.points.empty() && !guide0.points.empty()) {
-        const interpolation::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
+        const motion::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
         if (pose.valid) r.guide1 = carry_points(guide0, pose);
     }
     r.sgm1 = disparity(in.left1, in.right1, r.guide1);
     r.seconds_stereo += seconds_since(t);
 
     t = Clock::now();
-    interpolation::EgoMotion motion;
+    motion::EgoMotion motion;
     if (opt.flow.prior_track_step > 0) motion = track_rigid_motion(tracks, r.sgm0, r.sgm1, camera, opt.random_seed);
     if (opt.flow.prior_track_step > 0 && !motion.valid)
         log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "
@@ -279,7 +279,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     r.forward = assemble(choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc),
                          r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none);
     if (backward) {
-        const interpolation::EgoMotion back = motion.valid ? motion.inverse() : motion;
+        const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         const cv::Mat2f prior1 = rigid_flow(back, r.sgm1);
         r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1, r.sgm1, rc),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none);

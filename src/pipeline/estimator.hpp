@@ -120,11 +120,11 @@ struct EstimatorResult {
     SceneFlowField dense;     // stage 4 (the final result)
     // The output of last_stage: one of the fields above.
     const SceneFlowField &output() const;
-    // Stage 4's background model (interpolation::EgoMotion), kept as fitted: the rigid motion
+    // Stage 4's background model (motion::EgoMotion), kept as fitted: the rigid motion
     // of the static scene t0 -> t1 when the camera was known (calibrated = true), its R, t in
     // metres and so the same at any processing_scale. valid = false: stage 4 did not run, the
     // ego-motion model is off, or too few matches agree on one motion.
-    interpolation::EgoMotion ego;
+    motion::EgoMotion ego;
     EgoState ego_state = EgoState::NotRun;  // Ok exactly when ego is valid and calibrated
 
     std::vector<StageTime> timings;  // in execution order

@@ -33,7 +33,7 @@ namespace lidarflow::cli {
 namespace {
 
 // The rigid background motion as the C ABI's T (X1 = T X0); identity where there is none.
-cv::Matx44d ego_matrix(const interpolation::EgoMotion &e) {
+cv::Matx44d ego_matrix(const motion::EgoMotion &e) {
     cv::Matx44d T = cv::Matx44d::eye();
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) T(i, j) = e.R[3 * i + j];

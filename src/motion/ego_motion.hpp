@@ -8,7 +8,8 @@
 //   x' = x + u     = bx0 (1 - r) + r (bx1 + bx2 y) + bx3 d1 + r x   (r = d1 / d0)
 //   y' = y + v     = by0 (1 - r) + r (by1 + by2 x) + by3 d1 + r y
 // (bx0, by0 play the principal point, a3 / bx3 / by3 the translation, the rest the rotation).
-// All three are linear in their unknowns. The interpolator subtracts this prediction from the
+// All three are linear in their unknowns. Two stages use it, so it has its own folder: stage 1's
+// decoupled design starts DIS from its flow, and stage 4 subtracts its prediction from the
 // matches and interpolates only the remainder: ~0 on the background, so the motion in large
 // match-free holes (the road) follows the dense d0 (which LiDAR supports) instead of being
 // extrapolated from far-away matches.
@@ -21,7 +22,7 @@
 
 #include "core/camera.hpp"
 
-namespace lidarflow::interpolation {
+namespace lidarflow::motion {
 
 struct EgoMotion {
     bool valid = false;
@@ -78,4 +79,4 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
                                const std::vector<float> &v, const EgoMotionOptions &options,
                                const StereoCamera &camera);
 
-}  // namespace lidarflow::interpolation
+}  // namespace lidarflow::motion

@@ -11,9 +11,9 @@
 #include <cstdint>
 
 #include "core/random.hpp"
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 
-namespace lidarflow::interpolation {
+namespace lidarflow::motion {
 namespace {
 
 using Rng = SplitMix64;
@@ -273,4 +273,4 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     return em;
 }
 
-}  // namespace lidarflow::interpolation
+}  // namespace lidarflow::motion

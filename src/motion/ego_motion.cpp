@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "interpolation/ego_motion.hpp"
+#include "motion/ego_motion.hpp"
 
 #include "core/random.hpp"
 
@@ -8,7 +8,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace lidarflow::interpolation {
+namespace lidarflow::motion {
 namespace {
 
 // Scaled coordinates keep the 4x4 systems well conditioned (pixels ~1000, disparities ~100).
@@ -245,4 +245,4 @@ EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &
     return em;
 }
 
-}  // namespace lidarflow::interpolation
+}  // namespace lidarflow::motion

@@ -44,23 +44,29 @@ std::string entry_text(uint32_t i, const float e[3]) {
 
 SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) {
     // Larger disparity wins on a shared pixel (nearer surface), as in the projection.
+    // An entry off the image is dropped and counted, as a projected 3-D point is: one point
+    // must not cost the frame.
     DisparityMap map(size, kInvalidDisparity);
+    size_t outside = 0;
     for (uint32_t i = 0; i < l.count; ++i) {
         float e[3];
         read_entry(l, stride, i, e);
         require(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2]), ErrorCode::InvalidArgument,
                 entry_text(i, e) + " is not finite");
-        const double x = std::floor(static_cast<double>(e[0]) + 0.5), y = std::floor(static_cast<double>(e[1]) + 0.5);
-        require(x >= 0 && y >= 0 && x < size.width && y < size.height, ErrorCode::InvalidArgument,
-                entry_text(i, e) + " lies outside the " + std::to_string(size.width) + "x" +
-                    std::to_string(size.height) + " image");
         require(e[2] >= 0.0f && e[2] <= kMaxLidarDisparity, ErrorCode::InvalidArgument,
                 entry_text(i, e) + " has a disparity outside [0, " +
                     std::to_string(static_cast<int>(kMaxLidarDisparity)) + "] px");
-        float &cell = map(static_cast<int>(y), static_cast<int>(x));
+        int x = 0, y = 0;
+        if (!lidar::nearest_pixel(e[0], e[1], size, x, y)) {
+            ++outside;
+            continue;
+        }
+        float &cell = map(y, x);
         if (e[2] > cell) cell = e[2];
     }
-    return SparseLidar::from_map(map);
+    SparseLidar out = SparseLidar::from_map(map);
+    lidar::report_dropped_points(l.count, 0, 0.0, outside, size, 0, out.points.size());
+    return out;
 }
 
 SparseLidar from_points(const lf_lidar_t &l, size_t stride, cv::Size size, const Calibration &cal) {

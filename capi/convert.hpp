@@ -22,9 +22,9 @@ Calibration convert_calibration(const lf_calibration_t &c);
 cv::Mat convert_image(const lf_image_t &image, const char *what);
 
 // LiDAR entries -> SparseLidar in an image of `size`. lidar may be NULL (no points). Throws
-// InvalidArgument (unknown kind, NULL data with count > 0, non-finite values, disparity entries
-// outside the image or outside [0, kMaxLidarDisparity], LF_LIDAR_POINTS_LIDAR without a transform) or SizeMismatch
-// (stride below 12 bytes).
+// InvalidArgument (unknown kind, NULL data with count > 0, non-finite values, disparities
+// outside [0, kMaxLidarDisparity], LF_LIDAR_POINTS_LIDAR without a transform) or SizeMismatch
+// (stride below 12 bytes). Entries off the image (lidar::nearest_pixel) are dropped and logged.
 SparseLidar convert_lidar(const lf_lidar_t *lidar, cv::Size size, const Calibration &calibration);
 
 }  // namespace lidarflow::capi

@@ -128,6 +128,18 @@ static void dropped_points_are_reported(void **state) {
     assert_int_equal(sink.levels[i], LF_LOG_INFO);
     assert_non_null(strstr(sink.messages[i], "4 outside the 96x64 image"));
 
+    /* Disparity entries alike: off the image is dropped and said, half a pixel beyond rounds in. */
+    const float xyd[4 * 3] = {10, 10, 5, 95.9f, 63.9f, 5, -3, 10, 5, 40, 70, 5};
+    lf_lidar_t disparities;
+    memset(&disparities, 0, sizeof disparities);
+    disparities.kind = LF_LIDAR_DISPARITY;
+    disparities.count = 4;
+    disparities.data = xyd;
+    assert_int_equal(push(e, &s, 2500, &disparities), LF_OK);
+    const int j = find_message(&sink, "frame 2500 us", "2 of 4 LiDAR points dropped: 2 outside the 96x64 image",
+                               "2 pixels keep a point");
+    if (j < 0) fail_msg("no drop message for disparity entries among %d messages", sink.count);
+
     /* Every point dropped is a warning; a warning-level callback sees it but not the info. */
     static sink_t warnings;
     sink_init(&warnings);

@@ -620,9 +620,23 @@ void test_visibility_filter_real(void **) {
 
 }  // namespace
 
+// Image coordinates to pixels: the nearest pixel, also half a pixel beyond the image's edges
+// (at -0.5 and size - 0.5); farther out, or not finite, none.
+void test_nearest_pixel(void **) {
+    const cv::Size image(160, 64);
+    int x = -7, y = -7;
+    assert_true(lidar::nearest_pixel(20.4, 30.5, image, x, y) && x == 20 && y == 31);
+    assert_true(lidar::nearest_pixel(-0.6, -1.0, image, x, y) && x == 0 && y == 0);
+    assert_true(lidar::nearest_pixel(159.9, 64.0, image, x, y) && x == 159 && y == 63);
+    for (const auto &p : {cv::Point2d(-1.01, 3), cv::Point2d(160.01, 3), cv::Point2d(3, 64.2),
+                          cv::Point2d(std::nan(""), 3), cv::Point2d(3, 1e300)})
+        assert_false(lidar::nearest_pixel(p.x, p.y, image, x, y));
+}
+
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_projection_synthetic),
+        cmocka_unit_test(test_nearest_pixel),
         cmocka_unit_test(test_projection_matches_ground_truth),
         cmocka_unit_test(test_grid_sampler),
         cmocka_unit_test(test_dewarp_occlusion),

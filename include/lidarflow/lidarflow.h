@@ -360,17 +360,19 @@ typedef struct lf_image_t {
 /* Kinds of LiDAR input. */
 typedef enum lf_lidar_kind_t {
     LF_LIDAR_NONE = 0,
-    /* float32 (x, y, z) [m] in the left rectified camera frame. Points behind the camera
-     * (z <= 0.1 m), outside the image, or so close that their disparity fx * baseline / z
-     * exceeds 16384 px are dropped, as the camera pair does not see them; where several points
-     * land on one pixel the nearest wins. */
+    /* float32 (x, y, z) [m] in the left rectified camera frame, each taken to the nearest
+     * pixel of its projection (half a pixel beyond the image's edge still rounds in). Points
+     * behind the camera (z <= 0.1 m), farther outside the image, or so close that their
+     * disparity fx * baseline / z exceeds 16384 px are dropped (and logged), as the camera
+     * pair does not see them; where several points land on one pixel the nearest wins. */
     LF_LIDAR_POINTS_CAMERA = 1,
     /* float32 (x, y, z) [m] in the LiDAR frame, moved by the calibration's lidar_to_camera,
      * then as LF_LIDAR_POINTS_CAMERA. */
     LF_LIDAR_POINTS_LIDAR = 2,
-    /* float32 (x, y, d): pixel column, row (rounded to the nearest pixel, which must lie in
-     * the image) and disparity d = fx * baseline / z [px] in [0, 16384] (0: at infinity; no
-     * image is wider). Where two entries share a pixel the larger disparity wins. */
+    /* float32 (x, y, d): pixel column, row (rounded to the nearest pixel as 3-D points are;
+     * entries farther outside the image are dropped and logged, never the frame) and
+     * disparity d = fx * baseline / z [px] in [0, 16384] (0: at infinity; no image is
+     * wider). Where two entries share a pixel the larger disparity wins. */
     LF_LIDAR_DISPARITY = 3
 } lf_lidar_kind_t;
 
@@ -415,7 +417,7 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
  * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
  * timestamp not increasing, NULL LiDAR data with count > 0, non-finite LiDAR values,
- * disparity entries outside the image or outside [0, 16384] px, 3-D points that the
+ * disparities outside [0, 16384] px, 3-D points that the
  * calibration's lidar_to_camera moves to non-finite coordinates,
  * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
  * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "lidar/projection.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -23,6 +25,43 @@ void check_inputs(const io::CamToCamCalib &calib, cv::Size image, const Projecti
             "projection: min_depth must be > 0");
 }
 
+}  // namespace
+
+bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py) {
+    // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit. The image's
+    // edges lie at -0.5 and size - 0.5; half a pixel beyond them still rounds in.
+    if (!(x >= -1.0 && y >= -1.0 && x <= image.width && y <= image.height)) return false;
+    px = std::clamp(static_cast<int>(std::floor(x + 0.5)), 0, image.width - 1);
+    py = std::clamp(static_cast<int>(std::floor(y + 0.5)), 0, image.height - 1);
+    return image.width > 0 && image.height > 0;
+}
+
+void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t outside, cv::Size image,
+                           size_t too_close, size_t kept) {
+    const size_t dropped = behind + outside + too_close;
+    const log::Level level = seen > 0 && kept == 0 ? log::Level::Warning : log::Level::Info;
+    if (dropped == 0 || !log::enabled(level)) return;
+    char part[96];
+    std::string text = std::to_string(dropped) + " of " + std::to_string(seen) + " LiDAR points dropped:";
+    const char *sep = " ";
+    if (behind) {
+        std::snprintf(part, sizeof part, "%s%zu behind the camera (z <= %g m)", sep, behind, min_depth);
+        text += part, sep = ", ";
+    }
+    if (outside) {
+        std::snprintf(part, sizeof part, "%s%zu outside the %dx%d image", sep, outside, image.width, image.height);
+        text += part, sep = ", ";
+    }
+    if (too_close) {
+        std::snprintf(part, sizeof part, "%s%zu nearer than a disparity of %g px", sep, too_close,
+                      static_cast<double>(kMaxLidarDisparity));
+        text += part;
+    }
+    log::write(level, text + "; " + std::to_string(kept) + " pixels keep a point");
+}
+
+namespace {
+
 // Z-buffer of disparities in the left image; kInvalidDisparity where nothing landed.
 class DepthBuffer {
 public:
@@ -38,9 +77,8 @@ public:
             ++behind_;
             return;
         }
-        // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit.
-        const double u = std::floor(p[0] / w + 0.5), v = std::floor(p[1] / w + 0.5);
-        if (!(u >= 0 && v >= 0 && u < map_.cols && v < map_.rows)) {
+        int u = 0, v = 0;
+        if (!nearest_pixel(p[0] / w, p[1] / w, map_.size(), u, v)) {
             ++outside_;
             return;
         }
@@ -52,7 +90,7 @@ public:
             return;
         }
         const float d = static_cast<float>(dd);
-        float &cell = map_(static_cast<int>(v), static_cast<int>(u));
+        float &cell = map_(v, u);
         if (d > cell) cell = d;
     }
     SparseLidar result() const {
@@ -62,18 +100,8 @@ public:
     }
 
 private:
-    // A wrong calibration shows as points dropped: say how many and why.
     void report(size_t kept) const {
-        const size_t dropped = behind_ + outside_ + too_close_;
-        const log::Level level = seen_ > 0 && kept == 0 ? log::Level::Warning : log::Level::Info;
-        if (dropped == 0 || !log::enabled(level)) return;
-        char buf[256];
-        std::snprintf(buf, sizeof buf,
-                      "%zu of %zu LiDAR points dropped: %zu behind the camera (z <= %g m), %zu outside the %dx%d "
-                      "image, %zu nearer than a disparity of %g px; %zu pixels keep a point",
-                      dropped, seen_, behind_, min_depth_, outside_, map_.cols, map_.rows, too_close_,
-                      static_cast<double>(kMaxLidarDisparity), kept);
-        log::write(level, buf);
+        report_dropped_points(seen_, behind_, min_depth_, outside_, map_.size(), too_close_, kept);
     }
 
     cv::Matx34d P_;

@@ -19,6 +19,16 @@
 
 namespace lidarflow::lidar {
 
+// The pixel of image coordinates (x, y) (pixel centres at integers): the nearest one, also for a
+// point at most half a pixel beyond the image's edges (rounded in); false for one farther out
+// or not finite.
+bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py);
+
+// Says in the log how many LiDAR entries a conversion dropped and why (a wrong calibration or
+// image size shows this way): Info, or Warning when none is left. Nothing when none was dropped.
+void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t outside, cv::Size image,
+                           size_t too_close, size_t kept);
+
 struct ProjectionOptions {
     double min_depth = 0.1;  // [m] in camera 2's rectified frame; also keeps d finite
 };

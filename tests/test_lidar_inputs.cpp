@@ -631,6 +631,14 @@ void test_nearest_pixel(void **) {
     for (const auto &p : {cv::Point2d(-1.01, 3), cv::Point2d(160.01, 3), cv::Point2d(3, 64.2),
                           cv::Point2d(std::nan(""), 3), cv::Point2d(3, 1e300)})
         assert_false(lidar::nearest_pixel(p.x, p.y, image, x, y));
+    // The C ABI's 3-D points follow it; the KITTI devkit's projection drops such a point.
+    const StereoCamera cam{100, 100, 79.5, 31.5, 0.5};
+    const std::vector<cv::Point3f> beyond{{(159.7f - 79.5f) * 5.0f / 100.0f, 0.0f, 5.0f}};  // column 159.7
+    const SparseLidar in = lidar::project_to_left_camera(beyond, nullptr, cam, image);
+    assert_int_equal(in.points.size(), 1);
+    assert_int_equal(in.points[0].x, 159);
+    const std::vector<cv::Point3d> same{{beyond[0].x, beyond[0].y, beyond[0].z}};
+    assert_true(lidar::project_to_left(same, io::calib_from_camera(cam), image).points.empty());
 }
 
 int main() {

@@ -67,7 +67,7 @@ class DepthBuffer {
 public:
     DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
         : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
-          map_(image.height, image.width, kInvalidDisparity) {}
+          round_in_(opt.round_in_border), map_(image.height, image.width, kInvalidDisparity) {}
 
     void add(const cv::Vec3d &x_rect) {
         const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
@@ -78,7 +78,7 @@ public:
             return;
         }
         int u = 0, v = 0;
-        if (!nearest_pixel(p[0] / w, p[1] / w, map_.size(), u, v)) {
+        if (!pixel_of(p[0] / w, p[1] / w, u, v)) {
             ++outside_;
             return;
         }
@@ -100,12 +100,23 @@ public:
     }
 
 private:
+    bool pixel_of(double x, double y, int &u, int &v) const {
+        if (round_in_) return nearest_pixel(x, y, map_.size(), u, v);
+        // The devkit's rule: floor(x + 0.5) must lie in the image.
+        const double fu = std::floor(x + 0.5), fv = std::floor(y + 0.5);
+        if (!(fu >= 0 && fv >= 0 && fu < map_.cols && fv < map_.rows)) return false;
+        u = static_cast<int>(fu);
+        v = static_cast<int>(fv);
+        return true;
+    }
+
     void report(size_t kept) const {
         report_dropped_points(seen_, behind_, min_depth_, outside_, map_.size(), too_close_, kept);
     }
 
     cv::Matx34d P_;
     double fb_, min_depth_;
+    bool round_in_;
     DisparityMap map_;
     size_t seen_ = 0, behind_ = 0, outside_ = 0, too_close_ = 0;
 };
@@ -151,7 +162,9 @@ SparseLidar project_to_left_camera(const std::vector<cv::Point3f> &points, const
         if (lidar_to_camera) p = *lidar_to_camera * p;
         moved[i] = {p[0], p[1], p[2]};
     }
-    return project_to_left(moved, io::calib_from_camera(camera), image);
+    ProjectionOptions opt;
+    opt.round_in_border = true;
+    return project_to_left(moved, io::calib_from_camera(camera), image, opt);
 }
 
 }  // namespace lidarflow::lidar

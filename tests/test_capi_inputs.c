@@ -239,10 +239,10 @@ static void test_bad_lidar(void **state) {
     pts[1][2] = INFINITY;
     EXPECT_FAIL(e, lf_push_frame(e, 0, &l0, &r0, &l), LF_ERR_INVALID_ARGUMENT, "not finite");
     pts[1][2] = 10;
-    /* Half a pixel beyond an edge rounds in; farther out an entry is dropped (and logged): one
-     * point never costs the frame. */
-    static const float near_edge[][2] = {{-0.6f, 30}, {159.9f, 30}, {20, 64}, {160, -1}, /* rounded in */
-                                         {-1.2f, 30}, {161, 30},    {20, 66}, {1e30f, 30}}; /* dropped */
+    /* An entry whose nearest pixel lies outside the image is dropped (and logged), as a 3-D
+     * point is: one point never costs the frame. */
+    static const float near_edge[][2] = {{-0.5f, 30}, {159.4f, 63.4f},                      /* in */
+                                         {-0.6f, 30}, {159.6f, 30}, {20, 64}, {1e30f, 30}}; /* dropped */
     for (size_t k = 0; k < sizeof near_edge / sizeof near_edge[0]; ++k) {
         pts[1][0] = near_edge[k][0];
         pts[1][1] = near_edge[k][1];

@@ -128,8 +128,8 @@ static void dropped_points_are_reported(void **state) {
     assert_int_equal(sink.levels[i], LF_LOG_INFO);
     assert_non_null(strstr(sink.messages[i], "4 outside the 96x64 image"));
 
-    /* Disparity entries alike: off the image is dropped and said, half a pixel beyond rounds in. */
-    const float xyd[4 * 3] = {10, 10, 5, 95.9f, 63.9f, 5, -3, 10, 5, 40, 70, 5};
+    /* Disparity entries alike: those whose nearest pixel is off the image are dropped and said. */
+    const float xyd[4 * 3] = {10, 10, 5, 95.4f, 63.4f, 5, -3, 10, 5, 40, 63.6f, 5};
     lf_lidar_t disparities;
     memset(&disparities, 0, sizeof disparities);
     disparities.kind = LF_LIDAR_DISPARITY;

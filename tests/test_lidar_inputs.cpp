@@ -620,25 +620,17 @@ void test_visibility_filter_real(void **) {
 
 }  // namespace
 
-// Image coordinates to pixels: the nearest pixel, also half a pixel beyond the image's edges
-// (at -0.5 and size - 0.5); farther out, or not finite, none.
+// Image coordinates to pixels: the nearest pixel (the devkit's floor(x + 0.5)) when it lies in
+// the image; none otherwise or for coordinates that are not finite.
 void test_nearest_pixel(void **) {
     const cv::Size image(160, 64);
     int x = -7, y = -7;
     assert_true(lidar::nearest_pixel(20.4, 30.5, image, x, y) && x == 20 && y == 31);
-    assert_true(lidar::nearest_pixel(-0.6, -1.0, image, x, y) && x == 0 && y == 0);
-    assert_true(lidar::nearest_pixel(159.9, 64.0, image, x, y) && x == 159 && y == 63);
-    for (const auto &p : {cv::Point2d(-1.01, 3), cv::Point2d(160.01, 3), cv::Point2d(3, 64.2),
+    assert_true(lidar::nearest_pixel(-0.5, -0.4, image, x, y) && x == 0 && y == 0);
+    assert_true(lidar::nearest_pixel(159.4, 63.49, image, x, y) && x == 159 && y == 63);
+    for (const auto &p : {cv::Point2d(-0.6, 3), cv::Point2d(159.5, 3), cv::Point2d(3, 63.5),
                           cv::Point2d(std::nan(""), 3), cv::Point2d(3, 1e300)})
         assert_false(lidar::nearest_pixel(p.x, p.y, image, x, y));
-    // The C ABI's 3-D points follow it; the KITTI devkit's projection drops such a point.
-    const StereoCamera cam{100, 100, 79.5, 31.5, 0.5};
-    const std::vector<cv::Point3f> beyond{{(159.7f - 79.5f) * 5.0f / 100.0f, 0.0f, 5.0f}};  // column 159.7
-    const SparseLidar in = lidar::project_to_left_camera(beyond, nullptr, cam, image);
-    assert_int_equal(in.points.size(), 1);
-    assert_int_equal(in.points[0].x, 159);
-    const std::vector<cv::Point3d> same{{beyond[0].x, beyond[0].y, beyond[0].z}};
-    assert_true(lidar::project_to_left(same, io::calib_from_camera(cam), image).points.empty());
 }
 
 int main() {

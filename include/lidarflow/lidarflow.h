@@ -361,8 +361,8 @@ typedef struct lf_image_t {
 typedef enum lf_lidar_kind_t {
     LF_LIDAR_NONE = 0,
     /* float32 (x, y, z) [m] in the left rectified camera frame, each taken to the nearest
-     * pixel of its projection (half a pixel beyond the image's edge still rounds in). Points
-     * behind the camera (z <= 0.1 m), farther outside the image, or so close that their
+     * pixel of its projection (floor(x + 0.5), as the KITTI devkit). Points behind the camera
+     * (z <= 0.1 m), whose nearest pixel lies outside the image, or so close that their
      * disparity fx * baseline / z exceeds 16384 px are dropped (and logged), as the camera
      * pair does not see them; where several points land on one pixel the nearest wins. */
     LF_LIDAR_POINTS_CAMERA = 1,
@@ -370,7 +370,7 @@ typedef enum lf_lidar_kind_t {
      * then as LF_LIDAR_POINTS_CAMERA. */
     LF_LIDAR_POINTS_LIDAR = 2,
     /* float32 (x, y, d): pixel column, row (rounded to the nearest pixel as 3-D points are;
-     * entries farther outside the image are dropped and logged, never the frame) and
+     * an entry whose pixel lies outside the image is dropped and logged, never the frame) and
      * disparity d = fx * baseline / z [px] in [0, 16384] (0: at infinity; no image is
      * wider). Where two entries share a pixel the larger disparity wins. */
     LF_LIDAR_DISPARITY = 3

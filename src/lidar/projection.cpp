@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "lidar/projection.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -28,12 +27,12 @@ void check_inputs(const io::CamToCamCalib &calib, cv::Size image, const Projecti
 }  // namespace
 
 bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py) {
-    // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit. The image's
-    // edges lie at -0.5 and size - 0.5; half a pixel beyond them still rounds in.
-    if (!(x >= -1.0 && y >= -1.0 && x <= image.width && y <= image.height)) return false;
-    px = std::clamp(static_cast<int>(std::floor(x + 0.5)), 0, image.width - 1);
-    py = std::clamp(static_cast<int>(std::floor(y + 0.5)), 0, image.height - 1);
-    return image.width > 0 && image.height > 0;
+    // floor(x + 0.5): pixel centres sit at integer coordinates, as in the devkit.
+    const double u = std::floor(x + 0.5), v = std::floor(y + 0.5);
+    if (!(u >= 0 && v >= 0 && u < image.width && v < image.height)) return false;
+    px = static_cast<int>(u);
+    py = static_cast<int>(v);
+    return true;
 }
 
 void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t outside, cv::Size image,
@@ -67,7 +66,7 @@ class DepthBuffer {
 public:
     DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
         : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
-          round_in_(opt.round_in_border), map_(image.height, image.width, kInvalidDisparity) {}
+          map_(image.height, image.width, kInvalidDisparity) {}
 
     void add(const cv::Vec3d &x_rect) {
         const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
@@ -78,7 +77,7 @@ public:
             return;
         }
         int u = 0, v = 0;
-        if (!pixel_of(p[0] / w, p[1] / w, u, v)) {
+        if (!nearest_pixel(p[0] / w, p[1] / w, map_.size(), u, v)) {
             ++outside_;
             return;
         }
@@ -100,23 +99,12 @@ public:
     }
 
 private:
-    bool pixel_of(double x, double y, int &u, int &v) const {
-        if (round_in_) return nearest_pixel(x, y, map_.size(), u, v);
-        // The devkit's rule: floor(x + 0.5) must lie in the image.
-        const double fu = std::floor(x + 0.5), fv = std::floor(y + 0.5);
-        if (!(fu >= 0 && fv >= 0 && fu < map_.cols && fv < map_.rows)) return false;
-        u = static_cast<int>(fu);
-        v = static_cast<int>(fv);
-        return true;
-    }
-
     void report(size_t kept) const {
         report_dropped_points(seen_, behind_, min_depth_, outside_, map_.size(), too_close_, kept);
     }
 
     cv::Matx34d P_;
     double fb_, min_depth_;
-    bool round_in_;
     DisparityMap map_;
     size_t seen_ = 0, behind_ = 0, outside_ = 0, too_close_ = 0;
 };
@@ -162,9 +150,7 @@ SparseLidar project_to_left_camera(const std::vector<cv::Point3f> &points, const
         if (lidar_to_camera) p = *lidar_to_camera * p;
         moved[i] = {p[0], p[1], p[2]};
     }
-    ProjectionOptions opt;
-    opt.round_in_border = true;
-    return project_to_left(moved, io::calib_from_camera(camera), image, opt);
+    return project_to_left(moved, io::calib_from_camera(camera), image);
 }
 
 }  // namespace lidarflow::lidar

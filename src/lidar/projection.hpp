@@ -19,9 +19,9 @@
 
 namespace lidarflow::lidar {
 
-// The pixel of image coordinates (x, y) (pixel centres at integers): the nearest one, also for a
-// point at most half a pixel beyond the image's edges (rounded in); false for one farther out
-// or not finite.
+// The pixel of image coordinates (x, y) (pixel centres at integers): the nearest one, as the
+// KITTI devkit rounds (floor(x + 0.5)); false when that pixel lies outside the image or x, y
+// are not finite. Every LiDAR kind goes through it, so all drop the same points.
 bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py);
 
 // Says in the log how many LiDAR entries a conversion dropped and why (a wrong calibration or
@@ -31,9 +31,6 @@ void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t 
 
 struct ProjectionOptions {
     double min_depth = 0.1;  // [m] in camera 2's rectified frame; also keeps d finite
-    // Points up to half a pixel beyond the image's edges taken to the nearest pixel
-    // (nearest_pixel, the C ABI's rule) rather than dropped (the KITTI devkit's).
-    bool round_in_border = false;
 };
 
 // Velodyne points (Velodyne frame) -> left image of size `image`. The result owns its points,
@@ -49,8 +46,7 @@ SparseLidar project_to_left(const std::vector<cv::Point3d> &rect_points, const i
 
 // The C ABI's path for 3-D points (LF_LIDAR_POINTS_LIDAR / LF_LIDAR_POINTS_CAMERA): each point
 // moved by *lidar_to_camera (LiDAR frame -> left rectified camera frame; null: the points are
-// already there), then projected by the ideal rectified pair of `camera` (io::calib_from_camera),
-// with round_in_border.
+// already there), then projected by the ideal rectified pair of `camera` (io::calib_from_camera).
 // `lidarflow sequence` takes its scans through here too, so that it gives the C ABI's maps bit for
 // bit. Same ownership and errors as above, plus InvalidArgument for a camera outside the ranges
 // of core/limits.hpp.

@@ -21,6 +21,22 @@ namespace {
 
 ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
 
+// Holds the handle's busy flag for one mutating call; throws BadState when another holds it.
+class BusyScope {
+public:
+    BusyScope(lf_estimator_t *e, const char *call) : e_(e) {
+        require(!e_->busy.exchange(true), ErrorCode::BadState,
+                std::string(call) + ": the estimator is inside another call (lf_push_frame or lf_reset, e.g. "
+                                    "from its log callback); the handle allows one call at a time");
+    }
+    ~BusyScope() { e_->busy.store(false); }
+    BusyScope(const BusyScope &) = delete;
+    BusyScope &operator=(const BusyScope &) = delete;
+
+private:
+    lf_estimator_t *e_;
+};
+
 std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 const char *format_text(int type) { return type == CV_8UC1 ? "gray" : "colour"; }
@@ -81,6 +97,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         require_non_null(estimator, "estimator");
         require_non_null(left, "left");
         require_non_null(right, "right");
+        const BusyScope busy(estimator, "lf_push_frame");
         char context[80];
         std::snprintf(context, sizeof context, "estimator %p frame %lld us", static_cast<void *>(estimator),
                       static_cast<long long>(timestamp_us));
@@ -132,6 +149,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
 LF_API int32_t lf_reset(lf_estimator_t *estimator) {
     return guarded(sink_of(estimator), "lf_reset", [&] {
         require_non_null(estimator, "estimator");
+        const BusyScope busy(estimator, "lf_reset");
         estimator->previous.reset();
         estimator->result.reset();
         estimator->stream.clear();

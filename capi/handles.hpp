@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // What the opaque C handles are. Private to capi/.
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -58,4 +59,8 @@ struct lf_estimator {
     // The newer pair's descriptors, reused by the next push (frame k's t1 is frame k+1's t0).
     lidarflow::pipeline::StreamCache stream;
     mutable std::string error;                          // lf_last_error
+    // Set while lf_push_frame or lf_reset runs: one of them called from inside another on the
+    // same handle (its log callback, which may run on any of the call's threads) is refused
+    // instead of freeing the frame the outer call is reading.
+    std::atomic<bool> busy{false};
 };

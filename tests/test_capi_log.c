@@ -264,11 +264,66 @@ static void replacing_while_frames_run(void **state) {
     scene_free(&s);
 }
 
+/* A log callback that calls lf_push_frame and lf_reset on the estimator whose push is logging:
+ * both are refused (LF_ERR_BAD_STATE) and the outer push's result is what it would have been. */
+typedef struct reentry_t {
+    lf_estimator_t *e;
+    const scene_t *s;
+    int calls;
+    int32_t push_status, reset_status;
+} reentry_t;
+
+static void reenter(int32_t level, const char *message, void *user) {
+    (void)level;
+    (void)message;
+    reentry_t *r = (reentry_t *)user;
+    if (r->calls++ > 0) return;
+    r->push_status = push(r->e, r->s, 999000, NULL);
+    r->reset_status = lf_reset(r->e);
+}
+
+static void reentry_is_refused(void **state) {
+    (void)state;
+    scene_t s;
+    assert_true(scene_make(&s, W, H, 10, 2, 1, 7u));
+    lf_estimator_t *e = new_estimator(&s), *plain = new_estimator(&s);
+    assert_non_null(e);
+    assert_non_null(plain);
+    float xyz[3 * 40];
+    const lf_lidar_t lidar = camera_points(xyz, 20); /* its dropped points are logged */
+    assert_int_equal(push(e, &s, 1000, &lidar), LF_OK);
+    assert_int_equal(push(plain, &s, 1000, &lidar), LF_OK);
+    static reentry_t r;
+    memset(&r, 0, sizeof r);
+    r.e = e;
+    r.s = &s;
+    assert_int_equal(lf_set_log_callback(reenter, LF_LOG_DEBUG, &r), LF_OK);
+    assert_int_equal(push(e, &s, 2000, &lidar), LF_OK);
+    assert_int_equal(lf_set_log_callback(NULL, 0, NULL), LF_OK);
+    assert_true(r.calls > 0);
+    assert_int_equal(r.push_status, LF_ERR_BAD_STATE);
+    assert_int_equal(r.reset_status, LF_ERR_BAD_STATE);
+    assert_int_equal(push(plain, &s, 2000, &lidar), LF_OK);
+    assert_int_equal(lf_has_result(e), 1);
+    lf_result_info_t a, b;
+    lf_result_info_init(&a);
+    lf_result_info_init(&b);
+    assert_int_equal(lf_get_result_info(e, &a), LF_OK);
+    assert_int_equal(lf_get_result_info(plain, &b), LF_OK);
+    assert_true(a.t0_us == 1000 && a.t1_us == 2000 && b.t0_us == 1000);
+    /* After the call the handle takes calls again. */
+    assert_int_equal(lf_reset(e), LF_OK);
+    lf_destroy(e);
+    lf_destroy(plain);
+    scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(dropped_points_are_reported),
         cmocka_unit_test(callback_may_replace_itself),
         cmocka_unit_test(replacing_while_frames_run),
+        cmocka_unit_test(reentry_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -223,6 +223,7 @@ void test_bad_arguments_fail(void **) {
     expect_failure("synth" + o + " --frames 0", dir, 2);
     expect_failure("synth" + o + " --bogus 1", dir, 2);
     expect_failure("synth" + o + " stray", dir, 2);
+    expect_failure("synth --drive '' --frames 2", dir, 2);  // not the filesystem's root
     assert_false(fs::exists(dir / "o"));  // nothing written on bad arguments
     expect_failure("demo --seed abc" + o, dir, 2);
     expect_failure("viz --out x.png", dir, 2);  // neither --disp nor --flow

@@ -404,7 +404,7 @@ LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *ca
                          lf_estimator_t **out);
 
 /* Frees the estimator and everything it owns (views from it become invalid). NULL is a no-op.
- * Not concurrently with another call on the same estimator. */
+ * Not concurrently with another call on the same estimator, nor from its log callback. */
 LF_API void lf_destroy(lf_estimator_t *estimator);
 
 /* Adds the next stereo frame. left and right must have the same size and format; size and
@@ -422,14 +422,16 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
  * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes
  * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes),
- * LF_ERR_OUT_OF_MEMORY. On any error the estimator is unchanged: the previous frame and the
- * previous result stay. One thread at a time per estimator (this and every function below
+ * LF_ERR_BAD_STATE (called while lf_push_frame or lf_reset runs on the same estimator, e.g.
+ * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
+ * unchanged: the previous frame and the previous result stay. One thread at a time per estimator (this and every function below
  * that takes one); distinct estimators may push concurrently. */
 LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
                              const lf_image_t *right, const lf_lidar_t *lidar);
 
 /* Forgets the previous frame and the result (the next push starts a new sequence, any
- * size); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL).
+ * size); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL),
+ * LF_ERR_BAD_STATE (as lf_push_frame: called from inside a call on the same estimator).
  * One thread at a time per estimator. */
 LF_API int32_t lf_reset(lf_estimator_t *estimator);
 

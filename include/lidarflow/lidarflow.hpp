@@ -166,22 +166,32 @@ inline LogSlot &log_slot() {
     static LogSlot slot;
     return slot;
 }
+// How many handler calls run on this thread (set_log_handler refuses to run inside one).
+inline int &handler_depth() noexcept {
+    static thread_local int depth = 0;
+    return depth;
+}
 inline void log_trampoline(int32_t level, const char *message, void *user) noexcept {
+    ++handler_depth();
     try {
         (*static_cast<LogHandler *>(user))(level, std::string(message));
     } catch (...) {
         // An exception must not unwind through the library: the message is lost, the frame goes on.
     }
+    --handler_depth();
 }
 }  // namespace detail
 
 // Sends the library's messages of level >= min_level to `handler`, process-wide (lf_set_log_callback);
 // an empty handler silences them (the default). The handler runs on any thread that runs a
 // library call, concurrently from several, and its exceptions are swallowed. When this returns
-// the previous handler is not running any more and has been destroyed. Thread-safe, but not
-// from inside a handler (it would wait for itself). Throws Error(LF_ERR_INVALID_ARGUMENT) for
-// min_level outside [LF_LOG_DEBUG, LF_LOG_ERROR]; the previous handler then stays.
+// the previous handler is not running any more and has been destroyed. Thread-safe. Throws
+// Error(LF_ERR_INVALID_ARGUMENT) for min_level outside [LF_LOG_DEBUG, LF_LOG_ERROR], and
+// Error(LF_ERR_BAD_STATE) when called from inside a handler (it would destroy the handler that
+// is running); the previous handler then stays.
 inline void set_log_handler(LogHandler handler, int min_level = LF_LOG_INFO) {
+    detail::require(detail::handler_depth() == 0, LF_ERR_BAD_STATE,
+                    "lidarflow::set_log_handler: called from inside a log handler, which it would destroy");
     std::unique_ptr<LogHandler> next = handler ? std::make_unique<LogHandler>(std::move(handler)) : nullptr;
     detail::LogSlot &slot = detail::log_slot();
     const std::lock_guard<std::mutex> lock(slot.mutex);

@@ -81,6 +81,31 @@ bool same_bits(const std::vector<float> &a, const std::vector<float> &b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
+// set_log_handler from inside a handler would destroy the running handler: it is refused
+// (LF_ERR_BAD_STATE) and the handler stays; outside a handler it works.
+void test_log_handler_not_from_a_handler(void **) {
+    Scene sc;
+    int calls = 0, refused = 0;
+    lf::set_log_handler(
+        [&](int, const std::string &) {
+            ++calls;
+            try {
+                lf::set_log_handler({});
+            } catch (const lf::Error &e) {
+                refused += e.status() == LF_ERR_BAD_STATE;
+            }
+        },
+        LF_LOG_DEBUG);
+    std::vector<float> lidar = sc.lidar;
+    lidar.insert(lidar.end(), {-5.0f, 3.0f, 4.0f});  // off the image: dropped and logged
+    lf::Estimator e(sc.calibration(), scene_options("matching"));
+    e.push(0, sc.image(sc.s.left0), sc.image(sc.s.right0), lf::LidarView::from_vector(lf::LidarKind::disparity, lidar));
+    e.push(1, sc.image(sc.s.left1), sc.image(sc.s.right1), lf::LidarView::from_vector(lf::LidarKind::disparity, lidar));
+    lf::set_log_handler({});
+    assert_true(calls >= 2);
+    assert_int_equal(refused, calls);
+}
+
 void test_version(void **) {
     assert_string_equal(lf::version_string().c_str(), LF_VERSION_STRING);
     assert_int_equal(lf::version_number(), LF_VERSION_NUMBER);
@@ -499,6 +524,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_version), cmocka_unit_test(test_options),  cmocka_unit_test(test_errors),
         cmocka_unit_test(test_dense_run), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
+        cmocka_unit_test(test_log_handler_not_from_a_handler),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -19,6 +19,8 @@ namespace {
 // A continuous drive of `frames` frames (synth/scene.hpp), layout in synth/write_kitti.hpp.
 int write_drive(const Args &args) {
     const std::string root = args.required("drive");
+    // An empty path would put the drive's folders into the working directory's root ("/gt").
+    require(!root.empty(), ErrorCode::InvalidArgument, "synth: --drive must not be empty");
     for (const char *other : {"out", "id", "points", "lidar-noise"})
         require(!args.has(other), ErrorCode::InvalidArgument,
                 std::string("synth: --") + other + " does not apply to --drive (a drive has Velodyne scans, frame "

@@ -100,6 +100,14 @@ Calibration convert_calibration(const lf_calibration_t &c) {
         require(r[0] == 0 && r[1] == 0 && r[2] == 0 && r[3] == 1, ErrorCode::InvalidArgument,
                 "calibration: the last row of lidar_to_camera must be 0 0 0 1");
         for (int i = 0; i < 16; ++i) out.lidar_to_camera.val[i] = c.lidar_to_camera[i];
+        // A rigid transform, as the KITTI reader checks it: a scaled one (mm for m) moves every
+        // point off its pixel.
+        const cv::Matx33d R = out.lidar_to_camera.get_minor<3, 3>(0, 0);
+        require(cv::norm(R.t() * R - cv::Matx33d::eye(), cv::NORM_INF) <= 1e-3 && cv::determinant(R) > 0,
+                ErrorCode::InvalidArgument, "calibration: the rotation of lidar_to_camera is not a rotation matrix");
+        for (int i = 0; i < 3; ++i)
+            require(std::abs(out.lidar_to_camera(i, 3)) <= 1e3, ErrorCode::InvalidArgument,
+                    "calibration: the translation of lidar_to_camera exceeds 1000 m");
     }
     return out;
 }

@@ -139,6 +139,18 @@ static void test_create_arguments(void **state) {
     bad.lidar_to_camera[0] = bad.lidar_to_camera[5] = bad.lidar_to_camera[10] = bad.lidar_to_camera[15] = 1;
     bad.lidar_to_camera[3] = NAN;
     EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "lidar_to_camera must be finite");
+    bad.lidar_to_camera[3] = 0.27;
+    assert_int_equal(lf_create(NULL, &bad, &e), LF_OK); /* a rigid transform */
+    lf_destroy(e);
+    e = NULL;
+    for (int i = 0; i < 11; ++i) bad.lidar_to_camera[i] *= 1000; /* millimetres for metres */
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "not a rotation matrix");
+    for (int i = 0; i < 11; ++i) bad.lidar_to_camera[i] /= 1000;
+    bad.lidar_to_camera[5] = -1; /* a mirror */
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "not a rotation matrix");
+    bad.lidar_to_camera[5] = 1;
+    bad.lidar_to_camera[7] = 5e4;
+    EXPECT_FAIL(NULL, lf_create(NULL, &bad, &e), LF_ERR_INVALID_ARGUMENT, "exceeds 1000 m");
     assert_null(e);
 
     /* A newer caller's larger struct: accepted when the unknown tail is zero. */

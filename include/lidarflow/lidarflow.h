@@ -319,7 +319,8 @@ typedef struct lf_calibration_t {
     double cx, cy;                 /* principal point [px], [-1e6, 1e6] */
     double baseline;               /* distance of the rectified left and right centres [m], [1e-4, 1e4] */
     /* Row-major 4x4 rigid transform from the LiDAR frame to the left rectified camera frame
-     * (x right, y down, z forward); last row 0 0 0 1. */
+     * (x right, y down, z forward): a rotation (orthonormal within 1e-3, determinant > 0), a
+     * translation of at most 1000 m per axis [m], last row 0 0 0 1. */
     double lidar_to_camera[16];
 } lf_calibration_t;
 
@@ -397,7 +398,7 @@ typedef struct lf_estimator lf_estimator_t;
  * afterwards; calibration is copied. *out receives the handle (NULL on failure), owned by the
  * caller until lf_destroy(). Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
  * struct_size too small, fx / fy / cx / cy / baseline outside the ranges of lf_calibration_t,
- * a lidar_to_camera that is not finite with last row 0 0 0 1, inconsistent options such as const1 without support
+ * a lidar_to_camera that is not a finite rigid transform with last row 0 0 0 1, inconsistent options such as const1 without support
  * windows), LF_ERR_IO / LF_ERR_FORMAT (the "interpolation.sed_model" file), LF_ERR_OUT_OF_MEMORY;
  * the message is in lf_last_error(NULL). Thread-safe. */
 LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *calibration,

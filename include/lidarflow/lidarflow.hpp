@@ -278,17 +278,18 @@ public:
             return set_string(key, std::string(value));
         }
     }
-    // The typed setters behind set(): lf_options_set_int / _float / _string. Same errors.
+    // The typed setters behind set(): lf_options_set_int / _float / _string. Same errors, and
+    // LF_ERR_INVALID_ARGUMENT for a key or string value with an embedded NUL (C would cut it).
     Options &set_int(const std::string &key, int64_t value) {
-        check(lf_options_set_int(handle_, key.c_str(), value));
+        check(lf_options_set_int(handle_, c_text(key, "key"), value));
         return *this;
     }
     Options &set_float(const std::string &key, double value) {
-        check(lf_options_set_float(handle_, key.c_str(), value));
+        check(lf_options_set_float(handle_, c_text(key, "key"), value));
         return *this;
     }
     Options &set_string(const std::string &key, const std::string &value) {
-        check(lf_options_set_string(handle_, key.c_str(), value.c_str()));
+        check(lf_options_set_string(handle_, c_text(key, "key"), c_text(value, "value")));
         return *this;
     }
 
@@ -318,6 +319,11 @@ public:
     lf_options_t *release() noexcept { return std::exchange(handle_, nullptr); }
 
 private:
+    static const char *c_text(const std::string &s, const char *what) {
+        detail::require(s.find('\0') == std::string::npos, LF_ERR_INVALID_ARGUMENT,
+                        std::string("lidarflow: Options::set: the ") + what + " holds a NUL character");
+        return s.c_str();
+    }
     // Throws Error with this object's last-error message unless status is LF_OK.
     void check(int32_t status) {
         detail::check(status, [this] { return lf_options_last_error(handle_); });
@@ -467,17 +473,19 @@ struct LidarView {
         return make(kind, values.data(), values.size() / 3, 0);
     }
 #if LIDARFLOW_USE_OPENCV
-    // A list of `kind` entries, one per row of `points`: CV_32FC1 with >= 3 columns (e.g. N x 4
-    // KITTI records) or one column of CV_32FC3 / CV_32FC4; any row stride. Throws
-    // Error(LF_ERR_INVALID_ARGUMENT) for another layout. An empty Mat is an empty list.
+    // A list of `kind` entries, one per row of `points`: CV_32FC1 with 3 or 4 columns (x, y, z
+    // and e.g. KITTI's reflectance; a wider record: pass colRange(0, 3)) or one column of
+    // CV_32FC3 / CV_32FC4; any row stride. Throws Error(LF_ERR_INVALID_ARGUMENT) for another
+    // layout (a 3 x N Mat of N points is one: transpose it). An empty Mat is an empty list.
     static LidarView from_mat(LidarKind kind, const cv::Mat &points) {
         if (points.empty()) return make(kind, nullptr, 0, 0);
         const bool rows_of_floats = points.dims == 2 && points.depth() == CV_32F &&
-                                    ((points.channels() == 1 && points.cols >= 3) ||
+                                    ((points.channels() == 1 && (points.cols == 3 || points.cols == 4)) ||
                                      (points.cols == 1 && (points.channels() == 3 || points.channels() == 4)));
         detail::require(rows_of_floats, LF_ERR_INVALID_ARGUMENT,
-                        "lidarflow: LiDAR points must be a CV_32FC1 Mat of >= 3 columns or one "
-                        "CV_32FC3/CV_32FC4 column, not " + cv::typeToString(points.type()));
+                        "lidarflow: LiDAR points must be one per row: a CV_32FC1 Mat of 3 or 4 columns or one "
+                        "CV_32FC3/CV_32FC4 column, not " + cv::typeToString(points.type()) + " of " +
+                            std::to_string(points.rows) + "x" + std::to_string(points.cols));
         return make(kind, points.data, static_cast<std::size_t>(points.rows), static_cast<uint64_t>(points.step[0]));
     }
 #endif

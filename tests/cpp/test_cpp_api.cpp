@@ -106,6 +106,27 @@ void test_log_handler_not_from_a_handler(void **) {
     assert_int_equal(refused, calls);
 }
 
+// The C++ layer refuses what C would silently misread: a key or value with an embedded NUL,
+// and (with OpenCV) a 3 x N Mat of points; a rigid lidar_to_camera is checked by the C ABI.
+void test_cpp_checks(void **) {
+    lf::Options o;
+    expect_error([&] { o.set(std::string("threads\0x", 9), 2); }, LF_ERR_INVALID_ARGUMENT, "NUL", "NUL key");
+    expect_error([&] { o.set("preset", std::string("fast\0", 5)); }, LF_ERR_INVALID_ARGUMENT, "NUL", "NUL value");
+    o.set("threads", 2);
+    Scene sc;
+    lf::Calibration scaled = sc.calibration();
+    scaled.has_lidar_to_camera = true;
+    scaled.lidar_to_camera = {1000, 0, 0, 0, 0, 1000, 0, 0, 0, 0, 1000, 0, 0, 0, 0, 1};
+    expect_error([&] { lf::Estimator e(scaled, o); }, LF_ERR_INVALID_ARGUMENT, "not a rotation matrix", "scaled");
+#if LIDARFLOW_USE_OPENCV
+    const cv::Mat transposed(3, 50, CV_32FC1, cv::Scalar(1.0f));
+    expect_error([&] { lf::LidarView::from_mat(lf::LidarKind::points_camera, transposed); }, LF_ERR_INVALID_ARGUMENT,
+                 "one per row", "3 x N");
+    const cv::Mat records(50, 4, CV_32FC1, cv::Scalar(1.0f));
+    assert_int_equal(lf::LidarView::from_mat(lf::LidarKind::points_camera, records).count, 50);
+#endif
+}
+
 void test_version(void **) {
     assert_string_equal(lf::version_string().c_str(), LF_VERSION_STRING);
     assert_int_equal(lf::version_number(), LF_VERSION_NUMBER);
@@ -524,7 +545,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_version), cmocka_unit_test(test_options),  cmocka_unit_test(test_errors),
         cmocka_unit_test(test_dense_run), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
-        cmocka_unit_test(test_log_handler_not_from_a_handler),
+        cmocka_unit_test(test_log_handler_not_from_a_handler), cmocka_unit_test(test_cpp_checks),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -261,10 +261,12 @@ class ReplayFaults(unittest.TestCase):
             self.assertEqual(processed, 0)
 
     def test_signal_mid_frame(self):
-        log = self.write("frames.log", events_bytes(good_events(300)))
+        # Enough frames that the last signal still comes mid-replay (300 took 2.2 s at the
+        # default preset on two cores).
+        log = self.write("frames.log", events_bytes(good_events(2000)))
         seen = []
         for sig, after_s in ((signal.SIGINT, 0.4), (signal.SIGTERM, 0.9), (signal.SIGINT, 1.7), (signal.SIGTERM, 2.6)):
-            seen.append(self.interrupt(log, sig, after_s, 300))
+            seen.append(self.interrupt(log, sig, after_s, 2000))
         self.assertGreater(max(p for p, _ in seen), 0, seen)
 
     # Logs cut inside their last event (its header, channel name or data), as a crash of the

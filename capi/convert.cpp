@@ -47,7 +47,8 @@ SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) 
     // An entry off the image is dropped and counted, as a projected 3-D point is: one point
     // must not cost the frame.
     DisparityMap map(size, kInvalidDisparity);
-    size_t outside = 0;
+    lidar::DroppedPoints dropped;
+    dropped.seen = l.count;
     for (uint32_t i = 0; i < l.count; ++i) {
         float e[3];
         read_entry(l, stride, i, e);
@@ -58,14 +59,14 @@ SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) 
                     std::to_string(static_cast<int>(kMaxLidarDisparity)) + "] px");
         int x = 0, y = 0;
         if (!lidar::nearest_pixel(e[0], e[1], size, x, y)) {
-            ++outside;
+            ++dropped.outside;
             continue;
         }
         float &cell = map(y, x);
         if (e[2] > cell) cell = e[2];
     }
     SparseLidar out = SparseLidar::from_map(map);
-    lidar::report_dropped_points(l.count, 0, 0.0, outside, size, 0, out.points.size());
+    lidar::report_dropped_points(dropped, 0.0, size, out.points.size());
     return out;
 }
 

@@ -15,6 +15,14 @@ struct ScenePoint3 {
     double dx = 0, dy = 0, dz = 0;  // position at t1 minus position at t0 [m] (includes ego-motion)
 };
 
+// The point at pixel (x, y) with disparity d > 0 in the left rectified camera frame [m]:
+// Z = fx * B / d, X = (x - cx) Z / fx, Y = (y - cy) Z / fy.
+inline void back_project(const StereoCamera &cam, double x, double y, double d, double xyz[3]) {
+    xyz[2] = cam.fx * cam.baseline / d;
+    xyz[0] = (x - cam.cx) * xyz[2] / cam.fx;
+    xyz[1] = (y - cam.cy) * xyz[2] / cam.fy;
+}
+
 // False (and *out untouched) unless d0 > 0 and d1 > 0 and every value fits a float: a
 // disparity near 0 puts the point at a depth no float holds, and such a point is not valid
 // rather than infinite (a cast of the out-of-range double would be undefined). The camera must
@@ -22,11 +30,10 @@ struct ScenePoint3 {
 inline bool triangulate_scene_flow(const StereoCamera &cam, double x, double y, double u, double v, double d0,
                                    double d1, ScenePoint3 *out) {
     if (!(d0 > 0.0) || !(d1 > 0.0)) return false;
-    const double fb = cam.fx * cam.baseline;
-    const double z0 = fb / d0, z1 = fb / d1;
-    const double x0 = (x - cam.cx) * z0 / cam.fx, y0 = (y - cam.cy) * z0 / cam.fy;
-    const double x1 = (x + u - cam.cx) * z1 / cam.fx, y1 = (y + v - cam.cy) * z1 / cam.fy;
-    const ScenePoint3 q{x0, y0, z0, x1 - x0, y1 - y0, z1 - z0};
+    double p0[3], p1[3];
+    back_project(cam, x, y, d0, p0);
+    back_project(cam, x + u, y + v, d1, p1);
+    const ScenePoint3 q{p0[0], p0[1], p0[2], p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     const double limit = std::numeric_limits<float>::max();
     for (double c : {q.x, q.y, q.z, q.dx, q.dy, q.dz})
         if (!(std::fabs(c) <= limit)) return false;

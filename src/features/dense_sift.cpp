@@ -11,6 +11,7 @@
 
 #include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
+#include "core/gray.hpp"
 #include "core/parallel_errors.hpp"
 
 namespace lidarflow::features {
@@ -49,19 +50,8 @@ const bool kPackedLevelsReady = [] {
 }  // namespace
 
 cv::Mat1f to_gray_float(const cv::Mat &image) {
-    require(!image.empty(), ErrorCode::InvalidArgument, "to_gray_float: empty image");
-    require(image.depth() == CV_8U, ErrorCode::InvalidArgument, "to_gray_float: image must be 8-bit");
-    cv::Mat gray;
-    switch (image.channels()) {
-    case 1: gray = image; break;
-    case 3: cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY); break;
-    case 4: cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY); break;
-    default:
-        throw Error(ErrorCode::InvalidArgument,
-                    "to_gray_float: expected 1, 3 or 4 channels, got " + std::to_string(image.channels()));
-    }
     cv::Mat1f out;
-    gray.convertTo(out, CV_32F, 1.0 / 255.0);
+    gray8(image).convertTo(out, CV_32F, 1.0 / 255.0);
     return out;
 }
 

@@ -24,6 +24,50 @@ void check_inputs(const io::CamToCamCalib &calib, cv::Size image, const Projecti
             "projection: min_depth must be > 0");
 }
 
+// Z-buffer of disparities in the left image; kInvalidDisparity where nothing landed.
+class DepthBuffer {
+public:
+    DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
+        : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
+          map_(image.height, image.width, kInvalidDisparity) {}
+
+    void add(const cv::Vec3d &x_rect) {
+        const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
+        const double w = p[2];
+        ++dropped_.seen;
+        if (!(w > min_depth_)) {
+            ++dropped_.behind;
+            return;
+        }
+        int u = 0, v = 0;
+        if (!nearest_pixel(p[0] / w, p[1] / w, map_.size(), u, v)) {
+            ++dropped_.outside;
+            return;
+        }
+        // A point so close that its disparity leaves the accepted range is not seen by the
+        // right camera of any accepted image either.
+        const double dd = fb_ / w;
+        if (!(dd <= kMaxLidarDisparity)) {
+            ++dropped_.too_close;
+            return;
+        }
+        const float d = static_cast<float>(dd);
+        float &cell = map_(v, u);
+        if (d > cell) cell = d;
+    }
+    SparseLidar result() const {
+        SparseLidar out = SparseLidar::from_map(map_);
+        report_dropped_points(dropped_, min_depth_, map_.size(), out.points.size());
+        return out;
+    }
+
+private:
+    cv::Matx34d P_;
+    double fb_, min_depth_;
+    DisparityMap map_;
+    DroppedPoints dropped_;
+};
+
 }  // namespace
 
 bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py) {
@@ -35,81 +79,28 @@ bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py) {
     return true;
 }
 
-void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t outside, cv::Size image,
-                           size_t too_close, size_t kept) {
-    const size_t dropped = behind + outside + too_close;
-    const log::Level level = seen > 0 && kept == 0 ? log::Level::Warning : log::Level::Info;
+void report_dropped_points(const DroppedPoints &d, double min_depth, cv::Size image, size_t kept) {
+    const size_t dropped = d.behind + d.outside + d.too_close;
+    const log::Level level = d.seen > 0 && kept == 0 ? log::Level::Warning : log::Level::Info;
     if (dropped == 0 || !log::enabled(level)) return;
     char part[96];
-    std::string text = std::to_string(dropped) + " of " + std::to_string(seen) + " LiDAR points dropped:";
+    std::string text = std::to_string(dropped) + " of " + std::to_string(d.seen) + " LiDAR points dropped:";
     const char *sep = " ";
-    if (behind) {
-        std::snprintf(part, sizeof part, "%s%zu behind the camera (z <= %g m)", sep, behind, min_depth);
+    if (d.behind) {
+        std::snprintf(part, sizeof part, "%s%zu behind the camera (z <= %g m)", sep, d.behind, min_depth);
         text += part, sep = ", ";
     }
-    if (outside) {
-        std::snprintf(part, sizeof part, "%s%zu outside the %dx%d image", sep, outside, image.width, image.height);
+    if (d.outside) {
+        std::snprintf(part, sizeof part, "%s%zu outside the %dx%d image", sep, d.outside, image.width, image.height);
         text += part, sep = ", ";
     }
-    if (too_close) {
-        std::snprintf(part, sizeof part, "%s%zu nearer than a disparity of %g px", sep, too_close,
+    if (d.too_close) {
+        std::snprintf(part, sizeof part, "%s%zu nearer than a disparity of %g px", sep, d.too_close,
                       static_cast<double>(kMaxLidarDisparity));
         text += part;
     }
     log::write(level, text + "; " + std::to_string(kept) + " pixels keep a point");
 }
-
-namespace {
-
-// Z-buffer of disparities in the left image; kInvalidDisparity where nothing landed.
-class DepthBuffer {
-public:
-    DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
-        : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
-          map_(image.height, image.width, kInvalidDisparity) {}
-
-    void add(const cv::Vec3d &x_rect) {
-        const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);
-        const double w = p[2];
-        ++seen_;
-        if (!(w > min_depth_)) {
-            ++behind_;
-            return;
-        }
-        int u = 0, v = 0;
-        if (!nearest_pixel(p[0] / w, p[1] / w, map_.size(), u, v)) {
-            ++outside_;
-            return;
-        }
-        // A point so close that its disparity leaves the accepted range is not seen by the
-        // right camera of any accepted image either.
-        const double dd = fb_ / w;
-        if (!(dd <= kMaxLidarDisparity)) {
-            ++too_close_;
-            return;
-        }
-        const float d = static_cast<float>(dd);
-        float &cell = map_(v, u);
-        if (d > cell) cell = d;
-    }
-    SparseLidar result() const {
-        SparseLidar out = SparseLidar::from_map(map_);
-        report(out.points.size());
-        return out;
-    }
-
-private:
-    void report(size_t kept) const {
-        report_dropped_points(seen_, behind_, min_depth_, outside_, map_.size(), too_close_, kept);
-    }
-
-    cv::Matx34d P_;
-    double fb_, min_depth_;
-    DisparityMap map_;
-    size_t seen_ = 0, behind_ = 0, outside_ = 0, too_close_ = 0;
-};
-
-}  // namespace
 
 SparseLidar project_to_left(const std::vector<io::VelodynePoint> &points, const io::CamToCamCalib &calib,
                             const cv::Matx44d &velo_to_cam, cv::Size image, const ProjectionOptions &opt) {

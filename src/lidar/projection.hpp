@@ -24,10 +24,18 @@ namespace lidarflow::lidar {
 // are not finite. Every LiDAR kind goes through it, so all drop the same points.
 bool nearest_pixel(double x, double y, cv::Size image, int &px, int &py);
 
+// LiDAR entries a conversion saw, and those it dropped by reason.
+struct DroppedPoints {
+    size_t seen = 0;
+    size_t behind = 0;     // z <= min_depth
+    size_t outside = 0;    // nearest pixel off the image (nearest_pixel)
+    size_t too_close = 0;  // disparity above kMaxLidarDisparity
+};
+
 // Says in the log how many LiDAR entries a conversion dropped and why (a wrong calibration or
-// image size shows this way): Info, or Warning when none is left. Nothing when none was dropped.
-void report_dropped_points(size_t seen, size_t behind, double min_depth, size_t outside, cv::Size image,
-                           size_t too_close, size_t kept);
+// image size shows this way), naming the reasons that occurred: Info, or Warning when none is
+// left (`kept` pixels keep a point). Nothing when none was dropped.
+void report_dropped_points(const DroppedPoints &d, double min_depth, cv::Size image, size_t kept);
 
 struct ProjectionOptions {
     double min_depth = 0.1;  // [m] in camera 2's rectified frame; also keeps d finite

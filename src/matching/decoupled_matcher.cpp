@@ -10,9 +10,12 @@
 
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
+#include "core/gray.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/pixels.hpp"
+#include "core/points3d.hpp"
+#include "lidar/projection.hpp"
 #include "motion/ego_motion.hpp"
 #include "stereo/guided_sgm.hpp"
 
@@ -23,12 +26,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-cv::Mat gray(const cv::Mat &m) {
-    if (m.channels() == 1) return m;
-    cv::Mat g;
-    cv::cvtColor(m, g, m.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
-    return g;
-}
 
 // Grid pixels with a t0 disparity and where pyramidal Lucas-Kanade finds them at t1.
 struct Tracks {
@@ -83,9 +80,9 @@ motion::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, const S
     for (size_t i = 0; i < tr.from.size(); ++i) {
         const float d = d0(static_cast<int>(tr.from[i].y), static_cast<int>(tr.from[i].x));
         if (!(d > 0.5f)) continue;  // too far to place in depth
-        const double z = camera.depth_from_disparity(d);
-        object.emplace_back(static_cast<float>((tr.from[i].x - camera.cx) * z / camera.fx),
-                            static_cast<float>((tr.from[i].y - camera.cy) * z / camera.fy), static_cast<float>(z));
+        double p[3];
+        back_project(camera, tr.from[i].x, tr.from[i].y, d, p);
+        object.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]));
         image.push_back(tr.to[i]);
     }
     const motion::EgoMotionOptions eo;
@@ -115,10 +112,10 @@ SparseLidar carry_points(const SparseLidar &lidar0, const motion::EgoMotion &m) 
     SparseLidar carried{lidar0.width, lidar0.height, {}};
     for (const LidarPoint &p : lidar0.points) {
         float d1 = 0, u = 0, v = 0;
-        if (!m.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v)) continue;
-        const long x = std::lround(p.x + u), y = std::lround(p.y + v);
-        if (x >= 0 && y >= 0 && x < carried.width && y < carried.height && d1 > 0 && d1 <= kMaxLidarDisparity)
-            carried.points.push_back({static_cast<int>(x), static_cast<int>(y), d1});
+        int x = 0, y = 0;
+        if (m.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v) && d1 > 0 &&
+            d1 <= kMaxLidarDisparity && lidar::nearest_pixel(p.x + u, p.y + v, {carried.width, carried.height}, x, y))
+            carried.points.push_back({x, y, d1});
     }
     return SparseLidar::from_map(carried.to_map());
 }
@@ -197,6 +194,12 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
     return flow(cv::Rect(0, 0, from.cols, from.rows)).clone();
 }
 
+// The points that guide the stereo of a pair: `lidar` when the stereo is guided and the LiDAR
+// on, else none (of lidar's size).
+SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {
+    return opt.guided_stereo && opt.use_lidar ? lidar : SparseLidar{lidar.width, lidar.height, {}};
+}
+
 // One direction's 4-vectors: d0 from the reference pair's disparity (the LiDAR measurement where
 // there is one), (u, v) from the flow, d1 from the other pair's disparity at the flow target.
 SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const DisparityMap &target,
@@ -230,9 +233,6 @@ bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLi
     return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r) && lidar.points == guide.points;
 }
 
-SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {
-    return opt.guided_stereo && opt.use_lidar ? lidar : SparseLidar{lidar.width, lidar.height, {}};
-}
 
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,
                                 const StereoCamera &camera, bool backward, const DecoupledStereo *t0_reuse) {
@@ -254,9 +254,9 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     r.seconds_stereo = seconds_since(t);
 
     t = Clock::now();
-    const cv::Mat g0 = gray(in.left0), g1 = gray(in.left1);
+    const cv::Mat g0 = gray8(in.left0), g1 = gray8(in.left1);
     const Tracks tracks = opt.flow.prior_track_step > 0 ? track_grid(g0, g1, r.sgm0, opt.flow.prior_track_step) : Tracks{};
-    double seconds_tracks = seconds_since(t);
+    const double seconds_tracks = seconds_since(t);
 
     t = Clock::now();
     r.guide1 = guide1;

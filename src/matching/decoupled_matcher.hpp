@@ -47,14 +47,10 @@ struct DecoupledStereo {
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };
 
-// The points that guide the stereo of a pair: `lidar` when opt.guided_stereo and opt.use_lidar,
-// else none (of lidar's size).
-SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt);
-
 // Runs the decoupled stage 1 on the images of `in` (all one size, 8-bit gray or BGR). `sgm` are
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
-// pixel-identical to (left0, right0) and made with the same guiding points (stereo_guide of
-// lidar0), supplies the t0 disparity. Throws lidarflow::Error for bad inputs. Deterministic.
+// pixel-identical to (left0, right0) and made with the same guiding points (lidar0 when the
+// stereo is guided and the LiDAR on, else none), supplies the t0 disparity. Throws lidarflow::Error for bad inputs. Deterministic.
 // `camera` (all zero = unknown) is the rig at the images' resolution.
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,
                                 const consistency::SgmOptions &sgm, const StereoCamera &camera, bool backward,

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/gray.hpp"
 
 namespace lidarflow::pipeline {
 namespace {
@@ -63,22 +64,9 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     return out;
 }
 
-namespace {
-
-cv::Mat1f gray_intensity(const cv::Mat &m) {
-    cv::Mat g = m;
-    if (m.channels() == 3) cv::cvtColor(m, g, cv::COLOR_BGR2GRAY);
-    if (m.channels() == 4) cv::cvtColor(m, g, cv::COLOR_BGRA2GRAY);
-    cv::Mat1f f;
-    g.convertTo(f, CV_32F);
-    return f;
-}
-
-}  // namespace
-
 EdgeGuide::EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, float edge_step)
-    : small(edge_step > 0 ? gray_intensity(small_image) : cv::Mat1f()),
-      full(edge_step > 0 ? gray_intensity(full_image) : cv::Mat1f()), step(edge_step) {}
+    : small(edge_step > 0 ? gray8(small_image) : cv::Mat1b()), full(edge_step > 0 ? gray8(full_image) : cv::Mat1b()),
+      step(edge_step) {}
 
 namespace {
 
@@ -95,10 +83,10 @@ int edge_corner(const SceneFlowField &s, const EdgeGuide &g, int x, int y, int x
         spread = std::max(spread, hi - lo);
     }
     if (spread <= g.step) return -1;
-    int best = 0;
-    float nearest = std::abs(g.small(y0, x0) - g.full(y, x));
+    const int own = g.full(y, x);
+    int best = 0, nearest = std::abs(g.small(y0, x0) - own);
     for (int c = 1; c < 4; ++c) {
-        const float e = std::abs(g.small(cy[c], cx[c]) - g.full(y, x));
+        const int e = std::abs(g.small(cy[c], cx[c]) - own);
         if (e < nearest) nearest = e, best = c;
     }
     return best;

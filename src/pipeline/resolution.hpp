@@ -30,7 +30,7 @@ FrameInput downscale_frame(const FrameInput &frame, cv::Size size);
 // takes the one of the four nearest it in intensity instead of their blend: a blend across a
 // depth or motion edge is a surface in mid-air.
 struct EdgeGuide {
-    cv::Mat1f small, full;  // gray intensities of the field's image at the small and full size
+    cv::Mat1b small, full;  // gray intensities of the field's image at the small and full size
     float step = 0;         // [small px]; 0 blends everywhere
     EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, float step);
 };

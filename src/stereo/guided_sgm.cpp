@@ -16,6 +16,7 @@
 
 #include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
+#include "core/gray.hpp"
 #include "core/limits.hpp"
 
 namespace lidarflow::stereo {
@@ -23,13 +24,6 @@ namespace {
 
 constexpr int kCensusHalfW = 4, kCensusHalfH = 3;  // 9x7 window: 62 bits
 constexpr uint16_t kBig = 0x3FFF;                  // path sentinel: + P1 still fits 16 bits
-
-cv::Mat1b to_gray(const cv::Mat &m) {
-    if (m.channels() == 1) return m;
-    cv::Mat1b g;
-    cv::cvtColor(m, g, m.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
-    return g;
-}
 
 // Census signatures of one row: bit k set when neighbour k of the 9x7 window is darker than
 // the centre. `rows` are the window's 7 rows of the padded image (kCensusHalfW replicated
@@ -283,7 +277,7 @@ LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const 
 DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
                         const GuidedSgmOptions &opt) {
     check_inputs(left, right, lidar, opt);
-    const cv::Mat1b gl = to_gray(left), gr = to_gray(right);
+    const cv::Mat1b gl = gray8(left), gr = gray8(right);
     const int h = gl.rows, w = gl.cols, D = opt.num_disparities, T = opt.threads;
     const cv::Mat cl = census(gl, T), cr = census(gr, T);
     const LidarPrior prior = densify_lidar(gl, lidar, opt);

@@ -45,6 +45,7 @@ namespace {
 
 constexpr int kFrames = 5;
 const char *const kPreset = "default";
+const char *const kNoPrior = " --option matching.stream_prior=0";
 
 std::string q(const fs::path &p) { return test::quoted(p); }
 
@@ -68,8 +69,10 @@ void expect_code(const test::CliRun &r, int code) {
 
 // One drive and one clean sequence run, shared by the tests (rendering and estimating are the
 // slow parts).
+// `pairs` is the drive without the stream's motion prior, whose results depend on where the
+// stream started: a restarted stream gives its results.
 struct Fixture {
-    fs::path dir, drive, clean;
+    fs::path dir, drive, clean, pairs;
 };
 
 Fixture &fixture() {
@@ -78,6 +81,7 @@ Fixture &fixture() {
     f.dir = test::scratch_dir("sequence_cli");
     f.drive = f.dir / "drive";
     f.clean = f.dir / "clean";
+    f.pairs = f.dir / "pairs";
     expect_code(test::run_cli("synth --drive " + q(f.drive) + " --frames " + std::to_string(kFrames) +
                               " --width 320 --height 96 --seed 4"),
                 0);
@@ -87,6 +91,9 @@ Fixture &fixture() {
     expect_contains(r, "4 pairs: 4 computed, 0 skipped (existing), 0 failed");
     expect_contains(r, "[4/4] 3->4");
     expect_contains(r, "ETA");
+    expect_code(test::run_cli("sequence --drive " + q(f.drive) + " --out " + q(f.pairs) + " --format npy --threads 2 --quiet" +
+                              kNoPrior + " --preset " + kPreset),
+                0);
     return f;
 }
 
@@ -217,7 +224,7 @@ void test_bad_frames_skip_only_their_pairs(void **) {
     const fs::path png = drive / "image_03/data" / (name(4) + ".png");
     fs::resize_file(png, fs::file_size(png) / 2);
     const test::CliRun r = test::run_cli("sequence --drive " + q(drive) + " --out " + q(out) +
-                                         " --format npy --threads 2 --preset " + kPreset);
+                                         " --format npy --threads 2" + kNoPrior + " --preset " + kPreset);
     expect_code(r, 3);
     expect_contains(r, "sequence: frame 0000000001: velodyne_points/data/0000000001.bin: size 1607 bytes is not a "
                        "multiple of 16");
@@ -228,7 +235,7 @@ void test_bad_frames_skip_only_their_pairs(void **) {
     for (int k : {0, 1, 3}) assert_false(fs::exists(out / "flow" / (name(k) + ".npy")));
     // The stream restarts after the bad frame and gives the clean run's result.
     for (const char *map : {"disp_0", "disp_1", "flow"})
-        assert_true(file_bytes(out / map / (name(2) + ".npy")) == file_bytes(f.clean / map / (name(2) + ".npy")));
+        assert_true(file_bytes(out / map / (name(2) + ".npy")) == file_bytes(f.pairs / map / (name(2) + ".npy")));
     // A frame missing from the listing is a bad frame too.
     fs::remove(drive / "image_02/data" / (name(3) + ".png"));
     const test::CliRun m = test::run_cli("sequence --drive " + q(drive) + " --out " + q(f.dir / "missing_out") +
@@ -247,7 +254,8 @@ std::vector<std::string> temporaries(const fs::path &out) {
 void test_frames_and_skip_existing(void **) {
     const Fixture &f = fixture();
     const fs::path out = f.dir / "range_out";
-    const std::string base = "sequence --drive " + q(f.drive) + " --out " + q(out) + " --format kitti,npy --threads 2 --preset " + kPreset;
+    const std::string base = "sequence --drive " + q(f.drive) + " --out " + q(out) + " --format kitti,npy --threads 2" +
+                             kNoPrior + " --preset " + kPreset;
     const test::CliRun a = test::run_cli(base + " --frames 1:3");
     expect_code(a, 0);
     expect_contains(a, "2 pairs: 2 computed, 0 skipped (existing), 0 failed");
@@ -257,7 +265,7 @@ void test_frames_and_skip_existing(void **) {
         for (const char *map : {"disp_0", "disp_1", "flow"}) {
             assert_true(fs::exists(out / map / (name(k) + ".png")));
             // Pair 1->2 starts a fresh stream here, pair 2->3 reuses it: both equal the full run's.
-            assert_true(file_bytes(out / map / (name(k) + ".npy")) == file_bytes(f.clean / map / (name(k) + ".npy")));
+            assert_true(file_bytes(out / map / (name(k) + ".npy")) == file_bytes(f.pairs / map / (name(k) + ".npy")));
         }
     const auto stamp = fs::last_write_time(out / "flow" / (name(1) + ".npy"));
     // A pair with one of its files missing is recomputed.
@@ -268,7 +276,9 @@ void test_frames_and_skip_existing(void **) {
     expect_contains(b, "1->2 exists, skipped");
     assert_true(fs::last_write_time(out / "flow" / (name(1) + ".npy")) == stamp);
     assert_true(fs::exists(out / "disp_1" / (name(2) + ".png")));
-    assert_true(file_bytes(out / "flow" / (name(0) + ".npy")) == file_bytes(f.clean / "flow" / (name(0) + ".npy")));
+    assert_true(file_bytes(out / "flow" / (name(0) + ".npy")) == file_bytes(f.pairs / "flow" / (name(0) + ".npy")));
+    // The first pair of a stream has no prior: the same with it on.
+    assert_true(file_bytes(f.clean / "flow" / (name(0) + ".npy")) == file_bytes(f.pairs / "flow" / (name(0) + ".npy")));
     assert_true(temporaries(out).empty());
     // --quiet: the summary and progress lines go, the exit status stays.
     const test::CliRun c = test::run_cli(base + " --frames 0:3 --skip-existing --quiet");

@@ -10,6 +10,15 @@
 namespace lidarflow::bridge::testing {
 namespace {
 
+// The reference's estimator and the frame it saw last (a flow's t1 frame).
+struct ReferenceStream {
+    std::unique_ptr<lf_estimator_t, void (*)(lf_estimator_t *)> estimator{nullptr, lf_destroy};
+    std::vector<std::pair<std::string, std::string>> options;
+    lf_calibration_t calibration{};
+    std::vector<uint8_t> t1_stereo, t1_lidar;
+    bool t1_has_lidar = false;
+};
+
 // One frame's images as the C ABI takes them, with the bytes they point into.
 struct RefFrame {
     StereoMessage own;
@@ -151,15 +160,39 @@ std::string check_flow(const std::vector<std::pair<std::string, std::string>> &o
                        std::equal(l[k].lidar_to_camera, l[k].lidar_to_camera + 16, with_transform.lidar_to_camera)
                    ? l[k].lidar_frame_view()
                    : l[k].view();
-    lf_estimator_t *e = nullptr;
-    const int32_t created = lf_create(opt, &with_transform, &e);
+    // As the bridge's stream: a flow whose t0 frame (images, sweep, settings) is the previous
+    // flow's t1 frame continues that estimator, whose stream priors it then shares.
+    static ReferenceStream stream;
+    const std::vector<uint8_t> *l1 = has[1] ? &inputs.lidar.find(lt[1])->second : nullptr;
+    const std::vector<uint8_t> *l0 = has[0] ? &inputs.lidar.find(lt[0])->second : nullptr;
+    const bool continues = stream.estimator && stream.options == options &&
+                           std::memcmp(&stream.calibration, &with_transform, sizeof with_transform) == 0 &&
+                           stream.t1_stereo == s0->second && stream.t1_lidar == (l0 ? *l0 : std::vector<uint8_t>{}) &&
+                           stream.t1_has_lidar == has[0];
+    if (!continues) {
+        stream = ReferenceStream{};
+        lf_estimator_t *e = nullptr;
+        const int32_t created = lf_create(opt, &with_transform, &e);
+        if (created != LF_OK) {
+            lf_options_destroy(opt);
+            return std::string("lf_create: ") + lf_last_error(nullptr);
+        }
+        stream.estimator.reset(e);
+    }
     lf_options_destroy(opt);
-    if (created != LF_OK) return std::string("lf_create: ") + lf_last_error(nullptr);
-    std::unique_ptr<lf_estimator_t, void (*)(lf_estimator_t *)> guard(e, lf_destroy);
+    lf_estimator_t *e = stream.estimator.get();
     const lf_image_t a0 = f0.left, b0 = f0.right, a1 = f1.left, b1 = f1.right;
-    if (lf_push_frame(e, h.utime0, &a0, &b0, has[0] ? &v[0] : nullptr) != LF_OK ||
-        lf_push_frame(e, h.utime, &a1, &b1, has[1] ? &v[1] : nullptr) != LF_OK)
-        return std::string("lf_push_frame: ") + lf_last_error(e);
+    if ((!continues && lf_push_frame(e, h.utime0, &a0, &b0, has[0] ? &v[0] : nullptr) != LF_OK) ||
+        lf_push_frame(e, h.utime, &a1, &b1, has[1] ? &v[1] : nullptr) != LF_OK) {
+        const std::string err = std::string("lf_push_frame: ") + lf_last_error(e);
+        stream = ReferenceStream{};
+        return err;
+    }
+    stream.options = options;
+    stream.calibration = with_transform;
+    stream.t1_stereo = s1->second;
+    stream.t1_lidar = l1 ? *l1 : std::vector<uint8_t>{};
+    stream.t1_has_lidar = has[1];
     lf_result_views_t views;
     lf_result_views_init(&views);
     if (lf_get_result_views(e, &views) != LF_OK) return std::string("lf_get_result_views: ") + lf_last_error(e);

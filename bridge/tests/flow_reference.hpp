@@ -27,8 +27,9 @@ struct Inputs {
 // not decode.
 bool bot_core_utime(const std::vector<uint8_t> &raw, int64_t *utime);
 
-// Runs a fresh estimator (options, calibration) on the two frames and LiDAR sweeps `flow`
-// names, encodes the result as `flow` is encoded, and compares every plane value and the valid
+// Runs an estimator (options, calibration) on the two frames and LiDAR sweeps `flow` names (a
+// fresh one, or the previous call's when its t1 frame is this flow's t0 frame, as the bridge's
+// stream continues), encodes the result as `flow` is encoded, and compares every plane value and the valid
 // plane. Returns "" when equal, else what differs.
 std::string check_flow(const std::vector<std::pair<std::string, std::string>> &options, const lf_calibration_t &cal,
                        const Inputs &inputs, const std::vector<uint8_t> &flow_bytes);

@@ -171,6 +171,10 @@ typedef struct lf_options lf_options_t;
  *                                                   no t1 scan, the t1 stereo is guided by
  *                                                   the t0 points carried into t1 by the
  *                                                   camera's motion (default 1)
+ *   "matching.stream_prior"           0/1           (decoupled) in a stream of frames, what
+ *                                                   moved in the previous pair starts this
+ *                                                   pair's flow with its object motion
+ *                                                   (default 1)
  *   guided SGM (matching.guided_stereo 1): census 9x7 costs, 8 or 4 paths
  *   "stereo.p1"               int   [0, 255]     penalty of a 1 px step (default 10)
  *   "stereo.p2"               int   [1, 1023]    penalty of a larger step (default 120), > p1

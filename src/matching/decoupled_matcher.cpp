@@ -16,6 +16,7 @@
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
 #include "lidar/projection.hpp"
+#include "matching/motion_prior.hpp"
 #include "motion/ego_motion.hpp"
 #include "stereo/guided_sgm.hpp"
 
@@ -275,12 +276,18 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
                                         "inverse search starts from zero flow (image-only prior)");
     const SparseLidar none{in.left0.cols, in.left0.rows, {}};
     const int rc = opt.flow.rigid_choice_radius;
-    const cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
-    r.forward = assemble(choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc),
-                         r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none);
+    // A stream's movers keep their motion: it joins the background's in the prior, and so in
+    // DIS's start and in the per-pixel choice.
+    const cv::Mat3f objects = opt.stream_prior && r.reused_t0 && motion.calibrated ? t0_reuse->object_motion : cv::Mat3f();
+    cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
+    add_object_motion(motion, r.sgm0, objects, prior0);
+    const cv::Mat2f flow0 =
+        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc);
+    r.forward = assemble(flow0, r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none);
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
-        const cv::Mat2f prior1 = rigid_flow(back, r.sgm1);
+        cv::Mat2f prior1 = rigid_flow(back, r.sgm1);
+        add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
         r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1, r.sgm1, rc),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none);
     }

@@ -43,6 +43,9 @@ struct DecoupledStereo {
     cv::Mat left, right;  // deep copies of the pair it describes
     SparseLidar lidar;    // the points that guided it (none for StereoSGBM)
     DisparityMap disparity;
+    // The pair's movers as carry_object_motion leaves them at these images' pixels (the next
+    // pair's prior); empty when the pair had no calibrated background motion.
+    cv::Mat3f object_motion;
     // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };

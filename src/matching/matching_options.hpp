@@ -90,6 +90,9 @@ struct MatchingOptions {
     // Decoupled and guided only: where the input has no t1 scan, the t1 stereo is guided by the
     // t0 points carried into t1 by the camera's motion (fitted to tracks and the t0 disparity).
     bool carry_lidar = true;
+    // Decoupled only, in a stream: the previous pair's movers, carried to this pair's t0, keep
+    // their object motion in the flow's prior (matching/motion_prior.hpp).
+    bool stream_prior = true;
     stereo::GuidedSgmOptions stereo;
 
     // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least

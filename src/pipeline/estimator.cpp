@@ -11,6 +11,7 @@
 #include "core/log.hpp"
 #include "core/threads.hpp"
 #include "lidar/binning.hpp"
+#include "matching/motion_prior.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -252,8 +253,19 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     const SparseLidar &lidar1 = options_.use_lidar ? frame.lidar1 : no_lidar1;
 
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
-        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r);
+        std::shared_ptr<matching::DecoupledStereo> next;
+        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r, next);
         if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
+        if (next) {
+            // The next pair's prior, only from a final result with a calibrated background motion.
+            if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
+                next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
+                if (next->object_motion.empty())
+                    log::write(log::Level::Info, "no motion prior for the next frame: this pair has no calibrated "
+                                                 "background motion");
+            }
+            cache->stereo_t1_ = std::move(next);
+        }
         r.total_seconds = seconds_since(t_total);
         return r;
     }
@@ -301,7 +313,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 }
 
 DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
-                                      StreamCache *cache, int threads, EstimatorResult &r) const {
+                                      StreamCache *cache, int threads, EstimatorResult &r,
+                                      std::shared_ptr<matching::DecoupledStereo> &next) const {
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
@@ -314,12 +327,12 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
                        "the previous frame's stereo disparity was not reused (its t1 images differ from this t0): "
                        "computed again");
         cache->last_reused_ = m.reused_t0;
-        auto next = std::make_shared<matching::DecoupledStereo>();
+        cache->stereo_t1_.reset();
+        next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();
         next->right = frame.right1.clone();
         next->lidar = m.guide1;
         next->disparity = m.sgm1;
-        cache->stereo_t1_ = std::move(next);
     }
     r.timings.push_back({"matching_stereo", m.seconds_stereo});
     r.timings.push_back({"matching_flow", m.seconds_flow});

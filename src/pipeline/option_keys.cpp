@@ -77,6 +77,7 @@ const OptionKey kKeys[] = {
      LF_INT_FIELD(matching.flow.rigid_choice_radius)},
     {"matching.guided_stereo", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.guided_stereo)},
     {"matching.carry_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.carry_lidar)},
+    {"matching.stream_prior", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.stream_prior)},
     {"stereo.p1", OptionKeyType::Int, 0, 255, false, Extra::None, LF_INT_FIELD(matching.stereo.p1)},
     {"stereo.p2", OptionKeyType::Int, 1, 1023, false, Extra::None, LF_INT_FIELD(matching.stereo.p2)},
     {"stereo.adaptive_p2", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(matching.stereo.adaptive_p2)},

@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: MIT
+#include "matching/motion_prior.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "core/pixels.hpp"
+#include "core/points3d.hpp"
+
+namespace lidarflow::matching {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// An object motion that moves the point's image by less than this is the fit's noise [px].
+constexpr double kMinImageMotion = 1.0;
+
+bool finite3(const cv::Vec3f &v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+// Pixel of camera point p; false behind (or nearly at) the camera.
+bool project(const StereoCamera &c, const double p[3], double &x, double &y) {
+    if (!(p[2] > 1e-3)) return false;
+    x = c.fx * p[0] / p[2] + c.cx;
+    y = c.fy * p[1] / p[2] + c.cy;
+    return std::isfinite(x) && std::isfinite(y);
+}
+
+void rigid(const double R[9], const double t[3], const double p[3], double out[3]) {
+    for (int i = 0; i < 3; ++i) out[i] = R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2] + t[i];
+}
+
+// Empty pixels take a 3x3 neighbour's value: a point that comes closer covers more pixels at t1
+// than it had at t0, and the splat leaves single-pixel gaps inside it.
+cv::Mat3f close_gaps(const cv::Mat3f &m) {
+    cv::Mat3f out = m.clone();
+    for (int y = 0; y < m.rows; ++y)
+        for (int x = 0; x < m.cols; ++x) {
+            if (finite3(m(y, x))) continue;
+            for (int dy = -1; dy <= 1 && !finite3(out(y, x)); ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int yy = y + dy, xx = x + dx;
+                    if (yy < 0 || xx < 0 || yy >= m.rows || xx >= m.cols || !finite3(m(yy, xx))) continue;
+                    out(y, x) = m(yy, xx);
+                    break;
+                }
+        }
+    return out;
+}
+
+}  // namespace
+
+cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &ego, const StereoCamera &camera) {
+    if (!ego.valid || !ego.calibrated || !camera.valid() || f.u.empty()) return {};
+    cv::Mat3f objects(f.height(), f.width(), cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat1f nearest(f.height(), f.width(), 0.0f);  // d1 of the point written at each t1 pixel
+    for (int y = 0; y < f.height(); ++y)
+        for (int x = 0; x < f.width(); ++x) {
+            if (!f.valid(y, x)) continue;
+            const float u = f.u(y, x), v = f.v(y, x), d1 = f.d1(y, x);
+            ScenePoint3 q;
+            if (!triangulate_scene_flow(camera, x, y, u, v, f.d0(y, x), d1, &q)) continue;
+            const int tx = static_cast<int>(std::lround(x + u)), ty = static_cast<int>(std::lround(y + v));
+            if (tx < 0 || ty < 0 || tx >= f.width() || ty >= f.height() || d1 <= nearest(ty, tx)) continue;
+            nearest(ty, tx) = d1;
+            double obj[3], p0[3] = {q.x, q.y, q.z}, bg[3], xb, yb;
+            object_motion(q, ego.R, ego.t, obj);
+            rigid(ego.R, ego.t, p0, bg);
+            const bool moved = !project(camera, bg, xb, yb) || std::hypot(x + u - xb, y + v - yb) > kMinImageMotion;
+            objects(ty, tx) = moved ? cv::Vec3f(static_cast<float>(obj[0]), static_cast<float>(obj[1]),
+                                                static_cast<float>(obj[2]))
+                                    : cv::Vec3f(kNaN, kNaN, kNaN);
+        }
+    return close_gaps(objects);
+}
+
+void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const cv::Mat3f &objects, cv::Mat2f &prior) {
+    if (!m.valid || !m.calibrated || objects.size() != d.size() || prior.size() != d.size()) return;
+    const StereoCamera &c = m.camera;
+    for (int y = 0; y < d.rows; ++y)
+        for (int x = 0; x < d.cols; ++x) {
+            const cv::Vec3f o = objects(y, x);
+            if (!finite3(o) || !disparity_valid(d(y, x)) || !(d(y, x) > 0.0f)) continue;
+            double p[3], q[3], tx, ty;
+            back_project(c, x, y, d(y, x), p);
+            rigid(m.R, m.t, p, q);
+            for (int i = 0; i < 3; ++i) q[i] += o[i];
+            if (project(c, q, tx, ty)) prior(y, x) = cv::Vec2f(static_cast<float>(tx - x), static_cast<float>(ty - y));
+        }
+}
+
+cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m) {
+    if (objects.empty() || objects.size() != flow.size() || !m.valid || !m.calibrated) return {};
+    cv::Mat3f back(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
+    for (int y = 0; y < objects.rows; ++y)
+        for (int x = 0; x < objects.cols; ++x) {
+            const cv::Vec3f o = objects(y, x);
+            const cv::Vec2f f = flow(y, x);
+            if (!finite3(o) || !std::isfinite(f[0]) || !std::isfinite(f[1])) continue;
+            const int tx = static_cast<int>(std::lround(x + f[0])), ty = static_cast<int>(std::lround(y + f[1]));
+            if (tx < 0 || ty < 0 || tx >= back.cols || ty >= back.rows) continue;
+            // X0 = R^T (X1 - t - o): the object motion of the way back is -R^T o.
+            cv::Vec3f r;
+            for (int i = 0; i < 3; ++i) r[i] = -static_cast<float>(m.R[i] * o[0] + m.R[3 + i] * o[1] + m.R[6 + i] * o[2]);
+            back(ty, tx) = r;
+        }
+    return close_gaps(back);
+}
+
+}  // namespace lidarflow::matching

@@ -417,7 +417,10 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * this frame). Everything is copied before the call returns.
  * From the second frame on, the call computes (synchronously) the scene flow between the
  * previous frame (t0, the reference) and this one (t1): the previous frame's LiDAR is D_l^0,
- * this frame's is D_l^1. The new result replaces the previous one.
+ * this frame's is D_l^1. The new result replaces the previous one. In a stream the result also
+ * depends on the frames before: the decoupled presets start each pair's flow from what moved
+ * in the previous pair ("matching.stream_prior"), so a stream that starts later gives other
+ * (at its start, less informed) results; lf_reset() forgets it.
  * timestamp_us must be larger than the previous frame's (any value for the first frame).
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
  * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
@@ -434,8 +437,8 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
 LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
                              const lf_image_t *right, const lf_lidar_t *lidar);
 
-/* Forgets the previous frame and the result (the next push starts a new sequence, any
- * size); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL),
+/* Forgets the previous frame, the result and what the stream carried (the next push starts a
+ * new sequence, any size, as on a fresh estimator); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL),
  * LF_ERR_BAD_STATE (as lf_push_frame: called from inside a call on the same estimator).
  * One thread at a time per estimator. */
 LF_API int32_t lf_reset(lf_estimator_t *estimator);

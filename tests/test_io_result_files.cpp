@@ -41,6 +41,7 @@ SceneFlowField sample_field() {
             f.d0(y, x) = 10.0f + x + 0.25f * y;
             f.d1(y, x) = 9.5f + x - 0.125f * y;
             f.valid(y, x) = (x + 2 * y) % 5 != 0;
+            f.confidence(y, x) = 0.1f * static_cast<float>(x + y) + 0.05f;
         }
     f.d1(4, 6) = 0.0f;
     f.valid(4, 6) = 1;
@@ -103,7 +104,7 @@ void test_round_trips(void **) {
     for (io::ResultFormat fmt : {io::ResultFormat::Pfm, io::ResultFormat::Npy, io::ResultFormat::Flo}) {
         const std::vector<std::string> files = io::write_results(dir.string(), "000007", f, fmt);
         const bool npy = fmt == io::ResultFormat::Npy;
-        assert_int_equal(files.size(), npy ? 4 : 3);
+        assert_int_equal(files.size(), npy ? 5 : fmt == io::ResultFormat::Pfm ? 4 : 3);
         const auto read = [npy](const std::string &p) { return npy ? io::read_npy(p) : io::read_pfm(p); };
         assert_true(files[0] == (dir / "disp_0" / (npy ? "000007_10.npy" : "000007_10.pfm")).string());
         expect_disparity(read(files[0]), f.d0, f.valid);
@@ -122,6 +123,14 @@ void test_round_trips(void **) {
             test::expect_error([&] { io::read_flow_file(files[3]); }, ErrorCode::Format);
         } else {
             expect_flow(read(files[2]), f);
+        }
+        if (fmt != io::ResultFormat::Flo) {  // the confidence, 0 where the field is not valid
+            assert_true(files.back() == (dir / "confidence" / (npy ? "000007_10.npy" : "000007_10.pfm")).string());
+            const cv::Mat c = read(files.back());
+            assert_int_equal(c.type(), CV_32FC1);
+            for (int y = 0; y < f.u.rows; ++y)
+                for (int x = 0; x < f.u.cols; ++x)
+                    assert_true(c.at<float>(y, x) == (f.valid(y, x) ? f.confidence(y, x) : 0.0f));
         }
     }
     // The kitti format is the devkit layout.

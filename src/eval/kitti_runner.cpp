@@ -11,6 +11,7 @@
 #include "eval/json_report.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
+#include "io/result_formats.hpp"
 #include "io/kitti_png.hpp"
 #include "io/kitti_submission.hpp"
 #include "io/output_folder.hpp"
@@ -228,6 +229,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
                                r.total_seconds});
         if (!o.out.empty()) {
             io::write_submission(o.out, id, r.output());
+            io::write_npy(o.out + "/confidence/" + id + "_10.npy", io::confidence_map(r.output()));
             if (o.write_viz) write_viz(o.out, id, r.output(), scored ? &gt : nullptr);
         }
         if (!scored) continue;

@@ -406,12 +406,21 @@ std::string output_name_from_path(const std::string &path) {
     return stem;
 }
 
+cv::Mat1f confidence_map(const SceneFlowField &f) {
+    cv::Mat1f c(f.confidence.size(), 0.0f);
+    f.confidence.copyTo(c, f.valid);
+    return c;
+}
+
 std::vector<std::string> result_paths(const std::string &out_root, const std::string &id, ResultFormat format) {
     const std::string stem = result_file_stem(id);
     auto path = [&](const char *folder, const char *ext) { return out_root + "/" + folder + "/" + stem + "." + ext; };
     if (format == ResultFormat::Kitti) return {path("disp_0", "png"), path("disp_1", "png"), path("flow", "png")};
     if (format == ResultFormat::Npy)  // flow (H, W, 2) with NaN holes, its validity apart
-        return {path("disp_0", "npy"), path("disp_1", "npy"), path("flow", "npy"), path("valid", "npy")};
+        return {path("disp_0", "npy"), path("disp_1", "npy"), path("flow", "npy"), path("valid", "npy"),
+                path("confidence", "npy")};
+    if (format == ResultFormat::Pfm)
+        return {path("disp_0", "pfm"), path("disp_1", "pfm"), path("flow", "pfm"), path("confidence", "pfm")};
     return {path("disp_0", "pfm"), path("disp_1", "pfm"), path("flow", result_format_name(format))};
 }
 
@@ -434,8 +443,10 @@ std::vector<std::string> write_results(const std::string &out_root, const std::s
     } else if (format == ResultFormat::Npy) {
         write_npy(fl, flow_with_nan(field_flow(f)));
         write_npy(paths[3], cv::Mat1b(f.valid != 0) / 255);
+        write_npy(paths[4], confidence_map(f));
     } else {
         write_map(fl, flow_with_valid(field_flow(f)));
+        write_pfm(paths[3], confidence_map(f));
     }
     return paths;
 }

@@ -36,12 +36,16 @@ std::string output_name_from_path(const std::string &path);
 
 // Writes OUT/disp_0/STEM.EXT, OUT/disp_1/STEM.EXT and OUT/flow/STEM.EXT (STEM =
 // result_file_stem(id); creating the folders) and returns the paths. kitti: the devkit PNGs (write_submission); pfm, npy: as above,
-// npy also OUT/valid/STEM.npy (uint8, 1 where u, v, d0, d1 are defined; fourth path);
+// npy also OUT/valid/STEM.npy (uint8, 1 where u, v, d0, d1 are defined; fourth path); npy and
+// pfm also OUT/confidence/STEM.npy|pfm (confidence_map; the last path);
 // flo: the flow as .flo and, since .flo has no one-channel form, the disparities as .pfm.
 // Throws Error: InvalidArgument for an empty field, Io when a file cannot be written.
 std::vector<std::string> write_results(const std::string &out_root, const std::string &id, const SceneFlowField &f,
                                        ResultFormat format);
-// The three paths write_results writes for `format` (disp_0, disp_1, flow), without writing.
+// The confidence plane with 0 where the field is not valid (float32).
+cv::Mat1f confidence_map(const SceneFlowField &f);
+// The paths write_results writes for `format` (disp_0, disp_1, flow, then valid and confidence
+// for npy, confidence for pfm), without writing.
 // Throws like check_output_name.
 std::vector<std::string> result_paths(const std::string &out_root, const std::string &id, ResultFormat format);
 

@@ -12,6 +12,7 @@
 #include "core/threads.hpp"
 #include "lidar/binning.hpp"
 #include "matching/motion_prior.hpp"
+#include "pipeline/confidence.hpp"
 #include "matching/scene_flow_matcher.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -19,6 +20,12 @@ namespace lidarflow::pipeline {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The confidence's measured support (pipeline/confidence.hpp): agreement within 1 px in a 7 x 7
+// box, both in pixels of the full-resolution image.
+constexpr double kSupportRadius = 3.0;
+constexpr double kSupportTolerance = 1.0;
+constexpr float kSupportWeight = 0.2f;
 
 void report_hidden(const SparseLidar &given, const SparseLidar &kept, const char *which) {
     const size_t removed = given.points.size() - kept.points.size();
@@ -364,6 +371,8 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
     release_openmp_workers();  // stage 4 starts with OpenCV's own parallel filters
     // Stage 4 reads only the sparse matches and the SGM disparity: fields nobody keeps are
     // released first, so that stage 4's own memory reuses theirs instead of adding to it.
+    // Stage 1's forward measurement stays for the confidence (its u, v, d0 and valid planes).
+    const SceneFlowField measured{r.forward.u, r.forward.v, r.forward.d0, cv::Mat1f(), r.forward.valid, cv::Mat1f()};
     if (!options_.keep_stage_fields)
         for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb}) *f = SceneFlowField();
 
@@ -372,6 +381,9 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
     interpolation::InterpolationResult ir =
         interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads);
     r.dense = std::move(ir.dense);
+    const double k = std::min(1.0, options_.processing_scale);
+    add_measured_support(r.dense, measured, std::max(1, static_cast<int>(std::lround(kSupportRadius * k))),
+                         static_cast<float>(kSupportTolerance * k), kSupportWeight);
     r.ego = ir.ego;
     const interpolation::InterpolationOptions &io = interpolator_.options();
     r.ego_state = r.ego.valid && r.ego.calibrated      ? EgoState::Ok

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "eval/json_report.hpp"
 #include "eval/kitti_eval.hpp"
+#include "eval/sparsification.hpp"
 #include "eval/text_report.hpp"
 #include "io/kitti_layout.hpp"
 
@@ -22,7 +23,9 @@ int run_eval(int argc, char **argv) {
                     {"json", true, "FILE  also write the results as JSON"},
                     {"lidar", true, "DIR  folder with lidar_0/ID_10.png seed maps: adds Table II"},
                     {"mode", true, "filled|est-only  devkit hole filling (default) or valid pixels only"},
-                    {"window", true, "N  support window side for Table II (odd, default 15)"}});
+                    {"window", true, "N  support window side for Table II (odd, default 15)"},
+                    {"confidence", true,
+                     "DIR  folder with confidence/ID_10.npy (or .pfm) maps: adds each frame's sparsification curve"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -45,6 +48,19 @@ int run_eval(int argc, char **argv) {
 
     const eval::KittiEvaluation ev = eval::evaluate_kitti(root, est, ids, opt, args.str("lidar", ""));
     std::printf("%s", eval::format_tables(ev).c_str());
+    if (args.has("confidence")) {
+        const std::string dir = args.str("confidence", "");
+        std::vector<eval::Sparsification> curves;
+        for (const std::string &id : ids) {
+            try {
+                curves.push_back(eval::sparsify(eval::load_ground_truth(root, id).occ, eval::load_estimate(est, id),
+                                                eval::load_confidence(dir, id)));
+            } catch (const Error &e) {
+                throw Error(e.code(), "frame " + id + ": " + e.what());
+            }
+        }
+        std::printf("\n%s", eval::format_sparsification(ids, curves).c_str());
+    }
     if (args.has("json")) {
         eval::write_json(args.str("json", ""), ev);
         std::printf("wrote %s\n", args.str("json", "").c_str());

@@ -45,10 +45,20 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 # ldconfig through dpkg's trigger, not CPack's default maintainer scripts that call it
 # directly (lintian: lacks-ldconfig-trigger, maintscript-calls-ldconfig). Providing postinst
 # and postrm stops CPack from generating its own.
+# A symbols file (capi/lidarflow.symbols, each function with the version that added it): a
+# program that uses a newer function depends on the liblidarflow0 that has it, not on any.
+file(MAKE_DIRECTORY ${PROJECT_BINARY_DIR}/debian)
+execute_process(COMMAND bash ${PROJECT_SOURCE_DIR}/capi/symbols.sh debian ${PROJECT_BINARY_DIR}/debian/symbols
+                        ${LIDARFLOW_ABI_MAJOR} RESULT_VARIABLE _lf_symbols_rc)
+if(NOT _lf_symbols_rc EQUAL 0)
+  message(FATAL_ERROR "capi/symbols.sh could not write the Debian symbols file")
+endif()
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/capi/lidarflow.symbols)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/cmake/debian/triggers
     ${PROJECT_SOURCE_DIR}/cmake/debian/postinst
-    ${PROJECT_SOURCE_DIR}/cmake/debian/postrm)
+    ${PROJECT_SOURCE_DIR}/cmake/debian/postrm
+    ${PROJECT_BINARY_DIR}/debian/symbols)
 # The tools need liblidarflow.so.0, which is in another package of the same build: let
 # dpkg-shlibdeps find it in the build tree (it has no shlibs information there, so CPack's
 # --ignore-missing-info applies); the dependency on liblidarflow0 is declared below.

@@ -168,6 +168,8 @@ void test_huge_loop_and_folder_files(void **) {
                        "a scan's");
     expect_contains(r, "frame 0000000004: velodyne_points/data/0000000004.bin: is a folder, not a regular file");
     expect_contains(r, "4 pairs: 2 computed, 0 skipped (existing), 2 failed");
+    // The trajectory starts at frame 0 and so ends there: no ego-motion of pair 0->1.
+    expect_contains(r, "sequence: poses.txt: frames 0..0 only (pair 0->1 has no ego-motion)");
     // A file that cannot be opened for a symlink loop is one bad frame too.
     const fs::path loop = d / "image_03/data" / (name(2) + ".png");
     fs::remove(loop);

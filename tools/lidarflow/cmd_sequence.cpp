@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -20,6 +21,7 @@
 #include "log.hpp"
 #include "result_files.hpp"
 #include "result_manifest.hpp"
+#include "sequence_poses.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/drive_folder.hpp"
@@ -102,6 +104,7 @@ int run_sequence(int argc, char **argv) {
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
+               {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
@@ -125,6 +128,9 @@ int run_sequence(int argc, char **argv) {
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
     const bool skip_existing = args.flag("skip-existing");
+    const std::string poses_name = args.str("poses", "kitti");
+    const bool write_poses = poses_name != "none";
+    const io::PoseFormat poses_format = write_poses ? io::parse_pose_format(poses_name) : io::PoseFormat::Kitti;
     const uint64_t settings = settings_digest(pipeline::result_settings_text(opt));
 
     const io::DriveListing listing = io::list_drive(root.string());
@@ -182,6 +188,7 @@ int run_sequence(int argc, char **argv) {
         progress(t0, why);
     };
 
+    std::map<long, cv::Matx34d> motions;  // pair t0 -> its metric ego-motion [R | t]
     std::optional<Frame> prev;
     pipeline::StreamCache stream;
     for (long k = first; k <= last; ++k) {
@@ -212,7 +219,9 @@ int run_sequence(int argc, char **argv) {
             const long t0 = prev->index;
             const std::string id = io::drive_frame_name(t0);
             const std::vector<std::string> files = result_file_paths(out, id, formats);
-            if (skip_existing && result_manifest_matches(out, id, settings, files)) {
+            std::optional<cv::Matx34d> ego;
+            if (skip_existing && result_manifest_matches(out, id, settings, files, ego)) {
+                if (ego) motions[t0] = *ego;
                 ++skipped;
                 progress(t0, "exists, skipped");
             } else {
@@ -235,8 +244,16 @@ int run_sequence(int argc, char **argv) {
                     lose(t0, "failed");
                 }
                 if (r) {
+                    if (r->ego_state == pipeline::EgoState::Ok) {
+                        cv::Matx34d m;
+                        for (int i = 0; i < 3; ++i) {
+                            for (int j = 0; j < 3; ++j) m(i, j) = r->ego.R[3 * i + j];
+                            m(i, 3) = r->ego.t[i];
+                        }
+                        ego = motions[t0] = m;
+                    }
                     write_result_files(out, id, r->output(), formats);
-                    write_result_manifest(out, id, settings, files);
+                    write_result_manifest(out, id, settings, files, ego);
                     const double s = pair_clock.seconds();
                     ++computed;
                     std::string what = "in " + format_duration(s);
@@ -253,6 +270,17 @@ int run_sequence(int argc, char **argv) {
         prev = std::move(cur);
     }
     if (tty) std::fprintf(stderr, "\r\033[K");
+    if (write_poses) {
+        // A part of a drive (--frames) gets a file of its own: parts may share OUT.
+        const std::string file = args.has("frames") ? "poses_" + io::drive_frame_name(first) + "-" +
+                                                          io::drive_frame_name(last) + ".txt"
+                                                    : "poses.txt";
+        const long reached = write_sequence_poses((fs::path(out) / file).string(), first, motions, stamps.seconds,
+                                                  poses_format);
+        if (reached < last)
+            std::fprintf(stderr, "sequence: %s: frames %ld..%ld only (pair %s has no ego-motion)\n", file.c_str(), first,
+                         reached, pair_text(reached).c_str());
+    }
     const double total = clock.seconds();
     std::printf("sequence: %ld pairs: %ld computed, %ld skipped (existing), %zu failed (bad frames)%s; %.2f pairs/s "
                 "(%ld computed in %s)\n",

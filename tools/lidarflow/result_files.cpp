@@ -49,6 +49,25 @@ void sync_path(const std::string &path) {
 
 }  // namespace
 
+void write_text_durably(const std::string &path, const std::string &text) {
+    namespace fs = std::filesystem;
+    const fs::path target(path);
+    const fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    const std::string tmp =
+        (folder / (".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + target.filename().string())).string();
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    require(fd >= 0, ErrorCode::Io, [&] { return "cannot write " + tmp + ": " + std::strerror(errno); });
+    const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
+                         (::fsync(fd) == 0 || errno == EINVAL);
+    const bool closed = ::close(fd) == 0;
+    if (!written || !closed || std::rename(tmp.c_str(), path.c_str()) != 0) {
+        const std::string why = std::strerror(errno);
+        std::remove(tmp.c_str());
+        throw Error(ErrorCode::Io, "cannot write " + path + ": " + why);
+    }
+    sync_path(folder.string());
+}
+
 std::vector<std::string> write_result_files(const std::string &out, const std::string &id, const SceneFlowField &f,
                                             const std::vector<io::ResultFormat> &formats) {
     namespace fs = std::filesystem;

@@ -28,4 +28,9 @@ std::vector<std::string> result_file_paths(const std::string &out, const std::st
 std::vector<std::string> write_result_files(const std::string &out, const std::string &id, const SceneFlowField &f,
                                             const std::vector<io::ResultFormat> &formats);
 
+// Writes `text` to `path` as write_result_files writes a result: a hidden temporary file in the
+// same folder, synced, renamed over `path`, the folder synced. Throws Error(Io) (the temporary
+// file removed).
+void write_text_durably(const std::string &path, const std::string &text);
+
 }  // namespace lidarflow::cli

@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "result_manifest.hpp"
 
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/regular_file.hpp"
 #include "io/read_file.hpp"
+#include "result_files.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -77,38 +78,32 @@ uint64_t settings_digest(const std::string &settings_text) {
 }
 
 void write_result_manifest(const std::string &out, const std::string &id, uint64_t settings,
-                           const std::vector<std::string> &files) {
+                           const std::vector<std::string> &files, const std::optional<cv::Matx34d> &ego) {
     std::string text = std::string(kHeader) + "\nsettings " + hex(settings) + "\n";
     for (const std::string &p : files) {
         Digest d;
         require(digest_file(p, d), ErrorCode::Io, "cannot read back " + p);
         text += "file " + relative(out, p) + " " + std::to_string(d.bytes) + " " + hex(d.hash) + "\n";
     }
+    if (ego) {
+        text += "ego";
+        char buf[32];
+        for (double v : ego->val) {
+            std::snprintf(buf, sizeof buf, " %.17g", v);  // round-trips the double
+            text += buf;
+        }
+        text += "\n";
+    }
     const fs::path dir = fs::path(out) / "manifest";
     std::error_code ec;
     fs::create_directories(dir, ec);
     require(!ec, ErrorCode::Io, "cannot create " + dir.string() + ": " + ec.message());
-    const std::string final_path = manifest_path(out, id);
-    const std::string tmp = (dir / (".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + id + ".txt")).string();
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    require(fd >= 0, ErrorCode::Io, [&] { return "cannot write " + tmp + ": " + std::strerror(errno); });
-    const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
-                         (::fsync(fd) == 0 || errno == EINVAL);
-    const bool closed = ::close(fd) == 0;
-    if (!written || !closed || std::rename(tmp.c_str(), final_path.c_str()) != 0) {
-        const std::string why = std::strerror(errno);
-        std::remove(tmp.c_str());
-        throw Error(ErrorCode::Io, "cannot write " + final_path + ": " + why);
-    }
-    const int dfd = ::open(dir.c_str(), O_RDONLY | O_CLOEXEC);
-    if (dfd >= 0) {
-        ::fsync(dfd);
-        ::close(dfd);
-    }
+    write_text_durably(manifest_path(out, id), text);
 }
 
 bool result_manifest_matches(const std::string &out, const std::string &id, uint64_t settings,
-                             const std::vector<std::string> &files) {
+                             const std::vector<std::string> &files, std::optional<cv::Matx34d> &ego) {
+    ego.reset();
     std::string text;
     try {
         text = io::read_file(manifest_path(out, id), kMaxManifestBytes);
@@ -123,6 +118,15 @@ bool result_manifest_matches(const std::string &out, const std::string &id, uint
     while (std::getline(in, line)) {
         std::istringstream fields(line);
         std::string tag, path, bytes, hash, extra;
+        if (line.rfind("ego ", 0) == 0) {
+            cv::Matx34d m;
+            fields >> tag;
+            for (double &v : m.val)
+                if (!(fields >> v) || !std::isfinite(v)) return false;
+            if (fields >> extra) return false;
+            ego = m;
+            continue;
+        }
         if (!(fields >> tag >> path >> bytes >> hash) || tag != "file" || (fields >> extra)) return false;
         listed[path] = bytes + " " + hash;
     }

@@ -6,9 +6,10 @@
 //  - list_drive lists exactly the indices with an entry named as a frame in any data folder, and
 //    exactly the misnamed names, never opening an entry;
 //  - drive_frame_size is the most common size of the valid left images (ties: the earliest);
-//  - read_drive_frame succeeds exactly for frames whose three files are valid, of that size and
-//    of one type, and otherwise names the first bad file (left, right, scan) with the reason its
-//    kind gives, without blocking (an alarm ends a hung run) or throwing.
+//  - read_drive_frame succeeds exactly for frames whose two images are valid, of that size and
+//    of one type, and otherwise names the first bad image (left, right) with the reason its
+//    kind gives (a bad scan leaves the frame good, without points, its error apart), without
+//    blocking (an alarm ends a hung run) or throwing.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -198,7 +199,7 @@ void check_drive(unsigned seed, Tally &tally) {
 
     for (long k : l.frames) {
         const FrameSpec &f = frames[k];
-        std::string file, reason;
+        std::string file, reason, scan_reason;
         const auto image_problem = [&](const FileSpec &s, const std::string &rel) {
             if (!valid_image(s)) return (file = rel, reason = reason_of(s, true), true);
             if (kSizes[s.size] != size) return (file = rel, reason = "the drive's frames are", true);
@@ -209,8 +210,7 @@ void check_drive(unsigned seed, Tally &tally) {
                 file = io::drive_right_file(k);
                 reason = "is colour but the left image is gray";
             } else if (f.scan.kind != Kind::Valid) {
-                file = io::drive_scan_file(k);
-                reason = reason_of(f.scan, false);
+                scan_reason = reason_of(f.scan, false);  // the frame stays good, without points
             }
         }
         io::DriveFrame frame;
@@ -219,7 +219,15 @@ void check_drive(unsigned seed, Tally &tally) {
         if (ok != file.empty() || (!ok && (error.file != file || error.reason.find(reason) == std::string::npos)))
             fail_msg("seed %u, frame %ld: expected %s%s%s, got %s: %s", seed, k, file.empty() ? "a good frame" : file.c_str(),
                      file.empty() ? "" : ": ", reason.c_str(), ok ? "a good frame" : error.file.c_str(), error.reason.c_str());
-        if (ok) assert_true(frame.left.size() == size && frame.scan.points.size() == 2);
+        if (ok && (scan_reason.empty() ? !frame.scan_error.file.empty() || frame.scan.points.size() != 2
+                                       : frame.scan_error.file != io::drive_scan_file(k) ||
+                                             frame.scan_error.reason.find(scan_reason) == std::string::npos ||
+                                             !frame.scan.points.empty()))
+            fail_msg("seed %u, frame %ld: expected the scan %s, got %zu points, error '%s: %s'", seed, k,
+                     scan_reason.empty() ? "good" : scan_reason.c_str(), frame.scan.points.size(),
+                     frame.scan_error.file.c_str(), frame.scan_error.reason.c_str());
+        if (ok) assert_true(frame.left.size() == size);
+        if (!scan_reason.empty()) tally.reasons.insert(scan_reason);
         ++tally.frames;
         tally.good += ok ? 1 : 0;
         if (!ok) tally.reasons.insert(reason);

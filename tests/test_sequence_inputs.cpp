@@ -6,7 +6,7 @@
 //  - FIFOs as a scan, an image, image_02/timestamps.txt, a calibration file, and (in a mount
 //    namespace, when unshare works) bound over /proc/loadavg with adaptive threads;
 //    /dev/zero as timestamps.txt;
-//  - a 100 GiB sparse scan, a symlink loop, a folder as a scan;
+//  - a 100 GiB sparse scan, a symlink loop, a folder as a scan (a bad scan: its pairs image-only);
 //  - an odd-sized first frame; a missing left image of the last frame; an 11-digit name;
 //  - R_rect_00 scaled or zero, a velo T of 1e30, a non-pinhole P_rect_02;
 //  - a failed write leaves no temporary file; --skip-existing and its manifest.
@@ -112,12 +112,13 @@ void test_fifos_are_bad_frames(void **) {
     replace_with_fifo(d / "image_02/timestamps.txt");
     const test::CliRun r = sequence(d, base_dir() / "fifo_out");
     expect_code(r, 3);
+    // A bad scan costs the points only: its pairs go image-only.
     expect_contains(r, "frame 0000000001: velodyne_points/data/0000000001.bin: is a FIFO, not a regular file; pairs "
-                       "0->1, 1->2 skipped");
+                       "0->1, 1->2 image-only");
     expect_contains(r, "frame 0000000003: image_03/data/0000000003.png: is a FIFO, not a regular file; pairs 2->3, "
                        "3->4 skipped");
     expect_contains(r, "image_02/timestamps.txt: is a FIFO, not a regular file; progress lines without frame times");
-    expect_contains(r, "4 pairs: 0 computed, 0 skipped (existing), 4 failed");
+    expect_contains(r, "4 pairs: 2 computed (2 image-only), 0 skipped (existing), 2 failed");
 }
 
 void test_timestamps_of_dev_zero(void **) {
@@ -167,9 +168,8 @@ void test_huge_loop_and_folder_files(void **) {
     expect_contains(r, "frame 0000000000: velodyne_points/data/0000000000.bin: size 107374182400 bytes is more than "
                        "a scan's");
     expect_contains(r, "frame 0000000004: velodyne_points/data/0000000004.bin: is a folder, not a regular file");
-    expect_contains(r, "4 pairs: 2 computed, 0 skipped (existing), 2 failed");
-    // The trajectory starts at frame 0 and so ends there: no ego-motion of pair 0->1.
-    expect_contains(r, "sequence: poses.txt: frames 0..0 only (pair 0->1 has no ego-motion)");
+    expect_contains(r, "[1/4] 0->1 image-only in");
+    expect_contains(r, "4 pairs: 4 computed (2 image-only), 0 skipped (existing), 0 failed");
     // A file that cannot be opened for a symlink loop is one bad frame too.
     const fs::path loop = d / "image_03/data" / (name(2) + ".png");
     fs::remove(loop);
@@ -178,6 +178,8 @@ void test_huge_loop_and_folder_files(void **) {
     expect_code(l, 3);
     expect_contains(l, "frame 0000000002: image_03/data/0000000002.png: Too many levels of symbolic links");
     expect_contains(l, "2 pairs: 0 computed, 0 skipped (existing), 2 failed");
+    // The trajectory starts at the range's first frame and ends where the pairs do.
+    expect_contains(l, "sequence: poses_0000000001-0000000003.txt: frames 1..1 only (pair 1->2 has no ego-motion)");
 }
 
 void test_odd_first_frame(void **) {

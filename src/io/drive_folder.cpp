@@ -60,6 +60,23 @@ cv::Mat read_drive_image(const std::string &path, cv::Size size) {
     return m;
 }
 
+// Runs `read` on the file `rel` of the drive; false with `error` for whatever the input did.
+template <class F>
+bool guarded_read(const std::string &root, const std::string &rel, DriveFileError &error, F &&read) {
+    const std::string path = (fs::path(root) / rel).string();
+    try {
+        read(path);
+        return true;
+    } catch (const Error &e) {
+        error = {rel, reason_of(e.what(), path)};
+    } catch (const std::bad_alloc &) {
+        error = {rel, "out of memory while reading it"};
+    } catch (const std::exception &e) {  // OpenCV or the file system, whatever the input did to them
+        error = {rel, reason_of(e.what(), path)};
+    }
+    return false;
+}
+
 }  // namespace
 
 std::string drive_frame_name(long k) {
@@ -116,29 +133,18 @@ cv::Size drive_frame_size(const std::string &root, const std::vector<long> &fram
 }
 
 bool read_drive_frame(const std::string &root, long k, cv::Size size, DriveFrame &frame, DriveFileError &error) {
-    std::string rel, path;
-    const auto at = [&](const std::string &file) {
-        rel = file;
-        path = (fs::path(root) / rel).string();
-        return path;
-    };
-    try {
-        frame.left = read_drive_image(at(drive_left_file(k)), size);
-        frame.right = read_drive_image(at(drive_right_file(k)), size);
-        if (frame.right.type() != frame.left.type())
-            throw Error(ErrorCode::Format, std::string("is ") + (frame.right.channels() == 1 ? "gray" : "colour") +
-                                               " but the left image is " + (frame.left.channels() == 1 ? "gray" : "colour"));
-        frame.scan = read_velodyne_bin(at(drive_scan_file(k)));
-    } catch (const Error &e) {
-        error = {rel, reason_of(e.what(), path)};
+    frame = DriveFrame{};
+    if (!guarded_read(root, drive_left_file(k), error, [&](const std::string &p) { frame.left = read_drive_image(p, size); }) ||
+        !guarded_read(root, drive_right_file(k), error, [&](const std::string &p) {
+            frame.right = read_drive_image(p, size);
+            if (frame.right.type() != frame.left.type())
+                throw Error(ErrorCode::Format, std::string("is ") + (frame.right.channels() == 1 ? "gray" : "colour") +
+                                                   " but the left image is " +
+                                                   (frame.left.channels() == 1 ? "gray" : "colour"));
+        }))
         return false;
-    } catch (const std::bad_alloc &) {
-        error = {rel, "out of memory while reading it"};
-        return false;
-    } catch (const std::exception &e) {  // OpenCV or the file system, whatever the input did to them
-        error = {rel, reason_of(e.what(), path)};
-        return false;
-    }
+    guarded_read(root, drive_scan_file(k), frame.scan_error,
+                 [&](const std::string &p) { frame.scan = read_velodyne_bin(p); });
     return true;
 }
 

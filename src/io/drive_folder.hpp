@@ -45,21 +45,23 @@ DriveListing list_drive(const std::string &root);
 // Unreadable headers do not count; empty when none is readable.
 cv::Size drive_frame_size(const std::string &root, const std::vector<long> &frames);
 
-struct DriveFrame {
-    cv::Mat left, right;  // 8-bit, gray or BGR, both of one type and of the drive's size
-    VelodyneScan scan;
-};
-
-// A bad frame: its first bad file (relative to the drive) and why ("missing", "is a FIFO, not a
-// regular file", "is 320x80, the drive's frames are 320x96", ...).
+// A bad file (relative to the drive) and why ("missing", "is a FIFO, not a regular file", "is
+// 320x80, the drive's frames are 320x96", ...).
 struct DriveFileError {
-    std::string file;
+    std::string file;  // empty: no error
     std::string reason;
 };
 
-// Reads frame k, whose images must be `size`. Returns false and fills `error` for any bad file
-// (missing, not a regular file, unreadable, corrupt, too large, of another size or type); throws
-// nothing for bad input.
+struct DriveFrame {
+    cv::Mat left, right;  // 8-bit, gray or BGR, both of one type and of the drive's size
+    VelodyneScan scan;    // empty when scan_error says why
+    DriveFileError scan_error;
+};
+
+// Reads frame k, whose images must be `size`. Returns false and fills `error` for a bad image
+// (missing, not a regular file, unreadable, corrupt, of another size or type); a bad scan (the
+// same, or too large) leaves the frame good but without points, `frame.scan_error` saying why
+// (the frame can still be used image-only). Throws nothing for bad input.
 bool read_drive_frame(const std::string &root, long k, cv::Size size, DriveFrame &frame, DriveFileError &error);
 
 // image_02/timestamps.txt in seconds (line k = frame k, "YYYY-MM-DD HH:MM:SS.fffffffff"). The

@@ -54,6 +54,7 @@ struct Frame {
     long index = 0;
     cv::Mat left, right;
     SparseLidar lidar;
+    io::DriveFileError scan_error;  // set: the scan is bad, the frame goes image-only (no points)
 };
 
 // Frame k through io::read_drive_frame, its scan projected as the C ABI's LF_LIDAR_POINTS_LIDAR
@@ -68,7 +69,10 @@ std::optional<Frame> read_frame(const fs::path &root, long k, cv::Size size, con
     f.index = k;
     f.left = std::move(d.left);
     f.right = std::move(d.right);
-    f.lidar = lidar::project_to_left_camera(points, &velo_to_left, camera, size);
+    f.scan_error = std::move(d.scan_error);
+    // Without points the pair is image-only, as a frame pushed without LiDAR through the C ABI.
+    f.lidar = f.scan_error.file.empty() ? lidar::project_to_left_camera(points, &velo_to_left, camera, size)
+                                        : SparseLidar{size.width, size.height, {}};
     detail("sequence: frame %s: scan of %zu points, %zu in the image\n", io::drive_frame_name(k).c_str(),
            d.scan.points.size(), f.lidar.points.size());
     return f;
@@ -108,7 +112,8 @@ int run_sequence(int argc, char **argv) {
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
-        std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad frames, or misnamed files\n"
+        std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad images, image-only for\n"
+                    "             bad scans, or misnamed files\n"
                     "             (each reported on stderr); 1 other errors (unreadable drive, bad calibration,\n"
                     "             an output that cannot be written); 2 bad command line\n");
         return 0;
@@ -131,7 +136,10 @@ int run_sequence(int argc, char **argv) {
     const std::string poses_name = args.str("poses", "kitti");
     const bool write_poses = poses_name != "none";
     const io::PoseFormat poses_format = write_poses ? io::parse_pose_format(poses_name) : io::PoseFormat::Kitti;
-    const uint64_t settings = settings_digest(pipeline::result_settings_text(opt));
+    const std::string settings_text = pipeline::result_settings_text(opt);
+    // Image-only results are of other inputs: a rerun with the scan readable recomputes them.
+    const uint64_t settings = settings_digest(settings_text),
+                   image_only_settings = settings_digest(settings_text + "lidar=none\n");
 
     const io::DriveListing listing = io::list_drive(root.string());
     require(!listing.frames.empty(), ErrorCode::Io,
@@ -171,8 +179,9 @@ int run_sequence(int argc, char **argv) {
 
     const bool tty = isatty(fileno(stderr)) && verbosity() != Verbosity::Quiet;
     const long pairs = last - first;
-    long computed = 0, skipped = 0, done = 0;
-    std::set<long> failed;  // pairs (by their t0) lost to bad frames or estimator errors
+    long computed = 0, computed_image_only = 0, skipped = 0, done = 0;
+    std::set<long> failed;      // pairs (by their t0) lost to bad frames or estimator errors
+    std::set<long> image_only;  // pairs computed without points for a bad scan
     const Stopwatch clock;
     const auto progress = [&](long t0, const std::string &what) {
         ++done;
@@ -215,12 +224,26 @@ int run_sequence(int argc, char **argv) {
             stream.clear();
             continue;
         }
+        if (!cur->scan_error.file.empty()) {
+            std::vector<long> pairs_of;
+            if (prev) pairs_of.push_back(k - 1);
+            if (k < last) pairs_of.push_back(k);
+            std::string list;
+            for (long t0 : pairs_of) list += (list.empty() ? "" : ", ") + pair_text(t0);
+            if (tty) std::fprintf(stderr, "\r\033[K");
+            std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", io::drive_frame_name(k).c_str(),
+                         cur->scan_error.file.c_str(), cur->scan_error.reason.c_str(),
+                         list.empty() ? "" : ("; pair" + std::string(pairs_of.size() > 1 ? "s " : " ") + list + " image-only").c_str());
+        }
         if (prev) {
             const long t0 = prev->index;
             const std::string id = io::drive_frame_name(t0);
             const std::vector<std::string> files = result_file_paths(out, id, formats);
+            const bool no_points = !prev->scan_error.file.empty() || !cur->scan_error.file.empty();
+            if (no_points) image_only.insert(t0);
+            const uint64_t pair_settings = no_points ? image_only_settings : settings;
             std::optional<cv::Matx34d> ego;
-            if (skip_existing && result_manifest_matches(out, id, settings, files, ego)) {
+            if (skip_existing && result_manifest_matches(out, id, pair_settings, files, ego)) {
                 if (ego) motions[t0] = *ego;
                 ++skipped;
                 progress(t0, "exists, skipped");
@@ -253,10 +276,11 @@ int run_sequence(int argc, char **argv) {
                         ego = motions[t0] = m;
                     }
                     write_result_files(out, id, r->output(), formats);
-                    write_result_manifest(out, id, settings, files, ego);
+                    write_result_manifest(out, id, pair_settings, files, ego);
                     const double s = pair_clock.seconds();
                     ++computed;
-                    std::string what = "in " + format_duration(s);
+                    computed_image_only += no_points ? 1 : 0;
+                    std::string what = (no_points ? "image-only in " : "in ") + format_duration(s);
                     if (static_cast<size_t>(k) < stamps.seconds.size()) {
                         char dt[48];
                         std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
@@ -282,12 +306,14 @@ int run_sequence(int argc, char **argv) {
                          reached, pair_text(reached).c_str());
     }
     const double total = clock.seconds();
-    std::printf("sequence: %ld pairs: %ld computed, %ld skipped (existing), %zu failed (bad frames)%s; %.2f pairs/s "
+    std::printf("sequence: %ld pairs: %ld computed%s, %ld skipped (existing), %zu failed (bad frames)%s; %.2f pairs/s "
                 "(%ld computed in %s)\n",
-                pairs, computed, skipped, failed.size(),
+                pairs, computed,
+                computed_image_only ? (" (" + std::to_string(computed_image_only) + " image-only)").c_str() : "", skipped,
+                failed.size(),
                 misnamed ? ("; " + std::to_string(misnamed) + " misnamed file(s) ignored").c_str() : "",
                 total > 0 ? computed / total : 0.0, computed, format_duration(total).c_str());
-    return failed.empty() && misnamed == 0 ? 0 : kExitBadFrames;
+    return failed.empty() && image_only.empty() && misnamed == 0 ? 0 : kExitBadFrames;
 }
 
 }  // namespace

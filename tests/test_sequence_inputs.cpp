@@ -170,6 +170,14 @@ void test_huge_loop_and_folder_files(void **) {
     expect_contains(r, "frame 0000000004: velodyne_points/data/0000000004.bin: is a folder, not a regular file");
     expect_contains(r, "[1/4] 0->1 image-only in");
     expect_contains(r, "4 pairs: 4 computed (2 image-only), 0 skipped (existing), 0 failed");
+    // With the scan readable again --skip-existing recomputes its pair; the other image-only one
+    // (scan 4 still a folder) stays, as do the pairs with points.
+    fs::copy_file(drive() / "velodyne_points/data" / (name(0) + ".bin"), d / "velodyne_points/data" / (name(0) + ".bin"),
+                  fs::copy_options::overwrite_existing);
+    const test::CliRun again = sequence(d, base_dir() / "huge_out", "--skip-existing");
+    expect_code(again, 3);
+    expect_contains(again, "[1/4] 0->1 in");
+    expect_contains(again, "4 pairs: 1 computed, 3 skipped (existing), 0 failed");
     // A file that cannot be opened for a symlink loop is one bad frame too.
     const fs::path loop = d / "image_03/data" / (name(2) + ".png");
     fs::remove(loop);

@@ -6,13 +6,14 @@
 //  - FIFOs as a scan, an image, image_02/timestamps.txt, a calibration file, and (in a mount
 //    namespace, when unshare works) bound over /proc/loadavg with adaptive threads;
 //    /dev/zero as timestamps.txt;
-//  - a 100 GiB sparse scan, a symlink loop, a folder as a scan (a bad scan: its pairs image-only);
+//  - a 100 GiB sparse scan, a symlink loop, a folder without permission, a folder as a scan (a bad scan: its pairs image-only);
 //  - an odd-sized first frame; a missing left image of the last frame; an 11-digit name;
 //  - R_rect_00 scaled or zero, a velo T of 1e30, a non-pinhole P_rect_02;
 //  - a failed write leaves no temporary file; --skip-existing and its manifest.
 // Every CLI run goes through `timeout`, so a blocking open fails the test instead of hanging it.
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -83,13 +84,9 @@ fs::path copy_of_drive(const std::string &label) {
     return to;
 }
 
-// `lidarflow sequence` on `d` (realtime preset, npy) under a 120 s timeout.
-test::CliRun sequence(const fs::path &d, const fs::path &out, const std::string &extra = "") {
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
-    const std::string cmd = "timeout 120 '" + std::string(cli) + "' sequence --drive " + q(d) + " --out " + q(out) +
-                            " --format npy --threads 2 --preset realtime " + extra + " 2>&1";
-    FILE *p = popen(cmd.c_str(), "r");
+// What a shell command printed (stdout and stderr) and returned.
+test::CliRun run_shell(const std::string &cmd) {
+    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
     assert_non_null(p);
     test::CliRun r;
     char buf[4096];
@@ -98,6 +95,19 @@ test::CliRun sequence(const fs::path &d, const fs::path &out, const std::string 
     const int status = pclose(p);
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+// "timeout 120 'CLI' sequence --drive D --out OUT" with the realtime preset and npy files: a
+// blocked run ends with 124.
+std::string sequence_command(const fs::path &d, const fs::path &out) {
+    const char *cli = std::getenv("LIDARFLOW_CLI");
+    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
+    return "timeout 120 '" + std::string(cli) + "' sequence --drive " + q(d) + " --out " + q(out) +
+           " --format npy --threads 2 --preset realtime";
+}
+
+test::CliRun sequence(const fs::path &d, const fs::path &out, const std::string &extra = "") {
+    return run_shell(sequence_command(d, out) + " " + extra);
 }
 
 void replace_with_fifo(const fs::path &p) {
@@ -140,20 +150,12 @@ void test_loadavg_fifo(void **) {
         std::printf("unshare / mount --bind not permitted here: skipped\n");
         skip();
     }
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    const std::string inner = "mount --bind " + q(fifo) + " /proc/loadavg && exec timeout 120 '" + std::string(cli) +
-                              "' sequence --drive " + q(d) + " --out " + q(base_dir() / "loadavg_out") +
-                              " --format npy --threads 2 --preset realtime --frames 0:2 --option adaptive_threads=1";
+    const std::string inner = "mount --bind " + q(fifo) + " /proc/loadavg && exec " +
+                              sequence_command(d, base_dir() / "loadavg_out") +
+                              " --frames 0:2 --option adaptive_threads=1";
     std::string quoted_inner;
     for (char c : inner) quoted_inner += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    FILE *p = popen(("unshare -rm sh -c '" + quoted_inner + "' 2>&1").c_str(), "r");
-    assert_non_null(p);
-    test::CliRun r;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-    const int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const test::CliRun r = run_shell("unshare -rm sh -c '" + quoted_inner + "'");
     expect_code(r, 0);
     expect_contains(r, "2 pairs: 2 computed");
 }
@@ -188,6 +190,30 @@ void test_huge_loop_and_folder_files(void **) {
     expect_contains(l, "2 pairs: 0 computed, 0 skipped (existing), 2 failed");
     // The trajectory starts at the range's first frame and ends where the pairs do.
     expect_contains(l, "sequence: poses_0000000001-0000000003.txt: frames 1..1 only (pair 1->2 has no ego-motion)");
+}
+
+// A folder whose files cannot be reached (no permission): each frame is bad, nothing aborts. As
+// root the CLI runs as nobody (setpriv), since root passes every permission check.
+void test_unreadable_folder(void **) {
+    const fs::path d = copy_of_drive("unreadable"), out = base_dir() / "unreadable_out";
+    fs::remove_all(out);
+    fs::create_directories(out);
+    fs::permissions(out, fs::perms::all);
+    fs::permissions(d / "image_03/data", fs::perms::none);
+    std::string as_other_user;
+    if (geteuid() == 0) {
+        if (std::system("setpriv --reuid=65534 --regid=65534 --clear-groups true 2>/dev/null") != 0) {
+            fs::permissions(d / "image_03/data", fs::perms::owner_all);
+            std::printf("running as root without setpriv: skipped\n");
+            skip();
+        }
+        as_other_user = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
+    }
+    const test::CliRun r = run_shell(as_other_user + sequence_command(d, out) + " --frames 0:1");
+    fs::permissions(d / "image_03/data", fs::perms::owner_all);
+    expect_code(r, 3);
+    expect_contains(r, "frame 0000000000: image_03/data/0000000000.png: Permission denied; pair 0->1 skipped");
+    expect_contains(r, "1 pairs: 0 computed, 0 skipped (existing), 1 failed");
 }
 
 void test_odd_first_frame(void **) {
@@ -329,6 +355,7 @@ int main() {
         cmocka_unit_test(test_timestamps_of_dev_zero),
         cmocka_unit_test(test_loadavg_fifo),
         cmocka_unit_test(test_huge_loop_and_folder_files),
+        cmocka_unit_test(test_unreadable_folder),
         cmocka_unit_test(test_odd_first_frame),
         cmocka_unit_test(test_missing_last_left_and_misnamed),
         cmocka_unit_test(test_bad_calibration_is_exit_1),

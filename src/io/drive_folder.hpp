@@ -36,8 +36,9 @@ struct DriveListing {
 
 // Lists the three data folders (entries are not opened: any kind of entry with a frame's name
 // counts, and is reported when its frame is read). Names that do not start with a digit are
-// ignored. Throws Error(Io) when image_02/data is not a folder or a folder cannot be listed;
-// image_03/data or velodyne_points/data may be missing (their frames are then bad).
+// ignored. Throws Error(Io) when image_02/data is not a folder or cannot be listed;
+// image_03/data or velodyne_points/data may be missing or unlistable (their files are then tried,
+// and reported, frame by frame).
 DriveListing list_drive(const std::string &root);
 
 // The drive's image size: the most common header size of the left images of `frames` (ties: the

@@ -98,6 +98,28 @@ std::pair<long, long> parse_range(const std::string &text) {
 
 std::string pair_text(long t0) { return std::to_string(t0) + "->" + std::to_string(t0 + 1); }
 
+// "sequence: frame N: FILE: REASON; pairs A->B, B->C WHAT" on stderr (on a terminal, over the
+// progress line).
+void report_frame(bool tty, long k, const io::DriveFileError &e, const std::vector<long> &pairs, const char *what) {
+    std::string list;
+    for (long t0 : pairs) list += (list.empty() ? "" : ", ") + pair_text(t0);
+    if (!list.empty()) list = "; pair" + std::string(pairs.size() > 1 ? "s " : " ") + list + " " + what;
+    if (tty) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", io::drive_frame_name(k).c_str(), e.file.c_str(),
+                 e.reason.c_str(), list.c_str());
+}
+
+// A pair's metric ego-motion [R | t] (points of the t0 camera -> the t1 camera), if it has one.
+std::optional<cv::Matx34d> metric_ego(const pipeline::EstimatorResult &r) {
+    if (r.ego_state != pipeline::EgoState::Ok) return std::nullopt;
+    cv::Matx34d m;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) m(i, j) = r.ego.R[3 * i + j];
+        m(i, 3) = r.ego.t[i];
+    }
+    return m;
+}
+
 int run_sequence(int argc, char **argv) {
     Args args("sequence", argc, argv,
               {{"drive", true, "DIR  drive in the KITTI raw layout: image_02/data/NNNNNNNNNN.png, image_03/data, velodyne_points/data/NNNNNNNNNN.bin; calib_cam_to_cam.txt and calib_velo_to_cam.txt in DIR or DIR/.."},
@@ -212,12 +234,7 @@ int run_sequence(int argc, char **argv) {
             std::vector<long> lost;
             if (k > first && !failed.count(k - 1)) lost.push_back(k - 1);
             if (k < last) lost.push_back(k);
-            std::string list;
-            for (long t0 : lost) list += (list.empty() ? "" : ", ") + pair_text(t0);
-            if (tty) std::fprintf(stderr, "\r\033[K");
-            std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", io::drive_frame_name(k).c_str(), bad.file.c_str(),
-                         bad.reason.c_str(),
-                         list.empty() ? "" : ("; pair" + std::string(lost.size() > 1 ? "s " : " ") + list + " skipped").c_str());
+            report_frame(tty, k, bad, lost, "skipped");
             for (long t0 : lost) lose(t0, "skipped (bad frame)");
             // The stream restarts after a bad frame: no pair spans it.
             prev.reset();
@@ -228,12 +245,7 @@ int run_sequence(int argc, char **argv) {
             std::vector<long> pairs_of;
             if (prev) pairs_of.push_back(k - 1);
             if (k < last) pairs_of.push_back(k);
-            std::string list;
-            for (long t0 : pairs_of) list += (list.empty() ? "" : ", ") + pair_text(t0);
-            if (tty) std::fprintf(stderr, "\r\033[K");
-            std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", io::drive_frame_name(k).c_str(),
-                         cur->scan_error.file.c_str(), cur->scan_error.reason.c_str(),
-                         list.empty() ? "" : ("; pair" + std::string(pairs_of.size() > 1 ? "s " : " ") + list + " image-only").c_str());
+            report_frame(tty, k, cur->scan_error, pairs_of, "image-only");
         }
         if (prev) {
             const long t0 = prev->index;
@@ -267,14 +279,8 @@ int run_sequence(int argc, char **argv) {
                     lose(t0, "failed");
                 }
                 if (r) {
-                    if (r->ego_state == pipeline::EgoState::Ok) {
-                        cv::Matx34d m;
-                        for (int i = 0; i < 3; ++i) {
-                            for (int j = 0; j < 3; ++j) m(i, j) = r->ego.R[3 * i + j];
-                            m(i, 3) = r->ego.t[i];
-                        }
-                        ego = motions[t0] = m;
-                    }
+                    ego = metric_ego(*r);
+                    if (ego) motions[t0] = *ego;
                     write_result_files(out, id, r->output(), formats);
                     write_result_manifest(out, id, pair_settings, files, ego);
                     const double s = pair_clock.seconds();

@@ -107,7 +107,7 @@ Calibration convert_calibration(const lf_calibration_t &c) {
         require(cv::norm(R.t() * R - cv::Matx33d::eye(), cv::NORM_INF) <= 1e-3 && cv::determinant(R) > 0,
                 ErrorCode::InvalidArgument, "calibration: the rotation of lidar_to_camera is not a rotation matrix");
         for (int i = 0; i < 3; ++i)
-            require(std::abs(out.lidar_to_camera(i, 3)) <= 1e3, ErrorCode::InvalidArgument,
+            require(std::abs(out.lidar_to_camera(i, 3)) <= kMaxRigTranslation, ErrorCode::InvalidArgument,
                     "calibration: the translation of lidar_to_camera exceeds 1000 m");
     }
     return out;

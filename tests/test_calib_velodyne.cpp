@@ -154,10 +154,13 @@ void test_velodyne_bin(void **) {
 
     write_floats(dir / "ok.bin", {1, 2, 3, 0.5f, nan, 0, 0, 0, 4, 5, 6, inf, -7, 8, 9, 0.25f});
     const io::VelodyneScan s = io::read_velodyne_bin((dir / "ok.bin").string());
-    assert_int_equal(s.points.size(), 2);
-    assert_int_equal(s.dropped_nonfinite, 2);
+    // A NaN position drops its record; an infinite reflectance only reads as 0.
+    assert_int_equal(s.points.size(), 3);
+    assert_int_equal(s.dropped_nonfinite, 1);
+    assert_int_equal(s.nonfinite_reflectance, 1);
     assert_true(s.points[0].x == 1 && s.points[0].y == 2 && s.points[0].z == 3 && s.points[0].reflectance == 0.5f);
-    assert_true(s.points[1].x == -7 && s.points[1].reflectance == 0.25f);
+    assert_true(s.points[1].x == 4 && s.points[1].y == 5 && s.points[1].z == 6 && s.points[1].reflectance == 0);
+    assert_true(s.points[2].x == -7 && s.points[2].reflectance == 0.25f);
 
     write_floats(dir / "empty.bin", {});
     write_floats(dir / "odd.bin", {1, 2, 3, 4}, 1);          // 17 bytes

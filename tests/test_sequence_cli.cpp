@@ -3,8 +3,8 @@
 //  - the drive's scans project onto its ground-truth disparities through its calibration;
 //  - sequence gives exactly the arrays of the same frames pushed through the C ABI
 //    (LF_LIDAR_POINTS_LIDAR with lf_read_kitti_calibration's lidar_to_camera);
-//  - a corrupt scan and a truncated PNG are reported, only their pairs are missing (exit 3),
-//    and the pair after the restart equals the clean run's;
+//  - a corrupt scan and a truncated PNG are reported (exit 3): the scan's pairs go image-only,
+//    the image's are missing, and the pair after them equals the clean run's;
 //  - --frames and --skip-existing; no temporary file is left; bad command lines exit 2, an
 //    unreadable drive or a missing calibration 1;
 //  - the results score sensibly against the drive's ground truth.
@@ -228,12 +228,15 @@ void test_bad_frames_skip_only_their_pairs(void **) {
     expect_code(r, 3);
     expect_contains(r, "sequence: frame 0000000001: velodyne_points/data/0000000001.bin: size 1607 bytes is not a "
                        "multiple of 16");
-    expect_contains(r, "; pairs 0->1, 1->2 skipped");
+    expect_contains(r, "; pairs 0->1, 1->2 image-only");
     expect_contains(r, "sequence: frame 0000000004: image_03/data/0000000004.png: ");
     expect_contains(r, "; pair 3->4 skipped");
-    expect_contains(r, "4 pairs: 1 computed, 0 skipped (existing), 3 failed");
-    for (int k : {0, 1, 3}) assert_false(fs::exists(out / "flow" / (name(k) + ".npy")));
-    // The stream restarts after the bad frame and gives the clean run's result.
+    expect_contains(r, "4 pairs: 3 computed (2 image-only), 0 skipped (existing), 1 failed");
+    for (int k : {0, 1}) assert_true(fs::exists(out / "flow" / (name(k) + ".npy")));
+    assert_false(fs::exists(out / "flow" / (name(3) + ".npy")));
+    // Image-only pairs differ from the clean run's (no points); the stream goes on after them
+    // and gives the clean run's result.
+    assert_false(file_bytes(out / "disp_0" / (name(0) + ".npy")) == file_bytes(f.clean / "disp_0" / (name(0) + ".npy")));
     for (const char *map : {"disp_0", "disp_1", "flow"})
         assert_true(file_bytes(out / map / (name(2) + ".npy")) == file_bytes(f.pairs / map / (name(2) + ".npy")));
     // A frame missing from the listing is a bad frame too.

@@ -341,8 +341,11 @@ static inline void lf_calibration_init(lf_calibration_t *c) {
  * LF_LIDAR_POINTS_LIDAR expects (has_lidar_to_camera = 1; without it 0 and
  * lidar_to_camera all zero). out->struct_size must be set (lf_calibration_init); *out is written only on
  * success. Errors: LF_ERR_INVALID_ARGUMENT (NULL cam_to_cam_path or out, struct_size too small),
- * LF_ERR_IO (a file cannot be read), LF_ERR_FORMAT (a missing, duplicated or malformed entry, not
- * a rectified pair, R not a rotation); the message is in lf_last_error(NULL). Thread-safe. */
+ * LF_ERR_IO (a file cannot be read; only regular files of at most 1 MiB are opened, without
+ * blocking, so a FIFO or device is refused), LF_ERR_FORMAT (a missing, duplicated or malformed
+ * entry, a P_rect_02 / P_rect_03 that is not a rectified pinhole K [I | t], not a rectified pair,
+ * R_rect_00 or R not a rotation, a T beyond 1000 m); the message, naming the file, is in
+ * lf_last_error(NULL). Thread-safe. */
 LF_API int32_t lf_read_kitti_calibration(const char *cam_to_cam_path, const char *velo_to_cam_path,
                                          lf_calibration_t *out);
 

@@ -24,6 +24,10 @@ constexpr double kMinFocal = 1.0, kMaxFocal = 1e6;
 constexpr double kMaxPrincipalPoint = 1e6;
 constexpr double kMinBaseline = 1e-4, kMaxBaseline = 1e4;
 
+// The translation of a LiDAR -> camera transform [m], per axis: a rig is not a kilometre wide, and
+// a larger one (a unit slip, 1e30) puts every point behind or far outside the image.
+constexpr double kMaxRigTranslation = 1e3;
+
 // "" when the camera lies in the ranges above, else what is wrong ("fx = 1e-300 px is outside
 // [1, 1e+06]"). NaN and infinities are outside every range.
 std::string camera_range_error(const StereoCamera &camera);

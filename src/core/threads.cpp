@@ -3,13 +3,17 @@
 
 #include <dirent.h>
 #include <sched.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <thread>
 
 #include <omp.h>
+
+#include "core/regular_file.hpp"
 
 namespace lidarflow {
 namespace {
@@ -23,12 +27,13 @@ int usable_cpus() {
 
 // Runnable tasks in the whole system now, the caller included (0 when unknown).
 int runnable_tasks() {
-    std::FILE *f = std::fopen("/proc/loadavg", "r");
-    if (!f) return 0;
+    // Opened as a regular file with a bound: a FIFO or device bound over it must not stall frames.
+    RegularFile f("/proc/loadavg");
+    std::string text;
+    if (!f.read_all(text, 4096)) return 0;
     double l1, l5, l15;
     int running = 0, total = 0;
-    const bool ok = std::fscanf(f, "%lf %lf %lf %d/%d", &l1, &l5, &l15, &running, &total) == 5;
-    std::fclose(f);
+    const bool ok = std::sscanf(text.c_str(), "%lf %lf %lf %d/%d", &l1, &l5, &l15, &running, &total) == 5;
     return ok ? running : 0;
 }
 
@@ -42,10 +47,10 @@ int own_runnable_threads() {
     while (const dirent *e = readdir(dir)) {
         if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
         std::snprintf(path, sizeof(path), "/proc/self/task/%.20s/stat", e->d_name);
-        std::FILE *f = std::fopen(path, "r");
-        if (!f) continue;
-        const size_t n = std::fread(buf, 1, sizeof(buf) - 1, f);
-        std::fclose(f);
+        RegularFile f(path);
+        if (!f.ok()) continue;
+        const ssize_t got = ::read(f.fd(), buf, sizeof(buf) - 1);
+        const size_t n = got > 0 ? static_cast<size_t>(got) : 0;
         buf[n] = '\0';
         // "pid (comm) S ...": the state follows the last ')' (comm may hold one).
         const char *close = std::strrchr(buf, ')');

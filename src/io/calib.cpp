@@ -82,6 +82,23 @@ cv::Matx<double, R, C> matrix(const std::map<std::string, std::string> &found, c
     return m;
 }
 
+// Calibration files are a few kilobytes; a bound keeps /dev/zero or a huge file from being read.
+constexpr uint64_t kMaxCalibrationBytes = uint64_t{1} << 20;
+
+// A rotation as the C ABI checks lidar_to_camera: orthonormal within 1e-3 and det > 0 (a scaled
+// or all-zero matrix moves every point off its pixel or out of the image).
+void require_rotation(const cv::Matx33d &R, const std::string &key, const std::string &source) {
+    const double ortho = cv::norm(R.t() * R - cv::Matx33d::eye(), cv::NORM_INF);
+    require(ortho <= 1e-3 && cv::determinant(R) > 0, ErrorCode::Format, source + ": " + key + " is not a rotation matrix");
+}
+
+// A rectified camera's projection K [I | t]: the lower-left of K zero and its last row 0 0 1, the
+// form velo_to_left_rect inverts.
+void require_pinhole(const cv::Matx34d &P, const std::string &key, const std::string &source) {
+    require(P(1, 0) == 0 && P(2, 0) == 0 && P(2, 1) == 0 && P(2, 2) == 1, ErrorCode::Format,
+            source + ": " + key + " is not a rectified pinhole projection K [I | t] (rows 2 and 3 must start 0 fy cy, 0 0 1)");
+}
+
 template <int R, int C>
 bool all_finite(const cv::Matx<double, R, C> &m) {
     for (int i = 0; i < R * C; ++i)
@@ -105,6 +122,9 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
     c.P_rect_02 = matrix<3, 4>(found, "P_rect_02", source);
     c.P_rect_03 = matrix<3, 4>(found, "P_rect_03", source);
     c.R_rect_00 = matrix<3, 3>(found, "R_rect_00", source);
+    require_pinhole(c.P_rect_02, "P_rect_02", source);
+    require_pinhole(c.P_rect_03, "P_rect_03", source);
+    require_rotation(c.R_rect_00, "R_rect_00", source);
     const cv::Matx34d &P2 = c.P_rect_02, &P3 = c.P_rect_03;
     c.camera.fx = P2(0, 0);
     c.camera.fy = P2(1, 1);
@@ -123,15 +143,18 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
 }
 
 CamToCamCalib read_calib_cam_to_cam(const std::string &path) {
-    return parse_calib_cam_to_cam(read_file(path), path);
+    return parse_calib_cam_to_cam(read_file(path, kMaxCalibrationBytes), path);
 }
 
 cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &source) {
     const auto found = collect(text, source, {"R", "T"});
     const cv::Matx33d R = matrix<3, 3>(found, "R", source);
     const cv::Matx31d T = matrix<3, 1>(found, "T", source);
-    const double ortho = cv::norm(R.t() * R - cv::Matx33d::eye(), cv::NORM_INF);
-    require(ortho <= 1e-3 && cv::determinant(R) > 0, ErrorCode::Format, source + ": R is not a rotation matrix");
+    require_rotation(R, "R", source);
+    for (int i = 0; i < 3; ++i)
+        require(std::fabs(T(i, 0)) <= kMaxRigTranslation, ErrorCode::Format,
+                source + ": T moves the LiDAR more than " + std::to_string(static_cast<int>(kMaxRigTranslation)) +
+                    " m from the camera");
     cv::Matx44d M = cv::Matx44d::eye();
     for (int r = 0; r < 3; ++r) {
         for (int k = 0; k < 3; ++k) M(r, k) = R(r, k);
@@ -141,7 +164,7 @@ cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &
 }
 
 cv::Matx44d read_calib_velo_to_cam(const std::string &path) {
-    return parse_calib_velo_to_cam(read_file(path), path);
+    return parse_calib_velo_to_cam(read_file(path, kMaxCalibrationBytes), path);
 }
 
 void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib) {

@@ -27,10 +27,13 @@ struct CamToCamCalib {
     StereoCamera camera;    // derived from P_rect_02 / P_rect_03 (see header comment)
 };
 
-// Parses calib_cam_to_cam text. Throws Error: Io when the file cannot be opened; Format for a
-// missing or duplicated key, a wrong number of values, a non-numeric or non-finite value, a
-// geometry that is not a rectified stereo pair (fx, fy or baseline <= 0), or a camera outside
-// the ranges of core/limits.hpp (e.g. an infinite baseline from finite entries).
+// Parses calib_cam_to_cam text. Throws Error: Io when the file cannot be opened (only a regular
+// file of at most 1 MiB is, without blocking: io/read_file.hpp); Format for a missing or
+// duplicated key, a wrong number of values, a non-numeric or non-finite value, a P_rect_02 or
+// P_rect_03 that is not a pinhole K [I | t] (rows 2 and 3 of K not 0 fy cy / 0 0 1), an R_rect_00
+// that is not a rotation, a geometry that is not a rectified stereo pair (fx, fy or baseline <= 0),
+// or a camera outside the ranges of core/limits.hpp (e.g. an infinite baseline from finite
+// entries). Messages start with the file (`source`).
 CamToCamCalib read_calib_cam_to_cam(const std::string &path);
 
 // Same as read_calib_cam_to_cam on text already in memory; `source` names it in messages.
@@ -38,7 +41,8 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
 
 // Parses calib_velo_to_cam into the 4x4 rigid transform [R T; 0 0 0 1] (Velodyne -> camera 0).
 // Throws Error: Io when unreadable; Format for missing/duplicated keys, wrong counts,
-// non-finite values, or an R that is not a rotation (|R^T R - I| > 1e-3 or det(R) <= 0).
+// non-finite values, an R that is not a rotation (|R^T R - I| > 1e-3 or det(R) <= 0), or a T with
+// an entry beyond kMaxRigTranslation (1000 m).
 cv::Matx44d read_calib_velo_to_cam(const std::string &path);
 cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &source);
 

@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/regular_file.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -98,6 +99,9 @@ cv::Size pnm_size(std::ifstream &in, const std::string &path) {
 }  // namespace
 
 ImageHeader read_image_header(const std::string &path) {
+    // Regular files only: opening a FIFO would wait for a writer, a device be read without end.
+    const RegularFile file(path);
+    require(file.ok(), ErrorCode::Io, [&] { return "cannot open " + path + ": " + file.error(); });
     std::ifstream in(path, std::ios::binary);
     require(in.good(), ErrorCode::Io, "cannot open " + path);
     unsigned char sig[8] = {};

@@ -12,7 +12,7 @@
 namespace lidarflow::io {
 
 // The format name ("PNG", "JPEG", "BMP", "PNM") and size from the header; throws Error: Io when
-// the file cannot be opened, Format when it is none of those formats or its header is corrupt,
+// the file cannot be opened or is not a regular file (a FIFO, a device, a folder: never waited on), Format when it is none of those formats or its header is corrupt,
 // InvalidArgument when a side exceeds kMaxImageSide (core/limits.hpp).
 struct ImageHeader {
     std::string format;

@@ -1,20 +1,16 @@
 // SPDX-License-Identifier: MIT
 #include "io/read_file.hpp"
 
-#include <fstream>
-#include <sstream>
-
 #include "core/error.hpp"
+#include "core/regular_file.hpp"
 
 namespace lidarflow::io {
 
-std::string read_file(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    require(in.good(), ErrorCode::Io, "cannot open " + path);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    require(!in.bad(), ErrorCode::Io, "cannot read " + path);
-    return ss.str();
+std::string read_file(const std::string &path, uint64_t max_bytes) {
+    RegularFile f(path);
+    std::string data;
+    require(f.read_all(data, max_bytes), ErrorCode::Io, [&] { return "cannot open " + path + ": " + f.error(); });
+    return data;
 }
 
 }  // namespace lidarflow::io

@@ -7,23 +7,26 @@
 #include <fstream>
 
 #include "core/error.hpp"
+#include "core/regular_file.hpp"
 
 namespace lidarflow::io {
 
 static_assert(sizeof(float) == 4, "Velodyne records are float32");
 
 VelodyneScan read_velodyne_bin(const std::string &path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    require(in.good(), ErrorCode::Io, "cannot open " + path);
-    const std::streamoff size = in.tellg();
-    require(size >= 0, ErrorCode::Io, "cannot read " + path);
+    RegularFile file(path);
+    require(file.ok(), ErrorCode::Io, [&] { return "cannot open " + path + ": " + file.error(); });
+    const uint64_t size = file.size();
     require(size > 0, ErrorCode::Format, path + ": empty Velodyne scan");
     require(size % 16 == 0, ErrorCode::Format,
             path + ": size " + std::to_string(size) + " bytes is not a multiple of 16 (x, y, z, r float32)");
-    std::vector<char> raw(static_cast<std::size_t>(size));
-    in.seekg(0);
-    in.read(raw.data(), size);
-    require(in.gcount() == size, ErrorCode::Io, "cannot read " + path);
+    require(size <= kMaxVelodyneBytes, ErrorCode::Format, [&] {
+        return path + ": size " + std::to_string(size) + " bytes is more than a scan's " +
+               std::to_string(kMaxVelodyneBytes) + " (" + std::to_string(kMaxVelodyneBytes / 16) + " points)";
+    });
+    std::string raw;
+    require(file.read_all(raw, kMaxVelodyneBytes), ErrorCode::Io, [&] { return "cannot read " + path + ": " + file.error(); });
+    require(raw.size() == size, ErrorCode::Io, path + ": changed while read");
 
     VelodyneScan scan;
     const std::size_t n = raw.size() / 16;
@@ -31,9 +34,14 @@ VelodyneScan read_velodyne_bin(const std::string &path) {
     for (std::size_t i = 0; i < n; ++i) {
         float v[4];
         std::memcpy(v, raw.data() + 16 * i, sizeof v);  // memcpy: the buffer has no float alignment
-        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]) || !std::isfinite(v[3])) {
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
             ++scan.dropped_nonfinite;
             continue;
+        }
+        // The position is what places the point; a broken reflectance is not a reason to lose it.
+        if (!std::isfinite(v[3])) {
+            ++scan.nonfinite_reflectance;
+            v[3] = 0;
         }
         scan.points.push_back({v[0], v[1], v[2], v[3]});
     }

@@ -327,6 +327,28 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k) {
     return values.estimator.interpolation.edges.sed_model_path.c_str();
 }
 
+std::string result_settings_text(const EstimatorOptions &options) {
+    OptionValues values;
+    values.estimator = options;
+    std::string text;
+    for (const OptionKey &k : kKeys) {
+        if (is_key(k, "threads") || is_key(k, "adaptive_threads") || is_key(k, "preset")) continue;
+        text += k.name;
+        text += '=';
+        if (k.type == OptionKeyType::String) {
+            text += get_option_string(values, k);
+        } else if (k.type == OptionKeyType::Float) {
+            char buf[40];
+            std::snprintf(buf, sizeof buf, "%.17g", get_option_float(values, k));
+            text += buf;
+        } else {
+            text += std::to_string(get_option_int(values, k));
+        }
+        text += '\n';
+    }
+    return text;
+}
+
 OptionValues preset_values(const std::string &name, const OptionValues &current) {
     // The core owns the preset table, so the C ABI, the CLI's --preset, --set preset=..,
     // Python and the bridge all get the same values.

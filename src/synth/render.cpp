@@ -344,6 +344,12 @@ cv::Matx44d drive_velo_to_cam() {
     return undo * velo_to_left();
 }
 
+cv::Matx34d drive_camera_pose(const SynthConfig &config, int k) {
+    const Pose p = drive_rig(config, k, k).model.left[0];
+    // Yaw::apply as a matrix: the camera's axes in frame 0's camera, then its centre.
+    return {p.rot.c, 0, p.rot.s, p.centre.x, 0, 1, 0, p.centre.y, -p.rot.s, 0, p.rot.c, p.centre.z};
+}
+
 DriveFrame render_drive_frame(const SynthConfig &config, int k) {
     const Rig rig = drive_rig(config, k, k);
     DriveFrame f;

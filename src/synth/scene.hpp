@@ -91,6 +91,10 @@ struct DriveFrame {
 io::CamToCamCalib drive_calibration(const SynthConfig &config);
 cv::Matx44d drive_velo_to_cam();
 
+// The left camera of frame k in frame 0's camera coordinates (camera k -> camera 0, [R | t]:
+// the pose line of the KITTI odometry format); the identity for k = 0. Throws like drive frames.
+cv::Matx34d drive_camera_pose(const SynthConfig &config, int k);
+
 // Frame k of the drive: both images, and a scan ray-cast from the LiDAR at time k in an
 // HDL-64-like pattern: rings from +2 to -24.8 deg elevation over the full turn, at KITTI's
 // 0.42 deg between rings and 0.09 deg of azimuth for a focal length of 721 px, both spread by

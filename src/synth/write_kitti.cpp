@@ -6,11 +6,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
+#include "io/poses.hpp"
 #include "io/velodyne.hpp"
 
 namespace lidarflow::synth {
@@ -94,6 +96,12 @@ void write_drive_timestamps(const std::string &root, int frames) {
         text += line;
     }
     for (const char *dir : {"image_02", "image_03", "velodyne_points"}) write_text(root + "/" + dir + "/timestamps.txt", text);
+}
+
+void write_drive_poses(const SynthConfig &config, const std::string &root, int frames) {
+    std::vector<cv::Matx34d> poses;
+    for (int k = 0; k < frames; ++k) poses.push_back(drive_camera_pose(config, k));
+    write_text(root + "/gt/poses.txt", io::poses_text(poses, {}, io::PoseFormat::Kitti));
 }
 
 void write_drive_frame(const DriveFrame &frame, const std::string &root, int k) {

@@ -30,11 +30,14 @@ std::string shadow_mask_path(const std::string &root, const std::string &id);
 //   calib_cam_to_cam.txt, calib_velo_to_cam.txt                   the rig (drive_calibration, drive_velo_to_cam)
 //   gt/{disp_occ_0,disp_noc_0,disp_occ_1,disp_noc_1,flow_occ,flow_noc}/NNNNNNNNNN.png
 //                                                                 pair N -> N+1, KITTI PNGs
+//   gt/poses.txt                                                  the left camera per frame (KITTI
+//                                                                 odometry format, io/poses.hpp)
 // N is the frame index in 10 digits (drive_frame_name). Each function throws Error: Io when a
 // file cannot be written, InvalidArgument for a negative index or an empty frame.
 std::string drive_frame_name(int k);
 void write_drive_rig(const SynthConfig &config, const std::string &root);
 void write_drive_timestamps(const std::string &root, int frames);
+void write_drive_poses(const SynthConfig &config, const std::string &root, int frames);
 void write_drive_frame(const DriveFrame &frame, const std::string &root, int k);
 void write_drive_ground_truth(const SynthScene &pair, const std::string &root, int k);
 

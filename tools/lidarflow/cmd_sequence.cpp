@@ -1,16 +1,14 @@
 // SPDX-License-Identifier: MIT
 // lidarflow sequence: scene flow for every consecutive frame pair of a recorded drive in the
-// KITTI raw layout (image_02/data, image_03/data, velodyne_points/data, calib_*.txt), streamed
-// through one estimator as the C ABI streams pushed frames, so each frame's work is reused by
-// the next pair. Bad frames are reported and only their pairs are skipped.
+// KITTI raw layout (io/drive_folder.hpp), streamed through one estimator as the C ABI streams
+// pushed frames, so each frame's work is reused by the next pair. Bad frames and misnamed files
+// are reported and only their pairs are skipped.
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -22,15 +20,17 @@
 #include "commands.hpp"
 #include "log.hpp"
 #include "result_files.hpp"
+#include "result_manifest.hpp"
+#include "sequence_poses.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
-#include "io/image_file.hpp"
+#include "io/drive_folder.hpp"
 #include "io/output_folder.hpp"
 #include "io/velo_to_left.hpp"
-#include "io/velodyne.hpp"
 #include "lidar/projection.hpp"
 #include "pipeline/estimator.hpp"
 #include "pipeline/option_assignments.hpp"
+#include "pipeline/option_keys.hpp"
 
 namespace lidarflow::cli {
 namespace {
@@ -40,141 +40,43 @@ namespace fs = std::filesystem;
 constexpr int kExitBadFrames = 3;  // as the bridge's --replay for lost frames
 constexpr long kMaxPairs = 1000000;  // 28 hours at 10 Hz
 
-std::string frame_name(long k) {
-    char buf[24];
-    std::snprintf(buf, sizeof buf, "%010ld", k);
-    return buf;
-}
-
-// A drive's frames: the 10-digit numbers of image_02/data/*.png, sorted.
-std::vector<long> list_frames(const fs::path &root) {
-    const fs::path dir = root / "image_02" / "data";
-    std::error_code ec;
-    require(fs::is_directory(dir, ec), ErrorCode::Io,
-            "sequence: " + dir.string() + " is not a folder (expected the KITTI raw layout: image_02/data, "
-            "image_03/data, velodyne_points/data)");
-    std::vector<long> frames;
-    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-        const std::string name = it->path().filename().string();
-        if (name.size() != 14 || name.substr(10) != ".png" ||
-            !std::all_of(name.begin(), name.begin() + 10, [](unsigned char c) { return std::isdigit(c); }))
-            continue;
-        frames.push_back(std::stol(name.substr(0, 10)));
-    }
-    require(!ec, ErrorCode::Io, "sequence: cannot list " + dir.string() + ": " + ec.message());
-    require(!frames.empty(), ErrorCode::Io, "sequence: no frame (NNNNNNNNNN.png) in " + dir.string());
-    std::sort(frames.begin(), frames.end());
-    return frames;
-}
-
 // KITTI raw keeps the calibration in the date folder, one above the drive.
 std::string find_calibration(const fs::path &root, const char *name) {
     for (const fs::path &p : {root / name, root.parent_path() / name}) {
         std::error_code ec;
-        if (fs::is_regular_file(p, ec)) return p.string();
+        if (fs::symlink_status(p, ec).type() != fs::file_type::not_found && !ec) return p.string();
     }
     throw Error(ErrorCode::Io, std::string("sequence: no ") + name + " in " + root.string() + " or " +
                                    root.parent_path().string());
-}
-
-// Times of image_02/timestamps.txt ("YYYY-MM-DD HH:MM:SS.fffffffff", line k = frame k) in
-// seconds; empty when the file is absent or a line does not parse (they only annotate output).
-std::vector<double> read_timestamps(const fs::path &root) {
-    std::ifstream in(root / "image_02" / "timestamps.txt");
-    std::vector<double> t;
-    std::string line;
-    while (std::getline(in, line)) {
-        std::tm tm{};
-        double sec = 0;
-        if (std::sscanf(line.c_str(), "%d-%d-%d %d:%d:%lf", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour,
-                        &tm.tm_min, &sec) != 6)
-            return {};
-        tm.tm_year -= 1900;
-        tm.tm_mon -= 1;
-        tm.tm_sec = 0;
-        t.push_back(static_cast<double>(timegm(&tm)) + sec);
-    }
-    return t;
 }
 
 struct Frame {
     long index = 0;
     cv::Mat left, right;
     SparseLidar lidar;
+    io::DriveFileError scan_error;  // set: the scan is bad, the frame goes image-only (no points)
 };
 
-// A bad frame: which of its files and why.
-struct FrameError {
-    std::string file;  // relative to the drive
-    std::string reason;
-};
-
-// The reason of an error about `path`, without the path when the message starts with it.
-std::string reason_of(const Error &e, const std::string &path) {
-    std::string m = e.what();
-    if (m.compare(0, path.size() + 2, path + ": ") == 0) m = m.substr(path.size() + 2);
-    return m;
+// Frame k through io::read_drive_frame, its scan projected as the C ABI's LF_LIDAR_POINTS_LIDAR
+// path projects pushed scans, so that results equal pushed frames'.
+std::optional<Frame> read_frame(const fs::path &root, long k, cv::Size size, const StereoCamera &camera,
+                                const cv::Matx44d &velo_to_left, io::DriveFileError &error) {
+    io::DriveFrame d;
+    if (!io::read_drive_frame(root.string(), k, size, d, error)) return std::nullopt;
+    std::vector<cv::Point3f> points(d.scan.points.size());
+    for (size_t i = 0; i < points.size(); ++i) points[i] = {d.scan.points[i].x, d.scan.points[i].y, d.scan.points[i].z};
+    Frame f;
+    f.index = k;
+    f.left = std::move(d.left);
+    f.right = std::move(d.right);
+    f.scan_error = std::move(d.scan_error);
+    // Without points the pair is image-only, as a frame pushed without LiDAR through the C ABI.
+    f.lidar = f.scan_error.file.empty() ? lidar::project_to_left_camera(points, &velo_to_left, camera, size)
+                                        : SparseLidar{size.width, size.height, {}};
+    detail("sequence: frame %s: scan of %zu points, %zu in the image\n", io::drive_frame_name(k).c_str(),
+           d.scan.points.size(), f.lidar.points.size());
+    return f;
 }
-
-class DriveReader {
-public:
-    DriveReader(fs::path root, const io::CamToCamCalib &calib, const cv::Matx44d &velo_to_left)
-        : root_(std::move(root)), camera_(calib.camera), velo_to_left_(velo_to_left) {}
-
-    // Frame k, or the error of its first bad file. `size`: the size every frame must have
-    // (empty: this frame's sets it).
-    std::optional<Frame> read(long k, cv::Size &size, FrameError &error) const {
-        const std::string name = frame_name(k);
-        Frame f;
-        f.index = k;
-        std::string rel;
-        try {
-            rel = "image_02/data/" + name + ".png";
-            f.left = read_image(rel);
-            if (size.empty()) size = f.left.size();
-            check_size(f.left, size);
-            rel = "image_03/data/" + name + ".png";
-            f.right = read_image(rel);
-            check_size(f.right, size);
-            if (f.right.type() != f.left.type())
-                throw Error(ErrorCode::Format, "is " + channels_text(f.right) + " but the left image is " +
-                                                   channels_text(f.left));
-            rel = "velodyne_points/data/" + name + ".bin";
-            const std::string path = (root_ / rel).string();
-            if (!fs::exists(path)) throw Error(ErrorCode::Io, "missing");
-            const io::VelodyneScan scan = io::read_velodyne_bin(path);
-            std::vector<cv::Point3f> points(scan.points.size());
-            for (size_t i = 0; i < points.size(); ++i)
-                points[i] = {scan.points[i].x, scan.points[i].y, scan.points[i].z};
-            // The C ABI's LF_LIDAR_POINTS_LIDAR path, so that results equal pushed frames'.
-            f.lidar = lidar::project_to_left_camera(points, &velo_to_left_, camera_, size);
-            detail("sequence: frame %s: scan of %zu points, %zu in the image\n", name.c_str(), scan.points.size(),
-                   f.lidar.points.size());
-        } catch (const Error &e) {
-            error = {rel, reason_of(e, (root_ / rel).string())};
-            return std::nullopt;
-        }
-        return f;
-    }
-
-private:
-    cv::Mat read_image(const std::string &rel) const {
-        const std::string path = (root_ / rel).string();
-        if (!fs::exists(path)) throw Error(ErrorCode::Io, "missing");
-        return io::read_any_image(path);
-    }
-    static std::string channels_text(const cv::Mat &m) { return m.channels() == 1 ? "gray" : "colour"; }
-    static void check_size(const cv::Mat &m, cv::Size size) {
-        if (m.size() != size)
-            throw Error(ErrorCode::SizeMismatch, "is " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
-                                                     ", the drive's frames are " + std::to_string(size.width) + "x" +
-                                                     std::to_string(size.height));
-    }
-
-    fs::path root_;
-    StereoCamera camera_;
-    cv::Matx44d velo_to_left_;
-};
 
 // "A:B" with 0 <= A < B.
 std::pair<long, long> parse_range(const std::string &text) {
@@ -196,21 +98,46 @@ std::pair<long, long> parse_range(const std::string &text) {
 
 std::string pair_text(long t0) { return std::to_string(t0) + "->" + std::to_string(t0 + 1); }
 
+// "sequence: frame N: FILE: REASON; pairs A->B, B->C WHAT" on stderr (on a terminal, over the
+// progress line).
+void report_frame(bool tty, long k, const io::DriveFileError &e, const std::vector<long> &pairs, const char *what) {
+    std::string list;
+    for (long t0 : pairs) list += (list.empty() ? "" : ", ") + pair_text(t0);
+    if (!list.empty()) list = "; pair" + std::string(pairs.size() > 1 ? "s " : " ") + list + " " + what;
+    if (tty) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", io::drive_frame_name(k).c_str(), e.file.c_str(),
+                 e.reason.c_str(), list.c_str());
+}
+
+// A pair's metric ego-motion [R | t] (points of the t0 camera -> the t1 camera), if it has one.
+std::optional<cv::Matx34d> metric_ego(const pipeline::EstimatorResult &r) {
+    if (r.ego_state != pipeline::EgoState::Ok) return std::nullopt;
+    cv::Matx34d m;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) m(i, j) = r.ego.R[3 * i + j];
+        m(i, 3) = r.ego.t[i];
+    }
+    return m;
+}
+
 int run_sequence(int argc, char **argv) {
     Args args("sequence", argc, argv,
               {{"drive", true, "DIR  drive in the KITTI raw layout: image_02/data/NNNNNNNNNN.png, image_03/data, velodyne_points/data/NNNNNNNNNN.bin; calib_cam_to_cam.txt and calib_velo_to_cam.txt in DIR or DIR/.."},
-               {"out", true, "DIR  output folder: disp_0/, disp_1/, flow/, one file each per pair, named by its first frame (NNNNNNNNNN.EXT)"},
+               {"out", true, "DIR  output folder: disp_0/, disp_1/, flow/, one file each per pair, named by its first frame (NNNNNNNNNN.EXT), and manifest/NNNNNNNNNN.txt"},
                {"frames", true, "A:B  frames A..B (inclusive): pairs A->A+1 .. B-1->B, at most 1000000 (default: every frame)"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"preset", true, "NAME speed/accuracy preset: default | paper | balanced | fast | realtime"},
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
-               {"skip-existing", false, "do not recompute a pair whose result files all exist (counted as skipped)"}});
+               {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
+               {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
-        std::printf("exit status: 0 every pair done; 3 some pairs skipped for bad frames (each reported on stderr);\n"
-                    "             1 other errors (unreadable drive, no calibration); 2 bad command line\n");
+        std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad images, image-only for\n"
+                    "             bad scans, or misnamed files\n"
+                    "             (each reported on stderr); 1 other errors (unreadable drive, bad calibration,\n"
+                    "             an output that cannot be written); 2 bad command line\n");
         return 0;
     }
     const fs::path root = fs::path(args.required("drive")).lexically_normal();
@@ -228,30 +155,55 @@ int run_sequence(int argc, char **argv) {
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
     const bool skip_existing = args.flag("skip-existing");
+    const std::string poses_name = args.str("poses", "kitti");
+    const bool write_poses = poses_name != "none";
+    const io::PoseFormat poses_format = write_poses ? io::parse_pose_format(poses_name) : io::PoseFormat::Kitti;
+    const std::string settings_text = pipeline::result_settings_text(opt);
+    // Image-only results are of other inputs: a rerun with the scan readable recomputes them.
+    const uint64_t settings = settings_digest(settings_text),
+                   image_only_settings = settings_digest(settings_text + "lidar=none\n");
 
-    const std::vector<long> listed = list_frames(root);
+    const io::DriveListing listing = io::list_drive(root.string());
+    require(!listing.frames.empty(), ErrorCode::Io,
+            "sequence: no frame (NNNNNNNNNN.png / .bin) in the data folders of " + root.string());
     const io::CamToCamCalib calib = io::read_calib_cam_to_cam(find_calibration(root, "calib_cam_to_cam.txt"));
     const cv::Matx44d velo_to_left =
         io::velo_to_left_rect(calib, io::read_calib_velo_to_cam(find_calibration(root, "calib_velo_to_cam.txt")));
-    const std::vector<double> stamps = read_timestamps(root);
-    long first = listed.front(), last = listed.back();
+    const io::DriveTimestamps stamps = io::read_drive_timestamps(root.string());
+    long first = listing.frames.front(), last = listing.frames.back();
     if (args.has("frames")) std::tie(first, last) = parse_range(args.str("frames", ""));
     require(first < last, ErrorCode::Io, "sequence: " + root.string() + " has one frame only: no pair");
     require(last - first <= kMaxPairs, ErrorCode::Io,
             "sequence: " + root.string() + " spans frames " + std::to_string(first) + ".." + std::to_string(last) +
                 ", more than " + std::to_string(kMaxPairs) + " pairs (choose a part with --frames A:B)");
     io::prepare_output_folder(out);
-    const std::set<long> present(listed.begin(), listed.end());
-    detail("sequence: %s: frames %ld..%ld (%zu listed in the drive), preset %s, %d thread(s), fx %.2f px, baseline "
-           "%.4f m\n",
-           root.c_str(), first, last, listed.size(), args.str("preset", "default").c_str(), opt.threads,
-           calib.camera.fx, calib.camera.baseline);
+    const std::set<long> present(listing.frames.begin(), listing.frames.end());
+    std::vector<long> in_range;
+    for (long k : listing.frames)
+        if (k >= first && k <= last) in_range.push_back(k);
+    const cv::Size size = io::drive_frame_size(root.string(), in_range);
+    detail("sequence: %s: frames %ld..%ld (%zu listed in the drive), %dx%d, preset %s, %d thread(s), fx %.2f px, "
+           "baseline %.4f m\n",
+           root.c_str(), first, last, listing.frames.size(), size.width, size.height,
+           args.str("preset", "default").c_str(), opt.threads, calib.camera.fx, calib.camera.baseline);
 
-    const DriveReader reader(root, calib, velo_to_left);
+    // Input that is bad but costs no pair is reported too, and makes the exit status 3.
+    long misnamed = 0;
+    for (const io::MisnamedFile &m : listing.misnamed) {
+        if (m.number >= 0 && (m.number < first || m.number > last)) continue;
+        ++misnamed;
+        std::fprintf(stderr, "sequence: %s: not a frame's name (10 digits and the folder's extension); ignored\n",
+                     m.file.c_str());
+    }
+    if (!stamps.problem.empty())
+        std::fprintf(stderr, "sequence: image_02/timestamps.txt: %s; progress lines without frame times\n",
+                     stamps.problem.c_str());
+
     const bool tty = isatty(fileno(stderr)) && verbosity() != Verbosity::Quiet;
     const long pairs = last - first;
-    long computed = 0, skipped = 0, done = 0;
-    std::set<long> failed;  // pairs (by their t0) lost to bad frames or estimator errors
+    long computed = 0, computed_image_only = 0, skipped = 0, done = 0;
+    std::set<long> failed;      // pairs (by their t0) lost to bad frames or estimator errors
+    std::set<long> image_only;  // pairs computed without points for a bad scan
     const Stopwatch clock;
     const auto progress = [&](long t0, const std::string &what) {
         ++done;
@@ -267,40 +219,44 @@ int run_sequence(int argc, char **argv) {
         progress(t0, why);
     };
 
+    std::map<long, cv::Matx34d> motions;  // pair t0 -> its metric ego-motion [R | t]
     std::optional<Frame> prev;
     pipeline::StreamCache stream;
-    cv::Size size;
     for (long k = first; k <= last; ++k) {
         std::optional<Frame> cur;
-        FrameError bad;
+        io::DriveFileError bad;
         if (present.count(k)) {
-            cur = reader.read(k, size, bad);
+            cur = read_frame(root, k, size, calib.camera, velo_to_left, bad);
         } else {
-            bad = {"image_02/data/" + frame_name(k) + ".png", "missing"};
+            bad = {io::drive_left_file(k), "missing"};
         }
         if (!cur) {
             std::vector<long> lost;
             if (k > first && !failed.count(k - 1)) lost.push_back(k - 1);
             if (k < last) lost.push_back(k);
-            std::string list;
-            for (long t0 : lost) list += (list.empty() ? "" : ", ") + pair_text(t0);
-            if (tty) std::fprintf(stderr, "\r\033[K");
-            std::fprintf(stderr, "sequence: frame %s: %s: %s%s\n", frame_name(k).c_str(), bad.file.c_str(),
-                         bad.reason.c_str(),
-                         list.empty() ? "" : ("; pair" + std::string(lost.size() > 1 ? "s " : " ") + list + " skipped").c_str());
+            report_frame(tty, k, bad, lost, "skipped");
             for (long t0 : lost) lose(t0, "skipped (bad frame)");
             // The stream restarts after a bad frame: no pair spans it.
             prev.reset();
             stream.clear();
             continue;
         }
+        if (!cur->scan_error.file.empty()) {
+            std::vector<long> pairs_of;
+            if (prev) pairs_of.push_back(k - 1);
+            if (k < last) pairs_of.push_back(k);
+            report_frame(tty, k, cur->scan_error, pairs_of, "image-only");
+        }
         if (prev) {
             const long t0 = prev->index;
-            const std::string id = frame_name(t0);
-            bool exists = skip_existing;
-            if (skip_existing)
-                for (const std::string &p : result_file_paths(out, id, formats)) exists = exists && fs::exists(p);
-            if (exists) {
+            const std::string id = io::drive_frame_name(t0);
+            const std::vector<std::string> files = result_file_paths(out, id, formats);
+            const bool no_points = !prev->scan_error.file.empty() || !cur->scan_error.file.empty();
+            if (no_points) image_only.insert(t0);
+            const uint64_t pair_settings = no_points ? image_only_settings : settings;
+            std::optional<cv::Matx34d> ego;
+            if (skip_existing && result_manifest_matches(out, id, pair_settings, files, ego)) {
+                if (ego) motions[t0] = *ego;
                 ++skipped;
                 progress(t0, "exists, skipped");
             } else {
@@ -323,14 +279,18 @@ int run_sequence(int argc, char **argv) {
                     lose(t0, "failed");
                 }
                 if (r) {
+                    ego = metric_ego(*r);
+                    if (ego) motions[t0] = *ego;
                     write_result_files(out, id, r->output(), formats);
+                    write_result_manifest(out, id, pair_settings, files, ego);
                     const double s = pair_clock.seconds();
                     ++computed;
-                    std::string what = "in " + format_duration(s);
-                    if (static_cast<size_t>(k) < stamps.size()) {
+                    computed_image_only += no_points ? 1 : 0;
+                    std::string what = (no_points ? "image-only in " : "in ") + format_duration(s);
+                    if (static_cast<size_t>(k) < stamps.seconds.size()) {
                         char dt[48];
                         std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
-                                      stamps[static_cast<size_t>(k)] - stamps[static_cast<size_t>(t0)]);
+                                      stamps.seconds[static_cast<size_t>(k)] - stamps.seconds[static_cast<size_t>(t0)]);
                         what += dt;
                     }
                     progress(t0, what);
@@ -340,12 +300,26 @@ int run_sequence(int argc, char **argv) {
         prev = std::move(cur);
     }
     if (tty) std::fprintf(stderr, "\r\033[K");
+    if (write_poses) {
+        // A part of a drive (--frames) gets a file of its own: parts may share OUT.
+        const std::string file = args.has("frames") ? "poses_" + io::drive_frame_name(first) + "-" +
+                                                          io::drive_frame_name(last) + ".txt"
+                                                    : "poses.txt";
+        const long reached = write_sequence_poses((fs::path(out) / file).string(), first, motions, stamps.seconds,
+                                                  poses_format);
+        if (reached < last)
+            std::fprintf(stderr, "sequence: %s: frames %ld..%ld only (pair %s has no ego-motion)\n", file.c_str(), first,
+                         reached, pair_text(reached).c_str());
+    }
     const double total = clock.seconds();
-    std::printf("sequence: %ld pairs: %ld computed, %ld skipped (existing), %zu failed (bad frames); %.2f pairs/s "
+    std::printf("sequence: %ld pairs: %ld computed%s, %ld skipped (existing), %zu failed (bad frames)%s; %.2f pairs/s "
                 "(%ld computed in %s)\n",
-                pairs, computed, skipped, failed.size(), total > 0 ? computed / total : 0.0, computed,
-                format_duration(total).c_str());
-    return failed.empty() ? 0 : kExitBadFrames;
+                pairs, computed,
+                computed_image_only ? (" (" + std::to_string(computed_image_only) + " image-only)").c_str() : "", skipped,
+                failed.size(),
+                misnamed ? ("; " + std::to_string(misnamed) + " misnamed file(s) ignored").c_str() : "",
+                total > 0 ? computed / total : 0.0, computed, format_duration(total).c_str());
+    return failed.empty() && image_only.empty() && misnamed == 0 ? 0 : kExitBadFrames;
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ int write_drive(const Args &args) {
                 "] with --drive (further on, the camera would reach the car ahead)");
     synth::write_drive_rig(config, root);
     synth::write_drive_timestamps(root, frames);
+    synth::write_drive_poses(config, root, frames);
     for (int k = 0; k < frames; ++k) {
         const auto t0 = std::chrono::steady_clock::now();
         const synth::DriveFrame frame = synth::render_drive_frame(config, k);

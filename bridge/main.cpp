@@ -121,7 +121,9 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
         std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range not "
                              "computed, %s\n",
                      (long long)frames.first, (long long)frames.last, (long long)r.stereo_before_range,
-                     r.stopped_after_range ? "stopped at the frame after it" : "the log ended within it");
+                     r.stopped_after_range ? "stopped at the frame after it"
+                                           : printf_string("the log ended after %lld stereo frame(s)",
+                                                           (long long)r.stereo_in_log).c_str());
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 

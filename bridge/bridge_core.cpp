@@ -145,7 +145,10 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
         channels.push_back({&config.status_channel, &Bridge::on_status});
         channels.push_back({&config.flow_channel, &Bridge::on_flow});
         channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});  // MACs or receipts
+    } else if (!config.shard_key.empty()) {
+        channels.push_back({&b->config_.shard_auth_channel, &Bridge::on_mac});  // no watch: the others' tags to echo
     }
+    if (!config.shard_key.empty()) b->echoes_.resize(static_cast<size_t>(config.shard_count));
     for (const auto &[channel, handler] : channels) {
         lcm_subscription_t *s = lcm_subscribe(lcm, channel->c_str(), handler, b.get());
         if (!s) {

@@ -35,7 +35,11 @@ void Bridge::flush_outbox() {
         }
         const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
                                    static_cast<unsigned>(o.bytes.size()));
-        if (rc == 0) publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size());
+        if (rc == 0) {
+            int64_t t1 = 0;
+            scene_flow_utime(o.bytes.data(), o.bytes.size(), &t1);
+            publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size(), ShardMacKind::Result, t1);
+        }
         const double latency_ms = 1000.0 * (monotonic_seconds() - o.received_seconds);
         std::lock_guard<std::mutex> lock(mutex_);
         if (rc != 0) {
@@ -108,20 +112,41 @@ void Bridge::publish_status() {
         log("publishing the status on %s failed", config_.status_channel.c_str());
         return;
     }
-    publish_mac(config_.status_channel, bytes.data(), bytes.size());
+    publish_mac(config_.status_channel, bytes.data(), bytes.size(), ShardMacKind::Status, s.utime);
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.status_published;
 }
 
-void Bridge::publish_mac(const std::string &channel, const void *payload, size_t size) {
+void Bridge::publish_mac(const std::string &channel, const void *payload, size_t size, ShardMacKind kind,
+                         int64_t utime) {
     if (config_.shard_count < 2) return;
     // Without a key only results get a receipt: a status names its process itself.
-    if (config_.shard_key.empty() && channel != config_.flow_channel) return;
-    const std::vector<uint8_t> m =
-        config_.shard_key.empty()
-            ? shard_receipt_message(config_.shard_index, config_.shard_count, instance_id_, channel, payload, size)
-            : shard_mac_message(config_.shard_key, config_.shard_index, config_.shard_count, channel, payload, size);
-    if (m.empty() || lcm_publish(lcm_, config_.shard_auth_channel.c_str(), m.data(), static_cast<unsigned>(m.size())) != 0)
+    if (config_.shard_key.empty() && kind != ShardMacKind::Result) return;
+    std::vector<uint8_t> m;
+    if (config_.shard_key.empty()) {
+        m = shard_receipt_message(config_.shard_index, config_.shard_count, instance_id_, channel, payload, size);
+    } else {
+        std::vector<uint64_t> echoes(static_cast<size_t>(config_.shard_count), 0);
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            for (size_t k = 0; k < echoes_.size(); ++k) echoes[k] = echoes_[k].tag;
+        }
+        m = shard_mac_message(config_.shard_key, kind, config_.shard_index, config_.shard_count, utime, instance_id_,
+                              echoes, channel, payload, size);
+    }
+    if (m.empty() || lcm_publish(lcm_, config_.shard_auth_channel.c_str(), m.data(), static_cast<unsigned>(m.size())) != 0) {
         log("publishing the MAC of a message on %s failed", channel.c_str());
+        return;
+    }
+    if (config_.shard_key.empty() || kind != ShardMacKind::Status || shard_timeout_ <= 0) return;
+    // The tag the other shards echo: a status of theirs that holds it was sent after this one.
+    uint64_t tag = 0;
+    for (size_t i = m.size() - 32; i < m.size() - 24; ++i) tag = tag << 8 | m[i];
+    const double now = monotonic_seconds();
+    std::lock_guard<std::mutex> lock(mutex_);
+    own_tags_.emplace_back(tag, now);
+    while (!own_tags_.empty() && (now - own_tags_.front().second > shard_timeout_ || own_tags_.size() > 4096))
+        own_tags_.pop_front();
 }
+
 }  // namespace lidarflow::bridge

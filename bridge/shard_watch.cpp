@@ -14,13 +14,12 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     StatusMessage status;
     if (!decode_status(rbuf->data, rbuf->data_size, status).empty()) return;  // not ours to judge
     const lidarflow_status_t &f = status.fields;
-    // Computed before the lock: a MAC costs a pass over the message.
+    // Computed before the lock: a digest costs a pass over the message.
     const bool ours = f.shard_count == b->config_.shard_count && f.shard_index >= 0 && f.shard_index < f.shard_count &&
                       f.shard_index != b->config_.shard_index;
-    std::vector<uint8_t> mac;
-    if (ours && !b->config_.shard_key.empty())
-        mac = shard_mac_message(b->config_.shard_key, f.shard_index, f.shard_count, b->config_.status_channel,
-                                rbuf->data, rbuf->data_size);
+    Digest digest{};
+    const bool keyed = !b->config_.shard_key.empty();
+    if (ours && keyed && !message_digest(rbuf->data, rbuf->data_size, &digest)) return;
     std::lock_guard<std::mutex> lock(b->mutex_);
     if (f.shard_count != b->config_.shard_count || f.shard_index < 0 || f.shard_index >= f.shard_count) {
         if (!b->warned_foreign_split_)
@@ -39,26 +38,24 @@ void Bridge::on_status(const lcm_recv_buf_t *rbuf, const char *, void *self) {
                f.shard_index, f.shard_count, static_cast<uint64_t>(f.instance_id));
         return;
     }
-    if (b->config_.shard_key.empty()) {
-        b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
+    const double now = monotonic_seconds();
+    if (!keyed) {
+        b->apply_status_locked(f.shard_index, f.utime, f.instance_id, now);
         return;
     }
-    const double now = monotonic_seconds();
-    for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
-        if (it->mac == mac) {
-            b->received_macs_.erase(it);
-            b->apply_status_locked(f.shard_index, f.utime, f.instance_id);
-            return;
-        }
-    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.instance_id, std::move(mac), now});
+    // Its MAC, when valid, already did what the status asks; here it is only told apart from a
+    // status that no MAC vouches for (counted when none comes).
+    std::vector<uint8_t> d(digest.begin(), digest.end());
+    if (b->vouched_locked(d, f.shard_index, true)) return;
+    b->awaiting_mac_.push_back({true, f.shard_index, f.utime, f.instance_id, std::move(d), now});
     b->expire_macs_locked(now);
 }
 
-// A status that counts (authenticated with --shard-key): the shard is alive, if it comes from
+// A status that counts (authenticated and fresh with --shard-key): the shard is alive, if it comes from
 // the process holding the index. The first process heard holds it; another one takes it over
 // only once the holder is silent for the timeout (a restart), and never one heard claiming the
 // index while the holder lived (a second process or a forger: it must not keep the index alive).
-void Bridge::apply_status_locked(int32_t shard, int64_t utime, int64_t instance) {
+void Bridge::apply_status_locked(int32_t shard, int64_t utime, int64_t instance, double heard_at) {
     ShardWatch &w = shards_[static_cast<size_t>(shard)];
     const double now = monotonic_seconds();
     if (instance != w.holder) {
@@ -91,7 +88,7 @@ void Bridge::apply_status_locked(int32_t shard, int64_t utime, int64_t instance)
         w.have_status_utime = true;
         w.status_utime = utime;
     }
-    w.last_heartbeat = now;
+    w.last_heartbeat = std::max(w.last_heartbeat, heard_at);
     if (w.dead) {
         // A restarted shard starts from nothing: what it had is already counted.
         w.dead = false;
@@ -116,23 +113,43 @@ void Bridge::on_flow(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     if (owner < 0) return;  // settles nothing
     lock.unlock();
     const bool keyed = !b->config_.shard_key.empty();
-    std::vector<uint8_t> mac =
-        keyed ? shard_mac_message(b->config_.shard_key, owner, b->config_.shard_count, b->config_.flow_channel,
-                                  rbuf->data, rbuf->data_size)
-              : shard_receipt_message(owner, b->config_.shard_count, 0, b->config_.flow_channel, rbuf->data,
-                                      rbuf->data_size);
+    std::vector<uint8_t> mac;
+    if (keyed) {
+        // A valid MAC settles the pair alone; the result is only told apart from one that no MAC
+        // of its owner vouches for (counted when none comes).
+        Digest digest;
+        if (!message_digest(rbuf->data, rbuf->data_size, &digest)) return;
+        mac.assign(digest.begin(), digest.end());
+    } else {
+        mac = shard_receipt_message(owner, b->config_.shard_count, 0, b->config_.flow_channel, rbuf->data,
+                                    rbuf->data_size);
+    }
     lock.lock();
     const double now = monotonic_seconds();
-    for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
-        if (it->mac == mac) {
-            const int64_t instance = it->instance;
-            b->received_macs_.erase(it);
-            if (keyed) b->apply_flow_locked(owner, utime);
-            else b->apply_receipt_locked(owner, utime, instance);
-            return;
-        }
+    if (keyed) {
+        if (b->vouched_locked(mac, owner, false)) return;
+    } else {
+        for (auto it = b->received_macs_.begin(); it != b->received_macs_.end(); ++it)
+            if (it->mac == mac) {
+                const int64_t instance = it->instance;
+                b->received_macs_.erase(it);
+                b->apply_receipt_locked(owner, utime, instance);
+                return;
+            }
+    }
     b->awaiting_mac_.push_back({false, owner, utime, 0, std::move(mac), now});
     b->expire_macs_locked(now);
+}
+
+// --shard-key: whether a valid MAC of `shard` already vouched for the message of this digest
+// (forgotten then: one MAC vouches for one message).
+bool Bridge::vouched_locked(const std::vector<uint8_t> &digest, int32_t shard, bool status) {
+    for (auto it = received_macs_.begin(); it != received_macs_.end(); ++it)
+        if (it->mac == digest && it->instance == shard && it->status == status) {
+            received_macs_.erase(it);
+            return true;
+        }
+    return false;
 }
 
 // A result with its receipt (no key): it settles the pair only when the process that sent it
@@ -158,34 +175,83 @@ void Bridge::apply_flow_locked(int32_t shard, int64_t utime) {
 void Bridge::on_mac(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     auto *b = static_cast<Bridge *>(self);
     const auto *d = static_cast<const uint8_t *>(rbuf->data);
-    // A MAC with a key, a receipt without: the other kind is no proof here.
-    const bool keyed = !b->config_.shard_key.empty();
-    if (rbuf->data_size != 48 || std::memcmp(d, keyed ? "LFMAC\x01\0\0" : "LFRCP\x01\0\0", 8) != 0) return;
+    if (!b->config_.shard_key.empty()) {
+        ShardMac m;
+        const std::string why = check_shard_mac(b->config_.shard_key, b->config_.shard_count, b->config_.status_channel,
+                                                b->config_.flow_channel, rbuf->data, rbuf->data_size, &m);
+        std::lock_guard<std::mutex> lock(b->mutex_);
+        if (why.rfind("version 1", 0) == 0 && !b->warned_old_mac_) {
+            b->warned_old_mac_ = true;
+            b->log("a MAC message of %s on %s: not taken, every shard needs this version", why.c_str(),
+                   b->config_.shard_auth_channel.c_str());
+        }
+        // Its own, looped back, or another process's on this index: no claim the watch judges.
+        if (why.empty() && m.index != b->config_.shard_index) b->on_keyed_mac_locked(m, monotonic_seconds());
+        return;
+    }
+    // Without a key, a receipt (a MAC is no proof here).
+    if (rbuf->data_size != 48 || std::memcmp(d, "LFRCP\x01\0\0", 8) != 0) return;
     std::vector<uint8_t> mac(d, d + rbuf->data_size);
     int64_t instance = 0;
-    if (!keyed) {
-        uint64_t u = 0;
-        for (int i = 0; i < 8; ++i) u = u << 8 | mac[16 + i];
-        instance = static_cast<int64_t>(u);
-        std::fill(mac.begin() + 16, mac.begin() + 24, 0);  // matched without it, then checked
-    }
+    uint64_t u = 0;
+    for (int i = 0; i < 8; ++i) u = u << 8 | mac[16 + i];
+    instance = static_cast<int64_t>(u);
+    std::fill(mac.begin() + 16, mac.begin() + 24, 0);  // matched without it, then checked
     std::lock_guard<std::mutex> lock(b->mutex_);
     const double now = monotonic_seconds();
     for (auto it = b->awaiting_mac_.begin(); it != b->awaiting_mac_.end(); ++it)
         if (it->mac == mac) {
             const AwaitingMac m = std::move(*it);
             b->awaiting_mac_.erase(it);
-            if (m.status) b->apply_status_locked(m.shard, m.utime, m.instance);
-            else if (keyed) b->apply_flow_locked(m.shard, m.utime);
-            else b->apply_receipt_locked(m.shard, m.utime, instance);
+            b->apply_receipt_locked(m.shard, m.utime, instance);
             return;
         }
-    b->received_macs_.push_back({std::move(mac), instance, now});
+    b->received_macs_.push_back({std::move(mac), instance, false, now});
     b->expire_macs_locked(now);
 }
 
-// Messages whose MAC did not come within a second (or a wrong one did) are refused; MACs
-// without their message are forgotten. Both lists are bounded.
+// A valid MAC of another shard (--shard-key). It carries what the watch needs, so it acts
+// whether its message came, comes later or never: a result's settles that shard's pair; a
+// status's is a heartbeat when fresh, i.e. when it echoes one of this shard's own status tags
+// of the last timeout, which proves it was sent after that status (a recording cannot hold
+// tags sent after it was made). The shard then counts as alive as of that status.
+void Bridge::on_keyed_mac_locked(const ShardMac &m, double now) {
+    const bool status = m.kind == ShardMacKind::Status;
+    Echo &e = echoes_[static_cast<size_t>(m.index)];
+    if (status && (!e.have || m.utime > e.utime)) e = {true, m.utime, m.tag};  // answered in this one's MACs
+    std::vector<uint8_t> digest(m.digest.begin(), m.digest.end());
+    bool message_seen = false;
+    for (auto it = awaiting_mac_.begin(); it != awaiting_mac_.end(); ++it)
+        if (it->mac == digest && it->shard == m.index && it->status == status) {
+            awaiting_mac_.erase(it);
+            message_seen = true;
+            break;
+        }
+    if (!message_seen) received_macs_.push_back({std::move(digest), m.index, status, now});
+    expire_macs_locked(now);
+    if (shard_timeout_ <= 0) return;  // no watch: echoes only
+    if (!status) {
+        apply_flow_locked(m.index, m.utime);
+        return;
+    }
+    const uint64_t echo = m.echoes[static_cast<size_t>(config_.shard_index)];
+    for (const auto &[tag, published] : own_tags_)
+        if (tag == echo && echo != 0) {
+            apply_status_locked(m.index, m.utime, m.instance, published);
+            return;
+        }
+    // No answer to a recent status of this one: a recording, or a shard that has not heard this
+    // one yet (counted only once every live shard has had a timeout to hear it).
+    if (echo == 0 || now - start_seconds_ <= shard_timeout_) return;
+    ++counters_.shard_messages_refused;
+    log("a status of shard %d/%d (utime %" PRId64 ") with a valid MAC that answers no status of this shard of the "
+        "last %.1f s: a recording played again, ignored",
+        m.index, config_.shard_count, m.utime, shard_timeout_);
+}
+
+// Messages whose MAC (or receipt) did not come within a second (or a wrong one did) are refused;
+// MACs without their message are forgotten. Both lists are bounded: under a flood, the oldest
+// waiting messages are counted at once (with a key that decides nothing: a valid MAC acts alone).
 void Bridge::expire_macs_locked(double now) {
     constexpr double kMacWaitS = 1.0;
     constexpr size_t kMaxWaiting = 1024;

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "frame_pairing.hpp"
+#include "shard_auth.hpp"
 #include "lidarflow/lidarflow.h"
 #include "wire.hpp"
 
@@ -72,8 +73,10 @@ struct BridgeConfig {
     double shard_timeout_s = -1;
     // --shard-key: a key shared by the shards (raw bytes, >= 16). Each shard then follows every
     // status_t and scene_flow_t it publishes with a MAC message (shard_mac_message) on
-    // shard_auth_channel, and its watch takes another shard's status, and a result as settling
-    // a pair, only with a valid MAC from the shard that owns it. "" = no key: each result is
+    // shard_auth_channel, and its watch takes another shard's status only from a valid MAC that
+    // echoes one of its own status tags of the last timeout (so a recording revives no one), and
+    // a result as settling a pair only with a valid MAC from the shard that owns it; a valid MAC
+    // acts alone, so messages without one never displace it. "" = no key: each result is
     // followed by a receipt naming the process (shard_receipt_message) instead, and the watch
     // tells processes apart by status_t.instance_id but trusts anyone on the bus who copies
     // them (see docs/LCM.md).
@@ -233,29 +236,46 @@ private:
         bool have_status_utime = false;  // --shard-key: the latest authenticated status's utime
         int64_t status_utime = 0;
     };
-    // Messages waiting for their MAC (--shard-key) or receipt (results without a key), and
-    // MACs and receipts waiting for their message.
+    // Messages waiting for their receipt (results without a key), and receipts waiting for their
+    // message. With --shard-key a valid MAC acts alone (it carries what the watch needs), so
+    // these lists only count what no MAC vouched for: messages without one yet (digest), and the
+    // digests valid MACs vouched for; unauthenticated traffic can fill them, never displace a MAC.
     struct AwaitingMac {
         bool status;                  // else a result
         int32_t shard;
         int64_t utime;                // status_t.utime, or the result's t1 utime
         int64_t instance;             // status_t.instance_id
-        std::vector<uint8_t> mac;     // the expected MAC message, or receipt with instance 0
+        std::vector<uint8_t> mac;     // the expected receipt with instance 0; keyed: the digest
         double arrival;
     };
     std::deque<AwaitingMac> awaiting_mac_;
     struct ReceivedMac {
-        std::vector<uint8_t> mac;     // a receipt's with its instance set to 0
-        int64_t instance;             // a receipt's sender; 0 for a MAC
+        std::vector<uint8_t> mac;     // a receipt's with its instance set to 0; keyed: the digest
+        int64_t instance;             // a receipt's sender; keyed: the MAC's shard
+        bool status;                  // keyed: a status's MAC, else a result's
         double arrival;
     };
     std::deque<ReceivedMac> received_macs_;
+    // --shard-key: per shard, the tag of the newest status MAC heard from it (echoed in this
+    // one's MACs), and this one's own status tags of the last shard timeout with their time.
+    struct Echo {
+        bool have = false;
+        int64_t utime = 0;
+        uint64_t tag = 0;
+    };
+    std::vector<Echo> echoes_;
+    std::deque<std::pair<uint64_t, double>> own_tags_;
+    bool warned_old_mac_ = false;
     static void on_mac(const lcm_recv_buf_t *rbuf, const char *channel, void *self);
-    void apply_status_locked(int32_t shard, int64_t utime, int64_t instance);
+    void on_keyed_mac_locked(const ShardMac &m, double now);
+    bool vouched_locked(const std::vector<uint8_t> &digest, int32_t shard, bool status);
+    // heard_at: when the status proves its shard alive (keyed: when this one published the status
+    // it answers; else its arrival).
+    void apply_status_locked(int32_t shard, int64_t utime, int64_t instance, double heard_at);
     void apply_flow_locked(int32_t shard, int64_t utime);
     void apply_receipt_locked(int32_t shard, int64_t utime, int64_t instance);
     void expire_macs_locked(double now);
-    void publish_mac(const std::string &channel, const void *payload, size_t size);
+    void publish_mac(const std::string &channel, const void *payload, size_t size, ShardMacKind kind, int64_t utime);
     double shard_timeout_ = 0;
     std::vector<ShardWatch> shards_;
     bool watch_have_prev_ = false;    // the previous decodable frame, to know which pairs exist
@@ -287,20 +307,5 @@ private:
 
 // Monotonic clock [s].
 double monotonic_seconds();
-
-// The MAC message that follows a shard's `payload` on `channel` with --shard-key: 8 bytes
-// "LFMAC\x01\0\0", shard index and count (int32, big-endian), and HMAC-SHA256(key, "lidarflow
-// shard mac v1\0" index count channel "\0" payload) (32 bytes). Empty when libcrypto fails.
-std::vector<uint8_t> shard_mac_message(const std::string &key, int32_t index, int32_t count,
-                                       const std::string &channel, const void *payload, size_t size);
-// The receipt that follows a shard's result on `channel` without --shard-key: 8 bytes
-// "LFRCP\x01\0\0", shard index and count (int32, big-endian), the publishing process's
-// instance_id (int64, big-endian), and the first 24 bytes of SHA-256(channel "\0" payload).
-// Anyone can make one: it names the process, it does not authenticate it. Empty when libcrypto
-// fails.
-std::vector<uint8_t> shard_receipt_message(int32_t index, int32_t count, int64_t instance, const std::string &channel,
-                                           const void *payload, size_t size);
-// Reads a --shard-key file into *key; "" or what is wrong (missing, shorter than 16 bytes).
-std::string read_shard_key(const std::string &path, std::string *key);
 
 }  // namespace lidarflow::bridge

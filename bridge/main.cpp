@@ -61,7 +61,8 @@ const char *kUsage =
     "                           and its pairs counted as lost (default 3 status periods; 0 = off)\n"
     "  --shard-key FILE         with --shard: a key shared by the shards (>= 16 bytes, e.g. `openssl rand\n"
     "                           -hex 32`): statuses and results carry an HMAC-SHA256 (on STATUS_CHANNEL_MAC),\n"
-    "                           and the shard watch ignores (and counts) those without a valid one\n"
+    "                           and the shard watch ignores (and counts) those without a valid one, and\n"
+    "                           statuses that answer none of its own recent ones (a recording played again)\n"
     "  --status-period S        status every S seconds (default 1; 0 = only at exit)\n"
     "  --verbose                a line per published result, and the library's info messages\n"
     "  --quiet                  no --replay progress lines and no library messages (errors and the\n"
@@ -121,7 +122,9 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
         std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range not "
                              "computed, %s\n",
                      (long long)frames.first, (long long)frames.last, (long long)r.stereo_before_range,
-                     r.stopped_after_range ? "stopped at the frame after it" : "the log ended within it");
+                     r.stopped_after_range ? "stopped at the frame after it"
+                                           : printf_string("the log ended after %lld stereo frame(s)",
+                                                           (long long)r.stereo_in_log).c_str());
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 

@@ -303,6 +303,16 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                 }
             }
         }
+        report->stereo_in_log = stereo_index + 1;
+        // A range past the log's end: the source shrank (or the caller miscounted); either way
+        // the range's missing frames are lost, and a caller must hear of it.
+        if (error.empty() && !interrupted && frames.last != INT64_MAX && !report->stopped_after_range && stereo_index < frames.last)
+            report->lost.push_back(printf_string(
+                "frames %" PRId64 ":%" PRId64 ": the log has only %" PRId64 " stereo frame(s), %s", frames.first,
+                frames.last, stereo_index + 1,
+                stereo_index < frames.first ? "none of the range"
+                                            : printf_string("frames %" PRId64 "..%" PRId64 " missing", stereo_index + 1,
+                                                            frames.last).c_str()));
         // Interrupted: the stereo frames not handed over, counted without reading their data.
         if (interrupted)
             report->stereo_not_replayed +=

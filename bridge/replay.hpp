@@ -36,6 +36,7 @@ struct ReplayReport {
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
     int64_t stereo_before_range = 0;  // stereo frames before ReplayFrames::first, not handed over
     bool stopped_after_range = false; // a stereo frame after ReplayFrames::last ended the replay
+    int64_t stereo_in_log = 0;        // stereo frames read (all of the log's unless stopped after the range)
     // One line per stereo frame that did not reach the estimator, frames missing from the log
     // (gaps in frame_number), and places where the log was corrupt (bytes skipped to the next
     // sync word, reading stopped: frames there are unaccounted for); empty when every frame was

@@ -58,6 +58,18 @@ grep -q "; 2 results," "$tmp/range.err" || fail "--frames 3:7: not 2 results"
 grep -q "3 stereo frame(s) before the range" "$tmp/range.err" || fail "--frames 3:7: frames before not counted"
 "$LIDARFLOW_LOG_CHECK" edit "$tmp/out.log" "$tmp/out_tail.log" --drop LIDARFLOW_FLOW:0 --drop LIDARFLOW_FLOW:1
 "$LIDARFLOW_LOG_CHECK" compare "$tmp/range.log" "$tmp/out_tail.log" || fail "--frames 3:7: not the whole log's results"
+# A range past the log's end (8 frames: 0..7), e.g. a source that shrank since it was counted:
+# exit 3 and a LOST line naming the range and the log's frame count, never exit 0.
+for range in 3:9 10:12; do
+    set +e
+    "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/x.log" --frames "$range" "${opts[@]}" 2>"$tmp/past.err"
+    rc=$?
+    set -e
+    [ "$rc" = 3 ] || { cat "$tmp/past.err"; fail "--frames $range past the log's 8 frames exited $rc, expected 3"; }
+    grep -q "LOST: frames $range: the log has only 8 stereo frame(s)" "$tmp/past.err" || { cat "$tmp/past.err"; fail "--frames $range: no LOST line with the log's frame count"; }
+    grep -q "the log ended after 8 stereo frame(s)" "$tmp/past.err" || fail "--frames $range: the summary does not say how many frames the log had"
+    [ "$range" != 3:9 ] || grep -q "frames 8..9 missing" "$tmp/past.err" || fail "--frames 3:9: the missing frames not named"
+done
 for bad in 3:3 5:2 -1:4 3: x; do
     "$LIDARFLOW_BRIDGE" --replay "$tmp/in.log" --out "$tmp/x.log" --frames "$bad" 2>/dev/null && fail "--frames $bad accepted"
     [ $? = 2 ] || fail "--frames $bad: not a usage error"

@@ -548,9 +548,9 @@ StatusMessage own_final_status(Rig &rig) {
 }
 
 // A status of shard k/n with the given utime and uptime, followed by its MAC message under
-// `key` when one is given ("" = none).
+// `key` when one is given ("" = none), echoing `echo0` as shard 0's tag.
 std::vector<uint8_t> keyed_status(Rig &rig, int32_t k, int32_t n, int64_t utime, double uptime, const std::string &key,
-                                  int64_t instance = 0) {
+                                  int64_t instance = 0, uint64_t echo0 = 0, std::vector<uint8_t> *mac_out = nullptr) {
     lidarflow_status_t st;
     std::memset(&st, 0, sizeof st);
     st.utime = utime;
@@ -564,11 +564,26 @@ std::vector<uint8_t> keyed_status(Rig &rig, int32_t k, int32_t n, int64_t utime,
     assert_int_equal(lidarflow_status_t_encode(b.data(), 0, (int)b.size(), &st), (int)b.size());
     assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS", b.data(), (unsigned)b.size()), 0);
     if (!key.empty()) {
-        const std::vector<uint8_t> mac = shard_mac_message(key, k, n, "LIDARFLOW_STATUS", b.data(), b.size());
-        assert_int_equal(mac.size(), 48);
+        std::vector<uint64_t> echoes(static_cast<size_t>(n), 0);
+        echoes[0] = echo0;
+        const std::vector<uint8_t> mac = shard_mac_message(key, ShardMacKind::Status, k, n, utime, st.instance_id,
+                                                           echoes, "LIDARFLOW_STATUS", b.data(), b.size());
+        assert_int_equal(mac.size(), 96 + 8 * n);
+        if (mac_out) *mac_out = mac;
         assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
     }
     return b;
+}
+
+// The tag of the newest valid status MAC of `shard` among `macs` (0: none).
+uint64_t latest_status_tag(const std::vector<std::vector<uint8_t>> &macs, const std::string &key, int32_t shard) {
+    for (auto it = macs.rbegin(); it != macs.rend(); ++it) {
+        ShardMac m;
+        if (check_shard_mac(key, 3, "LIDARFLOW_STATUS", "LIDARFLOW_FLOW", it->data(), it->size(), &m).empty() &&
+            m.kind == ShardMacKind::Status && m.index == shard)
+            return m.tag;
+    }
+    return 0;
 }
 
 // A result naming pair t1 `utime` (only utime is read), with the MAC of shard `mac_shard`
@@ -584,7 +599,9 @@ void keyed_flow(Rig &rig, int64_t utime, const std::string &key, int32_t mac_sha
     assert_int_equal(lidarflow_scene_flow_t_encode(b.data(), 0, (int)b.size(), &flow), (int)b.size());
     assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_FLOW", b.data(), (unsigned)b.size()), 0);
     if (!key.empty()) {
-        const std::vector<uint8_t> mac = shard_mac_message(key, mac_shard, 3, "LIDARFLOW_FLOW", b.data(), b.size());
+        const std::vector<uint8_t> mac = shard_mac_message(key, ShardMacKind::Result, mac_shard, 3, utime,
+                                                           shard_instance(mac_shard), {}, "LIDARFLOW_FLOW", b.data(),
+                                                           b.size());
         assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
     }
 }
@@ -606,11 +623,13 @@ void test_keyed_shards(void **) {
     std::vector<std::vector<uint8_t>> macs;
     lcm_subscription_t *mac_sub = lcm_subscribe(rig.lcm, "LIDARFLOW_STATUS_MAC", &Rig::record, &macs);
     int64_t clock = 1000000;
-    std::vector<uint8_t> last2;
+    std::vector<uint8_t> last2, last2_mac;
+    // The simulated shards answer this bridge's newest status, as live shards do.
     auto heartbeats = [&](bool shard2_alive) {
         clock += 1000;
-        keyed_status(rig, 1, 3, clock, 1.0, key);
-        if (shard2_alive) last2 = keyed_status(rig, 2, 3, clock, 1.0, key);
+        const uint64_t echo = latest_status_tag(macs, key, 0);
+        keyed_status(rig, 1, 3, clock, 1.0, key, 0, echo);
+        if (shard2_alive) last2 = keyed_status(rig, 2, 3, clock, 1.0, key, 0, echo, &last2_mac);
     };
     for (int64_t n = 0; n <= 5; ++n) {  // pairs ending at 1 (shard 1), 2 (2), 3 (0), 4 (1), 5 (2)
         heartbeats(true);
@@ -625,10 +644,9 @@ void test_keyed_shards(void **) {
     while (monotonic_seconds() < end) {
         heartbeats(false);
         keyed_status(rig, 2, 3, clock, 1.0, "");
-        keyed_status(rig, 2, 3, clock, 1.0, "another key, 16+ bytes");
+        keyed_status(rig, 2, 3, clock, 1.0, "another key, 16+ bytes", 0, latest_status_tag(macs, key, 0));
         assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS", last2.data(), (unsigned)last2.size()), 0);
-        const std::vector<uint8_t> mac = shard_mac_message(key, 2, 3, "LIDARFLOW_STATUS", last2.data(), last2.size());
-        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", mac.data(), (unsigned)mac.size()), 0);
+        assert_int_equal(lcm_publish(rig.lcm, "LIDARFLOW_STATUS_MAC", last2_mac.data(), (unsigned)last2_mac.size()), 0);
         for (int i = 0; i < 5; ++i) rig.bridge->run_once(10);
     }
     const double wait_end = monotonic_seconds() + 1.2;  // the last forgeries' MAC wait runs out
@@ -649,13 +667,177 @@ void test_keyed_shards(void **) {
     int own = 0;
     for (const auto &b : rig.statuses) {
         StatusMessage st;
-        if (!decode_status(b.data(), b.size(), st).empty() || st.fields.shard_index != 0) continue;
-        const std::vector<uint8_t> want = shard_mac_message(key, 0, 3, "LIDARFLOW_STATUS", b.data(), b.size());
-        own += std::find(macs.begin(), macs.end(), want) != macs.end();
+        Digest digest;
+        if (!decode_status(b.data(), b.size(), st).empty() || st.fields.shard_index != 0 ||
+            !message_digest(b.data(), b.size(), &digest))
+            continue;
+        own += std::any_of(macs.begin(), macs.end(), [&](const std::vector<uint8_t> &mac) {
+            ShardMac m;
+            return check_shard_mac(key, 3, "LIDARFLOW_STATUS", "LIDARFLOW_FLOW", mac.data(), mac.size(), &m).empty() &&
+                   m.index == 0 && m.kind == ShardMacKind::Status && m.digest == digest &&
+                   m.utime == st.fields.utime && m.instance == rig.bridge->instance_id();
+        });
     }
     assert_true(own >= 5);
     const StatusMessage last = own_final_status(rig);
     assert_int_equal(last.fields.shard_messages_refused, rig.bridge->counters().shard_messages_refused);
+}
+
+// A keyed bridge k/3 with a heartbeat every `period_s`.
+BridgeConfig keyed_config(int32_t k, const std::string &key, double period_s, double timeout_s) {
+    BridgeConfig config;
+    config.shard_index = k;
+    config.shard_count = 3;
+    config.queue_capacity = 2;
+    config.status_period_s = period_s;
+    config.shard_timeout_s = timeout_s;
+    config.shard_key = key;
+    config.options = kOptions;
+    return config;
+}
+
+// Another real bridge on a test's LCM bus (beside a Rig's), its log thrown away.
+struct Peer {
+    FILE *log = std::fopen("/dev/null", "w");
+    std::unique_ptr<Bridge> bridge;
+    Peer(lcm_t *lcm, BridgeConfig config) {
+        assert_non_null(log);
+        config.log = log;
+        std::string err;
+        bridge = Bridge::create(config, lcm, &err);
+        if (!bridge) fail_msg("Bridge::create: %s", err.c_str());
+    }
+    ~Peer() {
+        bridge.reset();
+        std::fclose(log);
+    }
+};
+
+// Messages on the status and MAC channels, with the shard index they claim (status_t's, or the
+// MAC's header, bytes 8..11 in every version) and when they came.
+struct ShardTape {
+    struct Message {
+        std::string channel;
+        std::vector<uint8_t> bytes;
+        int32_t shard;
+        double at;
+    };
+    std::vector<Message> messages;
+    static void record(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
+        const auto *d = static_cast<const uint8_t *>(rbuf->data);
+        int32_t shard = -1;
+        if (std::strcmp(channel, "LIDARFLOW_STATUS") == 0) {
+            StatusMessage st;
+            if (decode_status(rbuf->data, rbuf->data_size, st).empty()) shard = st.fields.shard_index;
+        } else if (rbuf->data_size >= 12) {
+            shard = static_cast<int32_t>(static_cast<uint32_t>(d[8]) << 24 | static_cast<uint32_t>(d[9]) << 16 |
+                                         static_cast<uint32_t>(d[10]) << 8 | d[11]);
+        }
+        static_cast<ShardTape *>(user)->messages.push_back(
+            {channel, std::vector<uint8_t>(d, d + rbuf->data_size), shard, monotonic_seconds()});
+    }
+    void subscribe(lcm_t *lcm) {
+        subs[0] = lcm_subscribe(lcm, "LIDARFLOW_STATUS", &ShardTape::record, this);
+        subs[1] = lcm_subscribe(lcm, "LIDARFLOW_STATUS_MAC", &ShardTape::record, this);
+        this->lcm = lcm;
+    }
+    void unsubscribe() {
+        for (lcm_subscription_t *s : subs)
+            if (s) lcm_unsubscribe(lcm, s);
+        subs[0] = subs[1] = nullptr;
+    }
+    lcm_t *lcm = nullptr;
+    lcm_subscription_t *subs[2] = {nullptr, nullptr};
+};
+
+// --shard-key: a recording of a keyed shard's statuses and MACs, made while it lived, played to a
+// watcher started after its death, does not keep it alive: the watcher declares it dead on time
+// (and counts the recording as refused), while the live keyed shard beside it stays alive.
+void test_keyed_recording_revives_no_shard(void **) {
+    const std::string key = "0123456789abcdef-shared";
+    const double period = 0.05, timeout = 0.4;
+    ShardTape tape;
+    {
+        Rig rig(keyed_config(0, key, period, timeout), true);
+        Peer s1(rig.lcm, keyed_config(1, key, period, timeout)), s2(rig.lcm, keyed_config(2, key, period, timeout));
+        tape.subscribe(rig.lcm);
+        const double end = monotonic_seconds() + 1.5;
+        while (monotonic_seconds() < end)
+            for (Bridge *b : {rig.bridge.get(), s1.bridge.get(), s2.bridge.get()}) b->run_once(2);
+        tape.unsubscribe();
+        assert_int_equal(rig.bridge->counters().shards_dead, 0);  // keyed live shards stay alive
+    }
+    std::vector<ShardTape::Message> recording;
+    for (const auto &m : tape.messages)
+        if (m.shard == 2) recording.push_back(m);
+    assert_true(recording.size() >= 20);  // statuses and their MACs
+    // Shard 2 is gone. A new watcher and a live shard 1; the recording played at its own pace.
+    Rig rig(keyed_config(0, key, period, timeout), true);
+    Peer s1(rig.lcm, keyed_config(1, key, period, timeout));
+    const double start = monotonic_seconds(), recorded_start = recording.front().at;
+    for (const auto &m : recording) {
+        while (monotonic_seconds() - start < m.at - recorded_start)
+            for (Bridge *b : {rig.bridge.get(), s1.bridge.get()}) b->run_once(1);
+        assert_int_equal(lcm_publish(rig.lcm, m.channel.c_str(), m.bytes.data(), (unsigned)m.bytes.size()), 0);
+    }
+    for (Bridge *b : {rig.bridge.get(), s1.bridge.get()}) b->run_once(1);
+    const Counters c = rig.bridge->counters();
+    assert_int_equal(c.shards_dead, 1);  // shard 2; shard 1 lives
+    assert_true(c.shard_messages_refused >= 5);
+    assert_int_equal(c.shard_index_conflicts, 0);
+}
+
+// --shard-key: a flood of key-less statuses between each genuine status and its MAC (more than
+// the 1,024 messages that may wait for a MAC) displaces nothing: both live keyed shards stay
+// alive. The shards run on bus A, the watcher on bus B; the test relays their statuses and MACs
+// (with the flood) to B, and the watcher's back to A.
+void test_keyed_flood_displaces_no_status(void **) {
+    const std::string key = "0123456789abcdef-shared";
+    // 11,000 forged statuses a second: few enough for a sanitizer build to keep up with.
+    const double period = 0.2, timeout = 1.2;
+    lcm_t *a = lcm_create("memq://");
+    assert_non_null(a);
+    {
+        Rig rig(keyed_config(0, key, period, timeout), true);
+        Peer s1(a, keyed_config(1, key, period, timeout)), s2(a, keyed_config(2, key, period, timeout));
+        ShardTape from_a, from_b;
+        from_a.subscribe(a);
+        from_b.subscribe(rig.lcm);
+        int64_t forged_utime = 1;
+        int64_t forged = 0;
+        const double end = monotonic_seconds() + 2.5;
+        while (monotonic_seconds() < end) {
+            for (Bridge *b : {rig.bridge.get(), s1.bridge.get(), s2.bridge.get()}) b->run_once(1);
+            for (const auto &m : from_a.messages) {
+                if (m.shard != 1 && m.shard != 2) continue;
+                assert_int_equal(lcm_publish(rig.lcm, m.channel.c_str(), m.bytes.data(), (unsigned)m.bytes.size()), 0);
+                if (m.channel != "LIDARFLOW_STATUS") continue;
+                for (int i = 0; i < 1100; ++i, ++forged) {
+                    lidarflow_status_t st;
+                    std::memset(&st, 0, sizeof st);
+                    st.utime = forged_utime++;
+                    st.shard_index = 1 + i % 2;
+                    st.shard_count = 3;
+                    st.instance_id = shard_instance(st.shard_index);
+                    char empty[] = "";
+                    st.last_error = empty;
+                    assert_int_equal(lidarflow_status_t_publish(rig.lcm, "LIDARFLOW_STATUS", &st), 0);
+                }
+            }
+            from_a.messages.clear();
+            for (const auto &m : from_b.messages)
+                if (m.shard == 0)
+                    assert_int_equal(lcm_publish(a, m.channel.c_str(), m.bytes.data(), (unsigned)m.bytes.size()), 0);
+            from_b.messages.clear();
+        }
+        from_a.unsubscribe();
+        from_b.unsubscribe();
+        const Counters c = rig.bridge->counters();
+        assert_true(forged >= 10 * 1100);
+        assert_int_equal(c.shards_dead, 0);
+        assert_true(c.shard_messages_refused >= forged / 2);
+    }
+    lcm_destroy(a);
 }
 
 // Without a key: statuses of one shard index from two processes (two instance_ids, one start
@@ -1312,6 +1494,8 @@ int main(void) {
         cmocka_unit_test(test_lidar_transform_change_within_pair),
         cmocka_unit_test(test_dead_shards),
         cmocka_unit_test(test_keyed_shards),
+        cmocka_unit_test(test_keyed_recording_revives_no_shard),
+        cmocka_unit_test(test_keyed_flood_displaces_no_status),
         cmocka_unit_test(test_shard_index_claimed_twice),
         cmocka_unit_test(test_forged_status_keeps_no_shard_alive),
         cmocka_unit_test(test_forged_result_settles_nothing),

@@ -142,7 +142,7 @@ void half_resolution_estimator(void **) {
     c.seed = 3;
     c.threads = 2;
     const synth::SynthScene s = synth::render(c);
-    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     EstimatorOptions o;
     o.processing_scale = 0.5;
     o.threads = 2;
@@ -197,7 +197,7 @@ void hidden_lidar_point_is_not_used(void **) {
     c.height = 96;
     c.seed = 3;
     const synth::SynthScene s = synth::render(c);
-    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     const int hx = 160, hy = 70;
     const float near = s.disp0_occ(hy, hx) > 0 ? s.disp0_occ(hy, hx) : 20.0f;
     in.lidar0.points.clear();

@@ -192,6 +192,7 @@ int run(int argc, char **argv) {
                     ego(2, 3), rotation_degrees(ego), r.ego.inliers, r.ego.candidates);
     else
         std::printf("ego       %s\n", pipeline::ego_state_text(r.ego_state));
+    std::printf("quality: %s\n", r.quality.summary().c_str());
     for (const std::string &w : written) std::printf("wrote     %s\n", w.c_str());
     std::printf("wrote     %s/viz/%s_{flow,disp0,disp1}.png\n", out.c_str(), id.c_str());
     if (args.has("points"))

@@ -252,6 +252,7 @@ int run_sequence(int argc, char **argv) {
     const long pairs = last - first;
     long computed = 0, skipped = 0, done = 0;
     std::set<long> failed;  // pairs (by their t0) lost to bad frames or estimator errors
+    quality::Tally quality;
     const Stopwatch clock;
     const auto progress = [&](long t0, const std::string &what) {
         ++done;
@@ -326,7 +327,9 @@ int run_sequence(int argc, char **argv) {
                     write_result_files(out, id, r->output(), formats);
                     const double s = pair_clock.seconds();
                     ++computed;
+                    quality.add(r->quality.flags);
                     std::string what = "in " + format_duration(s);
+                    if (!r->quality.ok()) what += ", quality: " + r->quality.summary();
                     if (static_cast<size_t>(k) < stamps.size()) {
                         char dt[48];
                         std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
@@ -345,6 +348,7 @@ int run_sequence(int argc, char **argv) {
                 "(%ld computed in %s)\n",
                 pairs, computed, skipped, failed.size(), total > 0 ? computed / total : 0.0, computed,
                 format_duration(total).c_str());
+    std::printf("sequence: quality: %s\n", quality.text().c_str());
     return failed.empty() ? 0 : kExitBadFrames;
 }
 

@@ -84,6 +84,11 @@ void check_frame(const FrameInput &f) {
         });
         require(m.size() == f.left0.size(), ErrorCode::SizeMismatch,
                 std::string("FrameInput: ") + names[i] + " differs in size from left0");
+        require(m.type() == f.left0.type(), ErrorCode::InvalidArgument, [&] {
+            return std::string("FrameInput: ") + names[i] + " has " + std::to_string(m.channels()) +
+                   " channel(s), left0 " + std::to_string(f.left0.channels()) +
+                   ": give the four images in one format (all gray or all colour)";
+        });
     }
     if (!camera_unknown(f.camera)) {
         const std::string e = camera_range_error(f.camera);

@@ -975,17 +975,34 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
             lidarflow_ego_motion_t em = ego_motion_message(ego, info.t1_us, info.t0_us, m.sequence);
             ego_bytes = encode_ego_motion(em);
         }
-        if (bytes.empty() || ego_bytes.empty()) {
-            err = bytes.empty() ? "encoding the scene flow failed" : "encoding the ego-motion failed";
+        uint32_t quality = 0;
+        const char *reason = "";
+        std::vector<uint8_t> quality_bytes;
+        if (lf_get_quality(estimator_, &quality, &reason) == LF_OK)
+            quality_bytes = encode_quality(info.t1_us, info.t0_us, m.sequence, quality, reason);
+        if (bytes.empty() || ego_bytes.empty() || quality_bytes.empty()) {
+            err = bytes.empty() ? "encoding the scene flow failed"
+                  : ego_bytes.empty() ? "encoding the ego-motion failed"
+                                      : "encoding the input quality failed";
         } else {
             std::lock_guard<std::mutex> lock(mutex_);
-            outbox_.push_back({std::move(bytes), std::move(ego_bytes), frame.received_seconds, info.total_seconds});
+            if (quality != 0)
+                log("result of frame %" PRId64 ": input quality: %s", m.utime, quality_summary(quality, reason).c_str());
+            outbox_.push_back({std::move(bytes), std::move(ego_bytes), std::move(quality_bytes), quality,
+                               frame.received_seconds, info.total_seconds});
             return;
         }
     }
     std::lock_guard<std::mutex> lock(mutex_);
     counters_.last_error = "result: " + err;
     log("result of frame %" PRId64 " not published: %s", m.utime, err.c_str());
+}
+
+std::string Counters::quality_text() const {
+    std::string s = std::to_string(quality_ok) + " ok";
+    for (int b = 0; b < 5; ++b)
+        if (quality_flagged[b]) s += ", " + std::to_string(quality_flagged[b]) + " " + lf_quality_name(1u << b);
+    return s;
 }
 
 void Bridge::flush_outbox() {
@@ -995,13 +1012,19 @@ void Bridge::flush_outbox() {
         out.swap(outbox_);
     }
     for (const Outgoing &o : out) {
-        // The ego-motion first: a consumer (and --replay, which counts results) that has the
-        // flow then has its ego-motion too.
+        // The ego-motion and the quality first: a consumer (and --replay, which counts results)
+        // that has the flow then has its ego-motion and quality too.
         if (lcm_publish(lcm_, config_.ego_channel.c_str(), o.ego_bytes.data(), static_cast<unsigned>(o.ego_bytes.size())) !=
             0) {
             std::lock_guard<std::mutex> lock(mutex_);
             counters_.last_error = "publishing on " + config_.ego_channel + " failed";
             log("publishing %zu bytes on %s failed", o.ego_bytes.size(), config_.ego_channel.c_str());
+        }
+        if (lcm_publish(lcm_, config_.quality_channel.c_str(), o.quality_bytes.data(),
+                        static_cast<unsigned>(o.quality_bytes.size())) != 0) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            counters_.last_error = "publishing on " + config_.quality_channel + " failed";
+            log("publishing %zu bytes on %s failed", o.quality_bytes.size(), config_.quality_channel.c_str());
         }
         const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
                                    static_cast<unsigned>(o.bytes.size()));
@@ -1014,6 +1037,8 @@ void Bridge::flush_outbox() {
             continue;
         }
         ++counters_.results_published;
+        if (o.quality_flags == 0) ++counters_.quality_ok;
+        for (int b = 0; b < 5; ++b) counters_.quality_flagged[b] += (o.quality_flags >> b) & 1u;
         const double n = static_cast<double>(counters_.results_published);
         latency_sum_ms_ += latency_ms;
         compute_sum_ms_ += 1000.0 * o.compute_seconds;

@@ -166,15 +166,19 @@ std::string blank_frame(const Input &in) {
 StereoMatches match_stereo_features(const cv::Mat1b &left, const cv::Mat1b &right, double to_full_resolution) {
     StereoMatches m;
     std::vector<cv::Point2f> corners;
-    cv::goodFeaturesToTrack(left, corners, 160, 0.01, 10, cv::noArray(), 5);
+    cv::goodFeaturesToTrack(left, corners, 100, 0.01, 12, cv::noArray(), 5);
     if (corners.size() < static_cast<size_t>(kMinMatches)) return m;
     std::vector<cv::Point2f> there, back;
     std::vector<uint8_t> ok_there, ok_back;
     std::vector<float> err;
-    const cv::Size win(13, 13);
+    const cv::Size win(11, 11);
     const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03);
-    cv::calcOpticalFlowPyrLK(left, right, corners, there, ok_there, err, win, 4, stop);
-    cv::calcOpticalFlowPyrLK(right, left, there, back, ok_back, err, win, 4, stop);
+    // Each pyramid built once for both directions.
+    std::vector<cv::Mat> pyr_left, pyr_right;
+    const int levels = cv::buildOpticalFlowPyramid(left, pyr_left, win, 4);
+    cv::buildOpticalFlowPyramid(right, pyr_right, win, levels);
+    cv::calcOpticalFlowPyrLK(pyr_left, pyr_right, corners, there, ok_there, err, win, levels, stop);
+    cv::calcOpticalFlowPyrLK(pyr_right, pyr_left, there, back, ok_back, err, win, levels, stop);
     std::vector<double> dys;
     for (size_t i = 0; i < corners.size(); ++i) {
         if (!ok_there[i] || !ok_back[i]) continue;

@@ -42,10 +42,10 @@ cv::Mat1b work_gray(const cv::Mat &image, double scale) {
     return gray8(small);
 }
 
-// Standard deviation (and *mean) of every channel's values on every 4th pixel of every 4th row:
+// Standard deviation (and *mean) of every channel's values on every 8th pixel of every 8th row:
 // enough to tell an image from a blank one.
 double spread(const cv::Mat &image, double *mean) {
-    const int step = 4;
+    const int step = 8;
     double s = 0, s2 = 0;
     size_t n = 0;
     const int ch = image.channels();
@@ -213,7 +213,7 @@ LidarAgreement lidar_agreement(const cv::Mat1b &left, const cv::Mat1b &right, co
     LidarAgreement a;
     const int rad = 3, n = (2 * rad + 1) * (2 * rad + 1);
     const int W = left.cols, H = left.rows;
-    const int max_d = W / 3;
+    const int max_d = W / 4;
     const size_t budget = 240;  // points examined, evenly spread over the list
     const size_t stride = std::max<size_t>(1, lidar.points.size() / budget);
     std::vector<double> score, residuals;

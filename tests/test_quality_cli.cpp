@@ -46,12 +46,17 @@ std::string quality_line(const std::string &out) {
     return out.substr(at, out.find('\n', at) - at);
 }
 
-// Runs `run` on the pair (stage 1 only unless `full`: the checks run before it) and returns the
-// output; fails the test on an exit status other than `code`.
+// `run` on the pair at the realtime preset (callers add --stage matching where the later stages
+// do not matter: the checks run before stage 1).
+test::CliRun run_on(const Pair &p, const std::string &extra, const fs::path &dir) {
+    return test::run_cli("run --left0 " + q(p.left0) + " --right0 " + q(p.right0) + " --left1 " + q(p.left1) +
+                         " --right1 " + q(p.right1) + " --preset realtime --threads 2 " + extra + " --out " +
+                         q(dir / "out"));
+}
+
+// Its output; fails the test on an exit status other than `code`.
 std::string run_pair(const Pair &p, const std::string &extra, const fs::path &dir, int code = 0) {
-    const test::CliRun r = test::run_cli("run --left0 " + q(p.left0) + " --right0 " + q(p.right0) + " --left1 " +
-                                         q(p.left1) + " --right1 " + q(p.right1) + " --preset realtime --threads 2 " +
-                                         extra + " --out " + q(dir / "out"));
+    const test::CliRun r = run_on(p, extra, dir);
     if (r.code != code) fail_msg("exit %d (expected %d):\n%s", r.code, code, r.output.c_str());
     return r.output;
 }
@@ -96,9 +101,7 @@ Pair black_t1(const Pair &p, const fs::path &dir) {
 // Frames that a broken camera delivers make the estimator fail or produce nonsense: either way
 // the state is named, in the quality line or in the error message.
 void expect_blank(const Pair &p, const std::string &extra, const fs::path &dir) {
-    const test::CliRun r = test::run_cli("run --left0 " + q(p.left0) + " --right0 " + q(p.right0) + " --left1 " +
-                                         q(p.left1) + " --right1 " + q(p.right1) + " --preset realtime --threads 2 " +
-                                         extra + " --out " + q(dir / "out"));
+    const test::CliRun r = run_on(p, extra, dir);
     if (r.code == 0)
         expect_quality(r.output, "quality: blank_frame (left1 is black");
     else

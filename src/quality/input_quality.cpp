@@ -23,6 +23,8 @@ constexpr double kBlankStddev = 2.5;
 // Decisions need this many matches (or LiDAR points); fewer say nothing.
 constexpr int kMinMatches = 15;
 constexpr int kMinLidar = 12;
+// Working images smaller than this per side are not matched.
+constexpr int kMinSide = 32;
 
 std::string format(const char *fmt, double a, double b = 0, double c = 0) {
     char buf[200];
@@ -275,13 +277,15 @@ Report assess(const Input &in) {
         return r;  // nothing else is measurable on a blank frame
     }
     const double scale = work_scale(size);
+    // Too small a frame for corners, a pyramid and patches (such frames are refused later on).
+    if (size.width * scale < kMinSide || size.height * scale < kMinSide) return r;
     const cv::Mat1b left = work_gray(in.left0, scale), right = work_gray(in.right0, scale);
     const StereoMatches m = match_stereo_features(left, right, 1.0 / scale);
     const std::string swapped = left_right_swapped(m), skewed = not_rectified(m);
     if (!swapped.empty()) r.add(LeftRightSwapped, swapped);
     if (!skewed.empty()) r.add(NotRectified, skewed);
     LidarAgreement a;
-    if (r.ok() && in.lidar0 && !in.lidar0->points.empty()) {
+    if (!(r.flags & (LeftRightSwapped | NotRectified)) && in.lidar0 && !in.lidar0->points.empty()) {
         a = lidar_agreement(left, right, *in.lidar0, scale);
         if (const std::string w = lidar_disagrees(a); !w.empty()) r.add(LidarDisagrees, w);
     }

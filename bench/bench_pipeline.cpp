@@ -150,7 +150,7 @@ std::vector<Case> load_cases(const Args &a) {
         const synth::SynthScene s = synth::render(synth::SynthConfig{});
         Case c;
         c.name = "synthetic";
-        c.input = {s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}};
+        c.input = {s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}, {}};
         c.gt.occ = {s.disp0_occ, s.disp1_occ, s.flow_occ};
         c.gt.has_noc = true;
         c.gt.noc = {s.disp0_noc, s.disp1_noc, s.flow_noc};

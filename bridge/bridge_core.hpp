@@ -52,6 +52,7 @@ struct BridgeConfig {
     // ego_motion_t of each result, published just before its scene_flow_t (no shard MAC: the
     // shards coordinate on the flow and status channels only).
     std::string ego_channel = "LIDARFLOW_EGO_MOTION";
+    std::string quality_channel = "LIDARFLOW_QUALITY";
     // A fixed calibration (--calib); when set, calibration messages are counted but not used.
     bool fixed_calibration = false;
     lf_calibration_t calibration{};
@@ -126,6 +127,13 @@ struct Counters {
     double compute_last_ms = 0, compute_mean_ms = 0;
     int64_t status_published = 0;
     std::string last_error;
+    // Published results by input quality (lf_get_quality): ok, and per flag bit (a result with
+    // several flags counts under each). Not in status_t.
+    int64_t quality_ok = 0;
+    int64_t quality_flagged[5] = {};
+
+    // "12 ok, 1 blank_frame" (flags never seen left out).
+    std::string quality_text() const;
 
     int64_t dropped() const {
         return dropped_stale + dropped_out_of_order + dropped_no_calibration + dropped_calibration_mismatch +
@@ -285,6 +293,8 @@ private:
     struct Outgoing {
         std::vector<uint8_t> bytes;
         std::vector<uint8_t> ego_bytes;  // the result's ego_motion_t
+        std::vector<uint8_t> quality_bytes;  // the result's quality_t
+        uint32_t quality_flags;
         double received_seconds;
         double compute_seconds;
     };

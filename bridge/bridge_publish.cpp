@@ -18,6 +18,13 @@ int64_t wall_utime() {
 
 }  // namespace
 
+std::string Counters::quality_text() const {
+    std::string s = std::to_string(quality_ok) + " ok";
+    for (int b = 0; b < 5; ++b)
+        if (quality_flagged[b]) s += ", " + std::to_string(quality_flagged[b]) + " " + lf_quality_name(1u << b);
+    return s;
+}
+
 void Bridge::flush_outbox() {
     std::vector<Outgoing> out;
     {
@@ -25,13 +32,19 @@ void Bridge::flush_outbox() {
         out.swap(outbox_);
     }
     for (const Outgoing &o : out) {
-        // The ego-motion first: a consumer (and --replay, which counts results) that has the
-        // flow then has its ego-motion too.
+        // The ego-motion and the quality first: a consumer (and --replay, which counts results)
+        // that has the flow then has its ego-motion and quality too.
         if (lcm_publish(lcm_, config_.ego_channel.c_str(), o.ego_bytes.data(), static_cast<unsigned>(o.ego_bytes.size())) !=
             0) {
             std::lock_guard<std::mutex> lock(mutex_);
             counters_.last_error = "publishing on " + config_.ego_channel + " failed";
             log("publishing %zu bytes on %s failed", o.ego_bytes.size(), config_.ego_channel.c_str());
+        }
+        if (lcm_publish(lcm_, config_.quality_channel.c_str(), o.quality_bytes.data(),
+                        static_cast<unsigned>(o.quality_bytes.size())) != 0) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            counters_.last_error = "publishing on " + config_.quality_channel + " failed";
+            log("publishing %zu bytes on %s failed", o.quality_bytes.size(), config_.quality_channel.c_str());
         }
         const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
                                    static_cast<unsigned>(o.bytes.size()));
@@ -48,6 +61,8 @@ void Bridge::flush_outbox() {
             continue;
         }
         ++counters_.results_published;
+        if (o.quality_flags == 0) ++counters_.quality_ok;
+        for (int b = 0; b < 5; ++b) counters_.quality_flagged[b] += (o.quality_flags >> b) & 1u;
         const double n = static_cast<double>(counters_.results_published);
         latency_sum_ms_ += latency_ms;
         compute_sum_ms_ += 1000.0 * o.compute_seconds;

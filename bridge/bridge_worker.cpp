@@ -178,11 +178,21 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
             lidarflow_ego_motion_t em = ego_motion_message(ego, info.t1_us, info.t0_us, m.sequence);
             ego_bytes = encode_ego_motion(em);
         }
-        if (bytes.empty() || ego_bytes.empty()) {
-            err = bytes.empty() ? "encoding the scene flow failed" : "encoding the ego-motion failed";
+        uint32_t quality = 0;
+        const char *reason = "";
+        std::vector<uint8_t> quality_bytes;
+        if (lf_get_quality(estimator_, &quality, &reason) == LF_OK)
+            quality_bytes = encode_quality(info.t1_us, info.t0_us, m.sequence, quality, reason);
+        if (bytes.empty() || ego_bytes.empty() || quality_bytes.empty()) {
+            err = bytes.empty() ? "encoding the scene flow failed"
+                  : ego_bytes.empty() ? "encoding the ego-motion failed"
+                                      : "encoding the input quality failed";
         } else {
             std::lock_guard<std::mutex> lock(mutex_);
-            outbox_.push_back({std::move(bytes), std::move(ego_bytes), frame.received_seconds, info.total_seconds});
+            if (quality != 0)
+                log("result of frame %" PRId64 ": input quality: %s", m.utime, quality_summary(quality, reason).c_str());
+            outbox_.push_back({std::move(bytes), std::move(ego_bytes), std::move(quality_bytes), quality,
+                               frame.received_seconds, info.total_seconds});
             return;
         }
     }

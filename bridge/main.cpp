@@ -42,6 +42,7 @@ const char *kUsage =
     "  --calib-channel NAME     calibration_t input (default LIDARFLOW_CALIB)\n"
     "  --flow-channel NAME      scene_flow_t output (default LIDARFLOW_FLOW)\n"
     "  --ego-channel NAME       ego_motion_t output, one per result (default LIDARFLOW_EGO_MOTION)\n"
+    "  --quality-channel NAME   quality_t output (input quality), one per result (default LIDARFLOW_QUALITY)\n"
     "  --status-channel NAME    status_t output (default LIDARFLOW_STATUS)\n"
     "  --calib FILE             fixed calibration (KITTI calib_cam_to_cam.txt); default: from the channel\n"
     "  --lidar-tolerance-ms T   pair a LiDAR sweep with the stereo frame within T ms (default 20)\n"
@@ -118,6 +119,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
                  (long long)c.stereo_processed, (long long)c.dropped(), (long long)c.stereo_lost_in_transport,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
                  (long long)r.flows_written, (long long)r.status_written, (long long)c.pairs_lost_calibration_change);
+    std::fprintf(stderr, "lidarflow-lcm-bridge: input quality of the results: %s\n", c.quality_text().c_str());
     if (frames.first > 0 || frames.last < INT64_MAX)
         std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range not "
                              "computed, %s\n",
@@ -133,7 +135,7 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
 std::vector<lidarflow::cli::OptionSpec> bridge_options() {
     std::vector<lidarflow::cli::OptionSpec> spec;
     for (const char *name : {"lcm-url", "stereo-channel", "left-channel", "right-channel", "pair-wait-ms",
-                             "pair-buffer", "lidar-channel", "calib-channel", "flow-channel", "ego-channel",
+                             "pair-buffer", "lidar-channel", "calib-channel", "flow-channel", "ego-channel", "quality-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
                              "lidar-buffer", "queue", "shard", "shard-timeout", "shard-key", "encoding", "step", "option", "status-period", "replay",
                              "out", "frames"})
@@ -200,6 +202,12 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
     config->ego_channel = args.str("ego-channel", config->ego_channel);
     if (config->ego_channel == config->flow_channel || config->ego_channel == config->status_channel) {
         std::fprintf(stderr, "lidarflow-lcm-bridge: --ego-channel must differ from the flow and status channels\n");
+        return false;
+    }
+    config->quality_channel = args.str("quality-channel", config->quality_channel);
+    if (config->quality_channel == config->flow_channel || config->quality_channel == config->status_channel ||
+        config->quality_channel == config->ego_channel) {
+        std::fprintf(stderr, "lidarflow-lcm-bridge: --quality-channel must differ from the flow, ego and status channels\n");
         return false;
     }
     config->verbose = args.flag("verbose");
@@ -378,13 +386,14 @@ int main(int argc, char **argv) {
             lcm_destroy(lcm);
             return 1;
         }
-        std::fprintf(stderr, "lidarflow-lcm-bridge: lidarflow %s, listening on %s / %s / %s%s, publishing %s / %s / %s\n",
+        std::fprintf(stderr, "lidarflow-lcm-bridge: lidarflow %s, listening on %s / %s / %s%s, publishing %s / %s / %s / %s\n",
                      lf_version_string(),
                      config.left_channel.empty() ? config.stereo_channel.c_str()
                                                  : (config.left_channel + " + " + config.right_channel).c_str(),
                      config.lidar_channel.c_str(),
                      config.calibration_channel.c_str(), config.fixed_calibration ? " (calibration from --calib)" : "",
-                     config.flow_channel.c_str(), config.ego_channel.c_str(), config.status_channel.c_str());
+                     config.flow_channel.c_str(), config.ego_channel.c_str(), config.quality_channel.c_str(),
+                     config.status_channel.c_str());
         while (!g_stop) {
             if (bridge->run_once(100) != 0) {
                 std::fprintf(stderr, "lidarflow-lcm-bridge: LCM receive failed; stopping\n");
@@ -408,6 +417,7 @@ int main(int argc, char **argv) {
                      c.shards_dead, (long long)c.pairs_lost_dead_shard, (long long)c.pairs_lost_calibration_change,
                      (long long)c.shard_messages_refused, (long long)c.shard_index_conflicts,
                      (long long)c.shard_results_ignored);
+        std::fprintf(stderr, "lidarflow-lcm-bridge: input quality of the results: %s\n", c.quality_text().c_str());
     }
     lcm_destroy(lcm);
     return rc;

@@ -72,8 +72,8 @@ private:
 struct Output {
     EventLogWriter *log = nullptr;
     int64_t now = 0;  // log clock: timestamp of the input event being handled
-    int64_t flows = 0, status = 0, egos = 0, failures = 0;
-    std::string flow_channel, ego_channel;
+    int64_t flows = 0, status = 0, egos = 0, qualities = 0, failures = 0;
+    std::string flow_channel, ego_channel, quality_channel;
 };
 
 void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
@@ -84,6 +84,7 @@ void write_output(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
     }
     if (out->flow_channel == channel) ++out->flows;
     else if (out->ego_channel == channel) ++out->egos;
+    else if (out->quality_channel == channel) ++out->qualities;
     else ++out->status;
 }
 
@@ -129,6 +130,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     Output out;
     out.flow_channel = config.flow_channel;
     out.ego_channel = config.ego_channel;
+    out.quality_channel = config.quality_channel;
     out.log = &writer;
     if (!writer.open(out_path)) return "cannot write the log " + writer.error();
     lcm_t *lcm = lcm_create("memq://");
@@ -136,12 +138,13 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
     std::string error;
     {
         std::unique_ptr<Bridge> bridge = Bridge::create(config, lcm, &error);
-        lcm_subscription_t *subs[3] = {nullptr, nullptr, nullptr};
+        lcm_subscription_t *subs[4] = {nullptr, nullptr, nullptr, nullptr};
         if (bridge) {
             subs[0] = lcm_subscribe(lcm, config.flow_channel.c_str(), write_output, &out);
             subs[1] = lcm_subscribe(lcm, config.status_channel.c_str(), write_output, &out);
             subs[2] = lcm_subscribe(lcm, config.ego_channel.c_str(), write_output, &out);
-            if (!subs[0] || !subs[1] || !subs[2]) error = "cannot subscribe to the output channels";
+            subs[3] = lcm_subscribe(lcm, config.quality_channel.c_str(), write_output, &out);
+            if (!subs[0] || !subs[1] || !subs[2] || !subs[3]) error = "cannot subscribe to the output channels";
         }
         auto handled = [&] {
             const Counters c = bridge->counters();
@@ -351,6 +354,8 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
         error = printf_string("%" PRId64 " results published, %" PRId64 " written", report->counters.results_published, out.flows);
     if (error.empty() && out.egos != out.flows)
         error = printf_string("%" PRId64 " results written with %" PRId64 " ego-motions", out.flows, out.egos);
+    if (error.empty() && out.qualities != out.flows)
+        error = printf_string("%" PRId64 " results written with %" PRId64 " input qualities", out.flows, out.qualities);
     return error;
 }
 

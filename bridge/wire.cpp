@@ -485,6 +485,28 @@ std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg) {
     return buf;
 }
 
+std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t sequence, uint32_t flags, const char *reason) {
+    lidarflow_quality_t m;
+    std::memset(&m, 0, sizeof m);
+    m.utime = utime;
+    m.utime0 = utime0;
+    m.sequence = sequence;
+    m.flags = static_cast<int32_t>(flags);
+    m.reason = const_cast<char *>(reason);  // lcm-gen's struct is not const-correct; only read
+    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_quality_t_encoded_size(&m)));
+    const int n = lidarflow_quality_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &m);
+    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
+    return buf;
+}
+
+std::string quality_summary(uint32_t flags, const char *reason) {
+    if (flags == 0) return "ok";
+    std::string names;
+    for (uint32_t bit = 1; bit != 0; bit <<= 1)
+        if (flags & bit) names += (names.empty() ? "" : ", ") + std::string(lf_quality_name(bit));
+    return names + " (" + reason + ")";
+}
+
 std::string decode_ego_motion(const void *data, size_t size, lidarflow_ego_motion_t &out) {
     const std::string err = check_wire(data, size, "lidarflow.ego_motion_t", __lidarflow_ego_motion_t_get_hash(),
                                        kEgoMotionFixed, {});

@@ -16,6 +16,7 @@
 #include "lidarflow/lidarflow.h"
 #include "lidarflow_calibration_t.h"
 #include "lidarflow_ego_motion_t.h"
+#include "lidarflow_quality_t.h"
 #include "lidarflow_lidar_t.h"
 #include "lidarflow_scene_flow_t.h"
 #include "lidarflow_status_t.h"
@@ -182,6 +183,14 @@ lidarflow_ego_motion_t ego_motion_message(const lf_ego_motion_t &ego, int64_t ut
 
 // Encoded bytes of a message (lcm-gen's encoder).
 std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg);
+
+// Encoded quality_t of a result: header fields from the caller, flags and reason from
+// lf_get_quality. Empty when encoding failed.
+std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t sequence, uint32_t flags, const char *reason);
+
+// The one-line form of a result's quality: "ok" or "NAME[, NAME...] (reason)", names from
+// lf_quality_name.
+std::string quality_summary(uint32_t flags, const char *reason);
 
 // Decodes a raw ego_motion_t, checked like the inputs, then: state one of STATE_*; transform
 // finite with last row 0 0 0 1; its 3x3 block a proper rotation (R^T R within 1e-6 of I per

@@ -66,6 +66,7 @@ std::unique_ptr<Result> make_result(const lidarflow::pipeline::EstimatorResult &
     out->total_seconds = r.total_seconds;
     out->ego = r.ego;
     out->ego_state = r.ego_state;
+    out->quality = r.quality;
     return out;
 }
 
@@ -137,6 +138,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.lidar0 = prev->lidar;
             in.lidar1 = frame->lidar;
             in.camera = estimator->calibration.camera;
+            in.calibration_size = estimator->calibration.image_size;
             result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
         }
         // Commit: nothing below can throw.

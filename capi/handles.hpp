@@ -26,6 +26,7 @@ struct Calibration {
     StereoCamera camera;
     bool has_lidar_to_camera = false;
     cv::Matx44d lidar_to_camera = cv::Matx44d::eye();
+    cv::Size image_size;  // the images it describes; 0 = unknown (input quality: size check off)
 };
 
 // One pushed frame, owned by the estimator.
@@ -44,6 +45,7 @@ struct Result {
     double total_seconds = 0;
     motion::EgoMotion ego;  // stage 4's background motion (pipeline::EstimatorResult::ego)
     pipeline::EgoState ego_state = pipeline::EgoState::NotRun;
+    quality::Report quality;  // of the inputs (lf_get_quality)
 };
 
 }  // namespace lidarflow::capi

@@ -227,6 +227,20 @@ LF_API int32_t lf_get_ego_motion(lf_estimator_t *estimator, lf_ego_motion_t *ego
     });
 }
 
+LF_API int32_t lf_get_quality(lf_estimator_t *estimator, uint32_t *flags, const char **reason) {
+    return guarded(sink_of(estimator), "lf_get_quality", [&] {
+        require_non_null(estimator, "estimator");
+        const Result &r = ready_result(estimator);
+        if (flags) *flags = r.quality.flags;
+        if (reason) *reason = r.quality.reason.c_str();
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API const char *lf_quality_name(uint32_t flag) {
+    return flag == 0 ? "ok" : lidarflow::quality::flag_name(flag);
+}
+
 LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_motion_buffers_t *buffers) {
     return guarded(sink_of(estimator), "lf_get_object_motion", [&] {
         require_non_null(estimator, "estimator");

@@ -37,7 +37,7 @@ synth::SynthScene scene(int width = 320, int height = 96, uint64_t seed = 5) {
 }
 
 FrameInput frame_of(const synth::SynthScene &s) {
-    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
 }
 
 using test::same_field;

@@ -151,8 +151,8 @@ void estimator_stream_cache_keeps_results(void **) {
     o.threads = 2;
     o.last_stage = pipeline::Stage::Consistency;
     const pipeline::Estimator est(o);
-    pipeline::FrameInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}};
-    pipeline::FrameInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0, StereoCamera{}};
+    pipeline::FrameInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}, {}};
+    pipeline::FrameInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0, StereoCamera{}, {}};
     pipeline::StreamCache cache;
     est.run(fwd, &cache);
     assert_false(cache.last_reused());

@@ -142,7 +142,7 @@ void half_resolution_estimator(void **) {
     c.seed = 3;
     c.threads = 2;
     const synth::SynthScene s = synth::render(c);
-    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     EstimatorOptions o;
     o.processing_scale = 0.5;
     o.threads = 2;
@@ -152,7 +152,9 @@ void half_resolution_estimator(void **) {
     assert_int_equal(r.dense.height(), 96);
     assert_int_equal(cv::countNonZero(r.dense.valid), 320 * 96);
     assert_int_equal(r.forward.width(), 320);
-    assert_true(r.timings.front().name == "downscale" && r.timings.back().name == "upscale");
+    // The input checks come first, on the input itself.
+    assert_true(r.timings.size() > 2 && r.timings[0].name == "input_quality" && r.timings[1].name == "downscale" &&
+                r.timings.back().name == "upscale");
     // Every point the visibility filter keeps is restored at full resolution.
     for (const LidarPoint &p : lidar::remove_hidden_points(s.lidar0, o.lidar_visibility).points)
         assert_true(r.dense.d0(p.y, p.x) == p.disparity);
@@ -197,7 +199,7 @@ void hidden_lidar_point_is_not_used(void **) {
     c.height = 96;
     c.seed = 3;
     const synth::SynthScene s = synth::render(c);
-    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     const int hx = 160, hy = 70;
     const float near = s.disp0_occ(hy, hx) > 0 ? s.disp0_occ(hy, hx) : 20.0f;
     in.lidar0.points.clear();

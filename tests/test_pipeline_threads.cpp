@@ -25,7 +25,7 @@ synth::SynthScene scene() {
 }
 
 FrameInput frame_of(const synth::SynthScene &s) {
-    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    return FrameInput{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
 }
 
 EstimatorOptions small_options(int threads) {

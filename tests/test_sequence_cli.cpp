@@ -27,6 +27,7 @@
 #include "io/velo_to_left.hpp"
 #include "io/velodyne.hpp"
 #include "lidar/projection.hpp"
+#include <opencv2/imgcodecs.hpp>
 #include "lidarflow/lidarflow.h"
 // cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
 #include <setjmp.h>
@@ -89,6 +90,7 @@ Fixture &fixture() {
                                          " --format npy --threads 2 --preset " + kPreset);
     expect_code(r, 0);
     expect_contains(r, "4 pairs: 4 computed, 0 skipped (existing), 0 failed");
+    expect_contains(r, "sequence: quality: 4 ok\n");
     expect_contains(r, "[4/4] 3->4");
     expect_contains(r, "ETA");
     expect_code(test::run_cli("sequence --drive " + q(f.drive) + " --out " + q(f.pairs) + " --format npy --threads 2 --quiet" +
@@ -214,6 +216,24 @@ void test_sequence_equals_c_abi_stream(void **) {
 void copy_drive(const fs::path &from, const fs::path &to) {
     fs::remove_all(to);
     fs::copy(from, to, fs::copy_options::recursive);
+}
+
+// A black last frame: its pair is computed, flagged on its progress line and counted.
+void test_blank_frame_counted(void **) {
+    const Fixture &f = fixture();
+    const fs::path drive = f.dir / "black_drive", out = f.dir / "black_out";
+    copy_drive(f.drive, drive);
+    for (const char *cam : {"image_02", "image_03"}) {
+        const fs::path png = drive / cam / "data" / (name(kFrames - 1) + ".png");
+        const cv::Mat m = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+        assert_true(cv::imwrite(png.string(), cv::Mat::zeros(m.size(), m.type())));
+    }
+    const test::CliRun r = test::run_cli("sequence --drive " + q(drive) + " --out " + q(out) +
+                                         " --format npy --threads 2 --frames 2:4 --preset " + kPreset);
+    expect_code(r, 0);
+    expect_contains(r, "3->4 in ");
+    expect_contains(r, ", quality: blank_frame (left1 is black");
+    expect_contains(r, "sequence: quality: 1 ok, 1 blank_frame\n");
 }
 
 void test_bad_frames_skip_only_their_pairs(void **) {
@@ -351,6 +371,7 @@ int main() {
         cmocka_unit_test(test_drive_scans_match_ground_truth),
         cmocka_unit_test(test_sequence_equals_c_abi_stream),
         cmocka_unit_test(test_bad_frames_skip_only_their_pairs),
+        cmocka_unit_test(test_blank_frame_counted),
         cmocka_unit_test(test_frames_and_skip_existing),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_accuracy_against_ground_truth),

@@ -31,6 +31,7 @@ opts=(--option matching.min_coarsest_height=16 --option threads=2)
     || { rc=$?; cat "$tmp/replay.err"; fail "replay exited $rc"; }
 cat "$tmp/replay.err"
 grep -q "stereo processed 8, dropped 0, missing from the log 0" "$tmp/replay.err" || fail "not every frame processed"
+grep -q "^lidarflow-lcm-bridge: input quality of the results: [0-9]* ok" "$tmp/replay.err" || fail "no input quality in the summary"
 grep -q "^lidarflow-lcm-bridge: replay: stereo frame 1, [0-9]* % of the log  (elapsed .*, ETA .*)$" "$tmp/replay.err" \
     || fail "no replay progress line"
 grep -q "^lidarflow-lcm-bridge: replay: stereo frame 8, 100 % of the log  (elapsed .*, ETA 0.0 s)$" "$tmp/replay.err" \

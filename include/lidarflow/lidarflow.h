@@ -638,6 +638,40 @@ LF_API int32_t lf_get_object_motion(lf_estimator_t *estimator, const lf_object_m
 
 /* ----- End of ego-motion and object motion ------------------------------------------- */
 
+/* ----- Input quality ------------------------------------------------------------------- */
+
+/* What the estimator found wrong with the inputs of the latest result: bits of the flags of
+ * lf_get_quality (0 = ok). Each push checks its frame in a few milliseconds before estimating;
+ * a flagged result is computed all the same, but describes the wrong inputs, not the scene.
+ * docs/CONVENTIONS.md says what each means and what to do. Bits are never renumbered; new ones
+ * are appended. */
+typedef enum lf_quality_flag_t {
+    LF_QUALITY_LEFT_RIGHT_SWAPPED = 1,        /* matching features lie at negative disparities */
+    LF_QUALITY_NOT_RECTIFIED = 2,             /* rows of matching features disagree */
+    LF_QUALITY_CALIBRATION_SIZE_MISMATCH = 4, /* the calibration describes images of another size */
+    LF_QUALITY_BLANK_FRAME = 8,               /* an image is black, saturated or uniform, or t1
+                                               * repeats t0 bit for bit (a frozen camera) */
+    LF_QUALITY_LIDAR_DISAGREES = 16           /* LiDAR and image disparities disagree beyond what a
+                                               * calibrated rig leaves (a wrong lidar_to_camera) */
+} lf_quality_flag_t;
+
+/* The input quality of the latest result: *flags (lf_quality_flag_t bits, 0 = ok) and *reason
+ * (one English clause per set flag, "; "-separated, "" when ok; owned by the estimator, valid
+ * until the next push, reset or destroy). Either output may be NULL. Errors:
+ * LF_ERR_INVALID_ARGUMENT (NULL estimator), LF_ERR_NOT_READY (no result yet). One thread at a
+ * time per estimator. A push that fails on inputs the checks flagged (e.g. swapped images in
+ * which no stage finds a match) ends its message with "(input quality: NAME[, NAME...] (reason))".
+ * lf_calibration_t says nothing of the image size yet: LF_QUALITY_CALIBRATION_SIZE_MISMATCH is
+ * reserved for when it does. */
+LF_API int32_t lf_get_quality(lf_estimator_t *estimator, uint32_t *flags, const char **reason);
+
+/* The name of one flag ("left_right_swapped", "not_rectified", "calibration_size_mismatch",
+ * "blank_frame", "lidar_disagrees"), "ok" for 0, "unknown" for anything else (several bits, an
+ * unknown bit). Static, never NULL. Thread-safe. */
+LF_API const char *lf_quality_name(uint32_t flag);
+
+/* ----- End of input quality ------------------------------------------------------------ */
+
 /* Message of the most recent failed call on `estimator` ("" after a successful one). Owned by
  * the estimator, valid until the next call on it.
  * lf_last_error(NULL) is the message of the calling thread's most recent failed call (of any

@@ -612,6 +612,24 @@ struct EgoMotion {
 #endif
 };
 
+// The input quality of the latest result (lf_get_quality): flags are lf_quality_flag_t bits
+// (0 = ok), reason one English clause per flag ("" when ok); docs/CONVENTIONS.md says what each
+// means and what to do.
+struct Quality {
+    uint32_t flags = 0;
+    std::string reason;
+
+    bool ok() const { return flags == 0; }
+    bool has(lf_quality_flag_t f) const { return (flags & static_cast<uint32_t>(f)) != 0; }
+    // The names of the set flags ("left_right_swapped", ...), in bit order; empty when ok.
+    std::vector<std::string> names() const {
+        std::vector<std::string> n;
+        for (uint32_t bit = 1; bit != 0 && bit <= flags; bit <<= 1)
+            if (flags & bit) n.emplace_back(lf_quality_name(bit));
+        return n;
+    }
+};
+
 // Object motion of the latest result (lf_get_object_motion), owned by the caller; width * height
 // entries, row-major: motion (mx, my, mz) [m] = X1 - T X0 (scene flow without the camera's
 // motion, left camera frame at t1; about 0 on the static world), valid as Points3d::valid where
@@ -819,6 +837,15 @@ public:
         r.inliers = e.inliers;
         r.candidates = e.candidates;
         return r;
+    }
+
+    // The latest result's input quality (see Quality). Throws Error(LF_ERR_NOT_READY) before
+    // there is a result.
+    Quality quality() {
+        uint32_t flags = 0;
+        const char *reason = nullptr;
+        detail::check(lf_get_quality(handle_, &flags, &reason), [this] { return lf_last_error(handle_); });
+        return Quality{flags, reason ? reason : ""};
     }
 
     // A copy of the latest result's object motion (see ObjectMotion). Throws like ego_motion().

@@ -92,6 +92,11 @@ void check_frame(const FrameInput &f) {
         });
         require(m.size() == f.left0.size(), ErrorCode::SizeMismatch,
                 std::string("FrameInput: ") + names[i] + " differs in size from left0");
+        require(m.type() == f.left0.type(), ErrorCode::InvalidArgument, [&] {
+            return std::string("FrameInput: ") + names[i] + " has " + std::to_string(m.channels()) +
+                   " channel(s), left0 " + std::to_string(f.left0.channels()) +
+                   ": give the four images in one format (all gray or all colour)";
+        });
     }
     if (!camera_unknown(f.camera)) {
         const std::string e = camera_range_error(f.camera);
@@ -219,10 +224,42 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     } release_at_end;
     const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
     // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
-    const FrameInput frame{input.left0, input.right0, input.left1, input.right1,
-                           lidar_in_use(options_, input.lidar0), lidar_in_use(options_, input.lidar1), input.camera};
+    const FrameInput frame{input.left0,
+                           input.right0,
+                           input.left1,
+                           input.right1,
+                           lidar_in_use(options_, input.lidar0),
+                           lidar_in_use(options_, input.lidar1),
+                           input.camera,
+                           input.calibration_size};
     report_hidden(input.lidar0, frame.lidar0, "t0");
     report_hidden(input.lidar1, frame.lidar1, "t1");
+    const auto t_quality = Clock::now();
+    quality::Report verdict = assess_inputs(frame);
+    const double quality_seconds = seconds_since(t_quality);
+    EstimatorResult r;
+    try {
+        r = run_scaled(frame, cache, threads);
+    } catch (const Error &e) {
+        if (verdict.ok()) throw;
+        // The inputs' fault is the likelier explanation of a stage that found nothing to work with.
+        throw Error(e.code(), std::string(e.what()) + " (input quality: " + verdict.summary() + ")");
+    }
+    r.quality = std::move(verdict);
+    r.timings.insert(r.timings.begin(), {"input_quality", quality_seconds});
+    r.total_seconds += quality_seconds;
+    return r;
+}
+
+quality::Report Estimator::assess_inputs(const FrameInput &frame) const {
+    quality::Input q{frame.left0, frame.right0, frame.left1, frame.right1,
+                     options_.use_lidar ? &frame.lidar0 : nullptr, frame.calibration_size};
+    quality::Report r = quality::assess(q);
+    if (!r.ok()) log::write(log::Level::Warning, "input quality: " + r.summary());
+    return r;
+}
+
+EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cache, int threads) const {
     if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache, threads));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;

@@ -20,6 +20,7 @@
 #include "matching/decoupled_matcher.hpp"
 #include "matching/matching_options.hpp"
 #include "matching/scene_flow_matcher.hpp"
+#include "quality/input_quality.hpp"
 
 namespace lidarflow::pipeline {
 
@@ -98,6 +99,7 @@ struct FrameInput {
     SparseLidar lidar1;  // D_l^1 in I_l^1 (may have no points, e.g. a real scan only at t0)
     StereoCamera camera; // the rectified rig; all zero (default) = unknown (calibration-free
                          // models); anything else must lie in the ranges of core/limits.hpp
+    cv::Size calibration_size;  // the image size `camera` describes; 0 = unknown (not checked)
 };
 
 // Why EstimatorResult::ego is or is not the metric ego-motion (values of the C ABI's
@@ -126,6 +128,9 @@ struct EstimatorResult {
     // ego-motion model is off, or too few matches agree on one motion.
     motion::EgoMotion ego;
     EgoState ego_state = EgoState::NotRun;  // Ok exactly when ego is valid and calibrated
+
+    // Whether the inputs look like what the estimator assumes (quality/input_quality.hpp).
+    quality::Report quality;
 
     std::vector<StageTime> timings;  // in execution order
     double total_seconds = 0;
@@ -176,6 +181,10 @@ public:
     const EstimatorOptions &options() const { return options_; }
 
 private:
+    // The input checks of quality/input_quality.hpp, logged as a warning when one fails.
+    quality::Report assess_inputs(const FrameInput &frame) const;
+    // run() after the input checks: at processing_scale, results brought back to the input size.
+    EstimatorResult run_scaled(const FrameInput &frame, StreamCache *cache, int threads) const;
     // threads: this frame's OpenMP threads (core/threads.hpp).
     EstimatorResult run_native(const FrameInput &frame, StreamCache *cache, int threads) const;
     // Stages 2-4 on stage 1's fields (r.forward, r.backward); `sgm` is stage 2's reference

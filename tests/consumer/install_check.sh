@@ -169,7 +169,7 @@ done
 # LCM types: definitions, generated C (header + source) and C++ headers, used together, through
 # lidarflow-lcm-types.pc and through find_package(lidarflow COMPONENTS lcm_types).
 if [ -d "$prefix/share/lidarflow/lcm" ]; then
-    [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 6 ] || { echo "missing .lcm files"; exit 1; }
+    [ "$(ls "$prefix"/share/lidarflow/lcm/*.lcm | wc -l)" -eq 7 ] || { echo "missing .lcm files"; exit 1; }
     [ -n "$lcm_pc" ] || { echo "no lidarflow-lcm-types.pc"; exit 1; }
     csources="$(pkg-config --variable=csourcedir lidarflow-lcm-types)"
     [ -f "$csources/lidarflow_status_t.c" ] || { echo "no C sources in $csources"; exit 1; }

@@ -413,6 +413,26 @@ void test_dense_run(void **) {
 #endif
 }
 
+// Estimator::quality: ok on the scene; its left and right swapped, flagged and named.
+void test_quality(void **) {
+    Scene sc;
+    lf::Estimator e(sc.calibration(), scene_options("matching"));
+    expect_error([&] { e.quality(); }, LF_ERR_NOT_READY, "", "quality before a push");
+    push_pair(e, sc);
+    const lf::Quality ok = e.quality();
+    if (!ok.ok()) fail_msg("%s", ok.reason.c_str());
+    assert_true(ok.names().empty() && ok.reason.empty());
+
+    lf::Estimator swapped(sc.calibration(), scene_options("matching"));
+    swapped.push(0, sc.image(sc.s.right0), sc.image(sc.s.left0));
+    swapped.push(1, sc.image(sc.s.right1), sc.image(sc.s.left1));
+    const lf::Quality q = swapped.quality();
+    assert_true(q.has(LF_QUALITY_LEFT_RIGHT_SWAPPED) && !q.has(LF_QUALITY_BLANK_FRAME));
+    assert_int_equal(q.names().size(), 1);
+    assert_string_equal(q.names()[0].c_str(), "left_right_swapped");
+    assert_true(q.reason.find("negative disparity") != std::string::npos);
+}
+
 void test_nan_holes(void **) {
     Scene sc;
     lf::Estimator e(sc.calibration(), scene_options("sparse"));
@@ -544,7 +564,7 @@ void test_inputs(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_version), cmocka_unit_test(test_options),  cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_dense_run), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
+        cmocka_unit_test(test_dense_run), cmocka_unit_test(test_quality), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
         cmocka_unit_test(test_log_handler_not_from_a_handler), cmocka_unit_test(test_cpp_checks),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

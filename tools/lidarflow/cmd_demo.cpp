@@ -118,7 +118,7 @@ int run_demo(int argc, char **argv) {
     for (const Picture &p : pictures) io::write_image(p.path, p.image);
 
     // The estimator, with LiDAR and image-only, on the same frames.
-    const pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera};
+    const pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     eval::FrameGroundTruth gt, gt_hard;
     gt.occ = {s.disp0_occ, s.disp1_occ, s.flow_occ};
     gt.has_noc = true;

@@ -13,6 +13,7 @@
 #include "log.hpp"
 #include "result_files.hpp"
 #include "core/error.hpp"
+#include "core/gray.hpp"
 #include "io/calib.hpp"
 #include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
@@ -69,6 +70,24 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
     return l;
 }
 
+const char *const kImageNames[4] = {"left0", "right0", "left1", "right1"};
+
+std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
+
+// Colour and gray images together (a colour left camera, a monochrome right one) are all matched
+// in gray, as the estimator matches intensities; said before estimating, not found out after.
+void match_formats(cv::Mat *const images[4]) {
+    std::string colour, gray;
+    for (int i = 0; i < 4; ++i) {
+        std::string &list = images[i]->channels() == 1 ? gray : colour;
+        list += (list.empty() ? "--" : ", --") + std::string(kImageNames[i]);
+    }
+    if (colour.empty() || gray.empty()) return;
+    note("run: %s in colour but %s in gray: all four are matched in gray\n", colour.c_str(), gray.c_str());
+    for (int i = 0; i < 4; ++i)
+        if (images[i]->channels() != 1) *images[i] = gray8(*images[i]).clone();
+}
+
 int run(int argc, char **argv) {
     Args args("run", argc, argv,
               {{"left0", true, "IMG  rectified left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
@@ -94,6 +113,9 @@ int run(int argc, char **argv) {
         std::printf("%s", args.usage().c_str());
         return 0;
     }
+    // Every missing argument is reported before any file is read.
+    const std::string paths[4] = {args.required("left0"), args.required("right0"), args.required("left1"),
+                                  args.required("right1")};
     const std::string out = args.required("out");
     const std::string id = args.has("id") ? args.str("id", "") : io::output_name_from_path(args.required("left0"));
     // Both name output files: checked before minutes of estimation, not after.
@@ -125,13 +147,15 @@ int run(int argc, char **argv) {
     note("run: reading the images\n");
     const Stopwatch reading;
     pipeline::FrameInput in;
-    in.left0 = io::read_any_image(args.required("left0"));
-    in.right0 = io::read_any_image(args.required("right0"));
-    in.left1 = io::read_any_image(args.required("left1"));
-    in.right1 = io::read_any_image(args.required("right1"));
+    cv::Mat *images[4] = {&in.left0, &in.right0, &in.left1, &in.right1};
+    for (int i = 0; i < 4; ++i) *images[i] = io::read_any_image(paths[i]);
     const cv::Size size = in.left0.size();
-    for (const cv::Mat *m : {&in.right0, &in.left1, &in.right1})
-        require(m->size() == size, ErrorCode::SizeMismatch, "run: the four images must have the same size");
+    for (int i = 1; i < 4; ++i)
+        require(images[i]->size() == size, ErrorCode::SizeMismatch, [&] {
+            return "run: --" + std::string(kImageNames[i]) + " is " + size_text(images[i]->size()) + " but --left0 is " +
+                   size_text(size) + ": the four images must have the same size";
+        });
+    match_formats(images);
     in.lidar0 = {size.width, size.height, {}};
     in.lidar1 = {size.width, size.height, {}};
     if (args.has("lidar0")) in.lidar0 = read_lidar(args.str("lidar0", ""), size, "--lidar0");
@@ -192,6 +216,7 @@ int run(int argc, char **argv) {
                     ego(2, 3), rotation_degrees(ego), r.ego.inliers, r.ego.candidates);
     else
         std::printf("ego       %s\n", pipeline::ego_state_text(r.ego_state));
+    std::printf("quality: %s\n", r.quality.summary().c_str());
     for (const std::string &w : written) std::printf("wrote     %s\n", w.c_str());
     std::printf("wrote     %s/viz/%s_{flow,disp0,disp1}.png\n", out.c_str(), id.c_str());
     if (args.has("points"))

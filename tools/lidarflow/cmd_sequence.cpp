@@ -204,6 +204,7 @@ int run_sequence(int argc, char **argv) {
     long computed = 0, computed_image_only = 0, skipped = 0, done = 0;
     std::set<long> failed;      // pairs (by their t0) lost to bad frames or estimator errors
     std::set<long> image_only;  // pairs computed without points for a bad scan
+    quality::Tally quality;
     const Stopwatch clock;
     const auto progress = [&](long t0, const std::string &what) {
         ++done;
@@ -286,7 +287,9 @@ int run_sequence(int argc, char **argv) {
                     const double s = pair_clock.seconds();
                     ++computed;
                     computed_image_only += no_points ? 1 : 0;
+                    quality.add(r->quality.flags);
                     std::string what = (no_points ? "image-only in " : "in ") + format_duration(s);
+                    if (!r->quality.ok()) what += ", quality: " + r->quality.summary();
                     if (static_cast<size_t>(k) < stamps.seconds.size()) {
                         char dt[48];
                         std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
@@ -319,6 +322,7 @@ int run_sequence(int argc, char **argv) {
                 failed.size(),
                 misnamed ? ("; " + std::to_string(misnamed) + " misnamed file(s) ignored").c_str() : "",
                 total > 0 ? computed / total : 0.0, computed, format_duration(total).c_str());
+    std::printf("sequence: quality: %s\n", quality.text().c_str());
     return failed.empty() && image_only.empty() && misnamed == 0 ? 0 : kExitBadFrames;
 }
 

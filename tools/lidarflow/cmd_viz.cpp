@@ -23,6 +23,15 @@
 namespace lidarflow::cli {
 namespace {
 
+std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
+
+// Inputs drawn together must be of one size; the message names both.
+void same_size(cv::Size a, const char *what_a, cv::Size b, const char *what_b) {
+    require(a == b, ErrorCode::SizeMismatch, [&] {
+        return std::string("viz: ") + what_a + " is " + size_text(a) + " but " + what_b + " is " + size_text(b);
+    });
+}
+
 int birds_eye(const Args &args, const std::string &out) {
     require(!args.has("gt") && !args.has("gt-noc") && !args.has("style") && !args.has("image") &&
                 !args.has("no-legend"),
@@ -77,24 +86,28 @@ int run_viz(int argc, char **argv) {
     cv::Mat picture;
     cv::Mat1b valid;  // where the picture shows the result (for --image)
     std::string what;
+    const auto over_image = [&](cv::Mat &pic, const cv::Mat1b &shown, std::string &text) {
+        const cv::Mat image = io::read_any_image(args.str("image", ""));
+        same_size(image.size(), "--image", pic.size(), disp ? "the --disp map" : "the --flow map");
+        pic = viz::blend_over(image, pic, shown, 0.6);
+        text += " over the image";
+    };
     if (disp) {
         const DisparityMap est = io::read_disparity_file(args.str("disp", ""));
         valid = est >= 0.0f;
         if (error_map) {
             const DisparityMap noc = args.has("gt-noc") ? io::read_disparity_file(args.str("gt-noc", "")) : DisparityMap();
-            picture = viz::disparity_error_image(est, io::read_disparity_file(args.str("gt", "")), noc);
+            const DisparityMap gt = io::read_disparity_file(args.str("gt", ""));
+            same_size(gt.size(), "--gt", est.size(), "--disp");
+            if (!noc.empty()) same_size(noc.size(), "--gt-noc", est.size(), "--disp");
+            picture = viz::disparity_error_image(est, gt, noc);
             what = "disparity error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const double scale = viz::disparity_color_scale(est, static_cast<float>(max));
             picture = viz::disparity_to_color(est, static_cast<float>(scale));
             what = "disparity colour map, scale 0.." + std::to_string(static_cast<int>(std::ceil(scale))) + " px";
         }
-        if (args.has("image")) {
-            const cv::Mat image = io::read_any_image(args.str("image", ""));
-            require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
-            picture = viz::blend_over(image, picture, valid, 0.6);
-            what += " over the image";
-        }
+        if (args.has("image")) over_image(picture, valid, what);
         if (legend)
             picture = error_map ? viz::with_error_legend(picture)
                                 : viz::with_disparity_legend(picture, viz::disparity_color_scale(est, static_cast<float>(max)));
@@ -104,7 +117,10 @@ int run_viz(int argc, char **argv) {
         viz::FlowColorOptions o;
         if (error_map) {
             const FlowField noc = args.has("gt-noc") ? io::read_flow_file(args.str("gt-noc", "")) : FlowField();
-            picture = viz::flow_error_image(est, io::read_flow_file(args.str("gt", "")), noc);
+            const FlowField gt = io::read_flow_file(args.str("gt", ""));
+            same_size(gt.u.size(), "--gt", est.u.size(), "--flow");
+            if (!noc.u.empty()) same_size(noc.u.size(), "--gt-noc", est.u.size(), "--flow");
+            picture = viz::flow_error_image(est, gt, noc);
             what = "flow error map (log colours, 1 = KITTI outlier threshold)";
         } else {
             const std::string style = args.str("style", "kitti");
@@ -115,12 +131,7 @@ int run_viz(int argc, char **argv) {
             picture = viz::flow_to_color(est, o);
             what = "flow colour (" + style + " wheel)";
         }
-        if (args.has("image")) {
-            const cv::Mat image = io::read_any_image(args.str("image", ""));
-            require(image.size() == picture.size(), ErrorCode::SizeMismatch, "viz: --image differs in size from the map");
-            picture = viz::blend_over(image, picture, valid, 0.6);
-            what += " over the image";
-        }
+        if (args.has("image")) over_image(picture, valid, what);
         if (legend)
             picture = error_map ? viz::with_error_legend(picture)
                                 : viz::with_flow_legend(picture, viz::flow_color_scale(est, o), o.style);

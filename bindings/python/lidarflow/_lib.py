@@ -167,6 +167,11 @@ def _load():
 LOG_FN = ctypes.CFUNCTYPE(None, ctypes.c_int32, ctypes.c_char_p, ctypes.c_void_p)
 
 
+# lf_quality_flag_t: bit -> name, in bit order.
+QUALITY_FLAGS = {1: "left_right_swapped", 2: "not_rectified", 4: "calibration_size_mismatch", 8: "blank_frame",
+                 16: "lidar_disagrees"}
+
+
 def _declare(lib):
     c = ctypes
     P = c.POINTER
@@ -196,6 +201,8 @@ def _declare(lib):
         "lf_get_points3d": (i32, [c.c_void_p, P(Points3dBuffers)]),
         "lf_get_ego_motion": (i32, [c.c_void_p, P(EgoMotion)]),
         "lf_get_object_motion": (i32, [c.c_void_p, P(ObjectMotionBuffers)]),
+        "lf_get_quality": (i32, [c.c_void_p, P(u32), P(c.c_char_p)]),
+        "lf_quality_name": (c.c_char_p, [u32]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
         "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
         "lf_set_log_callback": (i32, [LOG_FN, i32, c.c_void_p]),

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
 """The Estimator class: one lidarflow handle (see include/lidarflow/lidarflow.h)."""
+import collections
 import ctypes
 import threading
 import weakref
@@ -309,6 +310,21 @@ class Estimator:
                                  _lib.EGO_STATE_NAMES.get(e.state, "unknown state %d" % e.state))
         return np.array(e.transform[:], dtype=np.float64).reshape(4, 4), int(e.inliers)
 
+    def quality(self):
+        """The latest result's input quality: a Quality (flags, states, reason) whose states are
+        the names of the set flags ("left_right_swapped", "not_rectified",
+        "calibration_size_mismatch", "blank_frame", "lidar_disagrees"; empty when ok) and reason
+        one English clause per state (docs/CONVENTIONS.md says what each means and what to do).
+        Raises LidarflowError(ERR_NOT_READY) before two frames."""
+        with self._busy:
+            h = self._h()
+            flags = ctypes.c_uint32()
+            reason = ctypes.c_char_p()
+            _check(lib.lf_get_quality(h, ctypes.byref(flags), ctypes.byref(reason)), h)
+            text = (reason.value or b"").decode()
+        states = tuple(lib.lf_quality_name(bit).decode() for bit in _lib.QUALITY_FLAGS if flags.value & bit)
+        return Quality(flags.value, states, text)
+
     def object_motion(self, out=None):
         """The latest result's object motion: dict with motion (H, W, 3) float32, X1 - T X0 in
         metres in the left camera frame at t1 (scene flow without the camera's own motion, about
@@ -328,6 +344,19 @@ class Estimator:
                 b.valid = _plane("valid", out["valid"], shape, np.uint8)
             _check(lib.lf_get_object_motion(h, ctypes.byref(b)), h)
         return out
+
+
+class Quality(collections.namedtuple("Quality", "flags states reason")):
+    """Input quality of a result (Estimator.quality()): flags (lf_quality_flag_t bits, 0 = ok),
+    states (names of the set flags) and reason ("" when ok)."""
+    __slots__ = ()
+
+    @property
+    def ok(self):
+        return self.flags == 0
+
+    def __str__(self):
+        return "ok" if self.ok else "%s (%s)" % (", ".join(self.states), self.reason)
 
 
 def _result_info(h):

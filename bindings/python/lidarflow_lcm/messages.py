@@ -17,7 +17,7 @@ import struct
 
 import numpy as np
 
-__all__ = ["MessageError", "stereo_t", "lidar_t", "calibration_t", "scene_flow_t", "status_t", "ego_motion_t",
+__all__ = ["MessageError", "stereo_t", "lidar_t", "calibration_t", "scene_flow_t", "status_t", "ego_motion_t", "quality_t",
            "TYPES", "decode", "type_of"]
 
 
@@ -464,7 +464,32 @@ class ego_motion_t(_Message):
             _fail(t, "inliers %d, candidates %d (0 <= inliers <= candidates)", self.inliers, self.candidates)
 
 
-TYPES = (stereo_t, lidar_t, calibration_t, scene_flow_t, status_t, ego_motion_t)
+class quality_t(_Message):
+    """The input quality of the scene_flow_t with the same utime, utime0 and sequence
+    (lcm_types/quality_t.lcm): flags (FLAG_* bits, 0 = ok) and reason (one clause per flag, ""
+    when ok). states() names the set flags; docs/CONVENTIONS.md says what each means."""
+    TYPE_NAME = "lidarflow.quality_t"
+    _FIELDS = (("utime", "int64_t", None), ("utime0", "int64_t", None), ("sequence", "int32_t", None),
+               ("flags", "int32_t", None), ("reason", "string", None))
+    __slots__ = tuple(f[0] for f in _FIELDS)
+    FLAG_LEFT_RIGHT_SWAPPED, FLAG_NOT_RECTIFIED, FLAG_CALIBRATION_SIZE_MISMATCH = 1, 2, 4
+    FLAG_BLANK_FRAME, FLAG_LIDAR_DISAGREES = 8, 16
+    NAMES = {1: "left_right_swapped", 2: "not_rectified", 4: "calibration_size_mismatch", 8: "blank_frame",
+             16: "lidar_disagrees"}
+
+    def states(self):
+        """The names of the set flags, in bit order (an unknown bit as "unknown")."""
+        return tuple(self.NAMES.get(1 << b, "unknown") for b in range(32) if self.flags >> b & 1)
+
+    def check(self):
+        if self.flags < 0 or self.flags & ~sum(self.NAMES):
+            _fail(self.TYPE_NAME, "unknown flags 0x%x (known: 0x%x)", self.flags & 0xffffffff, sum(self.NAMES))
+        if (self.flags == 0) != (self.reason == ""):
+            _fail(self.TYPE_NAME, "flags 0x%x with reason %r (a reason exactly when a flag is set)", self.flags,
+                  _short(self.reason))
+
+
+TYPES = (stereo_t, lidar_t, calibration_t, scene_flow_t, status_t, ego_motion_t, quality_t)
 _BY_FINGERPRINT = {t._PACKED_FINGERPRINT: t for t in TYPES}
 
 
@@ -474,7 +499,7 @@ def type_of(data):
 
 
 def decode(data, check=True):
-    """Decodes a message of any of the six types, chosen by its fingerprint; MessageError for
+    """Decodes a message of any of the seven types, chosen by its fingerprint; MessageError for
     an unknown fingerprint or a malformed message."""
     cls = type_of(data)
     if cls is None:

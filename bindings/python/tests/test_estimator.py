@@ -163,6 +163,43 @@ class RoundTrip(unittest.TestCase):
             self.assertFalse(est.has_result)
 
 
+class InputQuality(unittest.TestCase):
+    """Estimator.quality() on the scene and on the rig's usual mistakes made from it here (stage 1
+    only: the checks run before it)."""
+
+    def quality(self, frames, lidar=None):
+        with lidarflow.Estimator(options={"preset": "realtime", "last_stage": "matching"}, **CAL) as est:
+            with self.assertRaises(lidarflow.LidarflowError) as e:
+                est.quality()
+            self.assertEqual(e.exception.status, lidarflow.ERR_NOT_READY)
+            est.push(frames[0], frames[1], lidar, timestamp=0)
+            est.push(frames[2], frames[3], lidar, timestamp=1)
+            return est.quality()
+
+    def setUp(self):
+        self.scene = make_scene(width=320, height=96)
+
+    def test_ok(self):
+        q = self.quality(self.scene, grid_lidar(10, width=320, height=96))
+        self.assertEqual((q.flags, q.states, q.reason, q.ok, str(q)), (0, (), "", True, "ok"))
+
+    def test_swapped(self):
+        l0, r0, l1, r1 = self.scene
+        q = self.quality((r0, l0, r1, l1))
+        self.assertEqual(q.states, ("left_right_swapped",))
+        self.assertIn("negative disparity", q.reason)
+
+    def test_black_t1_and_lidar_off(self):
+        l0, r0 = self.scene[:2]
+        black = np.zeros_like(l0)
+        q = self.quality((l0, r0, black, black))
+        self.assertEqual(q.states, ("blank_frame",))
+        self.assertTrue(str(q).startswith("blank_frame (left1 is black"))
+        q = self.quality(self.scene, grid_lidar(16, width=320, height=96))
+        self.assertEqual(q.states, ("lidar_disagrees",))
+        self.assertEqual(q.flags, 16)
+
+
 class EgoMotion(unittest.TestCase):
     def test_ego_motion_and_object_motion(self):
         scene = make_scene()

@@ -119,6 +119,15 @@ class AgainstTheBridge(unittest.TestCase):
         self.assertTrue(all(isinstance(m, ll.scene_flow_t)
                             for _, m in ll.read_messages(self.out_f32, channels=ll.CHANNELS["flow"])))
 
+    def test_quality_beside_each_result(self):
+        # The bridge's C encoder (lcm-gen), read back with this package's checks: these frames
+        # are a correct rig.
+        got = [m for _, m in ll.read_messages(self.out_f32, channels=ll.CHANNELS["quality"], strict=True)]
+        flows = self.flows(self.out_f32)
+        self.assertEqual([(q.utime, q.utime0, q.sequence) for q in got],
+                         [(f.utime, f.utime0, f.sequence) for f in flows])
+        self.assertEqual([(q.flags, q.reason, q.states()) for q in got], [(0, "", ())] * len(flows))
+
     def flows(self, log):
         got = [m for _, m in ll.read_messages(log, channels=ll.CHANNELS["flow"], strict=True)]
         self.assertEqual(len(got), 2)

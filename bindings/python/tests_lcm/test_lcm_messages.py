@@ -81,6 +81,11 @@ def random_message(cls, rng, n=None):
         return ll.ego_motion_t(utime=int(rng.integers(0, 2**62)), utime0=int(rng.integers(0, 2**62)),
                                sequence=int(rng.integers(0, 100)), state=0, transform=T.ravel(),
                                inliers=int(rng.integers(0, c + 1)), candidates=c)
+    if cls is ll.quality_t:
+        flags = int(rng.integers(0, 32))
+        reason = "".join(chr(int(c)) for c in rng.integers(32, 0x3000, int(rng.integers(1, 40)))) if flags else ""
+        return ll.quality_t(utime=int(rng.integers(0, 2**62)), utime0=int(rng.integers(0, 2**62)),
+                            sequence=int(rng.integers(0, 100)), flags=flags, reason=reason)
     raise AssertionError(cls)
 
 
@@ -118,7 +123,7 @@ class AgainstLcmGen(unittest.TestCase):
     def test_fingerprints_equal_lcm_gen(self):
         for cls in ll.TYPES:
             self.assertEqual(cls._get_packed_fingerprint(), self.generated(cls)._get_packed_fingerprint(), cls.TYPE_NAME)
-        self.assertEqual(len({cls.FINGERPRINT for cls in ll.TYPES}), 6)
+        self.assertEqual(len({cls.FINGERPRINT for cls in ll.TYPES}), 7)
 
     def test_bytes_equal_lcm_gen_both_ways(self):
         rng = np.random.default_rng(11)
@@ -505,6 +510,19 @@ class Builders(unittest.TestCase):
                                        **change))
             with self.assertRaisesRegex(ll.MessageError, reason, msg=reason):
                 ll.ego_motion_t.decode(m.encode(check=False))
+
+    def test_quality_rules(self):
+        good = ll.quality_t(utime=2, utime0=1, sequence=3, flags=ll.quality_t.FLAG_LEFT_RIGHT_SWAPPED | 16,
+                            reason="a; b")
+        back = ll.quality_t.decode(good.encode())
+        self.assertEqual(back, good)
+        self.assertEqual(back.states(), ("left_right_swapped", "lidar_disagrees"))
+        self.assertEqual(ll.quality_t.decode(ll.quality_t().encode()).states(), ())  # ok
+        for change, reason in (({"flags": 32}, "unknown flags 0x20"), ({"flags": -1}, "unknown flags 0xffffffff"),
+                               ({"reason": ""}, "a reason exactly when"), ({"flags": 0}, "a reason exactly when")):
+            m = ll.quality_t(**dict(dict(utime=2, utime0=1, flags=8, reason="x"), **change))
+            with self.assertRaisesRegex(ll.MessageError, reason, msg=reason):
+                ll.quality_t.decode(m.encode(check=False))
 
     def test_lidar(self):
         pts = np.array([[1, 2, 3], [4, 5, 6]], np.float32)

@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: MIT
+// The input-quality checks' own rules: the calibration size check (0 = unknown), blank and
+// frozen frames, the one-line summary and the tally of a stream; and that the core estimator
+// flags a calibration of another size than its images (FrameInput::calibration_size).
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "pipeline/estimator.hpp"
+#include "quality/input_quality.hpp"
+#include "synth/scene.hpp"
+// cmocka 1.1.5's header lacks extern "C" and its fail() macro breaks <ios>: include it last.
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+extern "C" {
+#include <cmocka.h>
+}
+#include "test_support.hpp"
+
+using namespace lidarflow;
+using namespace lidarflow::quality;
+
+namespace {
+
+void calibration_size(void **) {
+    assert_true(calibration_size_mismatch({1242, 375}, {1242, 375}).empty());
+    assert_true(calibration_size_mismatch({0, 0}, {1001, 333}).empty());     // unknown calibration size
+    assert_true(calibration_size_mismatch({1242, 375}, {0, 0}).empty());     // unknown image size
+    assert_true(calibration_size_mismatch({1242, 0}, {1001, 333}).empty());  // half known is unknown
+    assert_string_equal(calibration_size_mismatch({1242, 375}, {1001, 333}).c_str(),
+                        "the calibration is for 1242x375 images, these are 1001x333");
+}
+
+Input frame(const cv::Mat &l0, const cv::Mat &r0, const cv::Mat &l1, const cv::Mat &r1) {
+    Input in;
+    in.left0 = l0;
+    in.right0 = r0;
+    in.left1 = l1;
+    in.right1 = r1;
+    return in;
+}
+
+void blank_and_frozen(void **) {
+    cv::Mat noise(48, 64, CV_8UC3);
+    cv::randu(noise, 0, 255);
+    cv::Mat other = noise.clone();
+    other.at<cv::Vec3b>(0, 0)[0] ^= 1;
+    const cv::Mat black = cv::Mat::zeros(48, 64, CV_8UC3), white(48, 64, CV_8UC3, cv::Scalar::all(255)),
+                  gray(48, 64, CV_8UC3, cv::Scalar::all(128));
+    assert_true(blank_frame(frame(noise, noise, other, noise)).empty());  // one pixel changed: not frozen
+    assert_true(blank_frame(frame(noise, noise, noise, noise)).find("frozen") != std::string::npos);
+    assert_true(blank_frame(frame(noise, white, noise, noise)).find("right0 is saturated") != std::string::npos);
+    assert_true(blank_frame(frame(noise, noise, gray, noise)).find("left1 is uniform") != std::string::npos);
+    assert_true(blank_frame(frame(noise, noise, noise, black)).find("right1 is black") != std::string::npos);
+}
+
+void summary_and_tally(void **) {
+    Report r;
+    assert_string_equal(r.summary().c_str(), "ok");
+    r.add(LidarDisagrees, "b");
+    r.add(LeftRightSwapped, "a");
+    assert_int_equal(r.flags, LidarDisagrees | LeftRightSwapped);
+    assert_string_equal(r.summary().c_str(), "left_right_swapped, lidar_disagrees (b; a)");
+    assert_string_equal(flag_name(NotRectified), "not_rectified");
+    assert_string_equal(flag_name(3), "unknown");
+    Tally t;
+    assert_string_equal(t.text().c_str(), "0 ok");
+    t.add(0);
+    t.add(0);
+    t.add(BlankFrame);
+    t.add(BlankFrame | CalibrationSizeMismatch);
+    assert_string_equal(t.text().c_str(), "2 ok, 1 calibration_size_mismatch, 2 blank_frame");
+}
+
+// The estimator reports the calibration's size when it knows it, and only then.
+void estimator_calibration_size(void **) {
+    synth::SynthConfig c;
+    c.width = 320;
+    c.height = 96;
+    c.seed = 5;
+    c.threads = 2;
+    const synth::SynthScene s = synth::render(c);
+    pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset("realtime");
+    o.last_stage = pipeline::Stage::Matching;
+    const pipeline::Estimator e(o);
+    pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
+    const pipeline::EstimatorResult known_nothing = e.run(in);
+    if (!known_nothing.quality.ok()) fail_msg("%s", known_nothing.quality.summary().c_str());
+    in.calibration_size = s.left0.size();
+    assert_true(e.run(in).quality.ok());
+    in.calibration_size = {s.left0.cols * 2, s.left0.rows * 2};
+    assert_int_equal(e.run(in).quality.flags, CalibrationSizeMismatch);
+}
+
+}  // namespace
+
+int main() {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(calibration_size),
+        cmocka_unit_test(blank_and_frozen),
+        cmocka_unit_test(summary_and_tally),
+        cmocka_unit_test(estimator_calibration_size),
+    };
+    return cmocka_run_group_tests(tests, nullptr, nullptr);
+}

@@ -119,6 +119,10 @@ typedef struct lf_options lf_options_t;
  *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
+ *   "input.strict"     0/1               1: lf_push_frame refuses (LF_ERR_SIZE_MISMATCH) images
+ *                                        of another size than the calibration's image_width x
+ *                                        image_height (when not 0); 0 (default): logs a warning
+ *                                        once per estimator and goes on
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
  *                                        (default 0.65; "realtime" 0.55, "paper" 1)
@@ -307,6 +311,14 @@ LF_API const char *lf_options_last_error(const lf_options_t *options);
 /* Calibration and inputs                                                                */
 /* ===================================================================================== */
 
+/* One camera of a rig whose images are not rectified (ROS camera_info style), row-major. */
+typedef struct lf_raw_camera_t {
+    double K[9];  /* intrinsics of the raw images [fx s cx; 0 fy cy; 0 0 1] */
+    double D[8];  /* distortion k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's order; unused ones 0) */
+    double R[9];  /* rotation raw camera -> rectified camera */
+    double P[12]; /* rectified projection [f 0 cx Tx; 0 f cy 0; 0 0 1 0]; right camera: Tx = -fx * baseline */
+} lf_raw_camera_t;
+
 /* The rectified stereo camera. All lengths in metres, pixel quantities in pixels of the
  * (full-resolution) images pushed later. Accepted ranges (lf_create checks them; NaN and
  * infinities are outside every range): fx, fy in [1, 1e6] px; cx, cy in [-1e6, 1e6] px;
@@ -322,7 +334,24 @@ typedef struct lf_calibration_t {
      * (x right, y down, z forward): a rotation (orthonormal within 1e-3, determinant > 0), a
      * translation of at most 1000 m per axis [m], last row 0 0 0 1. */
     double lidar_to_camera[16];
+    /* The fields below were added at the struct's end; a caller whose struct_size ends before
+     * them (an older lidarflow.h) gets their zero values: size unknown, images rectified. */
+    uint32_t image_width, image_height; /* size of the images the calibration is for [px]; 0 = unknown.
+                                         * lf_push_frame warns once about another size, or refuses
+                                         * it with the option "input.strict" */
+    /* 1: the pushed images are raw (distorted and/or not row-aligned): lf_push_frame rectifies
+     * each pair with raw_left / raw_right (tables computed once per image size), and every
+     * result is in the rectified left camera that fx, fy, cx, cy, baseline describe, which must
+     * equal raw_left.P's (and baseline (raw_left.P[3] - raw_right.P[3]) / fx). 3-D LiDAR input
+     * (lidar_to_camera, LF_LIDAR_POINTS_CAMERA) is in that rectified left camera too, as
+     * lf_read_calibration composes it. 0: the images are rectified; raw_left / raw_right unused. */
+    uint32_t rectify;
+    uint32_t reserved; /* 0 */
+    lf_raw_camera_t raw_left, raw_right;
 } lf_calibration_t;
+
+/* struct_size of the first lf_calibration_t (up to lidar_to_camera), still accepted. */
+#define LF_CALIBRATION_V1_SIZE 176u
 
 /* Zeroes *c and sets its struct_size (call before filling the fields). */
 static inline void lf_calibration_init(lf_calibration_t *c) {
@@ -338,9 +367,28 @@ static inline void lf_calibration_init(lf_calibration_t *c) {
  * lidar_to_camera all zero). out->struct_size must be set (lf_calibration_init); *out is written only on
  * success. Errors: LF_ERR_INVALID_ARGUMENT (NULL cam_to_cam_path or out, struct_size too small),
  * LF_ERR_IO (a file cannot be read), LF_ERR_FORMAT (a missing, duplicated or malformed entry, not
- * a rectified pair, R not a rotation); the message is in lf_last_error(NULL). Thread-safe. */
+ * a rectified pair, R not a rotation); the message is in lf_last_error(NULL). Thread-safe.
+ * image_width / image_height come from S_rect_02 when the file has it (written only when
+ * out->struct_size reaches them). */
 LF_API int32_t lf_read_kitti_calibration(const char *cam_to_cam_path, const char *velo_to_cam_path,
                                          lf_calibration_t *out);
+
+/* Fills *out from any calibration source that docs/CALIBRATION.md describes: `calibration` is
+ * a KITTI calib_cam_to_cam.txt, an OpenCV stereo calibration file (cv::FileStorage YAML or
+ * XML: M1/K1 D1 M2/K2 D2 R T, R1 R2 P1 P2 when present, image_width + image_height or
+ * imageSize) or "LEFT,RIGHT", two ROS camera_info YAML files; the format is told from the
+ * content. A rig that is not rectified yet (distortion, rectifying rotations or a P other than
+ * K) sets rectify = 1 and raw_left / raw_right (OpenCV files without R1 R2 P1 P2 are rectified
+ * with cv::stereoRectify, alpha 0). velo_to_cam_path (NULL: none) is a calib_velo_to_cam.txt
+ * (R, T) into the raw left camera (KITTI: camera 0), composed into lidar_to_camera with the
+ * left camera's rectifying rotation and offset as lf_read_kitti_calibration does.
+ * out->struct_size must be at least LF_CALIBRATION_V1_SIZE; fields beyond it are written
+ * when it reaches them, and a rig that needs rectifying needs all of sizeof(lf_calibration_t).
+ * *out is written only on success. Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
+ * struct_size too small), LF_ERR_IO (a file missing, unreadable, not a regular file or above
+ * 1 MiB), LF_ERR_FORMAT (malformed, incomplete or inconsistent; the message names the file).
+ * Thread-safe. */
+LF_API int32_t lf_read_calibration(const char *calibration, const char *velo_to_cam_path, lf_calibration_t *out);
 
 /* Pixel formats of lf_image_t. */
 typedef enum lf_pixel_format_t {

@@ -1089,6 +1089,24 @@ void test_calibration_file(void **) {
     assert_true(cal.fx == 100 && cal.fy == 100 && cal.cx == 80 && cal.cy == 32 && cal.baseline == 0.5);
     assert_non_null(strstr(read_calibration(bad, &cal).c_str(), "P_rect_02: expected 12 values, got 11"));
     assert_non_null(strstr(read_calibration(dir + "/missing.txt", &cal).c_str(), "cannot open"));
+    // A camera_info pair of the same rig, with its image size; one file alone is refused.
+    const std::string info[2] = {dir + "/bridge_memq_left.yaml", dir + "/bridge_memq_right.yaml"};
+    for (int k = 0; k < 2; ++k) {
+        f = std::fopen(info[k].c_str(), "w");
+        assert_non_null(f);
+        std::fprintf(f,
+                     "image_width: 160\nimage_height: 64\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: [100, 0, 80, 0, "
+                     "100, 32, 0, 0, 1]\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n"
+                     "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+                     "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [100, 0, 80, %d, 0, 100, 32, 0, 0, 0, 1, 0]\n",
+                     k == 0 ? 0 : -50);
+        std::fclose(f);
+    }
+    lf_calibration_t info_cal;
+    assert_string_equal(read_calibration(info[0] + "," + info[1], &info_cal).c_str(), "");
+    assert_true(info_cal.fx == 100 && info_cal.cx == 80 && info_cal.baseline == 0.5 && info_cal.image_width == 160 &&
+                info_cal.image_height == 64 && info_cal.rectify == 0);
+    assert_non_null(strstr(read_calibration(info[0], &info_cal).c_str(), "describes one camera"));
 
     BridgeConfig config;
     config.status_period_s = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -55,9 +56,14 @@ cv::FileStorage open_storage(const std::string &text, const std::string &source)
     try {
         cv::FileStorage fs(input, cv::FileStorage::READ | cv::FileStorage::MEMORY);
         require(fs.isOpened(), ErrorCode::Format, source + ": not a YAML or XML file OpenCV can read");
+        // fs[key] asserts on a top level that is a sequence or a scalar.
+        require(fs.root().isMap(), ErrorCode::Format, source + ": the top level is not a map of keys");
         return fs;
     } catch (const cv::Exception &e) {
         throw Error(ErrorCode::Format, source + ": not a YAML or XML file OpenCV can read (" + e.err + ")");
+    } catch (const std::length_error &) {
+        // OpenCV 4.6's parser lets some malformed input size a string from garbage.
+        throw Error(ErrorCode::Format, source + ": not a YAML or XML file OpenCV can read");
     }
 }
 
@@ -350,7 +356,8 @@ Rig read_rig(const std::string &spec) {
         const std::string left = spec.substr(0, comma), right = spec.substr(comma + 1);
         require(!left.empty() && !right.empty() && right.find(',') == std::string::npos, ErrorCode::InvalidArgument,
                 "calibration '" + spec + "': expected FILE or LEFT,RIGHT (two camera_info files)");
-        return parse_camera_info_pair(read_calibration_text(left), left, read_calibration_text(right), right);
+        const std::string left_text = read_calibration_text(left);  // left first: errors in reading order
+        return parse_camera_info_pair(left_text, left, read_calibration_text(right), right);
     }
     const std::string text = read_calibration_text(spec);
     const std::string body = skip_space(text);

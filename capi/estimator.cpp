@@ -2,6 +2,7 @@
 // lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
 // builds the new frame and result aside and commits them only when everything succeeded, so a
 // failed call leaves the handle exactly as it was.
+#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -134,11 +135,14 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             lidarflow::log::write(lidarflow::log::Level::Warning,
                                   mismatch + ": results use the calibration as it is (said once per estimator)");
         std::shared_ptr<const lidarflow::io::Rectifier> rectifier = estimator->rectifier;
+        const auto rectify_start = std::chrono::steady_clock::now();
         if (rig.rectify) {
             if (!rectifier || rectifier->size() != size)
                 rectifier = std::make_shared<const lidarflow::io::Rectifier>(rig, size);
             rectifier->apply(frame->left, frame->right, frame->left, frame->right);
         }
+        const double rectify_seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - rectify_start).count();
         frame->lidar = convert_lidar(lidar, size, estimator->calibration);
 
         std::unique_ptr<Result> result;
@@ -152,6 +156,10 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.lidar1 = frame->lidar;
             in.camera = estimator->calibration.camera;
             result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
+            if (rig.rectify) {
+                result->timings.insert(result->timings.begin(), {"rectify", rectify_seconds});
+                result->total_seconds += rectify_seconds;
+            }
         }
         // Commit: nothing below can throw.
         if (result) estimator->result = std::move(result);

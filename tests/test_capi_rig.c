@@ -177,6 +177,9 @@ static void test_rectified_inside(void **state) {
     assert_int_equal(scene_result_fetch(e, &r), LF_OK);
     const double as_is = scene_result_accuracy(&r, raw.tu, raw.tv, d);
     scene_result_free(&r);
+    const char *first = NULL;
+    assert_int_equal(lf_get_timing(e, 0, &first, NULL), LF_OK);
+    assert_string_not_equal(first, "rectify");
     lf_destroy(e);
 
     cal.rectify = 1;
@@ -185,6 +188,10 @@ static void test_rectified_inside(void **state) {
     assert_int_equal(scene_result_fetch(e, &r), LF_OK);
     const double rectified = scene_result_accuracy(&r, raw.tu, raw.tv, d);
     scene_result_free(&r);
+    double seconds = -1;
+    assert_int_equal(lf_get_timing(e, 0, &first, &seconds), LF_OK);
+    assert_string_equal(first, "rectify"); /* the result says its pair was rectified, and what it cost */
+    assert_true(seconds >= 0 && seconds < 1);
     lf_destroy(e);
     printf("pixels within 1 px of the true scene flow: %.1f %% as pushed, %.1f %% rectified inside\n", 100 * as_is,
            100 * rectified);

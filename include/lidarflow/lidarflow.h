@@ -517,7 +517,8 @@ static inline void lf_result_info_init(lf_result_info_t *i) {
 LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *info);
 
 /* Per-stage timing `index` (0 .. timing_count - 1, in execution order) of the latest result:
- * *name (e.g. "matching_forward", "interpolation"; owned by the estimator, valid until the
+ * *name (e.g. "matching_forward", "interpolation"; "rectify" first for a calibration with
+ * rectify = 1: the pushed pair's rectification; owned by the estimator, valid until the
  * next push, reset or destroy) and *seconds. Either output may be NULL. Errors:
  * LF_ERR_INVALID_ARGUMENT (NULL estimator, index out of range), LF_ERR_NOT_READY. One thread
  * at a time per estimator. */

@@ -445,7 +445,10 @@ typedef struct lf_estimator lf_estimator_t;
 /* Creates an estimator. options may be NULL (defaults); it is copied and may be destroyed
  * afterwards; calibration is copied. *out receives the handle (NULL on failure), owned by the
  * caller until lf_destroy(). Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
- * struct_size too small, fx / fy / cx / cy / baseline outside the ranges of lf_calibration_t,
+ * struct_size neither LF_CALIBRATION_V1_SIZE nor at least sizeof(lf_calibration_t), fx / fy /
+ * cx / cy / baseline outside the ranges of lf_calibration_t, an image size above 16384 px or
+ * with one side 0, rectify = 1 with raw cameras that are not a pinhole pair with rotations and
+ * one rectified camera, or whose rectified camera is not fx ... baseline,
  * a lidar_to_camera that is not a finite rigid transform with last row 0 0 0 1, inconsistent options such as const1 without support
  * windows), LF_ERR_IO / LF_ERR_FORMAT (the "interpolation.sed_model" file), LF_ERR_OUT_OF_MEMORY;
  * the message is in lf_last_error(NULL). Thread-safe. */
@@ -462,6 +465,9 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * From the second frame on, the call computes (synchronously) the scene flow between the
  * previous frame (t0, the reference) and this one (t1): the previous frame's LiDAR is D_l^0,
  * this frame's is D_l^1. The new result replaces the previous one.
+ * With a calibration of rectify = 1 the pair is rectified first (both images raw, of the size
+ * the tables were made for, made again when it changes); LiDAR entries are placed in the
+ * rectified left image, and every result is in the rectified left camera.
  * timestamp_us must be larger than the previous frame's (any value for the first frame).
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
  * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
@@ -470,7 +476,8 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * calibration's lidar_to_camera moves to non-finite coordinates,
  * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
  * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes
- * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes),
+ * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes, a size
+ * other than the calibration's image_width x image_height with the option "input.strict"),
  * LF_ERR_BAD_STATE (called while lf_push_frame or lf_reset runs on the same estimator, e.g.
  * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
  * unchanged: the previous frame and the previous result stay. One thread at a time per estimator (this and every function below

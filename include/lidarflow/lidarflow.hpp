@@ -377,12 +377,7 @@ struct Calibration {
     // calib_cam_to_cam.txt and, unless velo_to_cam_path is empty, lidar_to_camera from
     // calib_velo_to_cam.txt. Throws Error (LF_ERR_IO, LF_ERR_FORMAT). Thread-safe.
     static Calibration read_kitti(const std::string &cam_to_cam_path, const std::string &velo_to_cam_path = {}) {
-        lf_calibration_t c;
-        lf_calibration_init(&c);
-        detail::check(lf_read_kitti_calibration(cam_to_cam_path.c_str(),
-                                                velo_to_cam_path.empty() ? nullptr : velo_to_cam_path.c_str(), &c),
-                      [] { return lf_last_error(nullptr); });
-        return from_c(c);
+        return read_with(lf_read_kitti_calibration, cam_to_cam_path, velo_to_cam_path);
     }
 
     // Reads any calibration source (lf_read_calibration): a KITTI calib_cam_to_cam.txt, an OpenCV
@@ -390,12 +385,7 @@ struct Calibration {
     // calib_velo_to_cam.txt into the raw left camera. Throws Error (LF_ERR_IO, LF_ERR_FORMAT).
     // Thread-safe.
     static Calibration read(const std::string &calibration, const std::string &velo_to_cam_path = {}) {
-        lf_calibration_t c;
-        lf_calibration_init(&c);
-        detail::check(lf_read_calibration(calibration.c_str(),
-                                          velo_to_cam_path.empty() ? nullptr : velo_to_cam_path.c_str(), &c),
-                      [] { return lf_last_error(nullptr); });
-        return from_c(c);
+        return read_with(lf_read_calibration, calibration, velo_to_cam_path);
     }
 
     // Conversions to and from the C struct (struct_size set).
@@ -429,6 +419,15 @@ struct Calibration {
     }
 
 private:
+    static Calibration read_with(int32_t (*reader)(const char *, const char *, lf_calibration_t *),
+                                 const std::string &calibration, const std::string &velo_to_cam_path) {
+        lf_calibration_t c;
+        lf_calibration_init(&c);
+        detail::check(reader(calibration.c_str(), velo_to_cam_path.empty() ? nullptr : velo_to_cam_path.c_str(), &c),
+                      [] { return lf_last_error(nullptr); });
+        return from_c(c);
+    }
+
     // RawCamera <-> lf_raw_camera_t (same field names and lengths).
     template <class From, class To>
     static void copy_raw(const From &from, To &to) noexcept {

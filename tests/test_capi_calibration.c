@@ -155,9 +155,10 @@ static void test_read_calibration(void **state) {
     assert_true(c.raw_left.D[0] == -0.2 && c.raw_left.K[0] == 700 && c.raw_right.P[3] == -350);
 
     /* The first layout: the prefix is written, nothing after it; a raw rig does not fit. */
-    unsigned char buf[sizeof(lf_calibration_t)];
-    memset(buf, 0xAB, sizeof buf);
-    lf_calibration_t *v1 = (lf_calibration_t *)buf;
+    lf_calibration_t whole; /* an old caller's struct followed by bytes that are not its */
+    unsigned char *buf = (unsigned char *)&whole;
+    memset(buf, 0xAB, sizeof whole);
+    lf_calibration_t *v1 = &whole;
     v1->struct_size = LF_CALIBRATION_V1_SIZE;
     assert_int_equal(lf_read_calibration(spec, NULL, v1), LF_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(lf_last_error(NULL), "rectifying"));
@@ -167,7 +168,7 @@ static void test_read_calibration(void **state) {
     assert_int_equal(lf_read_kitti_calibration(kitti, NULL, v1), LF_OK);
     assert_int_equal(v1->struct_size, LF_CALIBRATION_V1_SIZE);
     assert_true(v1->fx == 700 && v1->baseline == 0.5);
-    for (size_t i = LF_CALIBRATION_V1_SIZE; i < sizeof buf; ++i) assert_int_equal(buf[i], 0xAB);
+    for (size_t i = LF_CALIBRATION_V1_SIZE; i < sizeof whole; ++i) assert_int_equal(buf[i], 0xAB);
     lf_calibration_init(&c);
     assert_int_equal(lf_read_kitti_calibration(kitti, NULL, &c), LF_OK);
     assert_int_equal(c.image_width, 640);
@@ -223,11 +224,11 @@ static void test_image_size(void **state) {
     assert_int_equal(lf_set_log_callback(NULL, LF_LOG_WARNING, NULL), LF_OK);
 
     /* The first layout: fields after it are not the caller's and are not read. */
-    unsigned char buf[sizeof(lf_calibration_t)];
-    memset(buf, 0xAB, sizeof buf);
-    memcpy(buf, &cal, LF_CALIBRATION_V1_SIZE);
-    ((lf_calibration_t *)buf)->struct_size = LF_CALIBRATION_V1_SIZE;
-    assert_int_equal(lf_create(o, (lf_calibration_t *)buf, &e), LF_OK);
+    lf_calibration_t old;
+    memset(&old, 0xAB, sizeof old);
+    memcpy(&old, &cal, LF_CALIBRATION_V1_SIZE);
+    old.struct_size = LF_CALIBRATION_V1_SIZE;
+    assert_int_equal(lf_create(o, &old, &e), LF_OK);
     assert_int_equal(scene_push_pair(e, &s, 0, 0), LF_OK);
     lf_destroy(e);
     lf_options_destroy(o);

@@ -1,16 +1,17 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// The bridge's --calib file: a KITTI calib_cam_to_cam.txt (P_rect_02 and P_rect_03 lines; the
-// other keys are ignored). The bridge uses only the C ABI, so it reads the file itself.
+// The bridge's --calib: any calibration source lf_read_calibration reads (KITTI
+// calib_cam_to_cam.txt, an OpenCV stereo calibration file, "LEFT,RIGHT" camera_info YAMLs;
+// docs/CALIBRATION.md), through the C ABI as everything the bridge does.
 #include <string>
 
 #include "lidarflow/lidarflow.h"
 
 namespace lidarflow::bridge {
 
-// Reads `path` into *out (fx = P2(0,0), fy = P2(1,1), cx = P2(0,2), cy = P2(1,2), baseline =
-// (P2(0,3) - P3(0,3)) / fx, as lidarflow's KITTI reader). Returns "" or the problem (file
-// unreadable, a key missing or repeated, not 12 finite numbers, fx / fy / baseline <= 0).
-std::string read_kitti_calibration(const std::string &path, lf_calibration_t *out);
+// Reads `spec` into *out (camera, image size, and the raw cameras of a rig the estimator must
+// rectify). Returns "" or the problem, naming the file (unreadable, not a regular file, too
+// large, malformed, a key missing or repeated, not a stereo pair).
+std::string read_calibration(const std::string &spec, lf_calibration_t *out);
 
 }  // namespace lidarflow::bridge

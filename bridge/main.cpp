@@ -44,7 +44,8 @@ const char *kUsage =
     "  --ego-channel NAME       ego_motion_t output, one per result (default LIDARFLOW_EGO_MOTION)\n"
     "  --quality-channel NAME   quality_t output (input quality), one per result (default LIDARFLOW_QUALITY)\n"
     "  --status-channel NAME    status_t output (default LIDARFLOW_STATUS)\n"
-    "  --calib FILE             fixed calibration (KITTI calib_cam_to_cam.txt); default: from the channel\n"
+    "  --calib FILE[,FILE]      fixed calibration: KITTI calib_cam_to_cam.txt, OpenCV stereo file or\n"
+    "                           LEFT,RIGHT camera_info YAMLs (docs/CALIBRATION.md); default: the channel\n"
     "  --lidar-tolerance-ms T   pair a LiDAR sweep with the stereo frame within T ms (default 20)\n"
     "  --lidar-wait-ms T        wait up to T ms for a sweep that arrives after its frame (default 30)\n"
     "  --lidar-to-camera M      LiDAR -> left rectified camera, 16 numbers (row-major 4x4, comma- or\n"
@@ -335,7 +336,7 @@ int main(int argc, char **argv) {
     // the pair in progress.
     if (config.shard_count > 1 && !queue_given) config.queue_capacity = 2;
     if (!calib_file.empty()) {
-        const std::string err = read_kitti_calibration(calib_file, &config.calibration);
+        const std::string err = read_calibration(calib_file, &config.calibration);
         if (!err.empty()) {
             std::fprintf(stderr, "lidarflow-lcm-bridge: --calib %s\n", err.c_str());
             return 1;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "convert.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "guard.hpp"
 #include "lidar/projection.hpp"
 
 namespace lidarflow::capi {
@@ -87,11 +89,89 @@ SparseLidar from_points(const lf_lidar_t &l, size_t stride, cv::Size size, const
 
 }  // namespace
 
-Calibration convert_calibration(const lf_calibration_t &c) {
+namespace {
+
+io::RawCamera raw_camera(const lf_raw_camera_t &c) {
+    io::RawCamera r;
+    std::copy(c.K, c.K + 9, r.K.val);
+    std::copy(c.D, c.D + 8, r.D.val);
+    std::copy(c.R, c.R + 9, r.R.val);
+    std::copy(c.P, c.P + 12, r.P.val);
+    return r;
+}
+
+lf_raw_camera_t raw_camera(const io::RawCamera &r) {
+    lf_raw_camera_t c;
+    std::copy(r.K.val, r.K.val + 9, c.K);
+    std::copy(r.D.val, r.D.val + 8, c.D);
+    std::copy(r.R.val, r.R.val + 9, c.R);
+    std::copy(r.P.val, r.P.val + 12, c.P);
+    return c;
+}
+
+bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); }
+
+// The fields after the first layout: image size and the raw rig, checked against the camera.
+io::Rig convert_rig(const lf_calibration_t &c, const StereoCamera &camera) {
+    const uint32_t side = static_cast<uint32_t>(kMaxImageSide);
+    require(c.image_width <= side && c.image_height <= side && (c.image_width == 0) == (c.image_height == 0),
+            ErrorCode::InvalidArgument,
+            "calibration: image_width x image_height " + std::to_string(c.image_width) + "x" +
+                std::to_string(c.image_height) + " is not 0x0 (unknown) or a size up to " +
+                std::to_string(kMaxImageSide) + " px per side");
+    require(c.rectify <= 1 && c.reserved == 0, ErrorCode::InvalidArgument,
+            "calibration: rectify must be 0 or 1 and reserved 0");
+    const cv::Size size(static_cast<int>(c.image_width), static_cast<int>(c.image_height));
+    if (!c.rectify) return io::rig_from_pinhole(camera, size);
+    io::Rig rig = io::rig_from_cameras(raw_camera(c.raw_left), raw_camera(c.raw_right), size, "calibration",
+                                       ErrorCode::InvalidArgument);
+    const StereoCamera &r = rig.rect.camera;
+    require(same(camera.fx, r.fx) && same(camera.fy, r.fy) && same(camera.cx, r.cx) && same(camera.cy, r.cy) &&
+                same(camera.baseline, r.baseline),
+            ErrorCode::InvalidArgument,
+            "calibration: fx, fy, cx, cy, baseline differ from the rectified camera of raw_left.P / raw_right.P");
+    rig.rectify = true;
+    return rig;
+}
+
+}  // namespace
+
+lf_calibration_t calibration_of_rig(const io::Rig &rig) {
+    lf_calibration_t c;
+    lf_calibration_init(&c);
+    const StereoCamera &cam = rig.rect.camera;
+    c.fx = cam.fx;
+    c.fy = cam.fy;
+    c.cx = cam.cx;
+    c.cy = cam.cy;
+    c.baseline = cam.baseline;
+    c.image_width = static_cast<uint32_t>(rig.rect.image_size.width);
+    c.image_height = static_cast<uint32_t>(rig.rect.image_size.height);
+    if (rig.rectify) {
+        c.rectify = 1;
+        c.raw_left = raw_camera(rig.left);
+        c.raw_right = raw_camera(rig.right);
+    }
+    return c;
+}
+
+Calibration convert_calibration(const lf_calibration_t &given) {
+    require(given.struct_size == LF_CALIBRATION_V1_SIZE || given.struct_size >= sizeof(lf_calibration_t),
+            ErrorCode::InvalidArgument,
+            "calibration.struct_size is " + std::to_string(given.struct_size) + ", expected " +
+                std::to_string(sizeof(lf_calibration_t)) + " (lf_calibration_init) or " +
+                std::to_string(LF_CALIBRATION_V1_SIZE) + " (the first layout)");
+    if (given.struct_size > sizeof(lf_calibration_t))
+        check_struct_size(&given, given.struct_size, sizeof(lf_calibration_t), "calibration");
+    // The first layout's caller owns only its first bytes: the later fields read as zero.
+    lf_calibration_t c;
+    std::memset(&c, 0, sizeof c);
+    std::memcpy(&c, &given, std::min<size_t>(given.struct_size, sizeof c));
     Calibration out;
     out.camera = {c.fx, c.fy, c.cx, c.cy, c.baseline};
     const std::string range = camera_range_error(out.camera);
     require(range.empty(), ErrorCode::InvalidArgument, "calibration: " + range);
+    out.rig = convert_rig(c, out.camera);
     require(c.has_lidar_to_camera <= 1, ErrorCode::InvalidArgument, "calibration: has_lidar_to_camera must be 0 or 1");
     out.has_lidar_to_camera = c.has_lidar_to_camera == 1;
     if (out.has_lidar_to_camera) {

@@ -13,8 +13,13 @@
 namespace lidarflow::capi {
 
 
-// lf_calibration_t -> Calibration. Throws InvalidArgument (see lf_create).
+// lf_calibration_t of any accepted struct_size (LF_CALIBRATION_V1_SIZE, or sizeof and more
+// with a zero unknown tail) -> Calibration. Throws InvalidArgument (see lf_create).
 Calibration convert_calibration(const lf_calibration_t &c);
+
+// A rig as an lf_calibration_t (struct_size sizeof): camera, image size, rectify and the raw
+// cameras; no lidar_to_camera.
+lf_calibration_t calibration_of_rig(const io::Rig &rig);
 
 // Deep copy of an image as 8-bit gray (GRAY8) or BGR (RGB8, BGR8). `what` names it in messages.
 // Throws InvalidArgument (NULL data, zero or too large size, unknown format) or SizeMismatch

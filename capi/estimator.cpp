@@ -2,6 +2,7 @@
 // lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
 // builds the new frame and result aside and commits them only when everything succeeded, so a
 // failed call leaves the handle exactly as it was.
+#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -79,13 +80,13 @@ LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *ca
         require_non_null(out, "out");
         *out = nullptr;
         require_non_null(calibration, "calibration");
-        check_struct_size(calibration, calibration->struct_size, sizeof(lf_calibration_t), "calibration");
         const Calibration cal = convert_calibration(*calibration);
         const OptionValues defaults;
         const OptionValues &values = options ? options->values : defaults;
         lidarflow::pipeline::EstimatorOptions estimator_options = values.estimator;
         estimator_options.keep_stage_fields = false;  // a result holds the output field only
         *out = new lf_estimator(estimator_options, cal);
+        (*out)->strict_input = values.estimator.strict_input;
         return static_cast<int32_t>(LF_OK);
     });
 }
@@ -126,6 +127,23 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
                     std::string("frame is ") + format_text(frame->left.type()) + " but the previous frame was " +
                         format_text(prev->left.type()) + " (call lf_reset to change the format)");
         }
+        const lidarflow::io::Rig &rig = estimator->calibration.rig;
+        const std::string mismatch = lidarflow::io::image_size_mismatch(rig.rect.image_size, size);
+        require(mismatch.empty() || !estimator->strict_input, ErrorCode::SizeMismatch,
+                mismatch + " (option input.strict refuses it)");
+        const bool warn_size = !mismatch.empty() && !estimator->size_warned;
+        if (warn_size)
+            lidarflow::log::write(lidarflow::log::Level::Warning,
+                                  mismatch + ": results use the calibration as it is (said once per estimator)");
+        std::shared_ptr<const lidarflow::io::Rectifier> rectifier = estimator->rectifier;
+        const auto rectify_start = std::chrono::steady_clock::now();
+        if (rig.rectify) {
+            if (!rectifier || rectifier->size() != size)
+                rectifier = std::make_shared<const lidarflow::io::Rectifier>(rig, size);
+            rectifier->apply(frame->left, frame->right, frame->left, frame->right);
+        }
+        const double rectify_seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - rectify_start).count();
         frame->lidar = convert_lidar(lidar, size, estimator->calibration);
 
         std::unique_ptr<Result> result;
@@ -138,12 +156,18 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.lidar0 = prev->lidar;
             in.lidar1 = frame->lidar;
             in.camera = estimator->calibration.camera;
-            in.calibration_size = estimator->calibration.image_size;
+            in.calibration_size = rig.rect.image_size;
             result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
+            if (rig.rectify) {
+                result->timings.insert(result->timings.begin(), {"rectify", rectify_seconds});
+                result->total_seconds += rectify_seconds;
+            }
         }
         // Commit: nothing below can throw.
         if (result) estimator->result = std::move(result);
         estimator->previous = std::move(frame);
+        estimator->rectifier = std::move(rectifier);
+        estimator->size_warned = estimator->size_warned || warn_size;
         return static_cast<int32_t>(LF_OK);
     });
 }

@@ -11,6 +11,8 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "io/rectify.hpp"
+#include "io/rig.hpp"
 #include "pipeline/estimator.hpp"
 #include "pipeline/option_keys.hpp"
 
@@ -23,10 +25,10 @@ namespace lidarflow::capi {
 
 // The calibration as the estimator keeps it.
 struct Calibration {
-    StereoCamera camera;
+    StereoCamera camera;  // the rectified pair (= rig.rect.camera)
     bool has_lidar_to_camera = false;
     cv::Matx44d lidar_to_camera = cv::Matx44d::eye();
-    cv::Size image_size;  // the images it describes; 0 = unknown (input quality: size check off)
+    io::Rig rig;  // image size (rig.rect.image_size, 0x0 = unknown) and, when rig.rectify, the raw cameras
 };
 
 // One pushed frame, owned by the estimator.
@@ -56,6 +58,10 @@ struct lf_estimator {
 
     lidarflow::pipeline::Estimator estimator;
     lidarflow::capi::Calibration calibration;
+    bool strict_input = false;   // option "input.strict"
+    bool size_warned = false;    // the calibration-size warning was logged (once per handle)
+    // Tables for the pushed size when calibration.rig.rectify; made at the first push.
+    std::shared_ptr<const lidarflow::io::Rectifier> rectifier;
     std::unique_ptr<lidarflow::capi::Frame> previous;  // null before the first frame / after reset
     std::unique_ptr<lidarflow::capi::Result> result;   // null until two frames were pushed
     // The newer pair's descriptors, reused by the next push (frame k's t1 is frame k+1's t0).

@@ -28,6 +28,7 @@ typedef struct key_t_ {
 static const key_t_ kKeys[] = {
     {"threads", INT, 1, 256, 0, NONE, NAN}, /* the usable CPUs: test_cpp_api checks it */
     {"use_lidar", BOOL, 0, 1, 0, NONE, 1},
+    {"input.strict", BOOL, 0, 1, 0, NONE, 0},
     {"processing_scale", FLOAT, 0.125, 1, 0, NONE, 0.65}, /* the "default" preset's */
     {"support_window", INT, 1, 101, 0, ODD, 15},
     {"lidar.visibility_filter", BOOL, 0, 1, 0, NONE, 1},

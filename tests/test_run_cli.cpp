@@ -4,6 +4,7 @@
 // t1 scan when the layout has one; every --format reads back as the same result; the --points
 // PLY holds one finite point per valid pixel; progress lines appear when the output is piped;
 // bad arguments exit 2 and bad files 1. Runs the built binary ($LIDARFLOW_CLI, set by CTest).
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -13,7 +14,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/calib.hpp"
@@ -295,6 +298,51 @@ void test_bad_arguments(void **) {
     assert_false(fs::exists(s.dir / "o" / "flow"));
 }
 
+// The rig options: --fx ... give --calib's result; a calibration of another image size is a
+// warning, or an error with --strict; bad combinations exit 2, bad files 1 naming the file
+// (a FIFO is refused, not waited on).
+void test_rig_options(void **) {
+    const Scene s = make_scene("cli_run_rig");
+    const std::string base = "run" + s.images + " --stage consistency";
+    const std::string cc = " --calib " + q(s.k.calib_cam_to_cam("000000"));
+    char numbers[200];
+    std::snprintf(numbers, sizeof numbers, " --fx %.17g --fy %.17g --cx %.17g --cy %.17g --baseline %.17g", s.cam.fx,
+                  s.cam.fy, s.cam.cx, s.cam.cy, s.cam.baseline);
+    for (const auto &[name, rig] : {std::pair<const char *, std::string>{"calib", cc}, {"numbers", numbers}}) {
+        const Result r = run(base + rig + " --points " + q(s.dir / name / "c.ply") + " --out " + q(s.dir / name), s.dir);
+        if (r.code != 0) fail_msg("%s", r.output.c_str());
+    }
+    for (const char *f : {"disp_0/000000_10.png", "flow/000000_10.png", "c.ply"}) {
+        std::ifstream a(s.dir / "calib" / f, std::ios::binary), b(s.dir / "numbers" / f, std::ios::binary);
+        const std::string x((std::istreambuf_iterator<char>(a)), {}), y((std::istreambuf_iterator<char>(b)), {});
+        assert_true(!x.empty() && x == y);
+    }
+    // The same file with a size: 320x96 images against 640x96.
+    {
+        std::ifstream in(s.k.calib_cam_to_cam("000000"));
+        std::ofstream out(s.dir / "sized.txt");
+        out << in.rdbuf() << "S_rect_02: 640 96\n";
+    }
+    const std::string sized = " --calib " + q(s.dir / "sized.txt");
+    const Result warned = run(base + sized + " --out " + q(s.dir / "w"), s.dir);
+    assert_int_equal(warned.code, 0);
+    expect_contains(warned, "warning: the images are 320x96 but the calibration is for 640x96");
+    expect_failure(base + sized + " --strict --out " + q(s.dir / "s"), s.dir, 1, "640x96 (--strict)");
+    expect_failure(base + cc + " --fx 100 --out " + q(s.dir / "o"), s.dir, 2, "not both");
+    expect_failure(base + " --fx 100 --cx 10 --out " + q(s.dir / "o"), s.dir, 2, "needs --fx, --cx, --cy and --baseline");
+    expect_failure(base + " --fx 0 --cx 10 --cy 10 --baseline 1 --out " + q(s.dir / "o"), s.dir, 2, "fx");
+    std::ofstream(s.dir / "left.yaml") << "image_width: 320\nimage_height: 96\ncamera_matrix:\n  rows: 3\n  cols: 3\n"
+                                          "  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n";
+    expect_failure(base + " --calib " + q(s.dir / "left.yaml") + " --out " + q(s.dir / "o"), s.dir, 1,
+                   (s.dir / "left.yaml").string() + ": a camera_info file describes one camera");
+    expect_failure(base + " --calib " + q(s.dir / "left.yaml") + "," + q(s.dir / "left.yaml") + " --out " +
+                       q(s.dir / "o"),
+                   s.dir, 1, "left.yaml: missing key rectification_matrix");
+    assert_int_equal(mkfifo((s.dir / "fifo").c_str(), 0600), 0);
+    expect_failure(base + " --calib " + q(s.dir / "fifo") + " --out " + q(s.dir / "o"), s.dir, 1,
+                   "fifo is not a regular file");
+}
+
 // Output names: --id, else left0's file stem (KITTI's ID_10 kept for 6-digit ids); any 8-bit
 // image OpenCV reads (here JPEG) is an input; run's pictures carry their colour bars.
 void test_output_names_and_jpeg_inputs(void **) {
@@ -436,6 +484,7 @@ int main() {
         cmocka_unit_test(test_formats_and_points),
         cmocka_unit_test(test_points_object_motion),
         cmocka_unit_test(test_bad_arguments),
+        cmocka_unit_test(test_rig_options),
         cmocka_unit_test(test_output_names_and_jpeg_inputs),
         cmocka_unit_test(test_quiet_and_verbose),
         cmocka_unit_test(test_kitti_pictures_have_legends),

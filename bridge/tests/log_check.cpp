@@ -251,7 +251,7 @@ int main(int argc, char **argv) {
         else if (a == "--check-every") setup.check_every = std::max(1, std::atoi(v.c_str()));
         else if (a == "--lidar-channel") setup.lidar_channel = v;
         else if (a == "--calib") {
-            const std::string err = read_kitti_calibration(v, &setup.calibration);
+            const std::string err = read_calibration(v, &setup.calibration);
             if (!err.empty()) {
                 std::fprintf(stderr, "log_check: %s\n", err.c_str());
                 return 2;

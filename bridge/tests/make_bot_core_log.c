@@ -182,6 +182,7 @@ int main(int argc, char **argv) {
         perror(path);
         return 1;
     }
+    fprintf(calib, "R_rect_00: 1 0 0 0 1 0 0 0 1\n"); /* as in every KITTI file, which lidarflow's reader needs */
     fprintf(calib, "P_rect_02: %g 0 %g 0 0 %g %g 0 0 0 1 0\n", FX, CX, FX, CY);
     fprintf(calib, "P_rect_03: %g 0 %g %g 0 %g %g 0 0 0 1 0\n", FX, CX, -FX * BASELINE, FX, CY);
     fclose(calib);

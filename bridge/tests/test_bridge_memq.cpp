@@ -1176,13 +1176,13 @@ void test_calibration_out_of_range(void **) {
     const std::string path = dir + "/bridge_memq_calib_inf.txt";
     FILE *f = std::fopen(path.c_str(), "w");
     assert_non_null(f);
-    std::fprintf(f, "P_rect_02: 100 0 80 1e308 0 100 32 0 0 0 1 0\nP_rect_03: 100 0 80 -1e308 0 100 32 0 0 0 1 0\n");
+    std::fprintf(f, "R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 100 0 80 1e308 0 100 32 0 0 0 1 0\nP_rect_03: 100 0 80 -1e308 0 100 32 0 0 0 1 0\n");
     std::fclose(f);
     BridgeConfig fixed;
     fixed.status_period_s = 0;
     fixed.options = kOptions;
     fixed.log = rig.log;
-    const std::string read_err = read_kitti_calibration(path, &fixed.calibration);
+    const std::string read_err = read_calibration(path, &fixed.calibration);
     fixed.fixed_calibration = true;
     lcm_t *lcm = lcm_create("memq://");
     assert_non_null(lcm);
@@ -1259,22 +1259,40 @@ void test_calibration_file(void **) {
     const std::string path = dir + "/bridge_memq_calib.txt", bad = dir + "/bridge_memq_calib_bad.txt";
     FILE *f = std::fopen(path.c_str(), "w");
     assert_non_null(f);
-    std::fprintf(f, "calib_time: 09-Jan-2012\nP_rect_02: 100 0 80 4 0 100 32 0 0 0 1 0\n"
+    std::fprintf(f, "calib_time: 09-Jan-2012\nR_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 100 0 80 4 0 100 32 0 0 0 1 0\n"
                     "P_rect_03: 100 0 80 -46 0 100 32 0 0 0 1 0\n");
     std::fclose(f);
     f = std::fopen(bad.c_str(), "w");
     assert_non_null(f);
-    std::fprintf(f, "P_rect_02: 100 0 80 4 0 100 32 0 0 0 1\nP_rect_03: 1 2 3\n");
+    std::fprintf(f, "R_rect_00: 1 0 0 0 1 0 0 0 1\nP_rect_02: 100 0 80 4 0 100 32 0 0 0 1\nP_rect_03: 1 2 3\n");
     std::fclose(f);
     lf_calibration_t cal;
-    assert_string_equal(read_kitti_calibration(path, &cal).c_str(), "");
+    assert_string_equal(read_calibration(path, &cal).c_str(), "");
     assert_true(cal.fx == 100 && cal.fy == 100 && cal.cx == 80 && cal.cy == 32 && cal.baseline == 0.5);
-    assert_non_null(strstr(read_kitti_calibration(bad, &cal).c_str(), "P_rect_02 has 11 values"));
-    assert_non_null(strstr(read_kitti_calibration(dir + "/missing.txt", &cal).c_str(), "cannot open"));
+    assert_non_null(strstr(read_calibration(bad, &cal).c_str(), "P_rect_02: expected 12 values, got 11"));
+    assert_non_null(strstr(read_calibration(dir + "/missing.txt", &cal).c_str(), "cannot open"));
+    // A camera_info pair of the same rig, with its image size; one file alone is refused.
+    const std::string info[2] = {dir + "/bridge_memq_left.yaml", dir + "/bridge_memq_right.yaml"};
+    for (int k = 0; k < 2; ++k) {
+        f = std::fopen(info[k].c_str(), "w");
+        assert_non_null(f);
+        std::fprintf(f,
+                     "image_width: 160\nimage_height: 64\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: [100, 0, 80, 0, "
+                     "100, 32, 0, 0, 1]\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n"
+                     "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+                     "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [100, 0, 80, %d, 0, 100, 32, 0, 0, 0, 1, 0]\n",
+                     k == 0 ? 0 : -50);
+        std::fclose(f);
+    }
+    lf_calibration_t info_cal;
+    assert_string_equal(read_calibration(info[0] + "," + info[1], &info_cal).c_str(), "");
+    assert_true(info_cal.fx == 100 && info_cal.cx == 80 && info_cal.baseline == 0.5 && info_cal.image_width == 160 &&
+                info_cal.image_height == 64 && info_cal.rectify == 0);
+    assert_non_null(strstr(read_calibration(info[0], &info_cal).c_str(), "describes one camera"));
 
     BridgeConfig config;
     config.status_period_s = 0;
-    assert_string_equal(read_kitti_calibration(path, &config.calibration).c_str(), "");
+    assert_string_equal(read_calibration(path, &config.calibration).c_str(), "");
     config.fixed_calibration = true;
     Rig rig(config);
     rig.send("LIDARFLOW_STEREO", stereo_bytes(g_scene.left0, g_scene.right0, 0));

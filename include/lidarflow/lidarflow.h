@@ -119,6 +119,10 @@ typedef struct lf_options lf_options_t;
  *                                        first, then any key it should not decide
  *   "use_lidar"        0/1               master LiDAR switch (default 1); 0 = image-only
  *                                        pipeline, LiDAR inputs are then checked but unused
+ *   "input.strict"     0/1               1: lf_push_frame refuses (LF_ERR_SIZE_MISMATCH) images
+ *                                        of another size than the calibration's image_width x
+ *                                        image_height (when not 0); 0 (default): logs a warning
+ *                                        once per estimator and goes on
  *   "processing_scale" float [0.125, 1]  run every stage on the frame resized by this
  *                                        factor, results brought back to the input size
  *                                        (default 0.65; "realtime" 0.55, "paper" 1)
@@ -311,6 +315,14 @@ LF_API const char *lf_options_last_error(const lf_options_t *options);
 /* Calibration and inputs                                                                */
 /* ===================================================================================== */
 
+/* One camera of a rig whose images are not rectified (ROS camera_info style), row-major. */
+typedef struct lf_raw_camera_t {
+    double K[9];  /* intrinsics of the raw images [fx s cx; 0 fy cy; 0 0 1] */
+    double D[8];  /* distortion k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's order; unused ones 0) */
+    double R[9];  /* rotation raw camera -> rectified camera */
+    double P[12]; /* rectified projection [f 0 cx Tx; 0 f cy 0; 0 0 1 0]; right camera: Tx = -fx * baseline */
+} lf_raw_camera_t;
+
 /* The rectified stereo camera. All lengths in metres, pixel quantities in pixels of the
  * (full-resolution) images pushed later. Accepted ranges (lf_create checks them; NaN and
  * infinities are outside every range): fx, fy in [1, 1e6] px; cx, cy in [-1e6, 1e6] px;
@@ -326,7 +338,24 @@ typedef struct lf_calibration_t {
      * (x right, y down, z forward): a rotation (orthonormal within 1e-3, determinant > 0), a
      * translation of at most 1000 m per axis [m], last row 0 0 0 1. */
     double lidar_to_camera[16];
+    /* The fields below were added at the struct's end; a caller whose struct_size ends before
+     * them (an older lidarflow.h) gets their zero values: size unknown, images rectified. */
+    uint32_t image_width, image_height; /* size of the images the calibration is for [px]; 0 = unknown.
+                                         * lf_push_frame warns once about another size, or refuses
+                                         * it with the option "input.strict" */
+    /* 1: the pushed images are raw (distorted and/or not row-aligned): lf_push_frame rectifies
+     * each pair with raw_left / raw_right (tables computed once per image size), and every
+     * result is in the rectified left camera that fx, fy, cx, cy, baseline describe, which must
+     * equal raw_left.P's (and baseline (raw_left.P[3] - raw_right.P[3]) / fx). 3-D LiDAR input
+     * (lidar_to_camera, LF_LIDAR_POINTS_CAMERA) is in that rectified left camera too, as
+     * lf_read_calibration composes it. 0: the images are rectified; raw_left / raw_right unused. */
+    uint32_t rectify;
+    uint32_t reserved; /* 0 */
+    lf_raw_camera_t raw_left, raw_right;
 } lf_calibration_t;
+
+/* struct_size of the first lf_calibration_t (up to lidar_to_camera), still accepted. */
+#define LF_CALIBRATION_V1_SIZE 176u
 
 /* Zeroes *c and sets its struct_size (call before filling the fields). */
 static inline void lf_calibration_init(lf_calibration_t *c) {
@@ -345,9 +374,28 @@ static inline void lf_calibration_init(lf_calibration_t *c) {
  * blocking, so a FIFO or device is refused), LF_ERR_FORMAT (a missing, duplicated or malformed
  * entry, a P_rect_02 / P_rect_03 that is not a rectified pinhole K [I | t], not a rectified pair,
  * R_rect_00 or R not a rotation, a T beyond 1000 m); the message, naming the file, is in
- * lf_last_error(NULL). Thread-safe. */
+ * lf_last_error(NULL). Thread-safe.
+ * image_width / image_height come from S_rect_02 when the file has it (written only when
+ * out->struct_size reaches them). */
 LF_API int32_t lf_read_kitti_calibration(const char *cam_to_cam_path, const char *velo_to_cam_path,
                                          lf_calibration_t *out);
+
+/* Fills *out from any calibration source that docs/CALIBRATION.md describes: `calibration` is
+ * a KITTI calib_cam_to_cam.txt, an OpenCV stereo calibration file (cv::FileStorage YAML or
+ * XML: M1/K1 D1 M2/K2 D2 R T, R1 R2 P1 P2 when present, image_width + image_height or
+ * imageSize) or "LEFT,RIGHT", two ROS camera_info YAML files; the format is told from the
+ * content. A rig that is not rectified yet (distortion, rectifying rotations or a P other than
+ * K) sets rectify = 1 and raw_left / raw_right (OpenCV files without R1 R2 P1 P2 are rectified
+ * with cv::stereoRectify, alpha 0). velo_to_cam_path (NULL: none) is a calib_velo_to_cam.txt
+ * (R, T) into the raw left camera (KITTI: camera 0), composed into lidar_to_camera with the
+ * left camera's rectifying rotation and offset as lf_read_kitti_calibration does.
+ * out->struct_size must be at least LF_CALIBRATION_V1_SIZE; fields beyond it are written
+ * when it reaches them, and a rig that needs rectifying needs all of sizeof(lf_calibration_t).
+ * *out is written only on success. Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
+ * struct_size too small), LF_ERR_IO (a file missing, unreadable, not a regular file or above
+ * 1 MiB), LF_ERR_FORMAT (malformed, incomplete or inconsistent; the message names the file).
+ * Thread-safe. */
+LF_API int32_t lf_read_calibration(const char *calibration, const char *velo_to_cam_path, lf_calibration_t *out);
 
 /* Pixel formats of lf_image_t. */
 typedef enum lf_pixel_format_t {
@@ -404,7 +452,10 @@ typedef struct lf_estimator lf_estimator_t;
 /* Creates an estimator. options may be NULL (defaults); it is copied and may be destroyed
  * afterwards; calibration is copied. *out receives the handle (NULL on failure), owned by the
  * caller until lf_destroy(). Errors: LF_ERR_INVALID_ARGUMENT (NULL calibration or out,
- * struct_size too small, fx / fy / cx / cy / baseline outside the ranges of lf_calibration_t,
+ * struct_size neither LF_CALIBRATION_V1_SIZE nor at least sizeof(lf_calibration_t), fx / fy /
+ * cx / cy / baseline outside the ranges of lf_calibration_t, an image size above 16384 px or
+ * with one side 0, rectify = 1 with raw cameras that are not a pinhole pair with rotations and
+ * one rectified camera, or whose rectified camera is not fx ... baseline,
  * a lidar_to_camera that is not a finite rigid transform with last row 0 0 0 1, inconsistent options such as const1 without support
  * windows), LF_ERR_IO / LF_ERR_FORMAT (the "interpolation.sed_model" file), LF_ERR_OUT_OF_MEMORY;
  * the message is in lf_last_error(NULL). Thread-safe. */
@@ -424,6 +475,9 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * depends on the frames before: the decoupled presets start each pair's flow from what moved
  * in the previous pair ("matching.stream_prior"), so a stream that starts later gives other
  * (at its start, less informed) results; lf_reset() forgets it.
+ * With a calibration of rectify = 1 the pair is rectified first (both images raw, of the size
+ * the tables were made for, made again when it changes); LiDAR entries are placed in the
+ * rectified left image, and every result is in the rectified left camera.
  * timestamp_us must be larger than the previous frame's (any value for the first frame).
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL estimator/left/right, NULL data, zero width or
  * height or a side above 16384 px, unknown format or LiDAR kind, left/right formats differ,
@@ -432,7 +486,8 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * calibration's lidar_to_camera moves to non-finite coordinates,
  * LF_LIDAR_POINTS_LIDAR without lidar_to_camera, images the estimator cannot work on (e.g.
  * no matchable texture)), LF_ERR_SIZE_MISMATCH (stride smaller than a row, left/right sizes
- * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes),
+ * differ, size or format differs from the previous frame, LiDAR stride below 12 bytes, a size
+ * other than the calibration's image_width x image_height with the option "input.strict"),
  * LF_ERR_BAD_STATE (called while lf_push_frame or lf_reset runs on the same estimator, e.g.
  * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
  * unchanged: the previous frame and the previous result stay. One thread at a time per estimator (this and every function below
@@ -479,7 +534,8 @@ static inline void lf_result_info_init(lf_result_info_t *i) {
 LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *info);
 
 /* Per-stage timing `index` (0 .. timing_count - 1, in execution order) of the latest result:
- * *name (e.g. "matching_forward", "interpolation"; owned by the estimator, valid until the
+ * *name (e.g. "matching_forward", "interpolation"; "rectify" first for a calibration with
+ * rectify = 1: the pushed pair's rectification; owned by the estimator, valid until the
  * next push, reset or destroy) and *seconds. Either output may be NULL. Errors:
  * LF_ERR_INVALID_ARGUMENT (NULL estimator, index out of range), LF_ERR_NOT_READY. One thread
  * at a time per estimator. */

@@ -336,7 +336,7 @@ private:
 // Calibration and inputs
 // =============================================================================================
 
-// The rectified stereo camera (lf_calibration_t): lengths in metres, pixel quantities in pixels
+// The stereo camera (lf_calibration_t): the rectified pair, lengths in metres, pixel quantities in pixels
 // of the full-resolution images; ranges as in lidarflow.h (checked when an Estimator is
 // created). A plain value.
 struct Calibration {
@@ -348,6 +348,19 @@ struct Calibration {
     // LidarView::points_lidar).
     bool has_lidar_to_camera = false;
     std::array<double, 16> lidar_to_camera{};
+    // Size of the images the calibration is for [px]; 0 = unknown. Another size is warned about
+    // once per Estimator, or refused with the option "input.strict".
+    uint32_t image_width = 0, image_height = 0;
+    // A raw rig (lf_raw_camera_t, row-major K, D, R, P per camera): the Estimator rectifies each
+    // pair, and fx ... baseline describe the rectified left camera, which results are in.
+    struct RawCamera {
+        std::array<double, 9> K{};
+        std::array<double, 8> D{};
+        std::array<double, 9> R{};
+        std::array<double, 12> P{};
+    };
+    bool rectify = false;
+    RawCamera raw_left, raw_right;
 
     // A pinhole pair without LiDAR extrinsics.
     static Calibration pinhole(double fx, double fy, double cx, double cy, double baseline) {
@@ -364,12 +377,15 @@ struct Calibration {
     // calib_cam_to_cam.txt and, unless velo_to_cam_path is empty, lidar_to_camera from
     // calib_velo_to_cam.txt. Throws Error (LF_ERR_IO, LF_ERR_FORMAT). Thread-safe.
     static Calibration read_kitti(const std::string &cam_to_cam_path, const std::string &velo_to_cam_path = {}) {
-        lf_calibration_t c;
-        lf_calibration_init(&c);
-        detail::check(lf_read_kitti_calibration(cam_to_cam_path.c_str(),
-                                                velo_to_cam_path.empty() ? nullptr : velo_to_cam_path.c_str(), &c),
-                      [] { return lf_last_error(nullptr); });
-        return from_c(c);
+        return read_with(lf_read_kitti_calibration, cam_to_cam_path, velo_to_cam_path);
+    }
+
+    // Reads any calibration source (lf_read_calibration): a KITTI calib_cam_to_cam.txt, an OpenCV
+    // stereo calibration file or "LEFT,RIGHT" camera_info YAMLs, plus optionally a
+    // calib_velo_to_cam.txt into the raw left camera. Throws Error (LF_ERR_IO, LF_ERR_FORMAT).
+    // Thread-safe.
+    static Calibration read(const std::string &calibration, const std::string &velo_to_cam_path = {}) {
+        return read_with(lf_read_calibration, calibration, velo_to_cam_path);
     }
 
     // Conversions to and from the C struct (struct_size set).
@@ -383,13 +399,42 @@ struct Calibration {
         c.baseline = baseline;
         c.has_lidar_to_camera = has_lidar_to_camera ? 1u : 0u;
         for (std::size_t i = 0; i < 16; ++i) c.lidar_to_camera[i] = lidar_to_camera[i];
+        c.image_width = image_width;
+        c.image_height = image_height;
+        c.rectify = rectify ? 1u : 0u;
+        copy_raw(raw_left, c.raw_left);
+        copy_raw(raw_right, c.raw_right);
         return c;
     }
     static Calibration from_c(const lf_calibration_t &c) noexcept {
         Calibration r = pinhole(c.fx, c.fy, c.cx, c.cy, c.baseline);
         r.has_lidar_to_camera = c.has_lidar_to_camera != 0;
         for (std::size_t i = 0; i < 16; ++i) r.lidar_to_camera[i] = c.lidar_to_camera[i];
+        r.image_width = c.image_width;
+        r.image_height = c.image_height;
+        r.rectify = c.rectify != 0;
+        copy_raw(c.raw_left, r.raw_left);
+        copy_raw(c.raw_right, r.raw_right);
         return r;
+    }
+
+private:
+    static Calibration read_with(int32_t (*reader)(const char *, const char *, lf_calibration_t *),
+                                 const std::string &calibration, const std::string &velo_to_cam_path) {
+        lf_calibration_t c;
+        lf_calibration_init(&c);
+        detail::check(reader(calibration.c_str(), velo_to_cam_path.empty() ? nullptr : velo_to_cam_path.c_str(), &c),
+                      [] { return lf_last_error(nullptr); });
+        return from_c(c);
+    }
+
+    // RawCamera <-> lf_raw_camera_t (same field names and lengths).
+    template <class From, class To>
+    static void copy_raw(const From &from, To &to) noexcept {
+        for (std::size_t i = 0; i < 9; ++i) to.K[i] = from.K[i];
+        for (std::size_t i = 0; i < 8; ++i) to.D[i] = from.D[i];
+        for (std::size_t i = 0; i < 9; ++i) to.R[i] = from.R[i];
+        for (std::size_t i = 0; i < 12; ++i) to.P[i] = from.P[i];
     }
 };
 

@@ -28,7 +28,8 @@ std::string trim(const std::string &s) {
 // Collects the value text of the wanted keys only: other keys (calib_time, corner_dist, ...)
 // carry non-numeric values that must not make a valid file fail.
 std::map<std::string, std::string> collect(const std::string &text, const std::string &source,
-                                           const std::vector<std::string> &wanted) {
+                                           const std::vector<std::string> &wanted,
+                                           const std::vector<std::string> &optional = {}) {
     std::map<std::string, std::string> found;
     std::istringstream in(text);
     std::string line;
@@ -43,6 +44,7 @@ std::map<std::string, std::string> collect(const std::string &text, const std::s
         const std::string key = trim(t.substr(0, colon));
         bool is_wanted = false;
         for (const auto &w : wanted) is_wanted = is_wanted || w == key;
+        for (const auto &w : optional) is_wanted = is_wanted || w == key;
         if (!is_wanted) continue;
         require(found.count(key) == 0, ErrorCode::Format,
                 source + ":" + std::to_string(lineno) + ": duplicate key " + key);
@@ -117,8 +119,17 @@ void write_matrix(std::FILE *f, const char *key, const cv::Matx<double, R, C> &m
 }  // namespace
 
 CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string &source) {
-    const auto found = collect(text, source, {"P_rect_02", "P_rect_03", "R_rect_00"});
+    const auto found = collect(text, source, {"P_rect_02", "P_rect_03", "R_rect_00"}, {"S_rect_02"});
     CamToCamCalib c;
+    if (found.count("S_rect_02")) {
+        // KITTI writes the size as doubles ("1.242000e+03 3.750000e+02").
+        const cv::Matx12d s = matrix<1, 2>(found, "S_rect_02", source);
+        require(s(0) >= 1 && s(1) >= 1 && s(0) <= kMaxImageSide && s(1) <= kMaxImageSide && s(0) == std::floor(s(0)) &&
+                    s(1) == std::floor(s(1)),
+                ErrorCode::Format, source + ": S_rect_02 is not an image size (whole pixels, 1 to " +
+                                       std::to_string(kMaxImageSide) + " per side)");
+        c.image_size = {static_cast<int>(s(0)), static_cast<int>(s(1))};
+    }
     c.P_rect_02 = matrix<3, 4>(found, "P_rect_02", source);
     c.P_rect_03 = matrix<3, 4>(found, "P_rect_03", source);
     c.R_rect_00 = matrix<3, 3>(found, "R_rect_00", source);
@@ -179,6 +190,8 @@ void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib)
     write_matrix(f, "R_rect_00", calib.R_rect_00);
     write_matrix(f, "P_rect_02", calib.P_rect_02);
     write_matrix(f, "P_rect_03", calib.P_rect_03);
+    if (!calib.image_size.empty())
+        std::fprintf(f, "S_rect_02: %d %d\n", calib.image_size.width, calib.image_size.height);
     const bool ok = !std::ferror(f);
     require(std::fclose(f) == 0 && ok, ErrorCode::Io, "cannot write " + path);
 }

@@ -11,7 +11,8 @@
 // calib_velo_to_cam/ID.txt holds `R:` (9 numbers, row-major) and `T:` (3 numbers): the rigid
 // transform from the Velodyne frame to camera 0's unrectified frame.
 //
-// Keys the parsers do not need are ignored (KITTI files carry dates, distortion, sizes).
+// S_rect_02 (optional) is the rectified left image's size. Keys the parsers do not need are
+// ignored (KITTI files carry dates, distortion, raw sizes).
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -25,6 +26,7 @@ struct CamToCamCalib {
     cv::Matx34d P_rect_03;  // right colour camera, rectified
     cv::Matx33d R_rect_00;  // rotation camera 0 -> camera 0 rectified
     StereoCamera camera;    // derived from P_rect_02 / P_rect_03 (see header comment)
+    cv::Size image_size;    // S_rect_02 (rectified image size) when the file has it; 0x0 = unknown
 };
 
 // Parses calib_cam_to_cam text. Throws Error: Io when the file cannot be opened (only a regular
@@ -46,7 +48,7 @@ CamToCamCalib parse_calib_cam_to_cam(const std::string &text, const std::string 
 cv::Matx44d read_calib_velo_to_cam(const std::string &path);
 cv::Matx44d parse_calib_velo_to_cam(const std::string &text, const std::string &source);
 
-// Writes P_rect_02, P_rect_03 and R_rect_00 in the KITTI text format, with enough digits that
+// Writes P_rect_02, P_rect_03, R_rect_00 (and S_rect_02 when image_size is known) in the KITTI text format, with enough digits that
 // read_calib_cam_to_cam returns the same doubles. Creates missing parent folders. Throws
 // Error: InvalidArgument for non-finite entries, Io when the file cannot be written.
 void write_calib_cam_to_cam(const std::string &path, const CamToCamCalib &calib);

@@ -86,13 +86,15 @@ std::vector<CloudPoint> scene_points(const SceneFlowField &f, const StereoCamera
     return out;
 }
 
-void write_ply(const std::string &path, const std::vector<CloudPoint> &points) {
+void write_ply(const std::string &path, const std::vector<CloudPoint> &points, const std::string &camera_note) {
+    require(camera_note.find('\n') == std::string::npos, ErrorCode::InvalidArgument, "write_ply: multi-line note");
     const bool om = !points.empty() && points[0].has_object_motion;
     for (const CloudPoint &p : points)
         require(p.has_object_motion == om, ErrorCode::InvalidArgument,
                 "write_ply: either every point has its object motion or none");
     std::string buf = "ply\nformat binary_little_endian 1.0\ncomment lidarflow scene flow: position at t0 and "
                       "motion to t1 [m], left rectified camera (x right, y down, z forward)\n" +
+                      (camera_note.empty() ? std::string() : "comment " + camera_note + "\n") +
                       std::string(om ? "comment omx omy omz: object motion X1 - T X0 [m], ego-motion T removed\n" : "") +
                       "element vertex " + std::to_string(points.size()) + "\n" + kHeaderProperties +
                       (om ? kObjectMotionProperties : "") + "end_header\n";

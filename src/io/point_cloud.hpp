@@ -36,9 +36,9 @@ std::vector<CloudPoint> scene_points(const SceneFlowField &f, const StereoCamera
                                      const cv::Matx44d *ego = nullptr);
 
 // Writes omx omy omz when the points have object motion (all or none must; else
-// Error(InvalidArgument)). Creates missing parent folders. Throws Error(Io) when the file cannot
-// be written.
-void write_ply(const std::string &path, const std::vector<CloudPoint> &points);
+// Error(InvalidArgument)). `camera_note` (one line, may be empty) adds a header comment about the
+// camera. Creates missing parent folders. Throws Error(Io) when the file cannot be written.
+void write_ply(const std::string &path, const std::vector<CloudPoint> &points, const std::string &camera_note = "");
 // Reads what write_ply writes (the same properties in the same order, binary little-endian, with
 // or without omx omy omz). Throws Error: Io when unreadable, Format for another layout or a
 // truncated file.

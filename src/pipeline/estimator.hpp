@@ -56,6 +56,10 @@ struct EstimatorOptions {
     // The C ABI handle (and so the bridge and Python) reads only the output and sets this to
     // false.
     bool keep_stage_fields = true;
+    // A frame whose size differs from the calibration's (when the calibration knows it) is
+    // refused instead of logged as a warning once. Checked by the callers that hold the
+    // calibration (the C ABI handle, `lidarflow run`) with io::image_size_mismatch.
+    bool strict_input = false;
 
     // LiDAR points the camera cannot see (behind an object's edge, seen past it from the
     // LiDAR's position) are removed from lidar0 and lidar1 before every stage, at the input's

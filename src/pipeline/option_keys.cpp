@@ -45,6 +45,7 @@ const OptionKey kKeys[] = {
     {"adaptive_threads", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(adaptive_threads)},
     {"preset", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
     {"use_lidar", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(use_lidar)},
+    {"input.strict", OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(strict_input)},
     {"processing_scale", OptionKeyType::Float, 0.125, 1, false, Extra::None, LF_FLOAT_FIELD(processing_scale)},
     {"upscale_edge_step", OptionKeyType::Float, 0, 64, false, Extra::None, LF_FLOAT_FIELD(upscale_edge_step)},
     {"last_stage", OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},

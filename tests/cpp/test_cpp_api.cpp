@@ -221,6 +221,20 @@ void test_errors(void **) {
                  "const1 without support windows");
     expect_error([] { lf::Calibration::read_kitti("/nonexistent/calib_cam_to_cam.txt"); }, LF_ERR_IO,
                  "/nonexistent/calib_cam_to_cam.txt", "missing calibration");
+    expect_error([] { lf::Calibration::read("/nonexistent/left.yaml,/nonexistent/right.yaml"); }, LF_ERR_IO,
+                 "/nonexistent/left.yaml", "missing camera_info");
+    // The image size and the raw rig survive the C struct; another size is refused when strict.
+    lf::Calibration sized = sc.calibration();
+    sized.image_width = W + 8;
+    sized.image_height = H;
+    sized.raw_left.K[0] = 5;
+    const lf::Calibration back = lf::Calibration::from_c(sized.to_c());
+    assert_true(back.image_width == W + 8 && back.image_height == H && back.raw_left.K[0] == 5 && !back.rectify);
+    lf::Options strict = scene_options("matching");
+    strict.set("input.strict", 1);
+    lf::Estimator refusing(sized, strict);
+    expect_error([&] { refusing.push(0, sc.image(sc.s.left0), sc.image(sc.s.right0)); }, LF_ERR_SIZE_MISMATCH,
+                 "calibration is for", "size other than the calibration's");
 
     lf::Estimator e(sc.calibration(), scene_options("matching"));
     assert_false(e.has_result());

@@ -20,6 +20,7 @@
 #include "io/calib.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
+#include "io/rig.hpp"
 #include "io/result_formats.hpp"
 #include "io/velodyne.hpp"
 #include "log_reader.hpp"
@@ -361,6 +362,36 @@ void kitti_seeds() {
     both.insert(both.end(), velo_bytes.begin(), velo_bytes.end());
     save("fuzz_kitti_calib", "both.txt", both);
 
+    // Calibration files of other rigs (io/rig.hpp): OpenCV's own writer, YAML and XML, an
+    // identity rig and a raw one; a camera_info pair as the fuzz target splits it.
+    const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+    for (const char *ext : {".yml", ".xml"}) {
+        for (const bool raw : {false, true}) {
+            cv::FileStorage fs(std::string(ext) + "", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+            fs << "image_width" << 1242 << "image_height" << 375 << "M1" << cv::Mat(K) << "D1"
+               << cv::Mat(cv::Matx<double, 1, 5>(raw ? -0.3 : 0, raw ? 0.1 : 0, 0, 0, 0)) << "M2" << cv::Mat(K) << "D2"
+               << cv::Mat::zeros(1, 5, CV_64F) << "R" << cv::Mat::eye(3, 3, CV_64F) << "T"
+               << cv::Mat(cv::Matx31d(-cam.baseline, 0, 0));
+            save("fuzz_io_calibration", std::string(raw ? "raw_stereo" : "stereo") + ext,
+                 text_bytes(fs.releaseAndGetString()));
+        }
+    }
+    auto camera_info = [&](double tx, const char *d) {
+        char p[160];
+        std::snprintf(p, sizeof p, "[%.17g, 0, %.17g, %.17g, 0, %.17g, %.17g, 0, 0, 0, 1, 0]", cam.fx, cam.cx, tx,
+                      cam.fy, cam.cy);
+        char k[160];
+        std::snprintf(k, sizeof k, "[%.17g, 0, %.17g, 0, %.17g, %.17g, 0, 0, 1]", cam.fx, cam.cx, cam.fy, cam.cy);
+        return std::string("image_width: 1242\nimage_height: 375\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: ") + k +
+               "\ndistortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: " + d +
+               "\nrectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+               "projection_matrix:\n  rows: 3\n  cols: 4\n  data: " + p + "\n";
+    };
+    save("fuzz_io_calibration", "camera_info_pair.yaml",
+         text_bytes(camera_info(0, "[0, 0, 0, 0, 0]") + "%%\n" + camera_info(-cam.fx * cam.baseline, "[0, 0, 0, 0, 0]")));
+    save("fuzz_io_calibration", "camera_info_raw_pair.yaml",
+         text_bytes(camera_info(0, "[-0.3, 0.1, 0, 0, 0]") + "%%\n" + camera_info(-cam.fx * cam.baseline, "[0, 0, 0, 0, 0]")));
+
     // Velodyne: three records (x, y, z, reflectance), the second with a NaN (dropped).
     const float records[12] = {10.5f, -1.25f, -1.7f, 0.3f, NAN, 0.0f, 0.0f, 0.0f, 4.0f, 2.0f, 0.5f, 0.9f};
     std::vector<uint8_t> bin(sizeof records);
@@ -462,7 +493,7 @@ int check_seeds() {
     const char *targets[] = {"fuzz_lcm_stereo",     "fuzz_lcm_lidar",   "fuzz_lcm_calibration", "fuzz_lcm_scene_flow",
                              "fuzz_lcm_ego_motion",
                              "fuzz_lcm_status",     "fuzz_lcm_bot_image", "fuzz_kitti_png",     "fuzz_kitti_calib",
-                             "fuzz_kitti_velodyne"};
+                             "fuzz_kitti_velodyne", "fuzz_io_calibration"};
     for (const char *t : targets) {
         const std::string target = t;
         std::vector<fs::path> seeds;
@@ -527,6 +558,18 @@ int check_seeds() {
                 r.emplace_back("read_image", outcome([&] {
                                    const cv::Mat m = io::read_image(p);
                                    return "ok " + std::to_string(m.cols) + "x" + std::to_string(m.rows);
+                               }));
+            } else if (target == "fuzz_io_calibration") {
+                r.emplace_back("parse_opencv_stereo", outcome([&] {
+                                   const io::Rig rig = io::parse_opencv_stereo(text, seed.filename().string());
+                                   return std::string("ok") + (rig.rectify ? " raw" : "");
+                               }));
+                const size_t cut = text.find("\n%%\n");
+                r.emplace_back("parse_camera_info_pair", outcome([&] {
+                                   if (cut == std::string::npos) return std::string("rejected: not a pair");
+                                   const io::Rig rig = io::parse_camera_info_pair(text.substr(0, cut + 1), "left",
+                                                                                  text.substr(cut + 4), "right");
+                                   return std::string("ok") + (rig.rectify ? " raw" : "");
                                }));
             } else if (target == "fuzz_kitti_calib") {
                 r.emplace_back("parse_calib_cam_to_cam", outcome([&] {

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
-// lidarflow run: the complete estimator on one frame pair of one's own data (four rectified
-// images, optional sparse LiDAR as KITTI disparity PNGs or raw Velodyne scans), written in the
+// lidarflow run: the complete estimator on one frame pair of one's own data (four images,
+// rectified or with the calibration of a raw rig to rectify them; optional sparse LiDAR as KITTI disparity PNGs or raw Velodyne scans), written in the
 // KITTI submission layout or float formats, plus pictures and optionally a point cloud.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "commands.hpp"
 #include "log.hpp"
 #include "result_files.hpp"
+#include "rig_args.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"
 #include "io/calib.hpp"
@@ -21,6 +23,7 @@
 #include "io/kitti_submission.hpp"
 #include "io/output_folder.hpp"
 #include "io/point_cloud.hpp"
+#include "io/rectify.hpp"
 #include "io/result_formats.hpp"
 #include "io/velodyne.hpp"
 #include "lidar/velodyne_protocol.hpp"
@@ -88,14 +91,20 @@ void match_formats(cv::Mat *const images[4]) {
         if (images[i]->channels() != 1) *images[i] = gray8(*images[i]).clone();
 }
 
+std::vector<OptionSpec> run_options() {
+    std::vector<OptionSpec> spec = {
+        {"left0", true, "IMG  left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
+        {"right0", true, "IMG  right image at t0"},
+        {"left1", true, "IMG  left image at t1"},
+        {"right1", true, "IMG  right image at t1"}};
+    for (OptionSpec &o : rig_option_specs()) spec.push_back(o);
+    return spec;
+}
+
 int run(int argc, char **argv) {
-    Args args("run", argc, argv,
-              {{"left0", true, "IMG  rectified left image at t0 (reference); 8-bit gray or colour PNG, JPEG, BMP or PGM/PPM"},
-               {"right0", true, "IMG  rectified right image at t0"},
-               {"left1", true, "IMG  rectified left image at t1"},
-               {"right1", true, "IMG  rectified right image at t1"},
-               {"calib", true, "FILE KITTI calib_cam_to_cam.txt (the rig; needed by --velo0/1 and --points)"},
-               {"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 as a KITTI disparity PNG"},
+    std::vector<OptionSpec> spec = run_options();
+    spec.insert(spec.end(),
+              {{"lidar0", true, "PNG  sparse LiDAR D_l^0 in left0 (rectified) as a KITTI disparity PNG"},
                {"lidar1", true, "PNG  sparse LiDAR D_l^1 in left1 as a KITTI disparity PNG"},
                {"velo0", true, "BIN  raw Velodyne scan at t0 (KITTI .bin; instead of --lidar0)"},
                {"velo1", true, "BIN  raw Velodyne scan at t1 (instead of --lidar1)"},
@@ -109,6 +118,7 @@ int run(int argc, char **argv) {
                {"id", true, "NAME output file name (default: left0's, 000002_10.png -> 000002); 6 digits write ID_10.EXT as KITTI does, other names NAME.EXT"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"points", true, "PLY  also write the 3-D points at t0 with their motion and colour"}});
+    Args args("run", argc, argv, spec);
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         return 0;
@@ -128,12 +138,14 @@ int run(int argc, char **argv) {
     require(!(args.has("lidar1") && args.has("velo1")), ErrorCode::InvalidArgument,
             "run: give --lidar1 or --velo1, not both");
     const bool velodyne = args.has("velo0") || args.has("velo1");
-    require(!velodyne || (args.has("calib") && args.has("calib-velo")), ErrorCode::InvalidArgument,
-            "run: --velo0/--velo1 need --calib (calib_cam_to_cam.txt) and --calib-velo (calib_velo_to_cam.txt)");
+    const std::optional<io::Rig> rig = rig_from_args(args, "run");
+    require(!velodyne || (rig && args.has("calib-velo")), ErrorCode::InvalidArgument,
+            "run: --velo0/--velo1 need --calib (or --fx ...) and --calib-velo (calib_velo_to_cam.txt)");
     require(velodyne || !args.has("calib-velo"), ErrorCode::InvalidArgument,
             "run: --calib-velo is only used with --velo0/--velo1");
-    require(!args.has("points") || args.has("calib"), ErrorCode::InvalidArgument,
-            "run: --points needs --calib: metric 3-D points come from the rig's focal length and baseline");
+    require(!args.has("points") || rig, ErrorCode::InvalidArgument,
+            "run: --points needs --calib (or --fx ...): metric 3-D points come from the rig's focal length and "
+            "baseline");
     pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(args.str("preset", "default"));
     opt.use_lidar = !args.flag("no-lidar");
     opt.threads = args.integer("threads", opt.threads);
@@ -156,14 +168,27 @@ int run(int argc, char **argv) {
                    size_text(size) + ": the four images must have the same size";
         });
     match_formats(images);
+    double rectify_seconds = 0;
+    if (rig) {
+        check_image_size(*rig, size, args.flag("strict"), "run");
+        if (rig->rectify) {
+            const Stopwatch rectifying;
+            const io::Rectifier rectifier(*rig, size);
+            rectifier.apply(in.left0, in.right0, in.left0, in.right0);
+            rectifier.apply(in.left1, in.right1, in.left1, in.right1);
+            rectify_seconds = rectifying.seconds();
+        }
+    }
     in.lidar0 = {size.width, size.height, {}};
     in.lidar1 = {size.width, size.height, {}};
     if (args.has("lidar0")) in.lidar0 = read_lidar(args.str("lidar0", ""), size, "--lidar0");
     if (args.has("lidar1")) in.lidar1 = read_lidar(args.str("lidar1", ""), size, "--lidar1");
-    if (args.has("calib")) {
-        const io::CamToCamCalib calib = io::read_calib_cam_to_cam(args.str("calib", ""));
-        std::printf("camera    fx %.2f px, baseline %.4f m\n", calib.camera.fx, calib.camera.baseline);
+    if (rig) {
+        const io::CamToCamCalib &calib = rig->rect;
+        std::printf("camera    fx %.2f px, baseline %.4f m%s\n", calib.camera.fx, calib.camera.baseline,
+                    rig->rectify ? ", raw images rectified: results in the rectified left camera" : "");
         in.camera = calib.camera;  // enables the rigid background model of stage 4
+        in.calibration_size = calib.image_size;  // the input quality's size check
         if (velodyne) {
             const cv::Matx44d velo_to_cam = io::read_calib_velo_to_cam(args.str("calib-velo", ""));
             if (args.has("velo0"))
@@ -201,7 +226,11 @@ int run(int argc, char **argv) {
     if (args.has("points")) {
         const std::vector<io::CloudPoint> pts =
             io::scene_points(f, in.camera, in.left0, r.ego_state == pipeline::EgoState::Ok ? &ego : nullptr);
-        io::write_ply(args.str("points", ""), pts);
+        io::write_ply(args.str("points", ""), pts,
+                      rig->rectify ? "camera rectified by lidarflow from raw images (distortion removed, rectifying "
+                                     "rotation applied); fx " + std::to_string(in.camera.fx) + " baseline " +
+                                         std::to_string(in.camera.baseline)
+                                   : "");
         cloud = pts.size();
     }
 
@@ -209,6 +238,7 @@ int run(int argc, char **argv) {
                 in.lidar0.points.size(), in.lidar1.points.size(), opt.use_lidar ? "" : " (ignored: --no-lidar)");
     std::printf("result    stage %s, density %.2f %%\n", pipeline::stage_name(opt.last_stage),
                 100.0 * cv::countNonZero(f.valid) / static_cast<double>(f.valid.total()));
+    if (rig && rig->rectify) std::printf("  %-18s %8.3f s (both pairs)\n", "rectify", rectify_seconds);
     for (const pipeline::StageTime &t : r.timings) std::printf("  %-18s %8.3f s\n", t.name.c_str(), t.seconds);
     std::printf("  %-18s %8.3f s\n", "total", r.total_seconds);
     if (r.ego_state == pipeline::EgoState::Ok)

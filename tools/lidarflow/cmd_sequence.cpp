@@ -269,6 +269,7 @@ int run_sequence(int argc, char **argv) {
                 in.lidar0 = prev->lidar;
                 in.lidar1 = cur->lidar;
                 in.camera = calib.camera;
+                in.calibration_size = calib.image_size;
                 const Stopwatch pair_clock;
                 std::optional<pipeline::EstimatorResult> r;
                 try {

@@ -42,11 +42,19 @@ LIDAR_NONE, LIDAR_POINTS_CAMERA, LIDAR_POINTS_LIDAR, LIDAR_DISPARITY = 0, 1, 2, 
 STAGE_NAMES = {1: "matching", 2: "consistency", 3: "sparse", 4: "interpolation"}
 
 
+class RawCamera(ctypes.Structure):
+    _fields_ = [("K", ctypes.c_double * 9), ("D", ctypes.c_double * 8), ("R", ctypes.c_double * 9),
+                ("P", ctypes.c_double * 12)]
+
+
 class Calibration(ctypes.Structure):
     _fields_ = [("struct_size", ctypes.c_uint32), ("has_lidar_to_camera", ctypes.c_uint32),
                 ("fx", ctypes.c_double), ("fy", ctypes.c_double), ("cx", ctypes.c_double),
                 ("cy", ctypes.c_double), ("baseline", ctypes.c_double),
-                ("lidar_to_camera", ctypes.c_double * 16)]
+                ("lidar_to_camera", ctypes.c_double * 16),
+                ("image_width", ctypes.c_uint32), ("image_height", ctypes.c_uint32),
+                ("rectify", ctypes.c_uint32), ("reserved", ctypes.c_uint32),
+                ("raw_left", RawCamera), ("raw_right", RawCamera)]
 
 
 class Image(ctypes.Structure):
@@ -205,6 +213,7 @@ def _declare(lib):
         "lf_quality_name": (c.c_char_p, [u32]),
         "lf_last_error": (c.c_char_p, [c.c_void_p]),
         "lf_read_kitti_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
+        "lf_read_calibration": (i32, [c.c_char_p, c.c_char_p, P(Calibration)]),
         "lf_set_log_callback": (i32, [LOG_FN, i32, c.c_void_p]),
     }
     for name, (restype, argtypes) in protos.items():

@@ -116,10 +116,13 @@ def _plane(name, a, shape, dtype, channels=1):
 class Estimator:
     """Dense scene flow from a stream of rectified stereo frames plus optional sparse LiDAR.
 
-    Estimator(fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None)
+    Estimator(fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None, image_size=None, raw=None)
       fx, fy, cx, cy [px] and baseline [m] describe the rectified stereo camera;
       lidar_to_camera is an optional 4x4 transform LiDAR frame -> left camera frame (needed for
-      lidar_kind="lidar"); options maps option keys (see lidarflow.h) to values, set in order
+      lidar_kind="lidar"); image_size (width, height) is the images' size the calibration is for
+      (another size is warned about once, or refused with the option "input.strict"); raw
+      ({"left": {K, D, R, P}, "right": ...}, as read_calibration gives it) makes the Estimator
+      rectify each pushed pair, results then being in the rectified left camera; options maps option keys (see lidarflow.h) to values, set in order
       ("threads" defaults to every CPU this process may use, fewer while other processes keep
       them busy; results do not depend on it).
 
@@ -129,10 +132,20 @@ class Estimator:
     run in parallel (ctypes releases the GIL while the library computes).
     """
 
-    def __init__(self, fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None):
+    def __init__(self, fx, fy, cx, cy, baseline, lidar_to_camera=None, options=None, image_size=None, raw=None):
         cal = _lib.Calibration()
         cal.struct_size = ctypes.sizeof(_lib.Calibration)
         cal.fx, cal.fy, cal.cx, cal.cy, cal.baseline = float(fx), float(fy), float(cx), float(cy), float(baseline)
+        if image_size is not None:
+            cal.image_width, cal.image_height = (int(v) for v in image_size)
+        if raw is not None:
+            cal.rectify = 1
+            for side, c in (("left", cal.raw_left), ("right", cal.raw_right)):
+                for name, n in (("K", 9), ("D", 8), ("R", 9), ("P", 12)):
+                    v = np.asarray(raw[side][name], dtype=np.float64).ravel()
+                    if v.size != n:
+                        raise ValueError("raw[%r][%r] must have %d values, got %d" % (side, name, n, v.size))
+                    getattr(c, name)[:] = [float(x) for x in v]
         if lidar_to_camera is not None:
             t = np.asarray(lidar_to_camera, dtype=np.float64)
             if t.shape != (4, 4):

@@ -19,6 +19,7 @@ from lidarflow import _lib
 W, H = 160, 64
 FAST = {"matching.min_coarsest_height": 16}  # a second pyramid level on 64 px high images
 CAL = dict(fx=100.0, fy=100.0, cx=80.0, cy=32.0, baseline=0.5)
+KITTI_CAM = os.path.join(os.environ.get("LIDARFLOW_KITTI_DIR", "/nonexistent"), "calib_cam_to_cam", "000002.txt")
 
 
 def make_scene(seed=7, d=10, tu=3, tv=1, width=W, height=H):
@@ -392,6 +393,58 @@ class KittiCalibration(unittest.TestCase):
             with self.assertRaises(lidarflow.LidarflowError) as cm:
                 lidarflow.read_kitti_calibration(cam, cam)
             self.assertEqual(cm.exception.status, lidarflow.ERR_FORMAT)
+
+
+class OtherCalibrationSources(unittest.TestCase):
+    """read_calibration: camera_info pairs with image size, raw rigs rectified by the Estimator,
+    and the size check (a warning, or ERR_SIZE_MISMATCH with input.strict)."""
+
+    @staticmethod
+    def camera_info(path, tx, d="[0, 0, 0, 0, 0]", cx=80):
+        with open(path, "w") as f:
+            f.write("image_width: %d\nimage_height: %d\ncamera_matrix:\n  rows: 3\n  cols: 3\n"
+                    "  data: [100, 0, %g, 0, 100, 32, 0, 0, 1]\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n"
+                    "  data: %s\nrectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+                    "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [100, 0, 80, %g, 0, 100, 32, 0, 0, 0, 1, 0]\n"
+                    % (W, H, cx, d, tx))
+        return path
+
+    def test_camera_info_pair_and_raw_rig(self):
+        import tempfile
+        with tempfile.TemporaryDirectory() as tmp:
+            left = self.camera_info(os.path.join(tmp, "l.yaml"), 0)
+            right = self.camera_info(os.path.join(tmp, "r.yaml"), -50)
+            cal = lidarflow.read_calibration(left + "," + right)
+            self.assertEqual(cal["image_size"], (W, H))
+            self.assertIsNone(cal["raw"])
+            self.assertEqual({k: cal[k] for k in CAL}, CAL)
+            # The raw right camera's principal point 3 px right of the rectified one: its images
+            # are the rectified ones shifted by 3 px (disparity 13 looks like 10).
+            shifted = self.camera_info(os.path.join(tmp, "s.yaml"), -50, cx=83)
+            raw = lidarflow.read_calibration(left + "," + shifted)
+            self.assertEqual(raw["raw"]["right"]["K"][0, 2], 83)
+            scene = make_scene(d=10)
+            with lidarflow.Estimator(options=FAST, **raw) as est:
+                est.push(scene[0], scene[1], timestamp=0)
+                est.push(scene[2], scene[3], timestamp=100000)
+                self.assertGreater(accuracy(est.result(), d=13), 0.8)
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                lidarflow.read_calibration(left)
+            self.assertEqual(cm.exception.status, lidarflow.ERR_FORMAT)
+            self.assertIn(left, cm.exception.message)
+
+    def test_image_size_strict(self):
+        small = [a[:, :W - 16] for a in make_scene()]
+        with lidarflow.Estimator(options=dict(FAST, **{"input.strict": 1}), image_size=(W, H), **CAL) as est:
+            with self.assertRaises(lidarflow.LidarflowError) as cm:
+                est.push(small[0], small[1], timestamp=0)
+            self.assertEqual(cm.exception.status, lidarflow.ERR_SIZE_MISMATCH)
+            self.assertIn("calibration is for %dx%d" % (W, H), cm.exception.message)
+        with lidarflow.Estimator(options=FAST, image_size=(W, H), **CAL) as est:
+            est.push(small[0], small[1], timestamp=0)  # a warning only
+        cal = lidarflow.read_kitti_calibration(KITTI_CAM) if os.path.exists(KITTI_CAM) else None
+        if cal is not None:
+            self.assertEqual(cal["image_size"], (1242, 375))
 
 
 class Lifetime(unittest.TestCase):

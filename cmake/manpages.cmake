@@ -3,6 +3,10 @@
 # Debian's help2man, gzipped (Debian policy 12.1) and installed with the programs (component
 # tools: `cmake --install` and the lidarflow-tools package). Without help2man the build goes
 # on without them.
+# Sanitizer builds are for tests, not for installing: their programs stay out of the build step.
+if(LIDARFLOW_SANITIZE OR LIDARFLOW_SANITIZE_THREAD OR LIDARFLOW_FUZZ)
+  return()
+endif()
 find_program(LIDARFLOW_HELP2MAN help2man)
 if(NOT LIDARFLOW_HELP2MAN)
   message(STATUS "help2man not found: no man pages (Debian: apt-get install help2man)")

@@ -74,9 +74,17 @@ const char *kUsage =
     "                           estimator's pace (no network, nothing stale), results and status into\n"
     "                           OUT.log on IN.log's clock (--status-period in log seconds); exit 3\n"
     "                           and a line per frame when a frame was not processed\n"
+    "  --frames A:B             with --replay: stereo frames A..B only (0.. in log order, both included)\n"
     "  --version                print the lidarflow library version and exit\n"
-    "  --help\n"
-    "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n";
+    "  --help                   print this help and exit\n"
+    "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n"
+    "\n"
+    "Exit status:\n"
+    "  0  stopped by SIGINT / SIGTERM; --replay: every stereo frame processed\n"
+    "  1  LCM cannot be opened or fails, a --calib file cannot be read, the library refuses an\n"
+    "     --option value or the calibration; --replay: a log cannot be read or written\n"
+    "  2  a bad command line\n"
+    "  3  --replay: some frames not processed (a LOST: line each), or interrupted\n";
 
 // --replay: 0 when every stereo frame of the log was processed, 3 when some were not (listed),
 // 1 when the logs cannot be read or written.

@@ -29,6 +29,8 @@ foreach(_lf_tool lidarflow_cli lidarflow_lcm_bridge)
     set_target_properties(${_lf_tool} PROPERTIES INSTALL_RPATH "${LIDARFLOW_TOOLS_RUNPATH}")
   endif()
 endforeach()
+# Their man pages (share/man/man1, component tools), when help2man is installed.
+include(${CMAKE_CURRENT_LIST_DIR}/manpages.cmake)
 
 # The C header and the header-only C++ API (lidarflow.hpp: nothing of it is in the library) are
 # the same in both layouts below.

@@ -59,12 +59,14 @@ void test_demo_writes_layout_and_pictures(void **) {
         const fs::path p = dir / "out" / "viz" / (std::string("000000_") + name + ".png");
         const cv::Mat m = io::read_image(p.string());
         assert_int_equal(m.type(), CV_8UC3);
+        // Every picture carries its key in a strip below it: the LiDAR dots' disparity bar, the
+        // flow wheel, the disparity bar, the names of the coverage's and the masks' colours.
         if (std::string(name) == "inputs") {
             assert_int_equal(m.cols, 2 * 640 + 4);  // 2x2 grid with a 4 px gutter
-            assert_int_equal(m.rows, 2 * 192 + 4);
+            assert_true(m.rows >= 2 * 192 + 4 + 40);
         } else {
             assert_int_equal(m.cols, 640);
-            assert_int_equal(m.rows, 192);
+            assert_true(m.rows >= 192 + 40);
         }
         assert_true(r.output.find(p.string()) != std::string::npos);  // it says what it wrote
     }
@@ -80,8 +82,8 @@ void test_demo_writes_layout_and_pictures(void **) {
             const fs::path p = dir / "out" / "viz" / (std::string("000000_") + run_name + "_" + pic + ".png");
             const cv::Mat m = io::read_image(p.string());
             assert_int_equal(m.cols, 640);
-            // Error maps carry the log scale's legend below the map.
-            if (std::string(pic).find("_error") != std::string::npos) assert_true(m.rows > 192 + 40);
+            // Error maps carry the log scale's legend below the map, the others the wheel or bar.
+            assert_true(m.rows >= 192 + 40);
         }
         assert_true(r.output.find(std::string("  ") + run_name + " ") != std::string::npos);
     }

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Visualisation: flow colour wheels, disparity colour map, KITTI error images and overlays.
+// Visualisation: flow colour wheels, disparity colour map, KITTI error images, overlays, the keys
+// below the pictures and the bird's-eye view's.
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <limits>
 
 #include "core/error.hpp"
+#include "viz/birds_eye.hpp"
 #include "viz/disparity_color.hpp"
 #include "viz/error_map.hpp"
 #include "viz/flow_color.hpp"
@@ -272,6 +274,60 @@ void test_error_legend(void **) {
     assert_true(throws_code(ErrorCode::InvalidArgument, [] { viz::with_error_legend(cv::Mat()); }));
 }
 
+// A key to marks: the picture unchanged on top, below it a row per mark with its glyph.
+void test_marks_legend(void **) {
+    const cv::Mat map(30, 50, CV_8UC3, cv::Scalar(1, 2, 3));
+    using Mark = viz::LegendMark;
+    const std::vector<Mark> marks = {{Mark::Glyph::Swatch, cv::Scalar(255, 255, 0), "textureless"},
+                                     {Mark::Glyph::Swatch, cv::Scalar(255, 0, 255), "shadow"},
+                                     {Mark::Glyph::Arrow, cv::Scalar(0, 0, 255), "motion"}};
+    const cv::Mat l = viz::with_marks_legend(map, marks);
+    assert_true(l.rows >= 30 + 3 * 18 && l.cols > 50);  // widened to fit the labels
+    assert_int_equal(cv::norm(l(cv::Rect(0, 0, 50, 30)), map, cv::NORM_INF), 0);
+    const cv::Mat strip = l(cv::Rect(0, 30, l.cols, l.rows - 30));
+    for (const Mark &m : marks) {
+        const cv::Vec3b c(static_cast<uchar>(m.color[0]), static_cast<uchar>(m.color[1]), static_cast<uchar>(m.color[2]));
+        int n = 0;
+        for (int y = 0; y < strip.rows; ++y)
+            for (int x = 0; x < 40; ++x) n += strip.at<cv::Vec3b>(y, x) == c;
+        if (n < 5) fail_msg("mark '%s': its colour is not drawn in the key (%d px)", m.label.c_str(), n);
+    }
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { viz::with_marks_legend(map, {}); }));
+    assert_true(throws_code(ErrorCode::InvalidArgument, [&] { viz::with_marks_legend(cv::Mat(), marks); }));
+}
+
+// The bird's-eye view: its key explains the camera, the arrows and the distance lines below the
+// speed bar, and a distance line just below the top edge has its label under it, not cut off.
+void test_birds_eye_key_and_top_label(void **) {
+    std::vector<io::CloudPoint> cloud;
+    for (int i = 0; i < 400; ++i) {  // a moving wall 3 m right of the camera, away from the labels
+        io::CloudPoint p;
+        p.position = cv::Vec3f(3.0f + 0.001f * static_cast<float>(i % 20), 0, 2.0f + 0.02f * static_cast<float>(i));
+        p.motion = cv::Vec3f(0, 0, 0.5f);
+        cloud.push_back(p);
+    }
+    viz::BirdsEyeOptions o;
+    o.range = 10.2;  // the 10 m line lies 12 px below the top edge
+    o.height = 600;
+    const cv::Mat view = viz::birds_eye_view(cloud, o);
+    assert_true(view.rows >= 600 + 40 + 3 * 18);
+    // The marks' key: the white camera triangle and arrow glyphs below the speed bar's strip.
+    const cv::Mat key = view(cv::Rect(0, 600 + 44, view.cols, view.rows - 600 - 44));
+    assert_true(cv::countNonZero(key.reshape(1) == 255) > 20);
+    const int line_y = static_cast<int>(std::lround((10.2 - 10.0) * 600 / 10.2));
+    auto label_pixels = [&](int y0, int y1) {
+        int n = 0;
+        for (int y = std::max(0, y0); y < y1; ++y)
+            for (int x = 2; x < 40; ++x) {
+                const cv::Vec3b c = view.at<cv::Vec3b>(y, x);
+                n += c[0] > 100 && c[0] == c[1] && c[1] == c[2];
+            }
+        return n;
+    };
+    assert_true(label_pixels(line_y + 2, line_y + 18) > 10);  // "10 m" under its line
+    assert_int_equal(label_pixels(0, line_y - 1), 0);         // nothing cut at the top edge
+}
+
 }  // namespace
 
 int main() {
@@ -285,6 +341,8 @@ int main() {
         cmocka_unit_test(test_overlays_and_tiles),
         cmocka_unit_test(test_round_ticks),
         cmocka_unit_test(test_error_legend),
+        cmocka_unit_test(test_marks_legend),
+        cmocka_unit_test(test_birds_eye_key_and_top_label),
     };
     return cmocka_run_group_tests_name("viz_colors", tests, nullptr, nullptr);
 }

@@ -33,7 +33,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libopencv-contrib-dev libeigen3-dev libcmocka-dev nlohmann-json3-dev
           liblcm-dev liblcm-bin libglib2.0-dev libssl-dev iproute2 util-linux
-          abigail-tools python3 python3-numpy dpkg-dev file
+          abigail-tools python3 python3-numpy dpkg-dev file help2man
           python3-pip python3-setuptools python3-wheel python3-venv
           python3-distributed)  # lidarflow_dask and its test (python_dask)
 

@@ -31,11 +31,13 @@ std::vector<std::string> option_key_names();
 // One row of `lidarflow options`: the table itself, not a copy of the header's documentation.
 struct OptionKeyDescription {
     std::string name;
-    std::string type;      // "int", "0/1", "float", "string"
-    std::string bounds;    // e.g. "[1, 256]", "(0, 10000]", "[1, 101] and odd"; the names a string key takes
-    std::string defaults;  // the value of a fresh lf_options_t
+    std::string type;         // "int", "0/1", "float", "string"
+    std::string bounds;       // e.g. "[1, 256]", "(0, 10000]", "[1, 101] and odd"; the names a string key takes
+    std::string value;        // the key's value in the described options, as `--set` takes it
+    std::string description;  // one line
 };
-std::vector<OptionKeyDescription> describe_option_keys();
+// Every key in table order, with its value in `values` (default: a fresh lf_options_t).
+std::vector<OptionKeyDescription> describe_option_keys(const OptionValues &values = OptionValues{});
 OptionKeyType option_key_type(const OptionKey &k);
 
 // Setters: check type and bounds, then write. Throw Error(InvalidArgument) naming the key,

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -12,6 +13,8 @@
 
 namespace lidarflow::viz {
 namespace {
+
+const cv::Scalar kMarks(255, 255, 255), kDistanceLine(70, 70, 70), kDistanceLabel(150, 150, 150);
 
 double percentile(std::vector<double> v, double q) {
     const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
@@ -69,9 +72,13 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
     const double step = range > 30 ? 10 : 5;
     for (double z = step; z < range; z += step) {
         const int y = static_cast<int>(std::lround(to_pixel(0, z).y));
-        cv::line(view, {0, y}, {size - 1, y}, cv::Scalar(70, 70, 70));
-        cv::putText(view, std::to_string(static_cast<int>(z)) + " m", {4, y - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                    cv::Scalar(150, 150, 150), 1, cv::LINE_AA);
+        cv::line(view, {0, y}, {size - 1, y}, kDistanceLine);
+        // Above its line, unless that would cut the label at the top edge: then below it.
+        const std::string label = std::to_string(static_cast<int>(z)) + " m";
+        int base = 0;
+        const int text_h = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &base).height;
+        const int baseline = y - 4 - text_h >= 1 ? y - 4 : y + 4 + text_h;
+        cv::putText(view, label, {4, baseline}, cv::FONT_HERSHEY_SIMPLEX, 0.4, kDistanceLabel, 1, cv::LINE_AA);
     }
     // Slow points first so that movers stay on top.
     std::vector<size_t> order(points.size());
@@ -94,16 +101,23 @@ cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEye
         const cv::Vec4d m = kv.second.second / kv.second.first;
         if (std::hypot(m[2], m[3]) * ppm < 2) continue;  // shorter than 2 px: a dot says nothing
         const cv::Point2d a = to_pixel(m[0], m[1]), b = to_pixel(m[0] + m[2], m[1] + m[3]);
-        cv::arrowedLine(view, a, b, cv::Scalar(255, 255, 255), 1, cv::LINE_AA, 0, 0.3);
+        cv::arrowedLine(view, a, b, kMarks, 1, cv::LINE_AA, 0, 0.3);
     }
     // The camera, looking up the picture.
     const cv::Point2d cam = to_pixel(0, 0);
     const cv::Point tri[3] = {cv::Point(static_cast<int>(cam.x), size - 12), cv::Point(static_cast<int>(cam.x) - 7, size - 1),
                               cv::Point(static_cast<int>(cam.x) + 7, size - 1)};
-    cv::fillConvexPoly(view, tri, 3, cv::Scalar(255, 255, 255), cv::LINE_AA);
-    return with_color_bar(
+    cv::fillConvexPoly(view, tri, 3, kMarks, cv::LINE_AA);
+    const bool object = points[0].has_object_motion;
+    const cv::Mat with_bar = with_color_bar(
         view, [max_speed](double s) { return speed_color(s, max_speed); }, 0.0, max_speed,
-        points[0].has_object_motion ? "|object motion| [m / frame]" : "|motion| [m / frame]");
+        object ? "|object motion| [m / frame]" : "|motion| [m / frame]");
+    char cell[96];
+    std::snprintf(cell, sizeof cell, "mean %s of the points of a %g x %g m cell, to the map's scale",
+                  object ? "object motion" : "motion", o.cell, o.cell);
+    return with_marks_legend(with_bar, {{LegendMark::Glyph::Triangle, kMarks, "camera, looking up the picture"},
+                                        {LegendMark::Glyph::Arrow, kMarks, cell},
+                                        {LegendMark::Glyph::Line, kDistanceLabel, "distance ahead of the camera"}});
 }
 
 }  // namespace lidarflow::viz

@@ -23,7 +23,7 @@ struct BirdsEyeOptions {
     int min_points = 20;   // cells with fewer points get no arrow
 };
 
-// CV_8UC3 picture with its speed legend. Throws Error(InvalidArgument) for no points, a
+// CV_8UC3 picture with its speed legend and the key to its marks (camera, arrows, distance lines). Throws Error(InvalidArgument) for no points, a
 // non-finite point, points of which only some have object motion, or options out of range (range < 0, height < 64, max_speed < 0, cell <= 0).
 cv::Mat birds_eye_view(const std::vector<io::CloudPoint> &points, const BirdsEyeOptions &options = {});
 

@@ -134,11 +134,41 @@ cv::Mat with_error_legend(const cv::Mat &picture) {
     return out;
 }
 
-cv::Mat with_disparity_legend(const cv::Mat &picture, double max_disp) {
+cv::Mat with_disparity_legend(const cv::Mat &picture, double max_disp, const std::string &label) {
     require(std::isfinite(max_disp) && max_disp > 0, ErrorCode::InvalidArgument, "legend: max_disp must be > 0");
     return with_color_bar(
-        picture, [max_disp](double d) { return disparity_color(d, max_disp); }, 0.0, max_disp,
-        "disparity [px] (near = bright)");
+        picture, [max_disp](double d) { return disparity_color(d, max_disp); }, 0.0, max_disp, label);
+}
+
+cv::Mat with_marks_legend(const cv::Mat &picture, const std::vector<LegendMark> &marks) {
+    check_picture(picture);
+    require(!marks.empty(), ErrorCode::InvalidArgument, "legend: no marks to explain");
+    constexpr int kRow = 20, kGlyph = 24;
+    int label_w = 0;
+    for (const LegendMark &m : marks) label_w = std::max(label_w, text_width(m.label));
+    cv::Mat strip;
+    cv::Mat out = stacked(picture, kRow * static_cast<int>(marks.size()) + 6, 8 + kGlyph + 8 + label_w + 8, &strip);
+    for (size_t i = 0; i < marks.size(); ++i) {
+        const LegendMark &m = marks[i];
+        const int y = 4 + kRow * static_cast<int>(i), mid = y + kRow / 2;
+        const cv::Point a(8, mid), b(8 + kGlyph, mid);
+        switch (m.glyph) {
+        case LegendMark::Glyph::Swatch:
+            cv::rectangle(strip, {8, y + 3}, {8 + kGlyph, y + kRow - 3}, m.color, cv::FILLED);
+            cv::rectangle(strip, {8, y + 3}, {8 + kGlyph, y + kRow - 3}, kText);  // black and dark swatches stay visible
+            break;
+        case LegendMark::Glyph::Line: cv::line(strip, a, b, m.color, 1, cv::LINE_AA); break;
+        case LegendMark::Glyph::Arrow: cv::arrowedLine(strip, a, b, m.color, 1, cv::LINE_AA, 0, 0.3); break;
+        case LegendMark::Glyph::Triangle: {
+            const cv::Point tri[3] = {{8 + kGlyph / 2, y + 3}, {8 + kGlyph / 2 - 7, y + kRow - 3},
+                                      {8 + kGlyph / 2 + 7, y + kRow - 3}};
+            cv::fillConvexPoly(strip, tri, 3, m.color, cv::LINE_AA);
+            break;
+        }
+        }
+        cv::putText(strip, m.label, {8 + kGlyph + 8, mid + 5}, kFont, kFontScale, kText, 1, cv::LINE_AA);
+    }
+    return out;
 }
 
 cv::Mat with_flow_legend(const cv::Mat &picture, double max_flow, FlowColorStyle style) {

@@ -29,8 +29,21 @@ std::vector<double> round_ticks(double lo, double hi);
 // the ten bands with their limits in units of the outlier threshold, 1 (3 px and 5 %) marked.
 cv::Mat with_error_legend(const cv::Mat &picture);
 
-// with_color_bar with disparity_color over [0, max_disp] (max_disp > 0).
-cv::Mat with_disparity_legend(const cv::Mat &picture, double max_disp);
+// with_color_bar with disparity_color over [0, max_disp] (max_disp > 0), under `label`.
+cv::Mat with_disparity_legend(const cv::Mat &picture, double max_disp,
+                              const std::string &label = "disparity [px] (near = bright)");
+
+// One entry of a key to marks drawn on a picture: a glyph in its colour, then its label.
+struct LegendMark {
+    enum class Glyph { Swatch, Line, Arrow, Triangle };
+    Glyph glyph;
+    cv::Scalar color;  // BGR
+    std::string label;
+};
+
+// Copy of `picture` with a strip below holding one row per mark. Throws Error(InvalidArgument)
+// for an empty or non-BGR picture or no marks.
+cv::Mat with_marks_legend(const cv::Mat &picture, const std::vector<LegendMark> &marks);
 
 // Copy of `picture` with a strip holding the colour wheel of `style` at normalisation max_flow
 // (> 0): the wheel's rim is |f| = max_flow, +u to the right, +v down, as in the picture.

@@ -45,10 +45,13 @@ int points_in(const SparseLidar &l, const cv::Mat1b &mask) {
 
 // White where the flow GT is non-occluded, grey where it exists only as occluded, black where
 // the point leaves the image.
+const cv::Scalar kNonOccluded(255, 255, 255), kOccluded(110, 110, 110), kLeavesImage(0, 0, 0);
+const cv::Scalar kTextureless(255, 255, 0), kShadow(255, 0, 255);
+
 cv::Mat flow_coverage(const synth::SynthScene &s) {
-    cv::Mat out(s.flow_occ.valid.size(), CV_8UC3, cv::Scalar(0, 0, 0));
-    out.setTo(cv::Scalar(110, 110, 110), s.flow_occ.valid);
-    out.setTo(cv::Scalar(255, 255, 255), s.flow_noc.valid);
+    cv::Mat out(s.flow_occ.valid.size(), CV_8UC3, kLeavesImage);
+    out.setTo(kOccluded, s.flow_occ.valid);
+    out.setTo(kNonOccluded, s.flow_noc.valid);
     return out;
 }
 
@@ -91,10 +94,20 @@ int run_demo(int argc, char **argv) {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     synth::write_kitti(s, out, id);
 
-    // One disparity scale for d0, d1 and the LiDAR dots, so colours compare across pictures.
+    // One disparity scale for d0, d1 and the LiDAR dots, and one flow scale (the ground
+    // truth's), so colours compare across pictures; each picture carries its key below it.
     double max_d = 0;
     cv::minMaxLoc(s.disp0_occ, nullptr, &max_d);
     const auto scale = static_cast<float>(max_d);
+    viz::FlowColorOptions flow_colors;
+    flow_colors.max_flow = static_cast<float>(viz::flow_color_scale(s.flow_occ));
+    const auto flow_picture = [&](const FlowField &f) {
+        return viz::with_flow_legend(viz::flow_to_color(f, flow_colors), flow_colors.max_flow, flow_colors.style);
+    };
+    const auto disparity_picture = [&](const DisparityMap &d) {
+        return viz::with_disparity_legend(viz::disparity_to_color(d, scale), scale);
+    };
+    using Mark = viz::LegendMark;
     const std::string dir = out + "/viz/" + id;
     struct Picture {
         std::string path, what;
@@ -102,18 +115,24 @@ int run_demo(int argc, char **argv) {
     };
     const std::vector<Picture> pictures = {
         {dir + "_inputs.png", "left|right at t0 (top) and t1 (bottom), LiDAR dots coloured by disparity",
-         viz::tile({viz::draw_lidar(s.left0, s.lidar0, scale), s.right0, viz::draw_lidar(s.left1, s.lidar1, scale),
-                    s.right1},
-                   2)},
-        {dir + "_flow_gt.png", "GT optical flow, KITTI colour wheel (occ)", viz::flow_to_color(s.flow_occ)},
+         viz::with_disparity_legend(viz::tile({viz::draw_lidar(s.left0, s.lidar0, scale), s.right0,
+                                               viz::draw_lidar(s.left1, s.lidar1, scale), s.right1},
+                                              2),
+                                    scale, "LiDAR dots: disparity [px] (near = bright)")},
+        {dir + "_flow_gt.png", "GT optical flow, KITTI colour wheel (occ)", flow_picture(s.flow_occ)},
         {dir + "_flow_coverage.png", "flow GT: white non-occluded, grey occluded, black leaves the image",
-         flow_coverage(s)},
-        {dir + "_disp0_gt.png", "GT disparity d0 (occ)", viz::disparity_to_color(s.disp0_occ, scale)},
+         viz::with_marks_legend(flow_coverage(s), {{Mark::Glyph::Swatch, kNonOccluded, "non-occluded"},
+                                                   {Mark::Glyph::Swatch, kOccluded, "occluded"},
+                                                   {Mark::Glyph::Swatch, kLeavesImage, "leaves the image"}})},
+        {dir + "_disp0_gt.png", "GT disparity d0 (occ)", disparity_picture(s.disp0_occ)},
         {dir + "_disp1_gt.png", "GT disparity d1 in the t0 frame (occ), same scale as d0",
-         viz::disparity_to_color(s.disp1_occ, scale)},
+         disparity_picture(s.disp1_occ)},
         {dir + "_masks.png", "left t0 with the textureless box (cyan) and the shadow (magenta)",
-         viz::overlay_mask(viz::overlay_mask(s.left0, s.textureless_mask, cv::Scalar(255, 255, 0), 0.55),
-                           s.shadow_mask, cv::Scalar(255, 0, 255), 0.55)},
+         viz::with_marks_legend(
+             viz::overlay_mask(viz::overlay_mask(s.left0, s.textureless_mask, kTextureless, 0.55), s.shadow_mask,
+                               kShadow, 0.55),
+             {{Mark::Glyph::Swatch, kTextureless, "textureless box (hard region)"},
+              {Mark::Glyph::Swatch, kShadow, "shadow (hard region)"}})},
     };
     for (const Picture &p : pictures) io::write_image(p.path, p.image);
 
@@ -138,8 +157,8 @@ int run_demo(int argc, char **argv) {
         const std::string est = out + "/" + r.name;
         io::write_submission(est, id, f);
         const std::string vdir = out + "/viz/" + id + "_" + r.name;
-        io::write_image(vdir + "_flow.png", viz::flow_to_color(io::field_flow(f)));
-        io::write_image(vdir + "_disp0.png", viz::disparity_to_color(io::field_disparity0(f), scale));
+        io::write_image(vdir + "_flow.png", flow_picture(io::field_flow(f)));
+        io::write_image(vdir + "_disp0.png", disparity_picture(io::field_disparity0(f)));
         io::write_image(vdir + "_disp0_error.png", viz::with_error_legend(viz::disparity_error_image(
                                                        io::field_disparity0(f), s.disp0_occ, s.disp0_noc)));
         io::write_image(vdir + "_flow_error.png",

@@ -36,6 +36,17 @@ void print_usage(FILE *f) {
     auto cmds = lidarflow::cli::command_registry();
     std::sort(cmds.begin(), cmds.end(), [](const Command &a, const Command &b) { return a.order < b.order; });
     for (const Command &c : cmds) std::fprintf(f, "  %-14s %s\n", c.name, c.summary);
+    std::fprintf(f, "\noptions:\n"
+                    "  --help         this text; lidarflow <command> --help: the command's options\n"
+                    "  --version      the version of lidarflow\n"
+                    "  --quiet        (any command) only errors, on stderr\n"
+                    "  --verbose      (any command) settings, per-step timings, the library's messages on stderr\n"
+                    "\nexit status:\n"
+                    "  0              success\n"
+                    "  1              an error: an input that cannot be read or is malformed (also a calibration\n"
+                    "                 file outside the accepted ranges), an output that cannot be written\n"
+                    "  2              a bad command line: an unknown option or key, a value out of range\n"
+                    "  3              sequence: some pairs lost to bad frames (the others were written)\n");
 }
 
 // The core's messages (what the library decided: points dropped, fallbacks), one line each.

@@ -2,38 +2,50 @@
 """Sources into chunks, chunks onto Dask (or run in order here), chunk logs into result logs."""
 import json
 import os
-import re
 import sys
 import time
 
-from lidarflow_lcm.eventlog import SYNC, LogReader, LogWriter
+from lidarflow_lcm.eventlog import SYNC, LogReader
 
 from . import chunks as ch
+from . import cluster, frames, results, state
+from .frames import parse_frames
+from .tools import ToolNotFound, check_tools
 
-_FRAME = re.compile(r"^(\d{10})\.png$")
 _SYNC_BYTES = SYNC.to_bytes(4, "big")
+MAX_NOTES = 20  # lines of one kind of note before "... and N more"
 
 
 class SourceError(ValueError):
-    """A source that is neither a drive nor an LCM log, or has no pair of frames."""
+    """A source that is neither a drive nor an LCM log, has no pair of frames, or clashes with
+    another source or with OUT."""
 
 
-class ClusterError(RuntimeError):
-    """No worker, or workers that cannot run the chunks (the executables or lidarflow_dask missing)."""
+ClusterError = cluster.ClusterError
 
 
 class Settings:
-    """What every chunk of a run shares (see chunks.py)."""
+    """What every chunk of a run shares (see chunks.py). frames: (A, B), 'A:B' or None (every
+    frame); formats: sequence's --format names (drives); chunk_timeout: seconds, None for the
+    default (chunks.default_timeout), 0 for none."""
 
     def __init__(self, out, preset=None, options=(), chunk=20, threads=1, force=False, bin_dir=None,
-                 stereo_channel="LIDARFLOW_STEREO", bridge_args=()):
+                 stereo_channel="LIDARFLOW_STEREO", bridge_args=(), formats=("kitti",), frames=None,
+                 chunk_timeout=None):
+        if not out:
+            raise ValueError("--out: the output folder must be named (got '')")
         if chunk < 2:
             raise ValueError("--chunk %d: a chunk has at least 2 frames (one pair)" % chunk)
         if threads < 1:
             raise ValueError("--threads-per-task %d: at least 1" % threads)
+        if chunk_timeout is not None and not chunk_timeout >= 0:
+            raise ValueError("--chunk-timeout %s: seconds, 0 or more" % chunk_timeout)
         self.out, self.preset, self.options = os.path.abspath(out), preset, list(options)
         self.chunk, self.threads, self.force, self.bin_dir = chunk, threads, force, bin_dir
         self.stereo_channel, self.bridge_args = stereo_channel, list(bridge_args)
+        self.formats = results.parse_formats(",".join(formats))
+        self.frames = parse_frames(frames) if isinstance(frames, str) else frames
+        self.chunk_timeout = chunk_timeout
 
     def signature(self, kind):
         """What the results depend on; a rerun into the same folder must match it."""
@@ -41,6 +53,7 @@ class Settings:
         if kind == "lcm":
             sig.update(stereo_channel=self.stereo_channel, bridge_args=self.bridge_args)
         return sig
+
 
 
 def detect(path):
@@ -60,30 +73,13 @@ def detect(path):
     raise SourceError("%s: neither a drive folder nor an LCM log (no LCM sync word at its start)" % path)
 
 
-def frame_range(kind, path, stereo_channel):
-    """(first, last) frame numbers of a source: a drive's lowest and highest image_02 index, an
-    LCM log's stereo events 0..N-1 in log order (as the bridge's --frames counts them)."""
+def listed_frames(kind, path, stereo_channel):
+    """The source's present frames: a drive's image_02 indices, an LCM log's stereo events
+    0..N-1 in log order (as the bridge's --frames counts them)."""
     if kind == "drive":
-        idx = [int(m.group(1)) for m in map(_FRAME.match, os.listdir(os.path.join(path, "image_02", "data"))) if m]
-        if len(idx) < 2:
-            raise SourceError("%s: %d frame(s) in image_02/data/, a pair needs 2" % (path, len(idx)))
-        return min(idx), max(idx)
+        return frames.drive_frames(path)
     with LogReader(path, channels=stereo_channel, data=False) as log:
-        n = sum(1 for _ in log)
-    if n < 2:
-        raise SourceError("%s: %d stereo frame(s) on %s, a pair needs 2" % (path, n, stereo_channel))
-    return 0, n - 1
-
-
-def plan(first, last, chunk):
-    """Chunks of `chunk` frames from first to last; neighbours share a frame, so every pair
-    (i, i+1) is in exactly one chunk."""
-    out, a = [], first
-    while a < last:
-        b = min(a + chunk - 1, last)
-        out.append((a, b))
-        a = b
-    return out
+        return range(sum(1 for _ in log))
 
 
 def source_name(path):
@@ -96,76 +92,126 @@ class Source:
         self.path = os.path.abspath(path)
         self.kind = detect(self.path)
         self.name = source_name(self.path)
-        self.first, self.last = frame_range(self.kind, self.path, settings.stereo_channel)
+        self.out = settings.out
+        if not self.name or (self.kind == "drive" and self.name == state.STATE_DIR):
+            raise SourceError("%s: a source needs a name of its own in %s (got '%s')" % (self.path, self.out, self.name))
+        if os.path.abspath(self.result_path()) == self.path:
+            raise SourceError("%s: its results would overwrite it (--out %s is its folder)" % (self.path, self.out))
+        listed = listed_frames(self.kind, self.path, settings.stereo_channel)
+        try:
+            self.first, self.last = frames.bounds(self.path, listed, settings.frames)
+        except frames.FramesError as e:
+            raise SourceError(str(e)) from None
+        present, self.gaps = frames.runs(listed, self.first, self.last)
+        self.lost = frames.lost_pairs(self.gaps, self.first, self.last)
         self.chunks = []
-        for a, b in plan(self.first, self.last, settings.chunk):
-            self.chunks.append({"kind": self.kind, "source": self.path, "name": self.name, "first": a, "last": b,
-                                "out": settings.out, "preset": settings.preset, "options": settings.options,
-                                "threads": settings.threads, "force": settings.force, "bin_dir": settings.bin_dir,
-                                "stereo_channel": settings.stereo_channel, "bridge_args": settings.bridge_args})
+        for r0, r1 in present:
+            for a, b in frames.plan(r0, r1, settings.chunk):
+                self.chunks.append({"kind": self.kind, "source": self.path, "name": self.name, "first": a, "last": b,
+                                    "out": settings.out, "preset": settings.preset, "options": settings.options,
+                                    "formats": settings.formats, "threads": settings.threads,
+                                    "force": settings.force, "bin_dir": settings.bin_dir,
+                                    "stereo_channel": settings.stereo_channel, "bridge_args": settings.bridge_args,
+                                    "timeout": ch.default_timeout(b - a) if settings.chunk_timeout is None
+                                    else settings.chunk_timeout})
 
-    def result_log(self, out):
-        return os.path.join(out, self.name + ".log")
+    def result_path(self):
+        """OUT/<name>/ of a drive, OUT/<name>.log of a log."""
+        return os.path.join(self.out, self.name + (".log" if self.kind == "lcm" else ""))
+
+    def state_dir(self):
+        return state.state_dir(self.out, self.name)
+
+    def settings_path(self):
+        return os.path.join(self.state_dir(), "settings.json")
+
+    def has_results(self):
+        if self.kind == "drive":
+            return results.drive_has_results(self.result_path())
+        try:
+            return any(state.CHUNK_FILE.match(n) and n.endswith(".log") for n in os.listdir(self.state_dir()))
+        except OSError:
+            return False
+
+    def missing_text(self, gap):
+        what = "no image_02/data/NNNNNNNNNN.png" if self.kind == "drive" else "past the log's last stereo frame"
+        return "%s frames %d..%d: %s" % (self.path, gap[0], gap[1], what)
+
+
+def capped(lines, limit=MAX_NOTES):
+    lines = list(lines)
+    return lines[:limit] + (["... and %d more" % (len(lines) - limit)] if len(lines) > limit else [])
+
+
+def chunk_complete(c, done_t0s):
+    """(pairs a valid marker vouches for, with its results present; or None, why not ('' when
+    there is no marker))."""
+    try:
+        pairs = state.check_marker(ch.marker_path(c), c["first"], c["last"])
+    except state.StateError as e:
+        return None, "%s; recomputing the chunk" % e
+    if pairs is None:
+        return None, ""
+    if c["kind"] == "drive":
+        have = sum(1 for k in range(c["first"], c["last"]) if k in done_t0s)
+    else:
+        have = results.count_flows(ch.chunk_log_path(c)) or 0
+    if have != pairs:
+        return None, "%s frames %d:%d was complete, but %d of its %d results are there: recomputing" \
+            % (c["source"], c["first"], c["last"], have, pairs)
+    return pairs, ""
 
 
 def prepare(sources, settings):
     """Checks names and the settings recorded by an earlier run into the same folder; with
-    force, forgets what earlier runs completed. Returns the chunks still to compute and the
-    number of pairs already complete."""
+    force, forgets what earlier runs completed. Returns the chunks still to compute, the number
+    of pairs already complete, and notes (markers not trusted)."""
     names = {}
     for s in sources:
-        if s.name in names:
-            raise SourceError("%s and %s would both write %s/%s: give sources distinct names"
-                              % (names[s.name], s.path, settings.out, s.name))
-        names[s.name] = s.path
-    pending, done_pairs = [], 0
+        key = state.safe_name(s.name)
+        if key in names:
+            raise SourceError("%s and %s would both keep their state in %s: give sources distinct names"
+                              % (names[key], s.path, s.state_dir()))
+        names[key] = s.path
+    pending, done_pairs, notes = [], 0, []
     for s in sources:
-        d = ch.state_dir(settings.out, s.name)
-        os.makedirs(d, exist_ok=True)
-        sig_path, sig = os.path.join(d, "settings.json"), settings.signature(s.kind)
-        for n in os.listdir(d):
-            # Left by attempts that died; one run per output folder at a time.
-            if ".tmp." in n or (settings.force and (n.endswith(".done") or n.endswith(".log"))):
-                os.unlink(os.path.join(d, n))
-        if not settings.force and os.path.exists(sig_path):
-            with open(sig_path) as f:
-                old = json.load(f)
-            if old != sig:
+        for p in state.own_files(s.state_dir(), settings.force):
+            try:
+                os.unlink(p)
+            except FileNotFoundError:
+                pass
+        if not settings.force:
+            try:
+                old = state.check_settings(s.settings_path(), settings.signature(s.kind))
+            except state.StateError as e:
+                raise SourceError("%s: use --force to recompute, or another --out" % e) from None
+            if old is not None and old != settings.signature(s.kind):
                 raise SourceError("%s holds results of %s computed with other settings (%s, now %s): "
                                   "use --force to recompute, or another --out"
-                                  % (settings.out, s.path, json.dumps(old), json.dumps(sig)))
-        ch.write_atomically(sig_path, (json.dumps(sig) + "\n").encode())
+                                  % (settings.out, s.path, old, settings.signature(s.kind)))
+        done_t0s = set() if s.kind != "drive" or settings.force else \
+            results.drive_complete_t0s(s.result_path(), settings.formats)
         for c in s.chunks:
-            if os.path.exists(ch.marker_path(c)):
-                with open(ch.marker_path(c)) as f:
-                    done_pairs += json.load(f)["pairs"]
-            else:
+            pairs, why = (None, "") if settings.force else chunk_complete(c, done_t0s)
+            if why:
+                notes.append(why)
+            if pairs is None:
                 pending.append(c)
-    return pending, done_pairs
+            else:
+                done_pairs += pairs
+    return pending, done_pairs, notes
 
 
-def merge(source, out):
-    """Concatenates a log source's chunk logs in chunk order into OUT/<name>.log (atomically):
-    the scene_flow_t results and their ego_motion_t with their log times, renumbered. The chunks'
-    status messages are left out: their counters are a chunk's, not the log's. Returns (results,
-    chunks missing)."""
-    results, missing = 0, []
-
-    def fill(f):
-        nonlocal results
-        w = LogWriter(f)
-        for c in source.chunks:
-            log = ch.chunk_log_path(c)
-            if not os.path.exists(log):
-                missing.append(c)
-                continue
-            with LogReader(log, channels=(ch.FLOW_CHANNEL, ch.EGO_CHANNEL), strict=True) as r:
-                for e in r:
-                    w.write(e.channel, e.data, e.utime)
-                    results += e.channel == ch.FLOW_CHANNEL
-
-    ch.write_atomically(source.result_log(out), fill)
-    return results, missing
+def record_settings(sources, pending, settings):
+    """Writes the settings of each source about to get results; returns the files written."""
+    made = []
+    with_work = {c["source"] for c in pending}
+    for s in sources:
+        if s.path in with_work and (settings.force or not os.path.exists(s.settings_path())):
+            os.makedirs(s.state_dir(), exist_ok=True)
+            state.write_atomically(s.settings_path(), (json.dumps(settings.signature(s.kind)) + "\n").encode())
+            made.append(s)
+    return made
 
 
 def describe(chunk):
@@ -185,95 +231,96 @@ class Report:
         if result["rc"] != 0:
             self.failed.append(result)
         if self.lines:
-            state = "ok" if result["rc"] == 0 else "FAILED"
-            print("chunk %s: %s, %d pairs, %.1f s on %s" % (describe(c), state, result["pairs"], result["seconds"],
-                                                           result["host"]), file=self.stream, flush=True)
+            state_text = "ok" if result["rc"] == 0 else "FAILED"
+            print("chunk %s: %s, %d pairs, %.1f s on %s" % (describe(c), state_text, result["pairs"],
+                                                           result["seconds"], result["host"]),
+                  file=self.stream, flush=True)
 
     def lost(self, chunk, why):
         self.add({"chunk": chunk, "host": "?", "rc": -1, "pairs": 0, "seconds": 0.0, "message": why})
 
 
-def run_serial(pending, report):
-    for c in pending:
-        report.add(ch.run_chunk(c))
+def merge_logs(sources, report, settings):
+    """Writes the result log of each LCM source whose chunks changed or whose result log is not
+    the chunks' results; a chunk log lost since its chunk completed is reported as failed."""
+    computed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.results}
+    failed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.failed}
+    for s in sources:
+        if s.kind != "lcm" or not s.chunks:
+            continue
+        expected = sum(c["last"] - c["first"] for c in s.chunks)
+        if not any((s.path, c["first"]) in computed for c in s.chunks) and \
+                results.count_flows(s.result_path()) == expected:
+            continue
+        _, missing = results.merge([ch.chunk_log_path(c) for c in s.chunks], s.result_path())
+        for c in s.chunks:
+            if ch.chunk_log_path(c) in missing and (s.path, c["first"]) not in failed:
+                report.lost(c, "its chunk log %s is missing or unreadable at the merge into %s"
+                            % (ch.chunk_log_path(c), s.result_path()))
 
 
-def run_dask(pending, report, client, progress_bar):
-    from distributed import as_completed, progress
-    # pure=False: a rerun after a failure is a new task, not the cached failed one.
-    futures = client.map(ch.run_chunk, pending, pure=False, key=["lidarflow-%s-%s" % (c["name"], ch.chunk_key(c))
-                                                              for c in pending])
-    chunk_of = {f.key: c for f, c in zip(futures, pending)}
-    if progress_bar:
-        progress(futures)
-        print(file=report.stream)
-    for f in as_completed(futures):
-        if f.status == "finished":
-            report.add(f.result())
-        else:
-            # e.g. KilledWorker: the chunk took down workers more often than Dask allows.
-            report.lost(chunk_of[f.key], "%s: %s" % (f.status, f.exception()))
-
-
-def check_workers(client, kinds, bin_dir):
-    """The executables on every worker; {worker: why} for those without them."""
-    answers = client.run(ch.check_tools, sorted(kinds), bin_dir, on_error="return")
-    bad = {}
-    for w, why in answers.items():
-        if isinstance(why, BaseException):  # e.g. lidarflow_dask not importable there
-            bad[w] = "%s: %s (install python3-lidarflow-dask on every worker host)" % (type(why).__name__, why)
-        elif why:
-            bad[w] = why
-    return bad
+def check_where_chunks_run(sources, settings, client):
+    """The executables, then the options, checked where the chunks will run (here, or on every
+    worker and then one of them): ToolNotFound / ClusterError, ValueError for bad options."""
+    kinds = {s.kind for s in sources}
+    if client is None:
+        why = check_tools(kinds, settings.bin_dir)
+        if why:
+            raise ToolNotFound(why)
+        why = ch.check_settings(settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir)
+    else:
+        cluster.check_workers(client, kinds, settings.bin_dir)
+        why = cluster.on_one_worker(client, ch.check_settings, settings.preset, settings.options, settings.formats,
+                                    settings.threads, settings.bin_dir)
+    if why:
+        raise ValueError(why)
 
 
 def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=False):
     """Runs every chunk not yet complete (on `client`, or in order here when None), then writes
-    the LCM sources' result logs. Returns (exit status, summary dict); prints the summary."""
+    the LCM sources' result logs. Returns (exit status, summary dict); prints the summary.
+    Raises SourceError / ValueError (bad sources or settings), state.Busy (another run into
+    OUT), ToolNotFound, ClusterError."""
     t0 = time.monotonic()
     sources = [Source(p, settings) for p in source_paths]
-    pending, done_before = prepare(sources, settings)
-    kinds = {s.kind for s in sources}
-    if client is None:
-        why = ch.check_tools(kinds, settings.bin_dir)
-        if why:
-            raise ch.ToolNotFound(why)
-    else:
-        # Workers started just before may not have joined yet: the check needs at least one.
+    check_where_chunks_run(sources, settings, client)
+    with state.Lock(settings.out):
+        pending, done_before, notes = prepare(sources, settings)
+        for line in capped(notes):
+            print("lidarflow_dask: %s" % line, file=stream)
+        n_chunks = sum(len(s.chunks) for s in sources)
+        print("lidarflow_dask: %d source(s), %d chunk(s) of up to %d frames, %d to compute (%d complete), %s"
+              % (len(sources), n_chunks, settings.chunk, len(pending), n_chunks - len(pending),
+                 "serial" if client is None else "on %d Dask worker(s)" % len(client.scheduler_info()["workers"])),
+              file=stream, flush=True)
+        report = Report(stream, lines=client is None or not progress_bar)
+        made = record_settings(sources, pending, settings)
         try:
-            client.wait_for_workers(1, timeout=120)
-        except TimeoutError:
-            raise ClusterError("no Dask worker joined the scheduler within 120 s") from None
-        bad = check_workers(client, kinds, settings.bin_dir)
-        if bad:
-            raise ClusterError("; ".join("worker %s: %s" % kv for kv in sorted(bad.items())))
-    print("lidarflow_dask: %d source(s), %d chunk(s) of up to %d frames, %d to compute (%d complete), %s"
-          % (len(sources), sum(len(s.chunks) for s in sources), settings.chunk, len(pending),
-             sum(len(s.chunks) for s in sources) - len(pending),
-             "serial" if client is None else "on %d Dask worker(s)" % len(client.scheduler_info()["workers"])),
-          file=stream, flush=True)
-    report = Report(stream, lines=client is None or not progress_bar)
-    if pending:
-        if client is None:
-            run_serial(pending, report)
-        else:
-            run_dask(pending, report, client, progress_bar)
-    computed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.results}
-    for s in sources:
-        if s.kind == "lcm" and (not os.path.exists(s.result_log(settings.out)) or
-                                any((s.path, c["first"]) in computed for c in s.chunks)):
-            merge(s, settings.out)
+            if pending and client is None:
+                for c in pending:
+                    report.add(ch.run_chunk(c))
+            elif pending:
+                cluster.run_dask(pending, report, client, progress_bar)
+            merge_logs(sources, report, settings)
+        finally:
+            for s in made:
+                if not s.has_results():  # nothing computed: the folder holds no results to guard
+                    os.unlink(s.settings_path())
     seconds = time.monotonic() - t0
     pairs = sum(r["pairs"] for r in report.results)
+    lost = sum(s.lost for s in sources)
     summary = {"sources": len(sources), "chunks": len(pending), "pairs": pairs, "pairs_complete_before": done_before,
                "failed": [(describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
-               "pairs_per_second": pairs / seconds if seconds > 0 else 0.0}
-    for what, why in summary["failed"]:
-        print("FAILED: %s: %s" % (what, why.replace("\n", "\n    ")), file=stream)
-    print("lidarflow_dask: %d pairs computed in %.1f s (%.2f pairs/s), %d complete before; %d of %d chunks failed%s"
+               "pairs_per_second": pairs / seconds if seconds > 0 else 0.0, "pairs_missing_frames": lost}
+    for line in capped("%s: %s" % (what, why.replace("\n", "\n    ")) for what, why in summary["failed"]):
+        print("FAILED: %s" % line, file=stream)
+    for line in capped(s.missing_text(g) for s in sources for g in s.gaps):
+        print("MISSING: %s" % line, file=stream)
+    print("lidarflow_dask: %d pairs computed in %.1f s (%.2f pairs/s), %d complete before; %d of %d chunks failed%s%s"
           % (pairs, seconds, summary["pairs_per_second"], done_before, len(report.failed), len(pending),
+             "; %d pairs not computed for missing frames" % lost if lost else "",
              " (rerun the command to retry them)" if report.failed else ""), file=stream, flush=True)
-    return (1 if report.failed else 0), summary
+    return (1 if report.failed or lost else 0), summary
 
 
 def default_threads(workers, threads_per_worker):
@@ -281,4 +328,6 @@ def default_threads(workers, threads_per_worker):
     return max(1, (os.cpu_count() or 1) // max(1, workers * threads_per_worker))
 
 
-__all__ = ["ClusterError", "Settings", "Source", "SourceError", "detect", "plan", "merge", "run", "default_threads"]
+plan = frames.plan
+
+__all__ = ["ClusterError", "Settings", "Source", "SourceError", "detect", "plan", "run", "default_threads"]

@@ -153,42 +153,43 @@ def run_chunk(chunk):
     except ToolNotFound as e:
         result["message"] = str(e)
         return result
-    os.makedirs(state.state_dir(chunk["out"], chunk["name"]), exist_ok=True)
     tmp_log = None
     if chunk["kind"] == "lcm":
         # The bridge writes as it goes: a name of this attempt's own, renamed when it ends.
         tmp_log = "%s.tmp.%s.%d.%s" % (chunk_log_path(chunk), host, os.getpid(), uuid.uuid4().hex[:8])
     timeout = chunk["timeout"] or None
     try:
+        os.makedirs(state.state_dir(chunk["out"], chunk["name"]), exist_ok=True)
         rc, out = execute(command(chunk, tool, tmp_log), timeout)
         result["seconds"] = time.monotonic() - t0
         result["rc"] = rc
-        if chunk["kind"] == "lcm":
-            if rc in (0, 3):
-                result["pairs"] = results.count_flows(tmp_log) or 0
-                if rc == 0 and result["pairs"] == expected:
-                    os.replace(tmp_log, chunk_log_path(chunk))
+        result["pairs"] = count_results(chunk, rc, tmp_log)
+        if rc == 0 and result["pairs"] != expected:
+            # A source that shrank since it was planned, or results deleted meanwhile: not complete.
+            result["rc"] = -1
+            result["message"] = "exit 0 but %d of the %d pairs' results (has the source changed since the run " \
+                                "started?): %s" % (result["pairs"], expected, _tail(out) or "(no output)")
+        elif rc == 0:
+            if tmp_log:
+                os.replace(tmp_log, chunk_log_path(chunk))
+            state.write_atomically(marker_path(chunk), state.marker(host, expected, result["seconds"],
+                                                                    chunk["first"], chunk["last"]))
+        elif rc == TIMED_OUT:
+            result["message"] = "timed out after %g s (--chunk-timeout), killed" % timeout
         else:
-            result["pairs"] = results.drive_pairs_complete(drive_out(chunk), chunk["first"], chunk["last"],
-                                                           chunk["formats"])
-    except OSError as e:
-        result["message"] = "cannot run %s: %s" % (tool, e)
+            why = "killed by signal %d" % -rc if rc < 0 else "exit %d" % rc
+            result["message"] = "%s: %s" % (why, _tail(out) or "(no output)")
+    except OSError as e:  # the tool could not start, or OUT refuses a file (a folder in a marker's place)
+        result["message"] = ("cannot keep the results: %s" if result["seconds"] else "cannot run " + tool + ": %s") % e
         result["rc"] = -1
-        return result
     finally:
         if tmp_log and os.path.exists(tmp_log):
             os.unlink(tmp_log)
-    if rc == 0 and result["pairs"] != expected:
-        # A source that shrank since it was planned, or results deleted meanwhile: not complete.
-        result["rc"] = -1
-        result["message"] = "exit 0 but %d of the %d pairs' results (has the source changed since the run " \
-                            "started?): %s" % (result["pairs"], expected, _tail(out) or "(no output)")
-    elif rc == 0:
-        state.write_atomically(marker_path(chunk), state.marker(host, expected, result["seconds"], chunk["first"],
-                                                                chunk["last"]))
-    elif rc == TIMED_OUT:
-        result["message"] = "timed out after %g s (--chunk-timeout), killed" % timeout
-    else:
-        why = "killed by signal %d" % -rc if rc < 0 else "exit %d" % rc
-        result["message"] = "%s: %s" % (why, _tail(out) or "(no output)")
     return result
+
+
+def count_results(chunk, rc, tmp_log):
+    """Pairs of the chunk whose results the tool left."""
+    if chunk["kind"] == "lcm":
+        return (results.count_flows(tmp_log) or 0) if rc in (0, 3) else 0
+    return results.drive_pairs_complete(drive_out(chunk), chunk["first"], chunk["last"], chunk["formats"])

@@ -24,7 +24,7 @@ def local_cluster(workers, threads_per_worker):
     scratch = tempfile.mkdtemp(prefix="lidarflow_dask-")
     try:
         with LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker, processes=True, host=LOOPBACK,
-                          dashboard_address=None, worker_dashboard_address=None, local_directory=scratch,
+                          dashboard_address=None, worker_dashboard_address=LOOPBACK + ":0", local_directory=scratch,
                           scheduler_kwargs={"dashboard": False, "dashboard_address": LOOPBACK + ":0"}) as c, \
                 Client(c) as client:
             yield client

@@ -161,7 +161,8 @@ def own_files(d, force):
         names = os.listdir(d)
     except FileNotFoundError:
         return []
-    return [os.path.join(d, n) for n in names if TEMPORARY.match(n) or (force and CHUNK_FILE.match(n))]
+    found = [os.path.join(d, n) for n in names if TEMPORARY.match(n) or (force and CHUNK_FILE.match(n))]
+    return [p for p in found if not os.path.isdir(p) or os.path.islink(p)]  # a folder is not one of them
 
 
 def write_atomically(path, data):

@@ -12,7 +12,7 @@ import subprocess
 import time
 import unittest
 
-from dask_fixture import BIN, PY, READY, SKIP, alive, cli, cmdline, fake_bin, fixture, processes, serial_args
+from dask_fixture import BIN, PY, READY, SKIP, cli, cmdline, fake_bin, fixture, processes, serial_args
 
 if BIN:
     from lidarflow_dask import chunks

@@ -17,6 +17,7 @@ import warnings
 
 import lidarflow_lcm as ll
 from lidarflow_dask import chunks, frames, runner, state
+from lidarflow_dask.sources import source_name
 
 SEED = 20261203
 ROUNDS = 150
@@ -145,14 +146,15 @@ class PlannerProperty(unittest.TestCase):
                 if rng.random() < 0.3:
                     a = rng.choice([0, 3, 9999999990, rng.randint(0, 10 ** 6)])
                     fr = (a, a + rng.choice([1, 2, 7, frames.MAX_PAIRS]))
-                settings = runner.Settings(out, chunk=rng.choice([2, 3, 5, 20, 10 ** 7]), frames=fr,
-                                           formats=rng.sample(["kitti", "flo", "pfm", "npy"], rng.randint(1, 2)),
-                                           force=rng.random() < 0.2)
+                chunk = rng.choice([2, 3, 5, 20, 10 ** 7])
+                formats = rng.sample(["kitti", "flo", "pfm", "npy"], rng.randint(1, 2))
+                force = rng.random() < 0.2
                 for p in paths:
                     if rng.random() < 0.7:
-                        make_state(rng, out, runner.source_name(p), listed[p] or [])
+                        make_state(rng, out, source_name(p), listed[p] or [])
                 with self.subTest(round=round_, paths=[os.path.basename(p) for p in paths]):
                     try:
+                        settings = runner.Settings(out, chunk=chunk, frames=fr, formats=formats, force=force)
                         sources = [runner.Source(p, settings) for p in paths]
                         pending, done, notes = runner.prepare(sources, settings)
                     except ValueError as e:  # SourceError, FramesError, StateError: a message

@@ -14,11 +14,15 @@ From Python (client: a distributed.Client, or None for the serial run in this pr
     import lidarflow_dask
     rc, summary = lidarflow_dask.run(["drive/"], lidarflow_dask.Settings("OUT", preset="realtime"), client)
 
-Thread-safety: run() is meant for one caller per output folder at a time; run_chunk() runs
+Thread-safety: run() takes a lock on the output folder (a second run into it, from any process
+or host sharing it, is refused with Busy naming the holder); run_chunk() runs
 concurrently on any number of workers (each writes files under names of its own and renames them).
 """
-from .chunks import ToolNotFound, find_tool, run_chunk
-from .runner import ClusterError, Settings, Source, SourceError, default_threads, detect, merge, plan, run
+from .chunks import run_chunk
+from .results import merge
+from .runner import ClusterError, Settings, Source, SourceError, default_threads, detect, plan, run
+from .state import Busy
+from .tools import ToolNotFound, find_tool
 
-__all__ = ["ClusterError", "Settings", "Source", "SourceError", "ToolNotFound", "default_threads", "detect", "find_tool", "merge",
-           "plan", "run", "run_chunk"]
+__all__ = ["Busy", "ClusterError", "Settings", "Source", "SourceError", "ToolNotFound", "default_threads", "detect",
+           "find_tool", "merge", "plan", "run", "run_chunk"]

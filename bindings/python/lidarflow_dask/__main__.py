@@ -1,17 +1,21 @@
 # SPDX-License-Identifier: MIT
 """python3 -m lidarflow_dask: recorded drives and LCM logs, chunk by chunk, over a Dask cluster."""
 import argparse
+import logging
 import os
 import sys
 
-from . import chunks, runner
+from . import cluster, frames, results, runner, state
+from .tools import ToolNotFound
 
 EPILOG = """\
 A SOURCE is a KITTI raw drive folder (image_02/data/NNNNNNNNNN.png ...) or an LCM log; which one
 is read from its content. A drive's results go to OUT/<drive name>/ (lidarflow run's layout), a
 log's to OUT/<log name>.log (the scene_flow_t results, in log order). Rerunning the command
-computes only the chunks not yet complete. Exit status: 0 every chunk complete, 1 some chunks
-failed (listed), 2 bad arguments or sources. See docs/SCALE.md.
+computes only the chunks not yet complete (or whose results are gone). Exit status: 0 every
+pair computed; 1 some chunks failed (listed), frames missing (listed), the tools missing or
+the scheduler lost; 2 bad arguments, options or sources, or OUT in use by another run. See
+docs/SCALE.md.
 """
 
 
@@ -35,6 +39,14 @@ def parse(argv):
     p.add_argument("--option", action="append", default=[], metavar="K=V", help="estimator option, repeatable")
     p.add_argument("--chunk", type=int, default=20, metavar="N",
                    help="frames per chunk, consecutive chunks sharing one (default 20: 19 pairs)")
+    p.add_argument("--frames", metavar="A:B",
+                   help="frames A..B (inclusive) of every source: pairs A->A+1 .. B-1->B, at most %d (default: "
+                        "every frame; an LCM log's stereo frames count 0.. in log order)" % frames.MAX_PAIRS)
+    p.add_argument("--format", default="kitti", metavar="F,..",
+                   help="drives' result files: kitti (16-bit PNG, default) | flo | pfm | npy (as lidarflow sequence)")
+    p.add_argument("--chunk-timeout", type=float, metavar="S",
+                   help="seconds a chunk may run before it is killed and reported (default: 120 + 60 per pair; "
+                        "0 = no limit)")
     p.add_argument("--force", action="store_true", help="recompute everything, also what is complete")
     p.add_argument("--bin-dir", metavar="DIR",
                    help="where lidarflow and lidarflow-lcm-bridge are, for every worker (default: "
@@ -51,6 +63,17 @@ def parse(argv):
         p.error("--workers %d: 0 or more" % a.workers)
     if a.threads_per_worker < 1:
         p.error("--threads-per-worker %d: at least 1" % a.threads_per_worker)
+    if a.threads_per_task is not None and a.threads_per_task < 1:
+        p.error("--threads-per-task %d: at least 1" % a.threads_per_task)
+    if not a.out:
+        p.error("--out: the output folder must be named (got '')")
+    if a.chunk_timeout is not None and not a.chunk_timeout >= 0:
+        p.error("--chunk-timeout %s: seconds, 0 or more" % a.chunk_timeout)
+    try:
+        a.frames = frames.parse_frames(a.frames) if a.frames is not None else None
+        a.format = results.parse_formats(a.format)
+    except ValueError as e:
+        p.error(str(e))
     for kv in a.option:
         if "=" not in kv or kv.startswith("="):
             p.error("--option %s: expected K=V" % kv)
@@ -63,7 +86,7 @@ def main(argv=None):
     a = parse(sys.argv[1:] if argv is None else argv)
     serial = a.serial or a.workers == 0
     workers = 0 if serial else (a.workers or 2)
-    if a.threads_per_task:
+    if a.threads_per_task is not None:
         threads = a.threads_per_task
     elif a.scheduler:
         threads = 1
@@ -74,27 +97,27 @@ def main(argv=None):
         bin_dir = a.bin_dir or os.environ.get("LIDARFLOW_BIN_DIR")
         settings = runner.Settings(a.out, preset=a.preset, options=a.option, chunk=a.chunk, threads=threads,
                                    force=a.force, bin_dir=os.path.abspath(bin_dir) if bin_dir else None,
-                                   stereo_channel=a.stereo_channel, bridge_args=a.bridge_arg)
+                                   stereo_channel=a.stereo_channel, bridge_args=a.bridge_arg, formats=a.format,
+                                   frames=a.frames, chunk_timeout=a.chunk_timeout)
         if serial:
             rc, _ = runner.run(a.sources, settings, client=None)
             return rc
-        from distributed import Client, LocalCluster
         progress_bar = sys.stderr.isatty()
+        from distributed import Client
+        # The client logs tracebacks while it tries to reconnect to a scheduler gone: the run says why once.
+        for name in ("distributed.client", "distributed.utils", "distributed.core", "asyncio", "tornado"):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
         if a.scheduler:
             with Client(a.scheduler) as client:
                 rc, _ = runner.run(a.sources, settings, client=client, progress_bar=progress_bar)
             return rc
-        with LocalCluster(n_workers=workers, threads_per_worker=a.threads_per_worker, processes=True,
-                          dashboard_address=None) as cluster, Client(cluster) as client:
+        with cluster.local_cluster(workers, a.threads_per_worker) as client:
             rc, _ = runner.run(a.sources, settings, client=client, progress_bar=progress_bar)
         return rc
-    except (runner.SourceError, ValueError) as e:
+    except (ValueError, state.Busy) as e:  # SourceError, bad options, unreadable state files
         print("lidarflow_dask: %s" % e, file=sys.stderr)
         return 2
-    except (chunks.ToolNotFound, runner.ClusterError) as e:
-        print("lidarflow_dask: %s" % e, file=sys.stderr)
-        return 1
-    except OSError as e:
+    except (ToolNotFound, cluster.ClusterError, OSError) as e:
         print("lidarflow_dask: %s" % e, file=sys.stderr)
         return 1
 

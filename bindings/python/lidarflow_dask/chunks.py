@@ -7,71 +7,34 @@ is a dict (plain data, so it pickles to any worker):
     kind      "drive" or "lcm"
     source    the drive folder or the LCM log (the same path on every host: shared storage)
     name      the source's name in the output folder
-    first, last   frames first..last, both included: the pairs (first, first+1) .. (last-1, last)
+    first, last   frames first..last, both included, all present: the pairs (first, first+1) .. (last-1, last)
     out       the output folder (shared storage)
-    preset, options, threads, force, bin_dir, stereo_channel, bridge_args   see runner.Settings
+    preset, options, formats, threads, force, bin_dir, stereo_channel, bridge_args, timeout   see runner.Settings
 
 run_chunk() never raises for bad data or a missing tool: it returns a result dict (rc, pairs,
 seconds, host, message) that the caller reports. It is safe to run twice, also concurrently:
 every file it leaves is complete, written under a name of its own and renamed into place.
 """
 import ctypes
-import json
 import os
 import signal
 import socket
 import subprocess
+import tempfile
 import time
 import uuid
 
-from lidarflow_lcm.eventlog import LogReader
+from . import results, state
+from .tools import BRIDGE, CLI, ToolNotFound, find_tool
 
-CLI, BRIDGE = "lidarflow", "lidarflow-lcm-bridge"
-FLOW_CHANNEL = "LIDARFLOW_FLOW"
-EGO_CHANNEL = "LIDARFLOW_EGO_MOTION"  # the ego_motion_t that comes with each result
-STATE_DIR = ".lidarflow_dask"  # under the output folder: chunk markers and chunk logs
 _PR_SET_PDEATHSIG = 1
+TIMED_OUT = -1000  # rc of a chunk killed for running past its timeout
 
 
-class ToolNotFound(RuntimeError):
-    """The lidarflow CLI or the bridge is not installed where it is looked for."""
-
-
-def find_tool(name, bin_dir=None):
-    """Path of the executable `name`: in bin_dir (else $LIDARFLOW_BIN_DIR) when given, else next
-    to this package's installation (PREFIX/bin for PREFIX/lib/python3/dist-packages), else on
-    the PATH. Raises ToolNotFound saying where it looked."""
-    bin_dir = bin_dir or os.environ.get("LIDARFLOW_BIN_DIR")
-    if bin_dir:
-        # A build tree keeps the CLI and the bridge in folders of their own.
-        for sub in ("", "tools/lidarflow", "bridge"):
-            path = os.path.join(bin_dir, sub, name)
-            if os.path.isfile(path) and os.access(path, os.X_OK):
-                return path
-        raise ToolNotFound("%s not found in %s (LIDARFLOW_BIN_DIR / --bin-dir) on %s"
-                           % (name, bin_dir, socket.gethostname()))
-    here = os.path.dirname(os.path.abspath(__file__))
-    prefix = os.path.normpath(os.path.join(here, "..", "..", "..", ".."))
-    looked = [os.path.join(prefix, "bin")]
-    path = os.path.join(looked[0], name)
-    if os.path.isfile(path) and os.access(path, os.X_OK):
-        return path
-    for d in os.environ.get("PATH", "").split(os.pathsep):
-        path = os.path.join(d or ".", name)
-        if os.path.isfile(path) and os.access(path, os.X_OK):
-            return path
-    raise ToolNotFound("%s not found in %s or on the PATH on %s (install lidarflow-tools, or set "
-                       "LIDARFLOW_BIN_DIR / --bin-dir to a build tree)" % (name, looked[0], socket.gethostname()))
-
-
-def check_tools(kinds, bin_dir=None):
-    """'' when the executables for the source kinds are found on this host, else why not."""
-    try:
-        for kind in sorted(kinds):
-            find_tool(CLI if kind == "drive" else BRIDGE, bin_dir)
-    except ToolNotFound as e:
-        return str(e)
-    return ""
+def default_timeout(pairs):
+    """Seconds a chunk of `pairs` pairs may run: start-up plus a minute a pair (a KITTI pair with
+    the paper preset on one loaded core takes seconds, not minutes)."""
+    return 120 + 60 * pairs
 
 
 try:
@@ -96,87 +59,93 @@ def chunk_key(chunk):
     return "%010d-%010d" % (chunk["first"], chunk["last"])
 
 
-def state_dir(out, name):
-    return os.path.join(out, STATE_DIR, name)
-
-
 def marker_path(chunk):
-    return os.path.join(state_dir(chunk["out"], chunk["name"]), chunk_key(chunk) + ".done")
+    return os.path.join(state.state_dir(chunk["out"], chunk["name"]), chunk_key(chunk) + ".done")
 
 
 def chunk_log_path(chunk):
-    return os.path.join(state_dir(chunk["out"], chunk["name"]), chunk_key(chunk) + ".log")
+    return os.path.join(state.state_dir(chunk["out"], chunk["name"]), chunk_key(chunk) + ".log")
 
 
-def write_atomically(path, data):
-    """Writes `data` (bytes, or a function that writes to the binary file it is given) to a
-    unique temporary name beside `path`, syncs, renames it over `path`."""
-    tmp = "%s.tmp.%s.%d.%s" % (path, socket.gethostname(), os.getpid(), uuid.uuid4().hex[:8])
-    try:
-        with open(tmp, "wb") as f:
-            if callable(data):
-                data(f)
-            else:
-                f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+def drive_out(chunk):
+    return os.path.join(chunk["out"], chunk["name"])
 
 
-def count_flows(log, channel=FLOW_CHANNEL):
-    """Scene-flow results in a result log (headers only)."""
-    with LogReader(log, channels=channel, data=False) as r:
-        return sum(1 for _ in r)
-
-
-def drive_pairs_written(out_dir, first, last):
-    """t0 frames in first..last-1 that have a flow file in out_dir/flow/ (any format)."""
-    try:
-        names = os.listdir(os.path.join(out_dir, "flow"))
-    except FileNotFoundError:
-        return 0
-    done = set()
-    for n in names:
-        stem = n.split(".", 1)[0]
-        if len(stem) == 10 and stem.isdigit() and first <= int(stem) < last:
-            done.add(int(stem))
-    return len(done)
+def option_args(options):
+    out = []
+    for kv in options:
+        out += ["--option", kv]
+    return out
 
 
 def command(chunk, tool, tmp_log=None):
     """The chunk's command line."""
-    opts = []
-    for kv in chunk["options"]:
-        opts += ["--option", kv]
     frames = "%d:%d" % (chunk["first"], chunk["last"])
     if chunk["kind"] == "drive":
-        cmd = [tool, "sequence", "--drive", chunk["source"], "--frames", frames,
-               "--out", os.path.join(chunk["out"], chunk["name"]), "--threads", str(chunk["threads"]), "--quiet"]
+        cmd = [tool, "sequence", "--drive", chunk["source"], "--frames", frames, "--out", drive_out(chunk),
+               "--threads", str(chunk["threads"]), "--format", ",".join(chunk["formats"]), "--quiet"]
         if chunk["preset"]:
             cmd += ["--preset", chunk["preset"]]
         if not chunk["force"]:
             cmd.append("--skip-existing")
-        return cmd + opts
+        return cmd + option_args(chunk["options"])
     cmd = [tool, "--replay", chunk["source"], "--out", tmp_log, "--frames", frames,
            "--option", "threads=%d" % chunk["threads"]]
     if chunk["preset"]:
         cmd += ["--option", "preset=" + chunk["preset"]]
-    return cmd + opts + list(chunk["bridge_args"])
+    return cmd + option_args(chunk["options"]) + list(chunk["bridge_args"])
+
+
+def execute(cmd, timeout):
+    """(rc, output) of cmd in a session of its own, the whole session killed past `timeout` s
+    (rc TIMED_OUT) or when this call is interrupted."""
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                         preexec_fn=_die_with_parent(os.getpid()), start_new_session=True, text=True,
+                         errors="replace")
+    try:
+        out, _ = p.communicate(timeout=timeout)
+        return p.returncode, out
+    except subprocess.TimeoutExpired:
+        return TIMED_OUT, ""
+    finally:
+        if p.returncode is None:
+            try:
+                os.killpg(p.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            p.communicate()
 
 
 def _tail(text, lines=8):
     return "\n".join(text.strip().splitlines()[-lines:])
 
 
+def check_settings(preset, options, formats, threads, bin_dir=None):
+    """'' when the CLI accepts the preset, options, formats and thread count, else its message.
+    `lidarflow sequence` checks them before it reads any file, so a drive that is not there
+    tells them apart: exit 2 is theirs, the drive's error comes after."""
+    tool = find_tool(CLI, bin_dir)
+    with tempfile.TemporaryDirectory(prefix="lidarflow_dask-check-") as tmp:
+        cmd = [tool, "sequence", "--drive", os.path.join(tmp, "none"), "--out", os.path.join(tmp, "out"),
+               "--threads", str(threads), "--format", ",".join(formats)] + option_args(options)
+        if preset:
+            cmd += ["--preset", preset]
+        rc, out = execute(cmd, 60)
+    if rc == 2:
+        return _tail(out, 3).replace("lidarflow sequence: error: ", "")
+    if rc == 1 and "is not a folder" in out:
+        return ""
+    return "cannot check the options with %s: %s" % (tool, "timed out" if rc == TIMED_OUT else _tail(out, 3))
+
+
 def run_chunk(chunk):
     """Computes one chunk; returns {rc, pairs, seconds, host, message, chunk}. rc: the tool's exit
     status (0 every pair computed; 3 some frames bad, the others' results kept; else an error),
-    or -1 when the tool is missing or could not start. On rc 0 a marker records the chunk as
-    complete, so a rerun skips it."""
+    -1 when the tool is missing, could not start or left fewer results than the chunk's pairs,
+    TIMED_OUT past the chunk's timeout. On rc 0 a marker records the chunk as complete, so a
+    rerun skips it (while its results are there)."""
     host = socket.gethostname()
+    expected = chunk["last"] - chunk["first"]
     result = {"chunk": chunk, "host": host, "rc": -1, "pairs": 0, "seconds": 0.0, "message": ""}
     t0 = time.monotonic()
     try:
@@ -184,39 +153,43 @@ def run_chunk(chunk):
     except ToolNotFound as e:
         result["message"] = str(e)
         return result
-    os.makedirs(state_dir(chunk["out"], chunk["name"]), exist_ok=True)
     tmp_log = None
     if chunk["kind"] == "lcm":
         # The bridge writes as it goes: a name of this attempt's own, renamed when it ends.
         tmp_log = "%s.tmp.%s.%d.%s" % (chunk_log_path(chunk), host, os.getpid(), uuid.uuid4().hex[:8])
-    cmd = command(chunk, tool, tmp_log)
+    timeout = chunk["timeout"] or None
     try:
-        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-                           preexec_fn=_die_with_parent(os.getpid()), text=True, errors="replace")
-    except OSError as e:
-        result["message"] = "cannot run %s: %s" % (tool, e)
-        return result
-    finally:
+        os.makedirs(state.state_dir(chunk["out"], chunk["name"]), exist_ok=True)
+        rc, out = execute(command(chunk, tool, tmp_log), timeout)
         result["seconds"] = time.monotonic() - t0
-    result["rc"] = p.returncode
-    if chunk["kind"] == "lcm":
-        try:
-            if p.returncode in (0, 3) and os.path.exists(tmp_log):
-                result["pairs"] = count_flows(tmp_log)
+        result["rc"] = rc
+        result["pairs"] = count_results(chunk, rc, tmp_log)
+        if rc == 0 and result["pairs"] != expected:
+            # A source that shrank since it was planned, or results deleted meanwhile: not complete.
+            result["rc"] = -1
+            result["message"] = "exit 0 but %d of the %d pairs' results (has the source changed since the run " \
+                                "started?): %s" % (result["pairs"], expected, _tail(out) or "(no output)")
+        elif rc == 0:
+            if tmp_log:
                 os.replace(tmp_log, chunk_log_path(chunk))
-        finally:
-            if os.path.exists(tmp_log):
-                os.unlink(tmp_log)
-    else:
-        result["pairs"] = drive_pairs_written(os.path.join(chunk["out"], chunk["name"]), chunk["first"], chunk["last"])
-    if p.returncode == 0:
-        marker = {k: result[k] for k in ("host", "pairs", "seconds")}
-        marker["frames"] = [chunk["first"], chunk["last"]]
-        write_atomically(marker_path(chunk), (json.dumps(marker) + "\n").encode())
-    else:
-        if p.returncode < 0:
-            why = "killed by signal %d" % -p.returncode
+            state.write_atomically(marker_path(chunk), state.marker(host, expected, result["seconds"],
+                                                                    chunk["first"], chunk["last"]))
+        elif rc == TIMED_OUT:
+            result["message"] = "timed out after %g s (--chunk-timeout), killed" % timeout
         else:
-            why = "exit %d" % p.returncode
-        result["message"] = "%s: %s" % (why, _tail(p.stderr + p.stdout) or "(no output)")
+            why = "killed by signal %d" % -rc if rc < 0 else "exit %d" % rc
+            result["message"] = "%s: %s" % (why, _tail(out) or "(no output)")
+    except OSError as e:  # the tool could not start, or OUT refuses a file (a folder in a marker's place)
+        result["message"] = ("cannot keep the results: %s" if result["seconds"] else "cannot run " + tool + ": %s") % e
+        result["rc"] = -1
+    finally:
+        if tmp_log and os.path.exists(tmp_log):
+            os.unlink(tmp_log)
     return result
+
+
+def count_results(chunk, rc, tmp_log):
+    """Pairs of the chunk whose results the tool left."""
+    if chunk["kind"] == "lcm":
+        return (results.count_flows(tmp_log) or 0) if rc in (0, 3) else 0
+    return results.drive_pairs_complete(drive_out(chunk), chunk["first"], chunk["last"], chunk["formats"])

@@ -15,107 +15,25 @@ import io
 import os
 import shutil
 import signal
-import subprocess
-import sys
-import tempfile
 import threading
 import time
 import unittest
 
-import lidarflow_lcm as ll
-
-BIN = os.environ.get("LIDARFLOW_BIN_DIR")
-PY = sys.executable
-CHUNK = 4
-try:
-    import distributed
-except ImportError:  # reported as skipped: tools/dev.sh deps installs python3-distributed
-    distributed = None
+from dask_fixture import BIN, CHUNK, READY, SKIP, alive, cli, egos, fixture, flows, processes, same_tree
 
 if BIN:
     import lidarflow_dask as ld
-    from lidarflow_dask import chunks as ldc
+    from lidarflow_dask.cluster import local_cluster
 
 
-def tool(*parts):
-    return os.path.join(BIN, *parts)
-
-
-def make_log(tmp):
-    """8 frames of 4 synthetic scenes as one stream (one sequence, frame numbers 0..7): 7 pairs,
-    three of them across a chunk boundary (frames 3 and 6 are shared by two chunks)."""
-    scene, raw, log = os.path.join(tmp, "scene"), os.path.join(tmp, "raw.log"), os.path.join(tmp, "run.log")
-    subprocess.run([tool("tools", "lidarflow", "lidarflow"), "synth", "--out", scene, "--width", "320", "--height", "96",
-                    "--frames", "4"], check=True, capture_output=True)
-    subprocess.run([tool("tools", "lidarflow", "lidarflow"), "publish-kitti", "--root", scene, "--lidar", "paper",
-                    "--rate", "0", "--lcm-url", "file://%s?mode=w" % raw], check=True, capture_output=True)
-    n = 0
-    with ll.LogWriter(log) as w:
-        for e, m in ll.read_messages(raw, strict=True):
-            if isinstance(m, ll.stereo_t):
-                m.sequence, m.frame_number, n = 0, n, n + 1
-                w.write(e.channel, m.encode(), e.utime)
-            elif not (isinstance(m, ll.calibration_t) and n > 0):  # one calibration: one stream
-                w.write(e.channel, e.data, e.utime)
-    return log
-
-
-def flows(path):
-    """(log time, scene_flow_t bytes with compute_seconds zeroed) of a result log."""
-    out = []
-    for e, m in ll.read_messages(path, channels=ldc.FLOW_CHANNEL, strict=True):
-        m.compute_seconds = 0.0
-        out.append((e.utime, m.encode()))
-    return out
-
-
-def egos(path):
-    """(log time, ego_motion_t bytes) of a result log."""
-    with ll.LogReader(path, channels=ldc.EGO_CHANNEL, strict=True) as r:
-        return [(e.utime, e.data) for e in r]
-
-
-def same_tree(test, a, b):
-    """Every file of folders a and b, byte for byte; returns the number of files."""
-    n = 0
-    for root, _, files in os.walk(a):
-        rel = os.path.relpath(root, a)
-        other = sorted(f for f in os.listdir(os.path.join(b, rel)) if os.path.isfile(os.path.join(b, rel, f)))
-        test.assertEqual(sorted(files), other, rel)
-        for f in files:
-            test.assertTrue(filecmp.cmp(os.path.join(root, f), os.path.join(b, rel, f), shallow=False),
-                            os.path.join(rel, f))
-            n += 1
-    return n
-
-
-def cli(*args):
-    return subprocess.run([PY, "-m", "lidarflow_dask"] + list(args), capture_output=True, text=True, timeout=300)
-
-
-@unittest.skipUnless(BIN and distributed, "LIDARFLOW_BIN_DIR not set or python3-distributed missing")
+@unittest.skipUnless(READY, SKIP)
 class Dask(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        t = cls.tmp.name
-        cls.drive = os.path.join(t, "drive")
-        subprocess.run([tool("tools", "lidarflow", "lidarflow"), "synth", "--drive", cls.drive, "--frames", "9",
-                        "--width", "320", "--height", "96"], check=True, capture_output=True)
-        cls.log = make_log(t)
-        cls.settings = dict(preset="realtime", chunk=CHUNK, threads=1)
-        # The serial run, the reference of the others.
-        cls.serial = os.path.join(t, "serial")
-        cls.serial_rc, cls.serial_summary = ld.run([cls.drive, cls.log], ld.Settings(cls.serial, **cls.settings))
-        whole = os.path.join(t, "whole.log")
-        subprocess.run([tool("bridge", "lidarflow-lcm-bridge"), "--replay", cls.log, "--out", whole,
-                        "--option", "preset=realtime", "--option", "threads=1"], check=True, capture_output=True)
-        cls.whole = flows(whole)
-        cls.whole_ego = egos(whole)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
+        f = fixture()  # the serial run, the reference of the others
+        cls.tmp, cls.drive, cls.log, cls.settings = f, f.drive, f.log, f.settings
+        cls.serial, cls.serial_rc, cls.serial_summary = f.serial, f.serial_rc, f.serial_summary
+        cls.whole, cls.whole_ego = f.whole, f.whole_ego
 
     def test_serial_run_computes_every_pair_once(self):
         self.assertEqual(self.serial_rc, 0, self.serial_summary)
@@ -130,9 +48,8 @@ class Dask(unittest.TestCase):
         self.assertEqual(egos(os.path.join(self.serial, "run.log")), self.whole_ego)
 
     def test_local_cluster_equals_serial_run(self):
-        out = os.path.join(self.tmp.name, "cluster")
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c, \
-                distributed.Client(c) as client:
+        out = os.path.join(self.tmp.tmp, "cluster")
+        with local_cluster(2, 1) as client:
             rc, summary = ld.run([self.drive, self.log], ld.Settings(out, **self.settings), client=client,
                                  stream=io.StringIO())
         self.assertEqual(rc, 0, summary)
@@ -141,9 +58,8 @@ class Dask(unittest.TestCase):
         self.assertEqual(flows(os.path.join(out, "run.log")), self.whole)
 
     def test_killed_worker_every_pair_exactly_once(self):
-        out = os.path.join(self.tmp.name, "killed")
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c, \
-                distributed.Client(c) as client:
+        out = os.path.join(self.tmp.tmp, "killed")
+        with local_cluster(2, 1) as client:
             pids = set(client.run(os.getpid).values())
             box = {}
             runner = threading.Thread(target=lambda: box.update(r=ld.run(
@@ -183,11 +99,11 @@ class Dask(unittest.TestCase):
         self.assertEqual(got, self.whole)  # each pair once, in order
 
     def test_corrupt_frame_reported_and_only_its_pairs_missing(self):
-        drive = os.path.join(self.tmp.name, "bad_drive")
+        drive = os.path.join(self.tmp.tmp, "bad_drive")
         shutil.copytree(self.drive, drive)
         with open(os.path.join(drive, "image_02", "data", "0000000005.png"), "r+b") as f:
             f.truncate(40)  # a cut-off PNG
-        out = os.path.join(self.tmp.name, "bad")
+        out = os.path.join(self.tmp.tmp, "bad")
         p = cli("--serial", "--out", out, "--preset", "realtime", "--chunk", str(CHUNK), "--threads-per-task", "1",
                 "--bin-dir", BIN, drive)
         self.assertEqual(p.returncode, 1, p.stderr)
@@ -202,7 +118,7 @@ class Dask(unittest.TestCase):
 
     def test_rerun_skips_and_force_recomputes(self):
         # The serial run's folder, copied (times kept): the same command finds it complete.
-        out = os.path.join(self.tmp.name, "rerun")
+        out = os.path.join(self.tmp.tmp, "rerun")
         shutil.copytree(self.serial, out)
         args = ["--serial", "--out", out, "--preset", "realtime", "--chunk", str(CHUNK), "--threads-per-task", "1",
                 "--bin-dir", BIN, self.drive, self.log]
@@ -226,15 +142,15 @@ class Dask(unittest.TestCase):
         self.assertEqual(flows(os.path.join(out, "run.log")), self.whole)
 
     def test_bad_sources_and_missing_tools(self):
-        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), self.tmp.name)
+        p = cli("--serial", "--out", os.path.join(self.tmp.tmp, "x"), self.tmp.tmp)
         self.assertEqual(p.returncode, 2)
         self.assertIn("not a KITTI raw drive", p.stderr)
-        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), os.path.join(self.drive, "calib_cam_to_cam.txt"))
+        p = cli("--serial", "--out", os.path.join(self.tmp.tmp, "x"), os.path.join(self.drive, "calib_cam_to_cam.txt"))
         self.assertEqual(p.returncode, 2)
         self.assertIn("neither a drive folder nor an LCM log", p.stderr)
-        empty = os.path.join(self.tmp.name, "empty_bin")
+        empty = os.path.join(self.tmp.tmp, "empty_bin")
         os.makedirs(empty, exist_ok=True)
-        p = cli("--serial", "--out", os.path.join(self.tmp.name, "x"), "--bin-dir", empty, self.log)
+        p = cli("--serial", "--out", os.path.join(self.tmp.tmp, "x"), "--bin-dir", empty, self.log)
         self.assertEqual(p.returncode, 1)
         self.assertIn("lidarflow-lcm-bridge not found in %s" % empty, p.stderr)
 
@@ -244,31 +160,6 @@ class Dask(unittest.TestCase):
         pairs = [(a, a + 1) for s, e in ld.plan(3, 100, 7) for a in range(s, e)]
         self.assertEqual(pairs, [(a, a + 1) for a in range(3, 100)])
 
-
-def processes():
-    """(pid, parent pid, command name) of every process."""
-    out = []
-    for d in os.listdir("/proc"):
-        if not d.isdigit():
-            continue
-        try:
-            with open("/proc/%s/stat" % d) as f:
-                stat = f.read()
-        except OSError:
-            continue
-        comm = stat[stat.index("(") + 1:stat.rindex(")")]
-        fields = stat[stat.rindex(")") + 2:].split()
-        out.append((int(d), int(fields[1]), comm))
-    return out
-
-
-def alive(pid):
-    """True while pid exists and is not a zombie."""
-    try:
-        with open("/proc/%d/stat" % pid) as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
 
 
 if __name__ == "__main__":

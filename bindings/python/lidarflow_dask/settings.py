@@ -1,0 +1,37 @@
+# SPDX-License-Identifier: MIT
+"""What every chunk of a run shares, checked as it is given."""
+import os
+
+from . import results
+from .frames import parse_frames
+
+
+class Settings:
+    """What every chunk of a run shares (see chunks.py). frames: (A, B), 'A:B' or None (every
+    frame); formats: sequence's --format names (drives); chunk_timeout: seconds, None for the
+    default (chunks.default_timeout), 0 for none."""
+
+    def __init__(self, out, preset=None, options=(), chunk=20, threads=1, force=False, bin_dir=None,
+                 stereo_channel="LIDARFLOW_STEREO", bridge_args=(), formats=("kitti",), frames=None,
+                 chunk_timeout=None):
+        if not out:
+            raise ValueError("--out: the output folder must be named (got '')")
+        if chunk < 2:
+            raise ValueError("--chunk %d: a chunk has at least 2 frames (one pair)" % chunk)
+        if threads < 1:
+            raise ValueError("--threads-per-task %d: at least 1" % threads)
+        if chunk_timeout is not None and not chunk_timeout >= 0:
+            raise ValueError("--chunk-timeout %s: seconds, 0 or more" % chunk_timeout)
+        self.out, self.preset, self.options = os.path.abspath(out), preset, list(options)
+        self.chunk, self.threads, self.force, self.bin_dir = chunk, threads, force, bin_dir
+        self.stereo_channel, self.bridge_args = stereo_channel, list(bridge_args)
+        self.formats = results.parse_formats(",".join(formats))
+        self.frames = None if frames is None else parse_frames(frames if isinstance(frames, str) else "%d:%d" % frames)
+        self.chunk_timeout = chunk_timeout
+
+    def signature(self, kind):
+        """What the results depend on; a rerun into the same folder must match it."""
+        sig = {"kind": kind, "preset": self.preset, "options": self.options}
+        if kind == "lcm":
+            sig.update(stereo_channel=self.stereo_channel, bridge_args=self.bridge_args)
+        return sig

@@ -274,6 +274,22 @@ std::vector<std::string> temporaries(const fs::path &out) {
     return t;
 }
 
+// A part of the drive that warms up from the drive's first frame is the whole run's stream:
+// its pairs equal the clean run's byte for byte (the motion prior included).
+void test_warm_up(void **) {
+    const Fixture &f = fixture();
+    const fs::path out = f.dir / "warm_out";
+    const test::CliRun r = test::run_cli("sequence --drive " + q(f.drive) + " --out " + q(out) +
+                                         " --format npy --threads 2 --frames 2:4 --warm-up 2 --preset " + kPreset);
+    expect_code(r, 0);
+    expect_contains(r, "2 pairs: 2 computed");
+    assert_false(fs::exists(out / "flow" / (name(1) + ".npy")));  // warm-up pairs are not written
+    for (int k : {2, 3})
+        for (const char *map : {"disp_0", "disp_1", "flow"})
+            assert_true(file_bytes(out / map / (name(k) + ".npy")) == file_bytes(f.clean / map / (name(k) + ".npy")));
+    expect_code(test::run_cli("sequence --drive " + q(f.drive) + " --out " + q(out) + " --warm-up -1"), 2);
+}
+
 void test_frames_and_skip_existing(void **) {
     const Fixture &f = fixture();
     const fs::path out = f.dir / "range_out";
@@ -373,6 +389,7 @@ int main() {
         cmocka_unit_test(test_bad_frames_skip_only_their_pairs),
         cmocka_unit_test(test_blank_frame_counted),
         cmocka_unit_test(test_frames_and_skip_existing),
+        cmocka_unit_test(test_warm_up),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_accuracy_against_ground_truth),
     };

@@ -131,6 +131,7 @@ int run_sequence(int argc, char **argv) {
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
                {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
+               {"warm-up", true, "N    with --frames A:B, start the stream N frames before A: pairs before A are computed for the stream's priors, not written (default 0)"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
@@ -155,6 +156,9 @@ int run_sequence(int argc, char **argv) {
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
     const bool skip_existing = args.flag("skip-existing");
+    const long warm_up = args.integer("warm-up", 0);
+    require(warm_up >= 0 && warm_up <= 1000, ErrorCode::InvalidArgument,
+            "sequence: --warm-up must be in [0, 1000] frames, got " + std::to_string(warm_up));
     const std::string poses_name = args.str("poses", "kitti");
     const bool write_poses = poses_name != "none";
     const io::PoseFormat poses_format = write_poses ? io::parse_pose_format(poses_name) : io::PoseFormat::Kitti;
@@ -223,6 +227,24 @@ int run_sequence(int argc, char **argv) {
     std::map<long, cv::Matx34d> motions;  // pair t0 -> its metric ego-motion [R | t]
     std::optional<Frame> prev;
     pipeline::StreamCache stream;
+    // Warm-up: the frames before the range feed the stream only (a part of a drive then gets the
+    // priors a whole run would have had); their problems are not the range's.
+    const auto warm_pair = [&](const Frame &a, const Frame &b) {
+        pipeline::FrameInput in{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
+        try {
+            estimator.run(in, &stream);
+        } catch (const Error &) {
+            stream.clear();
+        }
+    };
+    for (long k = std::max(listing.frames.front(), first - warm_up); k < first; ++k) {
+        io::DriveFileError ignored;
+        std::optional<Frame> cur;
+        if (present.count(k)) cur = read_frame(root, k, size, calib.camera, velo_to_left, ignored);
+        if (cur && prev) warm_pair(*prev, *cur);
+        if (!cur) stream.clear();
+        prev = std::move(cur);
+    }
     for (long k = first; k <= last; ++k) {
         std::optional<Frame> cur;
         io::DriveFileError bad;
@@ -244,11 +266,13 @@ int run_sequence(int argc, char **argv) {
         }
         if (!cur->scan_error.file.empty()) {
             std::vector<long> pairs_of;
-            if (prev) pairs_of.push_back(k - 1);
+            if (prev && k > first) pairs_of.push_back(k - 1);
             if (k < last) pairs_of.push_back(k);
             report_frame(tty, k, cur->scan_error, pairs_of, "image-only");
         }
-        if (prev) {
+        if (prev && prev->index < first) {
+            warm_pair(*prev, *cur);  // the last warm-up pair
+        } else if (prev) {
             const long t0 = prev->index;
             const std::string id = io::drive_frame_name(t0);
             const std::vector<std::string> files = result_file_paths(out, id, formats);

@@ -47,6 +47,9 @@ def parse(argv):
     p.add_argument("--chunk-timeout", type=float, metavar="S",
                    help="seconds a chunk may run before it is killed and reported (default: 120 + 60 per pair; "
                         "0 = no limit)")
+    p.add_argument("--warm-up", type=int, default=3, metavar="N",
+                   help="drives: each chunk's stream starts N frames before its first, for the priors a whole run "
+                        "has there (lidarflow sequence --warm-up; default 3, 0 = none)")
     p.add_argument("--force", action="store_true", help="recompute everything, also what is complete")
     p.add_argument("--bin-dir", metavar="DIR",
                    help="where lidarflow and lidarflow-lcm-bridge are, for every worker (default: "
@@ -69,6 +72,8 @@ def parse(argv):
         p.error("--out: the output folder must be named (got '')")
     if a.chunk_timeout is not None and not a.chunk_timeout >= 0:
         p.error("--chunk-timeout %s: seconds, 0 or more" % a.chunk_timeout)
+    if not 0 <= a.warm_up <= 1000:
+        p.error("--warm-up %d: frames, 0 to 1000" % a.warm_up)
     try:
         a.frames = frames.parse_frames(a.frames) if a.frames is not None else None
         a.format = results.parse_formats(a.format)
@@ -98,7 +103,7 @@ def main(argv=None):
         settings = runner.Settings(a.out, preset=a.preset, options=a.option, chunk=a.chunk, threads=threads,
                                    force=a.force, bin_dir=os.path.abspath(bin_dir) if bin_dir else None,
                                    stereo_channel=a.stereo_channel, bridge_args=a.bridge_arg, formats=a.format,
-                                   frames=a.frames, chunk_timeout=a.chunk_timeout)
+                                   frames=a.frames, chunk_timeout=a.chunk_timeout, warm_up=a.warm_up)
         if serial:
             rc, _ = runner.run(a.sources, settings, client=None)
             return rc

@@ -88,6 +88,8 @@ def command(chunk, tool, tmp_log=None):
             cmd += ["--preset", chunk["preset"]]
         if not chunk["force"]:
             cmd.append("--skip-existing")
+        if chunk.get("warm_up"):
+            cmd += ["--warm-up", str(chunk["warm_up"])]
         return cmd + option_args(chunk["options"])
     cmd = [tool, "--replay", chunk["source"], "--out", tmp_log, "--frames", frames,
            "--option", "threads=%d" % chunk["threads"]]

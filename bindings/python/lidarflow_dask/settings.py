@@ -9,11 +9,12 @@ from .frames import parse_frames
 class Settings:
     """What every chunk of a run shares (see chunks.py). frames: (A, B), 'A:B' or None (every
     frame); formats: sequence's --format names (drives); chunk_timeout: seconds, None for the
-    default (chunks.default_timeout), 0 for none."""
+    default (chunks.default_timeout), 0 for none; warm_up: frames before a drive chunk that feed its
+    stream's priors without being written (lidarflow sequence --warm-up)."""
 
     def __init__(self, out, preset=None, options=(), chunk=20, threads=1, force=False, bin_dir=None,
                  stereo_channel="LIDARFLOW_STEREO", bridge_args=(), formats=("kitti",), frames=None,
-                 chunk_timeout=None):
+                 chunk_timeout=None, warm_up=3):
         if not out:
             raise ValueError("--out: the output folder must be named (got '')")
         if chunk < 2:
@@ -22,12 +23,15 @@ class Settings:
             raise ValueError("--threads-per-task %d: at least 1" % threads)
         if chunk_timeout is not None and not chunk_timeout >= 0:
             raise ValueError("--chunk-timeout %s: seconds, 0 or more" % chunk_timeout)
+        if not 0 <= warm_up <= 1000:
+            raise ValueError("--warm-up %s: frames, 0 to 1000" % warm_up)
         self.out, self.preset, self.options = os.path.abspath(out), preset, list(options)
         self.chunk, self.threads, self.force, self.bin_dir = chunk, threads, force, bin_dir
         self.stereo_channel, self.bridge_args = stereo_channel, list(bridge_args)
         self.formats = results.parse_formats(",".join(formats))
         self.frames = None if frames is None else parse_frames(frames if isinstance(frames, str) else "%d:%d" % frames)
         self.chunk_timeout = chunk_timeout
+        self.warm_up = warm_up
 
     def signature(self, kind):
         """What the results depend on; a rerun into the same folder must match it."""

@@ -69,6 +69,7 @@ class Source:
                 self.chunks.append({"kind": self.kind, "source": self.path, "name": self.name, "first": a, "last": b,
                                     "out": settings.out, "preset": settings.preset, "options": settings.options,
                                     "formats": settings.formats, "threads": settings.threads,
+                                    "warm_up": settings.warm_up if a > self.first else 0,
                                     "force": settings.force, "bin_dir": settings.bin_dir,
                                     "stereo_channel": settings.stereo_channel, "bridge_args": settings.bridge_args,
                                     "timeout": ch.default_timeout(b - a) if settings.chunk_timeout is None

@@ -134,8 +134,9 @@ struct Pushed {
     cv::Mat1b valid;
 };
 
-// The drive's frames pushed through the C ABI, one result per pair.
-std::vector<Pushed> push_through_c_abi(const fs::path &drive) {
+// The drive's frames pushed through the C ABI, one result per pair; with reset_at >= 0,
+// lf_reset before frame reset_at (which then starts a new sequence: no pair ends there).
+std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1) {
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     assert_int_equal(lf_read_kitti_calibration((drive / "calib_cam_to_cam.txt").c_str(),
@@ -158,8 +159,9 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive) {
         };
         const lf_image_t li = image(left), ri = image(right);
         const lf_lidar_t lidar{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(bin.size() / 16), bin.data(), 16};
+        if (k == reset_at) assert_int_equal(lf_reset(est), LF_OK);
         if (lf_push_frame(est, int64_t{100000} * k, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
-        if (k == 0) continue;
+        if (k == 0 || k == reset_at) continue;
         Pushed p{cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()),
                  cv::Mat1b(left.size())};
         lf_result_buffers_t b;
@@ -180,37 +182,54 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive) {
 
 bool same_float(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// Pair k's npy files under `dir` hold exactly the pushed result p.
+void expect_pushed_result(const Pushed &p, const fs::path &dir, int k) {
+    const cv::Mat d0 = io::read_npy((dir / "disp_0" / (name(k) + ".npy")).string());
+    const cv::Mat d1 = io::read_npy((dir / "disp_1" / (name(k) + ".npy")).string());
+    const cv::Mat fl = io::read_npy((dir / "flow" / (name(k) + ".npy")).string());
+    const cv::Mat ok = io::read_npy((dir / "valid" / (name(k) + ".npy")).string());
+    assert_true(d0.size() == p.d0.size() && fl.type() == CV_32FC2 && ok.type() == CV_8UC1);
+    long valid = 0;
+    for (int y = 0; y < d0.rows; ++y)
+        for (int x = 0; x < d0.cols; ++x) {
+            const cv::Vec2f w = fl.at<cv::Vec2f>(y, x);
+            const float a = d0.at<float>(y, x), b = d1.at<float>(y, x);
+            const bool seq_valid = ok.at<uint8_t>(y, x) != 0;
+            if (p.valid(y, x)) {
+                ++valid;
+                if (!same_float(a, p.d0(y, x)) || !same_float(b, p.d1(y, x)) || !same_float(w[0], p.u(y, x)) ||
+                    !same_float(w[1], p.v(y, x)) || !seq_valid)
+                    fail_msg("pair %d, pixel (%d, %d): sequence (%g %g %g %g) != C ABI (%g %g %g %g)", k, x, y,
+                             static_cast<double>(w[0]), static_cast<double>(w[1]), static_cast<double>(a),
+                             static_cast<double>(b), static_cast<double>(p.u(y, x)), static_cast<double>(p.v(y, x)),
+                             static_cast<double>(p.d0(y, x)), static_cast<double>(p.d1(y, x)));
+            } else if (!std::isnan(a) || !std::isnan(b) || !std::isnan(w[0]) || !std::isnan(w[1]) || seq_valid) {
+                fail_msg("pair %d, pixel (%d, %d): valid in the sequence only", k, x, y);
+            }
+        }
+    assert_true(valid > 0.9 * static_cast<double>(d0.total()));
+}
+
 void test_sequence_equals_c_abi_stream(void **) {
     const Fixture &f = fixture();
     const std::vector<Pushed> pushed = push_through_c_abi(f.drive);
     assert_int_equal(pushed.size(), kFrames - 1);
-    for (int k = 0; k + 1 < kFrames; ++k) {
-        const Pushed &p = pushed[static_cast<size_t>(k)];
-        const cv::Mat d0 = io::read_npy((f.clean / "disp_0" / (name(k) + ".npy")).string());
-        const cv::Mat d1 = io::read_npy((f.clean / "disp_1" / (name(k) + ".npy")).string());
-        const cv::Mat fl = io::read_npy((f.clean / "flow" / (name(k) + ".npy")).string());
-        const cv::Mat ok = io::read_npy((f.clean / "valid" / (name(k) + ".npy")).string());
-        assert_true(d0.size() == p.d0.size() && fl.type() == CV_32FC2 && ok.type() == CV_8UC1);
-        long valid = 0;
-        for (int y = 0; y < d0.rows; ++y)
-            for (int x = 0; x < d0.cols; ++x) {
-                const cv::Vec2f w = fl.at<cv::Vec2f>(y, x);
-                const float a = d0.at<float>(y, x), b = d1.at<float>(y, x);
-                const bool seq_valid = ok.at<uint8_t>(y, x) != 0;
-                if (p.valid(y, x)) {
-                    ++valid;
-                    if (!same_float(a, p.d0(y, x)) || !same_float(b, p.d1(y, x)) || !same_float(w[0], p.u(y, x)) ||
-                        !same_float(w[1], p.v(y, x)) || !seq_valid)
-                        fail_msg("pair %d, pixel (%d, %d): sequence (%g %g %g %g) != C ABI (%g %g %g %g)", k, x, y,
-                                 static_cast<double>(w[0]), static_cast<double>(w[1]), static_cast<double>(a),
-                                 static_cast<double>(b), static_cast<double>(p.u(y, x)), static_cast<double>(p.v(y, x)),
-                                 static_cast<double>(p.d0(y, x)), static_cast<double>(p.d1(y, x)));
-                } else if (!std::isnan(a) || !std::isnan(b) || !std::isnan(w[0]) || !std::isnan(w[1]) || seq_valid) {
-                    fail_msg("pair %d, pixel (%d, %d): valid in the sequence only", k, x, y);
-                }
-            }
-        assert_true(valid > 0.9 * static_cast<double>(d0.total()));
-    }
+    for (int k = 0; k + 1 < kFrames; ++k) expect_pushed_result(pushed[static_cast<size_t>(k)], f.clean, k);
+}
+
+// lf_reset drops what the stream carried (its motion prior too): the pairs after it are those of
+// a sequence that starts there, not the clean run's.
+void test_reset_drops_the_stream(void **) {
+    const Fixture &f = fixture();
+    const std::vector<Pushed> pushed = push_through_c_abi(f.drive, 2);
+    assert_int_equal(pushed.size(), kFrames - 2);  // 0->1, then 2->3, 3->4
+    const fs::path from2 = f.dir / "from2";
+    expect_code(test::run_cli("sequence --drive " + q(f.drive) + " --out " + q(from2) +
+                              " --format npy --threads 2 --quiet --frames 2:4 --preset " + kPreset),
+                0);
+    expect_pushed_result(pushed[0], f.clean, 0);
+    for (int k : {2, 3}) expect_pushed_result(pushed[static_cast<size_t>(k - 1)], from2, k);
+    assert_false(file_bytes(from2 / "flow" / (name(3) + ".npy")) == file_bytes(f.clean / "flow" / (name(3) + ".npy")));
 }
 
 void copy_drive(const fs::path &from, const fs::path &to) {
@@ -386,6 +405,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_drive_scans_match_ground_truth),
         cmocka_unit_test(test_sequence_equals_c_abi_stream),
+        cmocka_unit_test(test_reset_drops_the_stream),
         cmocka_unit_test(test_bad_frames_skip_only_their_pairs),
         cmocka_unit_test(test_blank_frame_counted),
         cmocka_unit_test(test_frames_and_skip_existing),

@@ -91,7 +91,14 @@ void estimator_calibration_size(void **) {
     in.calibration_size = s.left0.size();
     assert_true(e.run(in).quality.ok());
     in.calibration_size = {s.left0.cols * 2, s.left0.rows * 2};
-    assert_int_equal(e.run(in).quality.flags, CalibrationSizeMismatch);
+    const pipeline::EstimatorResult flagged = e.run(in);
+    assert_int_equal(flagged.quality.flags, CalibrationSizeMismatch);
+    // The same result, its confidence dropped: a flagged input is less to be trusted everywhere.
+    in.calibration_size = s.left0.size();
+    const pipeline::EstimatorResult good = e.run(in);
+    assert_true(cv::norm(flagged.forward.u, good.forward.u, cv::NORM_INF) == 0);
+    assert_true(cv::countNonZero(good.forward.confidence) > 0);
+    assert_true(cv::norm(flagged.forward.confidence, good.forward.confidence * 0.25f, cv::NORM_INF) < 1e-6);
 }
 
 }  // namespace

@@ -26,6 +26,8 @@ using Clock = std::chrono::steady_clock;
 constexpr double kSupportRadius = 3.0;
 constexpr double kSupportTolerance = 1.0;
 constexpr float kSupportWeight = 0.2f;
+// The confidence of a result whose inputs the quality checks flag (swapped, not rectified, ...).
+constexpr float kFlaggedConfidenceScale = 0.25f;
 
 void report_hidden(const SparseLidar &given, const SparseLidar &kept, const char *which) {
     const size_t removed = given.points.size() - kept.points.size();
@@ -245,6 +247,11 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
         // The inputs' fault is the likelier explanation of a stage that found nothing to work with.
         throw Error(e.code(), std::string(e.what()) + " (input quality: " + verdict.summary() + ")");
     }
+    // A result from inputs flagged as wrong is less to be trusted everywhere: a gate on the
+    // confidence then drops most of it.
+    if (!verdict.ok())
+        for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense})
+            if (!f->confidence.empty()) f->confidence *= kFlaggedConfidenceScale;
     r.quality = std::move(verdict);
     r.timings.insert(r.timings.begin(), {"input_quality", quality_seconds});
     r.total_seconds += quality_seconds;

@@ -187,7 +187,7 @@ static char g_warning[512];
 
 static void count_warnings(int32_t level, const char *message, void *user) {
     (void)user;
-    if (level == LF_LOG_WARNING && strstr(message, "calibration is for")) {
+    if (level == LF_LOG_WARNING && strstr(message, "results use the calibration as it is")) {
         ++g_warnings;
         snprintf(g_warning, sizeof g_warning, "%s", message);
     }

@@ -179,15 +179,15 @@ void kitti_frames(void **) {
     expect_quality(run_pair(p, scan("000002", dir / "velo_tilted.txt") + " --stage matching", dir),
                    "quality: lidar_disagrees (");
 
-    // Cropped (as a region of interest would be) under the full-frame calibration: the scan
-    // lands 120 px left of and 21 px above where the images show it.
+    // Cropped (as a region of interest would be) under the full-frame calibration: its S_rect_02
+    // says 1242x375, and the scan lands 120 px left of and 21 px above where the images show it.
     Pair crop;
     fs::path *paths[4] = {&crop.left0, &crop.right0, &crop.left1, &crop.right1};
     const fs::path full[4] = {p.left0, p.right0, p.left1, p.right1};
     for (int i = 0; i < 4; ++i)
         *paths[i] = write_image(dir / ("crop" + std::to_string(i) + ".png"),
                                 cv::imread(full[i].string(), cv::IMREAD_UNCHANGED)(cv::Rect(120, 21, 1001, 333)));
-    expect_quality(run_pair(crop, velo + " --stage matching", dir), "quality: lidar_disagrees (");
+    expect_quality(run_pair(crop, velo + " --stage matching", dir), "quality: calibration_size_mismatch, lidar_disagrees (");
 
     // The paper's 88 points of both frames: no false alarm (the warning would be in the log).
     const test::CliRun k = test::run_cli("kitti --root " + q(root) +

@@ -50,23 +50,9 @@ const char *const kNoPrior = " --option matching.stream_prior=0";
 
 std::string q(const fs::path &p) { return test::quoted(p); }
 
-std::string name(int k) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "%010d", k);
-    return buf;
-}
-
-void expect_contains(const test::CliRun &r, const std::string &what) {
-    if (r.output.find(what) != std::string::npos) return;
-    std::printf("%s", r.output.c_str());
-    fail_msg("expected \"%s\" in the output above", what.c_str());
-}
-
-void expect_code(const test::CliRun &r, int code) {
-    if (r.code == code) return;
-    std::printf("%s", r.output.c_str());
-    fail_msg("expected exit %d, got %d", code, r.code);
-}
+std::string name(int k) { return test::frame_name(k); }
+constexpr auto expect_code = test::expect_exit;
+constexpr auto expect_contains = test::expect_output_has;
 
 // One drive and one clean sequence run, shared by the tests (rendering and estimating are the
 // slow parts).

@@ -44,23 +44,9 @@ namespace {
 
 std::string q(const fs::path &p) { return test::quoted(p); }
 
-std::string name(int k) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "%010d", k);
-    return buf;
-}
-
-void expect_contains(const test::CliRun &r, const std::string &what) {
-    if (r.output.find(what) != std::string::npos) return;
-    std::printf("%s", r.output.c_str());
-    fail_msg("expected \"%s\" in the output above", what.c_str());
-}
-
-void expect_code(const test::CliRun &r, int code) {
-    if (r.code == code) return;
-    std::printf("%s", r.output.c_str());
-    fail_msg("expected exit %d, got %d%s", code, r.code, r.code == 124 ? " (timed out: blocked)" : "");
-}
+std::string name(int k) { return test::frame_name(k); }
+constexpr auto expect_code = test::expect_exit;
+constexpr auto expect_contains = test::expect_output_has;
 
 fs::path &base_dir() {
     static fs::path dir;
@@ -84,18 +70,7 @@ fs::path copy_of_drive(const std::string &label) {
     return to;
 }
 
-// What a shell command printed (stdout and stderr) and returned.
-test::CliRun run_shell(const std::string &cmd) {
-    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
-    assert_non_null(p);
-    test::CliRun r;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-    const int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using test::run_shell;
 
 // "timeout 120 'CLI' sequence --drive D --out OUT" with the realtime preset and npy files: a
 // blocked run ends with 124.

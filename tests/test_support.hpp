@@ -101,12 +101,9 @@ struct CliRun {
     std::string output;  // stdout and stderr together
 };
 
-// Runs the CLI that CTest names in LIDARFLOW_CLI with stdout + stderr piped to the test, as
-// when a user pipes the program: no terminal. ARGS is shell text (quote paths with quoted()).
-inline CliRun run_cli(const std::string &args) {
-    const char *cli = std::getenv("LIDARFLOW_CLI");
-    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
-    FILE *p = popen((std::string("'") + cli + "' " + args + " 2>&1").c_str(), "r");
+// What a shell command printed (stdout and stderr together) and returned.
+inline CliRun run_shell(const std::string &cmd) {
+    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
     assert_non_null(p);
     CliRun r;
     char buf[4096];
@@ -115,6 +112,35 @@ inline CliRun run_cli(const std::string &args) {
     const int status = pclose(p);
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+// Runs the CLI that CTest names in LIDARFLOW_CLI with stdout + stderr piped to the test, as
+// when a user pipes the program: no terminal. ARGS is shell text (quote paths with quoted()).
+inline CliRun run_cli(const std::string &args) {
+    const char *cli = std::getenv("LIDARFLOW_CLI");
+    if (!cli || !*cli) fail_msg("LIDARFLOW_CLI is not set (run through ctest)");
+    return run_shell(std::string("'") + cli + "' " + args);
+}
+
+// Fails (printing the output) unless the run printed `what`.
+inline void expect_output_has(const CliRun &r, const std::string &what) {
+    if (r.output.find(what) != std::string::npos) return;
+    std::printf("%s", r.output.c_str());
+    fail_msg("expected \"%s\" in the output above", what.c_str());
+}
+
+// Fails (printing the output) unless the run exited with `code`.
+inline void expect_exit(const CliRun &r, int code) {
+    if (r.code == code) return;
+    std::printf("%s", r.output.c_str());
+    fail_msg("expected exit %d, got %d%s", code, r.code, r.code == 124 ? " (timed out: blocked)" : "");
+}
+
+// A drive's frame file stem: 10 digits.
+inline std::string frame_name(long k) {
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%010ld", k);
+    return buf;
 }
 
 // A path as one single-quoted shell word.

@@ -5,7 +5,7 @@ import sys
 import time
 
 from . import chunks as ch
-from . import cluster, frames, results, state
+from . import cluster, frames, poses, results, state
 from .resume import prepare, record_settings
 from .settings import Settings
 from .sources import Source, SourceError, detect
@@ -65,6 +65,20 @@ def merge_logs(sources, report, settings):
                             % (ch.chunk_log_path(c), s.result_path()))
 
 
+def merge_poses(sources, report, stream):
+    """Writes OUT/<drive>/poses.txt of each drive whose chunks all completed, from their poses
+    files (poses.merge); says where a trajectory stops short."""
+    failed = {r["chunk"]["source"] for r in report.failed}
+    for s in sources:
+        if s.kind != "drive" or not s.chunks or s.path in failed:
+            continue
+        out_dir = ch.drive_out(s.chunks[0])
+        last, why = poses.merge(out_dir, s.chunks)
+        if why:
+            print("lidarflow_dask: %s: %s; poses.txt %s" % (s.path, why, "not written" if last is None
+                                                              else "ends at frame %d" % last), file=stream)
+
+
 def check_where_chunks_run(sources, settings, client):
     """The executables, then the options, checked where the chunks will run (here, or on every
     worker and then one of them): ToolNotFound / ClusterError, ValueError for bad options."""
@@ -108,6 +122,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
             elif pending:
                 cluster.run_dask(pending, report, client, progress_bar)
             merge_logs(sources, report, settings)
+            merge_poses(sources, report, stream)
         finally:
             for s in made:
                 if not s.has_results():  # nothing computed: the folder holds no results to guard

@@ -19,10 +19,11 @@ import threading
 import time
 import unittest
 
-from dask_fixture import BIN, CHUNK, READY, SKIP, alive, cli, egos, fixture, flows, processes, same_tree
+from dask_fixture import BIN, CHUNK, READY, SKIP, alive, cli, egos, fixture, flows, lidarflow, processes, same_tree
 
 if BIN:
     import lidarflow_dask as ld
+    from lidarflow_dask import poses as ldp
     from lidarflow_dask.cluster import local_cluster
 
 
@@ -46,6 +47,33 @@ class Dask(unittest.TestCase):
         self.assertEqual(got, self.whole)
         self.assertEqual(len(self.whole_ego), 7)
         self.assertEqual(egos(os.path.join(self.serial, "run.log")), self.whole_ego)
+
+    def test_drive_poses_chained(self):
+        """The chunks' poses files chain into the drive's poses.txt: frames 0..6 (the first
+        chunk, and the second warmed up from frame 0) as `lidarflow sequence` over the whole
+        drive writes them, the rest within 5 cm."""
+        whole = os.path.join(self.tmp.tmp, "whole-drive")
+        lidarflow("sequence", "--drive", self.drive, "--out", whole, "--preset", "realtime", "--threads", "1",
+                  "--quiet")
+
+        def rows(path):
+            with open(path) as f:
+                return [[float(x) for x in line.split()] for line in f]
+        want, got = rows(os.path.join(whole, "poses.txt")), rows(os.path.join(self.serial, "drive", "poses.txt"))
+        self.assertEqual(len(got), 9)
+        for k, (a, b) in enumerate(zip(want, got)):
+            tol = 1e-6 if k <= 6 else 0.05
+            for i in (3, 7, 11):
+                self.assertLess(abs(a[i] - b[i]), tol, "frame %d" % k)
+        # A chunk's poses file gone: the trajectory stops where it is missing, and says so.
+        out = self.tmp.folder("poses")
+        for c in ({"first": 0, "last": 3}, {"first": 3, "last": 6}):
+            shutil.copy(os.path.join(self.serial, "drive", "poses_%010d-%010d.txt" % (c["first"], c["last"])),
+                        os.path.join(out, "poses_%010d-%010d.txt" % (c["first"], c["last"])))
+        last, why = ldp.merge(out, [{"first": 0, "last": 3}, {"first": 3, "last": 6}, {"first": 6, "last": 8}])
+        self.assertEqual(last, 6)
+        self.assertIn("poses_0000000006-0000000008.txt is missing", why)
+        self.assertEqual(len(rows(os.path.join(out, "poses.txt"))), 7)
 
     def test_local_cluster_equals_serial_run(self):
         out = os.path.join(self.tmp.tmp, "cluster")

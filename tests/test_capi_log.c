@@ -102,7 +102,7 @@ static lf_lidar_t camera_points(float *xyz, int inside) {
 /* The scene's two frames in turn: consecutive pushes never repeat a frame, which the input checks
  * would warn about (a frozen camera). */
 static int32_t push(lf_estimator_t *e, const scene_t *s, int64_t t, const lf_lidar_t *lidar) {
-    static unsigned turn;
+    static __thread unsigned turn; /* per thread: pushers on other handles keep their own turn */
     const int second = (int)(turn++ & 1u);
     const lf_image_t l = scene_image(second ? s->left1 : s->left0, s->width, s->height);
     const lf_image_t r = scene_image(second ? s->right1 : s->right0, s->width, s->height);

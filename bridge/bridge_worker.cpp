@@ -11,6 +11,15 @@
 namespace lidarflow::bridge {
 namespace {
 
+// The one-line form of a result's quality: "ok" or "NAME[, NAME...] (reason)".
+std::string quality_summary(uint32_t flags, const char *reason) {
+    if (flags == 0) return "ok";
+    std::string names;
+    for (uint32_t bit = 1; bit != 0; bit <<= 1)
+        if (flags & bit) names += (names.empty() ? "" : ", ") + std::string(lf_quality_name(bit));
+    return names + " (" + reason + ")";
+}
+
 bool same_calibration(const lf_calibration_t &a, const lf_calibration_t &b) {
     return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.baseline == b.baseline;
 }

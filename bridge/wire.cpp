@@ -499,14 +499,6 @@ std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t seque
     return buf;
 }
 
-std::string quality_summary(uint32_t flags, const char *reason) {
-    if (flags == 0) return "ok";
-    std::string names;
-    for (uint32_t bit = 1; bit != 0; bit <<= 1)
-        if (flags & bit) names += (names.empty() ? "" : ", ") + std::string(lf_quality_name(bit));
-    return names + " (" + reason + ")";
-}
-
 std::string decode_ego_motion(const void *data, size_t size, lidarflow_ego_motion_t &out) {
     const std::string err = check_wire(data, size, "lidarflow.ego_motion_t", __lidarflow_ego_motion_t_get_hash(),
                                        kEgoMotionFixed, {});

@@ -188,10 +188,6 @@ std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg);
 // lf_get_quality. Empty when encoding failed.
 std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t sequence, uint32_t flags, const char *reason);
 
-// The one-line form of a result's quality: "ok" or "NAME[, NAME...] (reason)", names from
-// lf_quality_name.
-std::string quality_summary(uint32_t flags, const char *reason);
-
 // Decodes a raw ego_motion_t, checked like the inputs, then: state one of STATE_*; transform
 // finite with last row 0 0 0 1; its 3x3 block a proper rotation (R^T R within 1e-6 of I per
 // entry, det R > 0) when STATE_OK, else the identity; 0 <= inliers <= candidates. Returns "" or

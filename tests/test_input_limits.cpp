@@ -73,7 +73,7 @@ pipeline::EstimatorOptions cheap_options() {
 
 StereoCamera camera(double fx, double baseline) { return {fx, fx, 10, 10, baseline}; }
 
-// --- item 1: image sides -----------------------------------------------------------------
+// --- image sides -----------------------------------------------------------------
 
 void sgm_refuses_sizes_its_speckle_filter_cannot_index(void **) {
     // Without the check, OpenCV's speckle filter wrote through 16-bit pixel coordinates.
@@ -97,7 +97,7 @@ void estimator_refuses_images_above_the_side_bound(void **) {
     expect_error([&] { est.run(tall); }, ErrorCode::InvalidArgument);
 }
 
-// --- item 3: LiDAR disparities -----------------------------------------------------------
+// --- LiDAR disparities -----------------------------------------------------------
 
 void lidar_disparities_outside_the_range_are_refused(void **) {
     for (float bad : {3e38f, kMaxLidarDisparity * 1.0001f, -1.0f, std::numeric_limits<float>::quiet_NaN(),
@@ -130,7 +130,7 @@ void projection_drops_points_with_disparities_out_of_range(void **) {
     assert_true(far.points[0].disparity == 1000.0f);
 }
 
-// --- item 4: cameras ---------------------------------------------------------------------
+// --- cameras ---------------------------------------------------------------------
 
 void cameras_outside_the_ranges_are_refused(void **) {
     assert_string_equal(camera_range_error(camera(721.5, 0.54)).c_str(), "");
@@ -170,7 +170,7 @@ void calibration_files_with_overflowing_cameras_are_refused(void **) {
     expect_error([] { io::parse_calib_cam_to_cam(cam_to_cam("0", "-1e200", "1e200"), "huge"); }, ErrorCode::Format);
 }
 
-// --- item 7: PNG signature and size before decoding --------------------------------------
+// --- PNG signature and size before decoding --------------------------------------
 
 void writes(const fs::path &p, const std::string &bytes) {
     std::ofstream(p, std::ios::binary) << bytes;
@@ -285,7 +285,7 @@ void camera_images_in_other_formats_are_read_with_the_same_checks(void **) {
     expect_in(message_of([&] { io::read_any_image((dir / "deep.png").string()); }, ErrorCode::Format), "8-bit");
 }
 
-// --- item 8: frame ids and output folders ------------------------------------------------
+// --- frame ids and output folders ------------------------------------------------
 
 void frame_ids_that_are_not_six_digits_never_reach_a_path(void **) {
     const io::KittiLayout k{"/data"};

@@ -159,6 +159,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.calibration_size = rig.rect.image_size;
             result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
             if (rig.rectify) {
+                result->rectified = true;
                 result->timings.insert(result->timings.begin(), {"rectify", rectify_seconds});
                 result->total_seconds += rectify_seconds;
             }

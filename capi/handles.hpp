@@ -48,6 +48,7 @@ struct Result {
     motion::EgoMotion ego;  // stage 4's background motion (pipeline::EstimatorResult::ego)
     pipeline::EgoState ego_state = pipeline::EgoState::NotRun;
     quality::Report quality;  // of the inputs (lf_get_quality)
+    bool rectified = false;   // the pair was rectified inside (lf_result_info_t::rectified)
 };
 
 }  // namespace lidarflow::capi

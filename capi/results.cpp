@@ -94,7 +94,9 @@ LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *i
     return guarded(sink_of(estimator), "lf_get_result_info", [&] {
         require_non_null(estimator, "estimator");
         require_non_null(info, "info");
-        check_struct_size(info, info->struct_size, sizeof(lf_result_info_t), "info");
+        // The first layout (without the 0.2.0 fields) is still taken, and written only as far as it goes.
+        const bool v1 = info->struct_size == LF_RESULT_INFO_V1_SIZE;
+        if (!v1) check_struct_size(info, info->struct_size, sizeof(lf_result_info_t), "info");
         const Result &r = ready_result(estimator);
         lf_result_info_t out;
         std::memset(&out, 0, sizeof out);
@@ -105,7 +107,9 @@ LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *i
         out.t1_us = r.t1_us;
         out.timing_count = static_cast<uint32_t>(r.timings.size());
         out.total_seconds = r.total_seconds;
-        write_struct(info, out);
+        out.rectified = r.rectified ? 1u : 0u;
+        out.struct_size = info->struct_size;
+        std::memcpy(info, &out, v1 ? LF_RESULT_INFO_V1_SIZE : sizeof out);
         return static_cast<int32_t>(LF_OK);
     });
 }

@@ -266,6 +266,10 @@ static void test_rectified_inside(void **state) {
     const char *first = NULL;
     assert_int_equal(lf_get_timing(e, 0, &first, NULL), LF_OK);
     assert_string_not_equal(first, "rectify");
+    lf_result_info_t info;
+    lf_result_info_init(&info);
+    assert_int_equal(lf_get_result_info(e, &info), LF_OK);
+    assert_int_equal(info.rectified, 0);
     lf_destroy(e);
 
     cal.rectify = 1;
@@ -278,6 +282,9 @@ static void test_rectified_inside(void **state) {
     assert_int_equal(lf_get_timing(e, 0, &first, &seconds), LF_OK);
     assert_string_equal(first, "rectify"); /* the result says its pair was rectified, and what it cost */
     assert_true(seconds >= 0 && seconds < 1);
+    lf_result_info_init(&info);
+    assert_int_equal(lf_get_result_info(e, &info), LF_OK);
+    assert_int_equal(info.rectified, 1); /* the result info says its camera is the rectified one */
     lf_destroy(e);
     printf("pixels within 1 px of the true scene flow: %.1f %% as pushed, %.1f %% rectified inside\n", 100 * as_is,
            100 * rectified);

@@ -130,6 +130,17 @@ static void test_info_and_timings(void **state) {
     EXPECT_FAIL(e, lf_get_result_info(e, NULL), LF_ERR_INVALID_ARGUMENT, "info is NULL");
     info.struct_size = 4;
     EXPECT_FAIL(e, lf_get_result_info(e, &info), LF_ERR_INVALID_ARGUMENT, "info.struct_size is 4");
+
+    /* A caller built against the first layout: its fields are filled, nothing after them. */
+    unsigned char old[sizeof(lf_result_info_t) + 8];
+    memset(old, 0xAB, sizeof old);
+    lf_result_info_t *v1 = (lf_result_info_t *)(void *)old;
+    v1->struct_size = LF_RESULT_INFO_V1_SIZE;
+    assert_int_equal(lf_get_result_info(e, v1), LF_OK);
+    assert_int_equal(v1->width, W);
+    assert_true(v1->total_seconds > 0);
+    for (size_t i = LF_RESULT_INFO_V1_SIZE; i < sizeof old; ++i) assert_int_equal(old[i], 0xAB);
+    assert_int_equal(LF_RESULT_INFO_V1_SIZE, offsetof(lf_result_info_t, rectified));
 }
 
 /* Copies into padded planes; bad buffers are rejected before anything is written. */

@@ -522,15 +522,23 @@ typedef struct lf_result_info_t {
     int64_t t0_us, t1_us;      /* timestamps of the reference (t0) and the second (t1) frame */
     uint32_t timing_count;     /* number of entries lf_get_timing() knows */
     double total_seconds;      /* wall time of the computation */
+    /* Fields added in 0.2.0 (a struct_size of LF_RESULT_INFO_V1_SIZE leaves them out): */
+    uint32_t rectified;        /* 1: the pair was rectified inside (calibration rectify = 1), so
+                                  every result is in the rectified left camera; 0: as pushed */
+    uint32_t reserved;         /* 0 */
 } lf_result_info_t;
+
+/* The struct_size of lf_result_info_t before the fields of 0.2.0. */
+#define LF_RESULT_INFO_V1_SIZE 48u
 
 static inline void lf_result_info_init(lf_result_info_t *i) {
     memset(i, 0, sizeof *i);
     i->struct_size = (uint32_t)sizeof *i;
 }
 
-/* Fills *info (caller-owned). Errors: LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small),
- * LF_ERR_NOT_READY (no result yet). One thread at a time per estimator. */
+/* Fills *info (caller-owned) up to its struct_size: LF_RESULT_INFO_V1_SIZE (the first layout)
+ * or at least sizeof(lf_result_info_t). Errors: LF_ERR_INVALID_ARGUMENT (NULL, another
+ * struct_size), LF_ERR_NOT_READY (no result yet). One thread at a time per estimator. */
 LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *info);
 
 /* Per-stage timing `index` (0 .. timing_count - 1, in execution order) of the latest result:

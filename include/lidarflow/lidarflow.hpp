@@ -568,6 +568,7 @@ struct ResultInfo {
     Stage last_stage = Stage::interpolation;
     int64_t t0_us = 0, t1_us = 0;    // timestamps of the reference (t0) and second (t1) frame
     double total_seconds = 0;        // wall time of the computation
+    bool rectified = false;          // the pair was rectified inside: results in the rectified left camera
     std::vector<Timing> timings;     // in execution order
 };
 
@@ -788,6 +789,7 @@ public:
         r.t0_us = i.t0_us;
         r.t1_us = i.t1_us;
         r.total_seconds = i.total_seconds;
+        r.rectified = i.rectified != 0;
         r.timings.reserve(i.timing_count);
         for (uint32_t k = 0; k < i.timing_count; ++k) {
             const char *name = nullptr;

@@ -70,7 +70,8 @@ class Lidar(ctypes.Structure):
 class ResultInfo(ctypes.Structure):
     _fields_ = [("struct_size", ctypes.c_uint32), ("width", ctypes.c_uint32), ("height", ctypes.c_uint32),
                 ("last_stage", ctypes.c_int32), ("t0_us", ctypes.c_int64), ("t1_us", ctypes.c_int64),
-                ("timing_count", ctypes.c_uint32), ("total_seconds", ctypes.c_double)]
+                ("timing_count", ctypes.c_uint32), ("total_seconds", ctypes.c_double),
+                ("rectified", ctypes.c_uint32), ("reserved", ctypes.c_uint32)]
 
 
 class Plane(ctypes.Structure):

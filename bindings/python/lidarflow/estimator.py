@@ -250,7 +250,8 @@ class Estimator:
                 _check(lib.lf_get_timing(h, k, ctypes.byref(name), ctypes.byref(sec)), h)
                 timings.append((name.value.decode(), sec.value))
         return {"width": i.width, "height": i.height, "last_stage": _lib.STAGE_NAMES.get(i.last_stage),
-                "t0_us": i.t0_us, "t1_us": i.t1_us, "total_seconds": i.total_seconds, "timings": timings}
+                "t0_us": i.t0_us, "t1_us": i.t1_us, "total_seconds": i.total_seconds,
+                "rectified": bool(i.rectified), "timings": timings}
 
     def result(self, out=None):
         """The latest result as a dict of numpy arrays: u, v, d0, d1, confidence (H, W) float32,

@@ -428,6 +428,7 @@ class OtherCalibrationSources(unittest.TestCase):
                 est.push(scene[0], scene[1], timestamp=0)
                 est.push(scene[2], scene[3], timestamp=100000)
                 self.assertGreater(accuracy(est.result(), d=13), 0.8)
+                self.assertTrue(est.info()["rectified"])  # results in the rectified left camera
             with self.assertRaises(lidarflow.LidarflowError) as cm:
                 lidarflow.read_calibration(left)
             self.assertEqual(cm.exception.status, lidarflow.ERR_FORMAT)

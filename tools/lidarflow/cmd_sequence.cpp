@@ -229,10 +229,12 @@ int run_sequence(int argc, char **argv) {
     pipeline::StreamCache stream;
     // Warm-up: the frames before the range feed the stream only (a part of a drive then gets the
     // priors a whole run would have had); their problems are not the range's.
+    const auto pair_input = [&](const Frame &a, const Frame &b) {
+        return pipeline::FrameInput{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
+    };
     const auto warm_pair = [&](const Frame &a, const Frame &b) {
-        pipeline::FrameInput in{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
         try {
-            estimator.run(in, &stream);
+            estimator.run(pair_input(a, b), &stream);
         } catch (const Error &) {
             stream.clear();
         }
@@ -285,15 +287,7 @@ int run_sequence(int argc, char **argv) {
                 ++skipped;
                 progress(t0, "exists, skipped");
             } else {
-                pipeline::FrameInput in;
-                in.left0 = prev->left;
-                in.right0 = prev->right;
-                in.left1 = cur->left;
-                in.right1 = cur->right;
-                in.lidar0 = prev->lidar;
-                in.lidar1 = cur->lidar;
-                in.camera = calib.camera;
-                in.calibration_size = calib.image_size;
+                const pipeline::FrameInput in = pair_input(*prev, *cur);
                 const Stopwatch pair_clock;
                 std::optional<pipeline::EstimatorResult> r;
                 try {

@@ -43,13 +43,13 @@ def listening(pids):
 
 
 def descendants(pid):
-    out, todo = [], [pid]
+    out, unvisited = [], [pid]
     table = processes()
-    while todo:
-        p = todo.pop()
+    while unvisited:
+        p = unvisited.pop()
         kids = [c for c, parent, _ in table if parent == p]
         out += kids
-        todo += kids
+        unvisited += kids
     return out
 
 

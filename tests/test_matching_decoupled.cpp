@@ -227,7 +227,8 @@ void presets_do_not_depend_on_threads(void **) {
 }
 
 // The `paper` preset is the paper's design (the field defaults: the same result); `default` is
-// the decoupled design with the LiDAR-guided stereo, and `fast` the same under its earlier name.
+// the decoupled design with the LiDAR-guided stereo, and `fast` differs from it only in the DIS
+// patch stride (the same result once that is set back).
 void paper_preset_is_the_papers_design(void **) {
     const synth::SynthScene s = scene();
     EstimatorOptions paper = EstimatorOptions::preset("paper"), fields;
@@ -242,6 +243,9 @@ void paper_preset_is_the_papers_design(void **) {
     assert_true(def.matching.method == matching::MatchMethod::Decoupled && def.matching.guided_stereo);
     assert_true(EstimatorOptions::preset("realtime").matching.guided_stereo);
     def.threads = fast.threads = 2;
+    assert_int_equal(fast.matching.flow.patch_stride, 3);
+    assert_false(same_field(Estimator(def).run(frame_of(s)).dense, Estimator(fast).run(frame_of(s)).dense));
+    fast.matching.flow.patch_stride = def.matching.flow.patch_stride;
     assert_true(same_field(Estimator(def).run(frame_of(s)).dense, Estimator(fast).run(frame_of(s)).dense));
 }
 

@@ -108,8 +108,9 @@ typedef struct lf_options lf_options_t;
  *                                        guided SGM stereo and DIS flow at processing_scale
  *                                        0.65, DIS patches 6 / stride 2, superpixels sized
  *                                        by the LiDAR's density; about 3x the time of
- *                                        OpenCV's SGBM + DIS), "fast" (the same as
- *                                        "default"), "realtime" ("decoupled" at 0.55, stage 4
+ *                                        OpenCV's SGBM + DIS), "fast" ("default" with
+ *                                        DIS patches every 3 px: about 2.5x), "realtime"
+ *                                        ("decoupled" at 0.55, stage 4
  *                                        with 20 px superpixels and 128 neighbours: about
  *                                        1.5x), "paper" (the paper's design: PatchMatch
  *                                        stage 1 at full size, every key's field default

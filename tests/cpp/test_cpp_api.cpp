@@ -175,7 +175,8 @@ void test_options(void **) {
     assert_true(o.get_float("processing_scale") == 0.65);
     assert_int_equal(o.get_int("matching.flow_patch_size"), 6);
     lf::Options fast = lf::Options::preset("fast");
-    assert_int_equal(fast.get_int("matching.flow_patch_stride"), 2);
+    assert_int_equal(fast.get_int("matching.flow_patch_stride"), 3);
+    assert_int_equal(lf::Options::preset("default").get_int("matching.flow_patch_stride"), 2);
     assert_int_equal(fast.get_int("threads"), usable_cpus());
     lf::Options balanced = lf::Options::preset("balanced");
     assert_int_equal(balanced.get_int("matching.thin_from_level"), 1);

@@ -359,7 +359,12 @@ class Presets(unittest.TestCase):
                 self.assertFalse(est.push(scene[0], scene[1], lidar))
                 self.assertTrue(est.push(scene[2], scene[3], lidar))
                 results[name] = est.result()
-        self.assertTrue(same(results["fast"], default))  # one design, two names
+        self.assertFalse(same(results["fast"], default))  # sparser DIS patches
+        with lidarflow.Estimator(options={"preset": "fast", "matching.flow_patch_stride": 2, "threads": 2},
+                                 **CAL) as est:
+            est.push(scene[0], scene[1], lidar)
+            est.push(scene[2], scene[3], lidar)
+            self.assertTrue(same(est.result(), default))  # and nothing else
         self.assertFalse(same(results["paper"], default))
         self.assertFalse(same(results["balanced"], default))
         for r in results.values():

@@ -9,6 +9,12 @@
 # The library, CMake package and pkg-config files are in the multiarch libdir with /usr paths
 # (the deb layout of cmake/install.cmake); Python packages byte-compile in postinst and clean up
 # in prerm, as Debian's own do.
+# Multi-Arch (written by cmake/debian/multiarch.cmake after CPack): liblidarflow0 and
+# liblidarflow-dev `same` (co-installable for several architectures: their files are in the
+# multiarch libdir or the same on every architecture), lidarflow-tools `foreign` (programs: any
+# architecture's serve a user of another). The arch-all packages have none: the Python ones load
+# liblidarflow.so.0 into the interpreter of their own architecture, and the LCM types come with
+# liblcm-dev of the architecture they are built for.
 # `tools/dev.sh package` (or `cpack -G DEB` in the build tree) writes them to build/packages/.
 # Run-time dependencies on system libraries come from dpkg-shlibdeps; the ones it cannot see
 # (between our own packages, Python, LCM headers) are declared below.
@@ -112,7 +118,46 @@ Copyright: 2026 The lidarflow authors
 License: Expat
 ${_lf_license}
 ")
-string(TIMESTAMP _lf_deb_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+# Its date is this version's release date in CHANGELOG.md, not the build's: liblidarflow0 and
+# liblidarflow-dev of every architecture ship the file, which dpkg co-installs (Multi-Arch: same)
+# only when it is the same bytes.
+string(REPLACE "." "\\." _lf_version_re "${PROJECT_VERSION}")
+file(STRINGS ${PROJECT_SOURCE_DIR}/CHANGELOG.md _lf_release REGEX "^## \\[${_lf_version_re}\\] - [0-9]+-[0-9]+-[0-9]+$")
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/CHANGELOG.md)
+if(_lf_release MATCHES "([0-9]+)-([0-9]+)-([0-9]+)$")
+  # Days since 1970-01-01 of the civil date (H. Hinnant's days_from_civil), at 00:00 UTC.
+  set(_y ${CMAKE_MATCH_1})
+  set(_m ${CMAKE_MATCH_2})
+  set(_d ${CMAKE_MATCH_3})
+  if(_m LESS_EQUAL 2)
+    math(EXPR _y "${_y} - 1")
+    math(EXPR _mp "${_m} + 9")
+  else()
+    math(EXPR _mp "${_m} - 3")
+  endif()
+  math(EXPR _era "${_y} / 400")
+  math(EXPR _yoe "${_y} - ${_era} * 400")
+  math(EXPR _doe "${_yoe} * 365 + ${_yoe} / 4 - ${_yoe} / 100 + (153 * ${_mp} + 2) / 5 + ${_d} - 1")
+  math(EXPR _lf_release_epoch "(${_era} * 146097 + ${_doe} - 719468) * 86400")
+  # string(TIMESTAMP) formats SOURCE_DATE_EPOCH when it is set: the release date, then the
+  # caller's value back.
+  set(_lf_sde_was_set FALSE)
+  if(DEFINED ENV{SOURCE_DATE_EPOCH})
+    set(_lf_sde_was_set TRUE)
+    set(_lf_sde "$ENV{SOURCE_DATE_EPOCH}")
+  endif()
+  set(ENV{SOURCE_DATE_EPOCH} ${_lf_release_epoch})
+  string(TIMESTAMP _lf_deb_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+  if(_lf_sde_was_set)
+    set(ENV{SOURCE_DATE_EPOCH} "${_lf_sde}")
+  else()
+    unset(ENV{SOURCE_DATE_EPOCH})
+  endif()
+else()
+  message(WARNING "CHANGELOG.md has no '## [${PROJECT_VERSION}] - YYYY-MM-DD' heading: changelog.Debian is "
+                  "dated by the build, and liblidarflow0 / liblidarflow-dev of two builds are not co-installable")
+  string(TIMESTAMP _lf_deb_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+endif()
 file(WRITE ${_lf_deb_dir}/changelog.Debian
 "lidarflow (${_lf_deb_version}) unstable; urgency=medium
 
@@ -147,5 +192,8 @@ if(LIDARFLOW_WITH_LCM)
     "This package holds the LCM message definitions of the lidarflow channels and\nthe C and C++ code lcm-gen generates from them.")
   set(CPACK_DEBIAN_LCM_PACKAGE_DEPENDS "liblcm-dev")
 endif()
+
+set(CPACK_LIDARFLOW_MULTIARCH liblidarflow0=same liblidarflow-dev=same lidarflow-tools=foreign)
+set(CPACK_POST_BUILD_SCRIPTS ${PROJECT_SOURCE_DIR}/cmake/debian/multiarch.cmake)
 
 include(CPack)

@@ -2,7 +2,7 @@
 // lidarflow options and the "did you mean" of unknown keys and flags: the listing comes from the
 // C ABI's key table (every key, its bounds, the default a fresh lf_options_t holds and a line of
 // description), --preset NAME shows each key's value under that preset, --set takes the named
-// presets, and typos get the nearest name.
+// presets, typos get the nearest name, and kitti says why it takes no rig options.
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -161,6 +161,17 @@ void test_unknown_keys_and_flags_get_a_suggestion(void **) {
     assert_true(contains(r.output, "unknown option --bananas (see --help)"));
 }
 
+// kitti takes each frame's calibration: a rig option is refused with the reason, not as unknown.
+void test_kitti_refuses_a_rig(void **) {
+    for (const char *rig : {"--calib stereo.yml", "--calib=left.yaml,right.yaml", "--fx 700"}) {
+        const Run r = run_cli(std::string("kitti --root /nonexistent/dir ") + rig);
+        assert_int_equal(r.code, 2);
+        assert_true(contains(r.output, "kitti takes no --"));
+        assert_true(contains(r.output, "each KITTI frame has its own calibration"));
+        assert_true(contains(r.output, "sequence --calib"));
+    }
+}
+
 void test_set_takes_named_presets(void **) {
     // demo renders a small synthetic pair: --set preset=fast must be accepted and reach the run
     // (an unknown preset fails before any work).
@@ -182,6 +193,7 @@ int main() {
         cmocka_unit_test(test_options_preset_shows_each_keys_value),
         cmocka_unit_test(test_unknown_keys_and_flags_get_a_suggestion),
         cmocka_unit_test(test_set_takes_named_presets),
+        cmocka_unit_test(test_kitti_refuses_a_rig),
     };
     return cmocka_run_group_tests_name("cli_options", tests, nullptr, nullptr);
 }

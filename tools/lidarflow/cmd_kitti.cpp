@@ -10,6 +10,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "log.hpp"
+#include "rig_args.hpp"
 #include "core/error.hpp"
 #include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
@@ -62,8 +63,13 @@ std::string format_seed_summary(const std::vector<eval::KittiRunReport> &runs, i
 }
 
 int run_kitti_command(int argc, char **argv) {
+    // One rig for every frame would score against ground truth of other cameras.
+    refuse_rig_options(argc, argv, "kitti",
+                       "each KITTI frame has its own calibration (calib_cam_to_cam/ID.txt, calib_velo_to_cam/ID.txt) "
+                       "and its ground truth is in that frame's rectified camera; for your own rig use `lidarflow run "
+                       "--calib` or `lidarflow sequence --calib`");
     Args args("kitti", argc, argv,
-              {{"root", true, "DIR  KITTI training folder (image_2, image_3, disp_occ_*, flow_occ, calib, velodyne)"},
+              {{"root", true, "DIR  KITTI training folder (image_2, image_3, disp_occ_*, flow_occ, velodyne; each frame's calibration from calib_cam_to_cam/ and calib_velo_to_cam/, no --calib)"},
                {"ids", true, "A,B  frames (default: every image_2/*_10.png)"},
                {"lidar", true, "P    sparse LiDAR protocol: paper (default) | velodyne (t1: velodyne/ID_11.bin if present) | none"},
                {"points", true, "N    LiDAR points per map (paper: default 88; velodyne: thin to N, 0 = full scan)"},

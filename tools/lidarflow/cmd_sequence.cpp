@@ -2,7 +2,8 @@
 // lidarflow sequence: scene flow for every consecutive frame pair of a recorded drive in the
 // KITTI raw layout (io/drive_folder.hpp), streamed through one estimator as the C ABI streams
 // pushed frames, so each frame's work is reused by the next pair. Bad frames and misnamed files
-// are reported and only their pairs are skipped.
+// are reported and only their pairs are skipped. The rig is the drive's calibration files or
+// `run`'s rig options (rig_args.hpp); a raw rig's pairs are rectified as they are read.
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,11 +22,13 @@
 #include "log.hpp"
 #include "result_files.hpp"
 #include "result_manifest.hpp"
+#include "rig_args.hpp"
 #include "sequence_poses.hpp"
 #include "core/error.hpp"
 #include "io/calib.hpp"
 #include "io/drive_folder.hpp"
 #include "io/output_folder.hpp"
+#include "io/rectify.hpp"
 #include "io/velo_to_left.hpp"
 #include "lidar/projection.hpp"
 #include "pipeline/estimator.hpp"
@@ -57,12 +60,15 @@ struct Frame {
     io::DriveFileError scan_error;  // set: the scan is bad, the frame goes image-only (no points)
 };
 
-// Frame k through io::read_drive_frame, its scan projected as the C ABI's LF_LIDAR_POINTS_LIDAR
-// path projects pushed scans, so that results equal pushed frames'.
+// Frame k through io::read_drive_frame, rectified when `rectifier` is given, its scan projected
+// as the C ABI's LF_LIDAR_POINTS_LIDAR path projects pushed scans, so that results equal pushed
+// frames'.
 std::optional<Frame> read_frame(const fs::path &root, long k, cv::Size size, const StereoCamera &camera,
-                                const cv::Matx44d &velo_to_left, io::DriveFileError &error) {
+                                const cv::Matx44d &velo_to_left, const io::Rectifier *rectifier,
+                                io::DriveFileError &error) {
     io::DriveFrame d;
     if (!io::read_drive_frame(root.string(), k, size, d, error)) return std::nullopt;
+    if (rectifier) rectifier->apply(d.left, d.right, d.left, d.right);
     std::vector<cv::Point3f> points(d.scan.points.size());
     for (size_t i = 0; i < points.size(); ++i) points[i] = {d.scan.points[i].x, d.scan.points[i].y, d.scan.points[i].z};
     Frame f;
@@ -120,10 +126,47 @@ std::optional<cv::Matx34d> metric_ego(const pipeline::EstimatorResult &r) {
     return m;
 }
 
+// The rig and LiDAR transform when they are not the drive's own files, for the manifests:
+// results of another calibration are recomputed, not skipped.
+std::string rig_settings_text(const io::Rig &rig, const cv::Matx44d &velo_to_left) {
+    std::string s;
+    const auto add = [&s](const char *name, const double *v, int n) {
+        s += name;
+        char number[32];
+        for (int i = 0; i < n; ++i) {
+            std::snprintf(number, sizeof number, " %.17g", v[i]);
+            s += number;
+        }
+        s += "\n";
+    };
+    const StereoCamera &c = rig.rect.camera;
+    const double camera[5] = {c.fx, c.fy, c.cx, c.cy, c.baseline};
+    add("rig.camera=", camera, 5);
+    if (rig.rectify)
+        for (const io::RawCamera *cam : {&rig.left, &rig.right}) {
+            add("rig.raw.K=", cam->K.val, 9);
+            add("rig.raw.D=", cam->D.val, 8);
+            add("rig.raw.R=", cam->R.val, 9);
+            add("rig.raw.P=", cam->P.val, 12);
+        }
+    add("rig.velo_to_left=", velo_to_left.val, 16);
+    return s;
+}
+
+std::vector<OptionSpec> sequence_options() {
+    std::vector<OptionSpec> spec = {
+        {"drive", true, "DIR  drive in the KITTI raw layout: image_02/data/NNNNNNNNNN.png, image_03/data, velodyne_points/data/NNNNNNNNNN.bin; calib_cam_to_cam.txt (unless --calib or --fx ...) and calib_velo_to_cam.txt (unless --calib-velo) in DIR or DIR/.."}};
+    for (OptionSpec &o : rig_option_specs()) spec.push_back(o);
+    spec.push_back({"calib-velo", true,
+                    "FILE Velodyne -> left camera in calib_velo_to_cam.txt's form (R:, T:), into the camera the rig's "
+                    "left rectifying rotation starts from (KITTI: camera 0; default: the drive's file)"});
+    return spec;
+}
+
 int run_sequence(int argc, char **argv) {
-    Args args("sequence", argc, argv,
-              {{"drive", true, "DIR  drive in the KITTI raw layout: image_02/data/NNNNNNNNNN.png, image_03/data, velodyne_points/data/NNNNNNNNNN.bin; calib_cam_to_cam.txt and calib_velo_to_cam.txt in DIR or DIR/.."},
-               {"out", true, "DIR  output folder: disp_0/, disp_1/, flow/, one file each per pair, named by its first frame (NNNNNNNNNN.EXT), and manifest/NNNNNNNNNN.txt"},
+    std::vector<OptionSpec> spec = sequence_options();
+    spec.insert(spec.end(),
+              {{"out", true, "DIR  output folder: disp_0/, disp_1/, flow/, one file each per pair, named by its first frame (NNNNNNNNNN.EXT), and manifest/NNNNNNNNNN.txt"},
                {"frames", true, "A:B  frames A..B (inclusive): pairs A->A+1 .. B-1->B, at most 1000000 (default: every frame)"},
                {"format", true, "F,.. result files: kitti (16-bit PNG, default) | flo | pfm | npy"},
                {"preset", true, "NAME speed/accuracy preset: default | paper | balanced | fast | realtime"},
@@ -133,6 +176,7 @@ int run_sequence(int argc, char **argv) {
                {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
                {"warm-up", true, "N    with --frames A:B, start the stream N frames before A: pairs before A are computed for the stream's priors, not written (default 0)"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
+    Args args("sequence", argc, argv, spec);
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
         std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad images, image-only for\n"
@@ -162,17 +206,23 @@ int run_sequence(int argc, char **argv) {
     const std::string poses_name = args.str("poses", "kitti");
     const bool write_poses = poses_name != "none";
     const io::PoseFormat poses_format = write_poses ? io::parse_pose_format(poses_name) : io::PoseFormat::Kitti;
-    const std::string settings_text = pipeline::result_settings_text(opt);
-    // Image-only results are of other inputs: a rerun with the scan readable recomputes them.
-    const uint64_t settings = settings_digest(settings_text),
-                   image_only_settings = settings_digest(settings_text + "lidar=none\n");
-
+    // --calib / --fx ... and --calib-velo stand in for the drive's files, each for its own.
+    const std::optional<io::Rig> given_rig = rig_from_args(args, "sequence");
+    std::string settings_text = pipeline::result_settings_text(opt);
     const io::DriveListing listing = io::list_drive(root.string());
     require(!listing.frames.empty(), ErrorCode::Io,
             "sequence: no frame (NNNNNNNNNN.png / .bin) in the data folders of " + root.string());
-    const io::CamToCamCalib calib = io::read_calib_cam_to_cam(find_calibration(root, "calib_cam_to_cam.txt"));
-    const cv::Matx44d velo_to_left =
-        io::velo_to_left_rect(calib, io::read_calib_velo_to_cam(find_calibration(root, "calib_velo_to_cam.txt")));
+    const io::Rig rig = given_rig ? *given_rig
+                                  : io::rig_from_kitti(io::read_calib_cam_to_cam(
+                                        find_calibration(root, "calib_cam_to_cam.txt")));
+    const io::CamToCamCalib &calib = rig.rect;
+    const cv::Matx44d velo_to_left = io::velo_to_left_rect(
+        calib, io::read_calib_velo_to_cam(args.has("calib-velo") ? args.str("calib-velo", "")
+                                                                  : find_calibration(root, "calib_velo_to_cam.txt")));
+    if (given_rig || args.has("calib-velo")) settings_text += rig_settings_text(rig, velo_to_left);
+    // Image-only results are of other inputs: a rerun with the scan readable recomputes them.
+    const uint64_t settings = settings_digest(settings_text),
+                   image_only_settings = settings_digest(settings_text + "lidar=none\n");
     const io::DriveTimestamps stamps = io::read_drive_timestamps(root.string());
     long first = listing.frames.front(), last = listing.frames.back();
     if (args.has("frames")) std::tie(first, last) = parse_range(args.str("frames", ""));
@@ -186,6 +236,17 @@ int run_sequence(int argc, char **argv) {
     for (long k : listing.frames)
         if (k >= first && k <= last) in_range.push_back(k);
     const cv::Size size = io::drive_frame_size(root.string(), in_range);
+    std::optional<io::Rectifier> rectifier;  // a raw rig's tables, made once for the drive
+    if (!size.empty()) {  // empty: no frame is readable, each is reported as bad
+        check_image_size(rig, size, args.flag("strict"), "sequence");
+        if (rig.rectify) {
+            rectifier.emplace(rig, size);
+            note("sequence: raw images: each pair is rectified, results are in the rectified left camera (fx %.2f px, "
+                 "baseline %.4f m)\n",
+                 calib.camera.fx, calib.camera.baseline);
+        }
+    }
+    const io::Rectifier *const rectify = rectifier ? &*rectifier : nullptr;
     detail("sequence: %s: frames %ld..%ld (%zu listed in the drive), %dx%d, preset %s, %d thread(s), fx %.2f px, "
            "baseline %.4f m\n",
            root.c_str(), first, last, listing.frames.size(), size.width, size.height,
@@ -242,7 +303,7 @@ int run_sequence(int argc, char **argv) {
     for (long k = std::max(listing.frames.front(), first - warm_up); k < first; ++k) {
         io::DriveFileError ignored;
         std::optional<Frame> cur;
-        if (present.count(k)) cur = read_frame(root, k, size, calib.camera, velo_to_left, ignored);
+        if (present.count(k)) cur = read_frame(root, k, size, calib.camera, velo_to_left, rectify, ignored);
         if (cur && prev) warm_pair(*prev, *cur);
         if (!cur) stream.clear();
         prev = std::move(cur);
@@ -251,7 +312,7 @@ int run_sequence(int argc, char **argv) {
         std::optional<Frame> cur;
         io::DriveFileError bad;
         if (present.count(k)) {
-            cur = read_frame(root, k, size, calib.camera, velo_to_left, bad);
+            cur = read_frame(root, k, size, calib.camera, velo_to_left, rectify, bad);
         } else {
             bad = {io::drive_left_file(k), "missing"};
         }
@@ -347,7 +408,7 @@ int run_sequence(int argc, char **argv) {
 
 }  // namespace
 
-LIDARFLOW_COMMAND(sequence, "sequence", "scene flow for every consecutive pair of a recorded drive (KITTI raw layout)",
+LIDARFLOW_COMMAND(sequence, "sequence", "scene flow for every consecutive pair of a recorded drive (KITTI raw layout; your rig: --calib)",
                   run_sequence, 57);
 
 }  // namespace lidarflow::cli

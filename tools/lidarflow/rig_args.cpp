@@ -36,6 +36,17 @@ std::optional<io::Rig> rig_from_args(const Args &args, const std::string &comman
     return io::rig_from_pinhole(cam);
 }
 
+void refuse_rig_options(int argc, char **argv, const std::string &command, const std::string &why) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        for (const OptionSpec &o : rig_option_specs()) {
+            const std::string name = "--" + o.name;
+            if (o.takes_value && (arg == name || arg.rfind(name + "=", 0) == 0))
+                throw Error(ErrorCode::InvalidArgument, command + " takes no " + name + ": " + why);
+        }
+    }
+}
+
 void check_image_size(const io::Rig &rig, cv::Size images, bool strict, const std::string &command) {
     const std::string mismatch = io::image_size_mismatch(rig.rect.image_size, images);
     if (mismatch.empty()) return;

@@ -5,7 +5,11 @@
 //   for the shared KITTI frames (paper LiDAR protocol) and the built-in synthetic scene.
 //
 //   bench_pipeline [--root DIR] [--ids A,B] [--runs 3] [--threads 2] [--preset NAME] [--no-synth]
-//                  [--no-kitti] [--heap keep|glibc] [--set KEY=VALUE,...]
+//                  [--no-kitti] [--heap keep|glibc] [--set KEY=VALUE,...] [--lidar paper|velodyne]
+//                  [--beams K]
+// --lidar velodyne [--beams K]: the KITTI frames with their Velodyne scan (as `lidarflow kitti`)
+// instead of the paper's ~88 points. KITTI has no t1 scan, so the stream's time-reversed pairs
+// run without LiDAR there: compare the pair column.
 // --set: any option key of the C ABI (lidarflow.h), after the preset, as `lidarflow --set`.
 // --heap: the heap policy of the project's programs (keep, as the CLI and the bridge) or glibc's
 // defaults (as an application that embeds the library without configuring malloc).
@@ -58,11 +62,13 @@ struct Args {
     bool synth = true, kitti = true;
     bool keep_heap = true;
     std::vector<std::string> assignments;
+    eval::LidarInputOptions lidar;  // KITTI frames: the paper's 88 points, or the scan
 };
 
 [[noreturn]] void usage(const char *msg) {
     std::fprintf(stderr, "bench_pipeline: %s\nusage: bench_pipeline [--root DIR] [--ids A,B] [--runs N] "
-                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti] [--heap keep|glibc] [--set K=V,..]\n",
+                         "[--threads N] [--preset NAME] [--no-synth] [--no-kitti] [--heap keep|glibc] [--set K=V,..]\n"
+                         "       [--lidar paper|velodyne] [--beams K]\n",
                  msg);
     std::exit(2);
 }
@@ -84,6 +90,13 @@ Args parse(int argc, char **argv) {
         else if (k == "--no-synth") a.synth = false;
         else if (k == "--no-kitti") a.kitti = false;
         else if (k == "--set") a.assignments = cli::split_list(value());
+        else if (k == "--lidar") {
+            const std::string v = value();
+            if (v != "paper" && v != "velodyne") usage("--lidar must be paper or velodyne");
+            a.lidar.protocol = v == "paper" ? eval::LidarProtocol::Paper : eval::LidarProtocol::Velodyne;
+            if (v == "velodyne") a.lidar.points = 0;  // the whole scan unless --beams thins it
+        }
+        else if (k == "--beams") a.lidar.beams = std::atoi(value().c_str());
         else if (k == "--heap") {
             const std::string v = value();
             if (v != "keep" && v != "glibc") usage("--heap must be keep or glibc");
@@ -92,6 +105,8 @@ Args parse(int argc, char **argv) {
         else usage(("unknown option " + k).c_str());
     }
     if (a.runs < 1 || a.threads < 1) usage("--runs and --threads must be >= 1");
+    if (a.lidar.beams < 0 || (a.lidar.beams > 0 && a.lidar.protocol != eval::LidarProtocol::Velodyne))
+        usage("--beams K (K >= 1) needs --lidar velodyne");
     return a;
 }
 
@@ -142,7 +157,7 @@ std::vector<Case> load_cases(const Args &a) {
     if (a.kitti && !a.root.empty()) {
         const std::vector<std::string> ids = a.ids.empty() ? io::KittiLayout{a.root}.frame_ids() : a.ids;
         for (const std::string &id : ids) {
-            eval::KittiFrame f = eval::load_kitti_frame(a.root, id, {});
+            eval::KittiFrame f = eval::load_kitti_frame(a.root, id, a.lidar);
             cases.push_back({"kitti " + id, std::move(f.input), eval::load_ground_truth(a.root, id)});
         }
     }

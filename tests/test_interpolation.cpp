@@ -126,6 +126,12 @@ void superpixels_shrink_with_dense_lidar(void **) {
     assert_int_equal(interpolation::superpixel_size(o, 20000, image), 10);  // 2 px: the floor
     o.min_superpixel_size = 40;  // a floor above the largest size: the largest
     assert_int_equal(interpolation::superpixel_size(o, 20000, image), 20);
+    // Smaller superpixels draw initial hypotheses in proportion to their area, at least 4.
+    assert_int_equal(interpolation::initial_hypotheses(24, 20, 20), 24);
+    assert_int_equal(interpolation::initial_hypotheses(24, 10, 20), 6);
+    assert_int_equal(interpolation::initial_hypotheses(24, 10, 16), 9);
+    assert_int_equal(interpolation::initial_hypotheses(24, 4, 20), interpolation::kMinInitialHypotheses);
+    assert_int_equal(interpolation::initial_hypotheses(2, 10, 20), 2);  // never more than asked
 
     const test::PlanarScene s = test::make_planar_scene();
     SceneFlowField ms = test::sample_matches(s.truth, 0.05, 0.05, 12), md = test::sample_matches(s.truth, 0.05, 0.05, 12);

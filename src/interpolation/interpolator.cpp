@@ -880,6 +880,12 @@ int superpixel_size(const InterpolationOptions &o, size_t lidar_points, cv::Size
                            : std::max(std::min(o.min_superpixel_size, largest), static_cast<int>(std::lround(size)));
 }
 
+int initial_hypotheses(int hypotheses, int size, int largest) {
+    if (size >= largest || largest <= 0) return hypotheses;
+    const double share = static_cast<double>(size) * size / (static_cast<double>(largest) * largest);
+    return std::min(hypotheses, std::max(kMinInitialHypotheses, static_cast<int>(std::lround(hypotheses * share))));
+}
+
 RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
     validate_options(options_);
     if (options_.edges.method == EdgeMethod::StructuredForest)
@@ -895,8 +901,10 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     if (threads > 0) this_call.num_threads = threads;
     const auto t_start = Clock::now();
     validate_inputs(matches, lidar0, image);
+    const int largest = this_call.superpixels.region_size;
     this_call.superpixels.region_size =
         superpixel_size(this_call, this_call.use_lidar ? lidar0.points.size() : 0, image.size());
+    this_call.initial_hypotheses = initial_hypotheses(this_call.initial_hypotheses, this_call.superpixels.region_size, largest);
     const InterpolationOptions &o = this_call;
     validate_lidar(lidar1, image.size(), "t1 LiDAR");
     validate_hint(geometry_hint, image.size());

@@ -55,7 +55,9 @@ struct InterpolationOptions {
     float distance_sigma = 36.0f;
     float disparity_inlier = 2.0f;  // robust-cost truncation for d0, d1 residuals [px] (> 0)
     float flow_inlier = 3.0f;       // robust-cost truncation for (u, v) end-point errors [px] (> 0)
-    int initial_hypotheses = 24;   // random minimal subsets per superpixel and channel (>= 1)
+    // Random minimal subsets per superpixel and channel (>= 1) at superpixels.region_size; a
+    // dense scan's smaller superpixels draw fewer (initial_hypotheses() below).
+    int initial_hypotheses = 24;
     int iterations = 4;            // propagation + random-search rounds (>= 0)
     int random_hypotheses = 4;     // new random subsets per round and channel (>= 0)
     // LiDAR: anchor threshold [px] (distance LiDAR pixel - superpixel centre), tolerance of
@@ -174,6 +176,13 @@ struct InterpolationTimings {
 // The superpixel size run() uses for lidar_points LiDAR points on an image of this size
 // (InterpolationOptions::lidar_points_per_superpixel).
 int superpixel_size(const InterpolationOptions &o, size_t lidar_points, cv::Size image);
+
+// The random minimal subsets a superpixel of side `size` draws at first, of `hypotheses` for
+// one of side `largest` (the preset's): in proportion to its area, at least
+// kMinInitialHypotheses. Smaller superpixels have more neighbours to take models from, so the
+// image's total stays that of the largest size.
+constexpr int kMinInitialHypotheses = 4;
+int initial_hypotheses(int hypotheses, int size, int largest);
 
 struct InterpolationResult {
     // Dense field: valid = 1 everywhere, d0/d1 >= 0, confidence in [0, 1] = weighted inlier

@@ -5,7 +5,7 @@ import logging
 import os
 import sys
 
-from . import cluster, frames, results, runner, state
+from . import cluster, frames, results, rig, runner, state
 from .tools import ToolNotFound
 
 EPILOG = """\
@@ -50,6 +50,20 @@ def parse(argv):
     p.add_argument("--warm-up", type=int, default=3, metavar="N",
                    help="drives: each chunk's stream starts N frames before its first, for the priors a whole run "
                         "has there (lidarflow sequence --warm-up; default 3, 0 = none)")
+    group = p.add_argument_group("drives' rig, instead of their calibration files (lidarflow sequence's options)",
+                                 "docs/CALIBRATION.md. Each file must be there (same path) on every worker; "
+                                 "relative paths are made absolute here.")
+    group.add_argument("--calib", metavar="FILE[,FILE]",
+                       help="KITTI calib_cam_to_cam.txt, an OpenCV stereo calibration (YAML/XML), or LEFT,RIGHT ROS "
+                            "camera_info YAMLs; raw rigs are rectified")
+    for key, what in (("fx", "focal length"), ("fy", "vertical focal length (default: --fx)"),
+                      ("cx", "principal point column"), ("cy", "principal point row")):
+        group.add_argument("--" + key, type=float, metavar="PX", help="rectified rig by numbers: " + what)
+    group.add_argument("--baseline", type=float, metavar="M", help="distance of the left and right camera centres")
+    group.add_argument("--strict", action="store_true",
+                       help="refuse images of another size than the calibration's (default: a warning)")
+    group.add_argument("--calib-velo", metavar="FILE",
+                       help="Velodyne -> left camera in calib_velo_to_cam.txt's form (default: the drive's file)")
     p.add_argument("--force", action="store_true", help="recompute everything, also what is complete")
     p.add_argument("--bin-dir", metavar="DIR",
                    help="where lidarflow and lidarflow-lcm-bridge are, for every worker (default: "
@@ -103,7 +117,9 @@ def main(argv=None):
         settings = runner.Settings(a.out, preset=a.preset, options=a.option, chunk=a.chunk, threads=threads,
                                    force=a.force, bin_dir=os.path.abspath(bin_dir) if bin_dir else None,
                                    stereo_channel=a.stereo_channel, bridge_args=a.bridge_arg, formats=a.format,
-                                   frames=a.frames, chunk_timeout=a.chunk_timeout, warm_up=a.warm_up)
+                                   frames=a.frames, chunk_timeout=a.chunk_timeout, warm_up=a.warm_up,
+                                   calib=a.calib, calib_velo=a.calib_velo, strict=a.strict,
+                                   camera={k: getattr(a, k) for k in rig.NUMBERS})
         if serial:
             rc, _ = runner.run(a.sources, settings, client=None)
             return rc

@@ -10,6 +10,7 @@ is a dict (plain data, so it pickles to any worker):
     first, last   frames first..last, both included, all present: the pairs (first, first+1) .. (last-1, last)
     out       the output folder (shared storage)
     preset, options, formats, threads, force, bin_dir, stereo_channel, bridge_args, timeout   see runner.Settings
+    rig_args  a drive's rig options for lidarflow sequence, paths absolute (Settings.rig_args)
 
 run_chunk() never raises for bad data or a missing tool: it returns a result dict (rc, pairs,
 seconds, host, message) that the caller reports. It is safe to run twice, also concurrently:
@@ -90,7 +91,7 @@ def command(chunk, tool, tmp_log=None):
             cmd.append("--skip-existing")
         if chunk.get("warm_up"):
             cmd += ["--warm-up", str(chunk["warm_up"])]
-        return cmd + option_args(chunk["options"])
+        return cmd + option_args(chunk["options"]) + list(chunk["rig_args"])
     cmd = [tool, "--replay", chunk["source"], "--out", tmp_log, "--frames", frames,
            "--option", "threads=%d" % chunk["threads"]]
     if chunk["preset"]:
@@ -122,21 +123,22 @@ def _tail(text, lines=8):
     return "\n".join(text.strip().splitlines()[-lines:])
 
 
-def check_settings(preset, options, formats, threads, bin_dir=None):
-    """'' when the CLI accepts the preset, options, formats and thread count, else its message.
-    `lidarflow sequence` checks them before it reads any file, so a drive that is not there
-    tells them apart: exit 2 is theirs, the drive's error comes after."""
+def check_settings(preset, options, formats, threads, bin_dir=None, rig_args=()):
+    """'' when the CLI accepts the preset, options, formats, thread count and rig, else its
+    message. `lidarflow sequence` checks them before it reads the drive, so a drive that is not
+    there tells them apart: exit 2 is theirs, and so is exit 1 before the drive's error when a
+    rig is given (its files are read first)."""
     tool = find_tool(CLI, bin_dir)
     with tempfile.TemporaryDirectory(prefix="lidarflow_dask-check-") as tmp:
         cmd = [tool, "sequence", "--drive", os.path.join(tmp, "none"), "--out", os.path.join(tmp, "out"),
-               "--threads", str(threads), "--format", ",".join(formats)] + option_args(options)
+               "--threads", str(threads), "--format", ",".join(formats)] + option_args(options) + list(rig_args)
         if preset:
             cmd += ["--preset", preset]
         rc, out = execute(cmd, 60)
-    if rc == 2:
-        return _tail(out, 3).replace("lidarflow sequence: error: ", "")
     if rc == 1 and "is not a folder" in out:
         return ""
+    if rc == 2 or (rc == 1 and rig_args):
+        return _tail(out, 3).replace("lidarflow sequence: error: ", "")
     return "cannot check the options with %s: %s" % (tool, "timed out" if rc == TIMED_OUT else _tail(out, 3))
 
 

@@ -87,11 +87,12 @@ def check_where_chunks_run(sources, settings, client):
         why = check_tools(kinds, settings.bin_dir)
         if why:
             raise ToolNotFound(why)
-        why = ch.check_settings(settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir)
+        why = ch.check_settings(settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir,
+                                settings.rig_args)
     else:
         cluster.check_workers(client, kinds, settings.bin_dir)
         why = cluster.on_one_worker(client, ch.check_settings, settings.preset, settings.options, settings.formats,
-                                    settings.threads, settings.bin_dir)
+                                    settings.threads, settings.bin_dir, settings.rig_args)
     if why:
         raise ValueError(why)
 

@@ -4,17 +4,20 @@ import os
 
 from . import results
 from .frames import parse_frames
+from .rig import rig_args
 
 
 class Settings:
     """What every chunk of a run shares (see chunks.py). frames: (A, B), 'A:B' or None (every
     frame); formats: sequence's --format names (drives); chunk_timeout: seconds, None for the
     default (chunks.default_timeout), 0 for none; warm_up: frames before a drive chunk that feed its
-    stream's priors without being written (lidarflow sequence --warm-up)."""
+    stream's priors without being written (lidarflow sequence --warm-up); calib ('FILE' or
+    'LEFT,RIGHT'), calib_velo, camera ({fx, cx, cy, baseline[, fy]}), strict: the drives' rig,
+    as lidarflow sequence's --calib, --calib-velo, --fx ..., --strict (rig.py)."""
 
     def __init__(self, out, preset=None, options=(), chunk=20, threads=1, force=False, bin_dir=None,
                  stereo_channel="LIDARFLOW_STEREO", bridge_args=(), formats=("kitti",), frames=None,
-                 chunk_timeout=None, warm_up=3):
+                 chunk_timeout=None, warm_up=3, calib=None, calib_velo=None, camera=None, strict=False):
         if not out:
             raise ValueError("--out: the output folder must be named (got '')")
         if chunk < 2:
@@ -32,10 +35,14 @@ class Settings:
         self.frames = None if frames is None else parse_frames(frames if isinstance(frames, str) else "%d:%d" % frames)
         self.chunk_timeout = chunk_timeout
         self.warm_up = warm_up
+        self.rig_args, self.rig_files = rig_args(calib, calib_velo, camera, strict)
 
     def signature(self, kind):
         """What the results depend on; a rerun into the same folder must match it."""
         sig = {"kind": kind, "preset": self.preset, "options": self.options}
+        rig = [a for a in self.rig_args if a != "--strict"]  # --strict refuses inputs, changes no result
+        if kind == "drive" and rig:
+            sig.update(rig=rig, rig_files=self.rig_files)
         if kind == "lcm":
             sig.update(stereo_channel=self.stereo_channel, bridge_args=self.bridge_args)
         return sig

@@ -56,6 +56,10 @@ class Source:
             raise SourceError("%s: a source needs a name of its own in %s (got '%s')" % (self.path, self.out, self.name))
         if os.path.abspath(self.result_path()) == self.path:
             raise SourceError("%s: its results would overwrite it (--out %s is its folder)" % (self.path, self.out))
+        if self.kind == "lcm" and settings.rig_args:
+            raise SourceError("%s: an LCM log carries its calibration; --calib, --calib-velo, --fx ... and --strict "
+                              "are for drives (a log's fixed calibration: --bridge-arg=--calib --bridge-arg=FILE)"
+                              % self.path)
         listed = listed_frames(self.kind, self.path, settings.stereo_channel)
         try:
             self.first, self.last = frames.bounds(self.path, listed, settings.frames)
@@ -69,6 +73,7 @@ class Source:
                 self.chunks.append({"kind": self.kind, "source": self.path, "name": self.name, "first": a, "last": b,
                                     "out": settings.out, "preset": settings.preset, "options": settings.options,
                                     "formats": settings.formats, "threads": settings.threads,
+                                    "rig_args": settings.rig_args,
                                     "warm_up": settings.warm_up if a > self.first else 0,
                                     "force": settings.force, "bin_dir": settings.bin_dir,
                                     "stereo_channel": settings.stereo_channel, "bridge_args": settings.bridge_args,

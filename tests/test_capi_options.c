@@ -300,7 +300,8 @@ static void test_named_presets(void **state) {
     assert_int_equal(lf_options_get_string(o, "matching.method", &m), LF_OK);
     assert_string_equal(m, "decoupled");
     assert_true(get_number(o, "matching.flow_patch_size") == 6.0);
-    assert_true(get_number(o, "matching.flow_patch_stride") == 2.0);
+    assert_true(get_number(o, "matching.flow_patch_stride") == 3.0); /* default's is 2 */
+    assert_true(get_number(fresh, "matching.flow_patch_stride") == 2.0);
     assert_true(get_number(o, "matching.flow_prior_track_step") == 12.0);
     assert_true(get_number(o, "matching.min_coarsest_height") == get_number(fresh, "matching.min_coarsest_height"));
     assert_true(fabs(get_number(o, "processing_scale") - 0.65) < 1e-12);

@@ -262,10 +262,11 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
                                 ? decode_bot_images(rbuf->data, rbuf->data_size, frame->stereo)
                                 : decode_stereo(rbuf->data, rbuf->data_size, frame->stereo);
     frame->received_seconds = monotonic_seconds();
+    frame->warm_up = warm_up_;
     std::lock_guard<std::mutex> lock(mutex_);
-    ++counters_.stereo_received;
+    ++(frame->warm_up ? counters_.warm_up_received : counters_.stereo_received);
     if (!err.empty()) {
-        ++counters_.dropped_malformed;
+        if (!frame->warm_up) ++counters_.dropped_malformed;
         counters_.last_error = "stereo: " + err;
         log("malformed message on %s (%u bytes), dropped: %s", config_.stereo_channel.c_str(), rbuf->data_size,
             err.c_str());
@@ -354,16 +355,20 @@ void Bridge::expire_unpaired() {
 // then the latest-wins queue.
 void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     const lidarflow_stereo_t &m = frame->stereo.msg();
-    if (frame->stereo.has_frame_number()) count_transport_gap(m.frame_number);
+    // A warm-up frame's fate is not the replayed part's: it is counted nowhere, and the part's
+    // first frame checks for transport gaps as if it came first.
+    const bool warm_up = frame->warm_up;
+    auto count = [warm_up](int64_t &counter) { counter += warm_up ? 0 : 1; };
+    if (frame->stereo.has_frame_number() && !warm_up) count_transport_gap(m.frame_number);
     frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
-    if (shard_timeout_ > 0) note_pair_locked(frame->index, m.sequence, m.utime);
+    if (shard_timeout_ > 0 && !warm_up) note_pair_locked(frame->index, m.sequence, m.utime);
     if (config_.shard_count > 1) {
         // Pair (index - 1, index) belongs to shard index % N; a shard needs its t1 frames and
         // the frame before each as t0. Unsigned modulo: frame numbers may be negative.
         const auto n = static_cast<uint64_t>(config_.shard_count);
         const uint64_t r = static_cast<uint64_t>(frame->index) % n, k = static_cast<uint64_t>(config_.shard_index);
         if (r != k && (r + 1) % n != k) {
-            ++counters_.skipped_other_shard;
+            count(counters_.skipped_other_shard);
             return;
         }
         frame->t0_only = r != k;
@@ -373,7 +378,7 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     } else {
         const FramePairing::CalibrationOutcome cal = pairing_.calibration_for(m.width, m.height, &frame->calibration);
         if (cal == FramePairing::CalibrationOutcome::None) {
-            ++counters_.dropped_no_calibration;
+            count(counters_.dropped_no_calibration);
             if (!warned_no_calibration_)
                 log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
                     config_.calibration_channel.c_str());
@@ -381,14 +386,14 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
             return;
         }
         if (cal == FramePairing::CalibrationOutcome::SizeMismatch) {
-            ++counters_.dropped_calibration_mismatch;
+            count(counters_.dropped_calibration_mismatch);
             log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
                 m.height, pairing_.calibration_width(), pairing_.calibration_height());
             return;
         }
     }
     if (have_last_ && m.sequence == last_sequence_ && m.utime <= last_utime_) {
-        ++counters_.dropped_out_of_order;
+        count(counters_.dropped_out_of_order);
         log("stereo frame %" PRId64 " is not after the previous one (%" PRId64 "): dropped as out of order", m.utime,
             last_utime_);
         return;
@@ -397,8 +402,8 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     last_sequence_ = m.sequence;
     last_utime_ = m.utime;
     if (static_cast<int>(queue_.size()) >= config_.queue_capacity) {
+        counters_.dropped_stale += queue_.front()->warm_up ? 0 : 1;  // the frame dropped, not this one
         queue_.pop_front();
-        ++counters_.dropped_stale;
     }
     queue_.push_back(std::move(frame));
     counters_.queue_depth = static_cast<int32_t>(queue_.size());
@@ -512,7 +517,7 @@ void Bridge::stop() {
     if (worker_.joinable()) worker_.join();
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        counters_.dropped_shutdown += static_cast<int64_t>(queue_.size());
+        for (const std::unique_ptr<Frame> &f : queue_) counters_.dropped_shutdown += f->warm_up ? 0 : 1;
         queue_.clear();
         std::vector<FramePairing::Unpaired> unpaired;
         pairing_.drop_all_images("the bridge stopped", &unpaired);

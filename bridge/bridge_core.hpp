@@ -131,6 +131,10 @@ struct Counters {
     // several flags counts under each). Not in status_t.
     int64_t quality_ok = 0;
     int64_t quality_flagged[5] = {};
+    // set_warm_up(): stereo messages taken while it was on, those the estimator took, and the
+    // pairs computed from them (t0 a warm-up frame) and not published. Kept out of every count
+    // above (and of status_t): they are not the stream's part being replayed.
+    int64_t warm_up_received = 0, warm_up_fed = 0, warm_up_pairs = 0;
 
     // "12 ok, 1 blank_frame" (flags never seen left out).
     std::string quality_text() const;
@@ -163,6 +167,12 @@ public:
 
     // Publishes a status now, besides the periodic ones (offline replay keeps its own clock).
     void publish_status_now() { publish_status(); }
+
+    // Offline replay's warm-up: while on, messages on the stereo channel only feed the
+    // estimator's stream (the priors a pair takes from the pairs before it): counted in
+    // Counters::warm_up_*, never as received, processed or dropped, and the result of a pair
+    // whose t0 is such a frame is computed but not published. The run_once() thread only.
+    void set_warm_up(bool on) { warm_up_ = on; }
 
     Counters counters() const;
     // This process's status_t.instance_id: random, drawn at create(), never 0. Any thread.
@@ -220,6 +230,7 @@ private:
     int wake_fd_ = -1;
     double start_seconds_ = 0, next_status_ = 0;
     bool stopped_ = false;
+    bool warm_up_ = false;            // set_warm_up(); the run_once() thread's
 
     mutable std::mutex mutex_;        // everything below
     std::condition_variable cv_;      // queue, LiDAR arrivals, stop
@@ -312,6 +323,7 @@ private:
     uint32_t prev_width_ = 0, prev_height_ = 0;
     int32_t prev_format_ = 0;
     bool prev_had_lidar_ = false;
+    bool prev_warm_up_ = false;       // the frame the estimator holds was a warm-up frame
     int64_t prev_index_ = 0;          // --shard: index of the frame the estimator holds
 };
 

@@ -11,6 +11,7 @@ struct Bridge::Frame {
     // shard's next pair (its own pair, with the frame before, belongs to another shard).
     int64_t index = 0;
     bool t0_only = false;
+    bool warm_up = false;  // Bridge::set_warm_up(): feeds the stream only
     lf_calibration_t calibration{};
     double received_seconds = 0;
 };

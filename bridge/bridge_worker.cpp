@@ -50,7 +50,7 @@ void Bridge::worker_loop() {
             sweep = pairing_.lidar_for(utime);
         if (!sweep) sweep = pairing_.lidar_for(utime);
         if (stop_worker_) {
-            ++counters_.dropped_shutdown;
+            counters_.dropped_shutdown += frame->warm_up ? 0 : 1;
             counters_.busy = false;
             return;
         }
@@ -65,9 +65,11 @@ void Bridge::worker_loop() {
 
 void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     const lidarflow_stereo_t &m = frame.stereo.msg();
+    // A warm-up frame's problems are not the replayed part's (Bridge::set_warm_up): not counted.
+    auto count = [&frame](int64_t &counter) { counter += frame.warm_up ? 0 : 1; };
     auto drop = [&](const std::string &why) {
         std::lock_guard<std::mutex> lock(mutex_);
-        ++counters_.dropped_estimator_error;
+        count(counters_.dropped_estimator_error);
         counters_.last_error = why;
         log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
     };
@@ -90,7 +92,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     if (new_camera && estimator_has_frame_) {
         // The pair (previous frame, this one) cannot be computed across a camera change.
         std::lock_guard<std::mutex> lock(mutex_);
-        ++counters_.pairs_lost_calibration_change;
+        count(counters_.pairs_lost_calibration_change);
         log("stereo frame %" PRId64 ": the calibration changed since frame %" PRId64 ", their pair is lost", m.utime,
             prev_utime_);
     }
@@ -130,7 +132,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
             st = LF_OK;
             with_lidar = false;
             std::lock_guard<std::mutex> lock(mutex_);
-            ++counters_.lidar_rejected;
+            count(counters_.lidar_rejected);
             counters_.last_error = "lidar: " + why;
             log("LiDAR sweep %" PRId64 " rejected by the estimator (%s): frame %" PRId64 " processed without LiDAR",
                 sweep->utime, why.c_str(), m.utime);
@@ -141,7 +143,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
         return;
     }
     const bool had_previous = estimator_has_frame_;
-    const bool previous_lidar = prev_had_lidar_;
+    const bool previous_lidar = prev_had_lidar_, previous_warm_up = prev_warm_up_;
     const int64_t previous_lidar_utime = prev_lidar_utime_;
     estimator_has_frame_ = true;
     prev_sequence_ = m.sequence;
@@ -151,13 +153,24 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     prev_height_ = left.height;
     prev_format_ = left.format;
     prev_had_lidar_ = with_lidar;
+    prev_warm_up_ = frame.warm_up;
     prev_lidar_utime_ = with_lidar ? sweep->utime : 0;
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        ++counters_.stereo_processed;
-        counters_.frames_with_lidar += with_lidar ? 1 : 0;
+        if (frame.warm_up) {
+            ++counters_.warm_up_fed;
+        } else {
+            ++counters_.stereo_processed;
+            counters_.frames_with_lidar += with_lidar ? 1 : 0;
+        }
     }
     if (!had_previous || !lf_has_result(estimator_)) return;
+    if (previous_warm_up) {
+        // Computed for the stream's priors only (the pair ends at the part's first frame or before).
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.warm_up_pairs;
+        return;
+    }
 
     lf_result_info_t info;
     lf_result_info_init(&info);

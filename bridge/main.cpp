@@ -75,6 +75,9 @@ const char *kUsage =
     "                           OUT.log on IN.log's clock (--status-period in log seconds); exit 3\n"
     "                           and a line per frame when a frame was not processed\n"
     "  --frames A:B             with --replay: stereo frames A..B only (0.. in log order, both included)\n"
+    "  --warm-up N              with --replay --frames A:B: start the stream N stereo frames before A\n"
+    "                           (0..1000, default 0): their pairs feed the stream's priors, not written\n"
+    "                           or counted; warmed up from frame 0, A..B get the whole log's results\n"
     "  --version                print the lidarflow library version and exit\n"
     "  --help                   print this help and exit\n"
     "Stops cleanly on SIGINT / SIGTERM (publishes a final status).\n"
@@ -129,13 +132,21 @@ int replay(const lidarflow::bridge::BridgeConfig &config, const std::string &in,
                  (long long)c.lidar_malformed, (long long)c.lidar_rejected, (long long)c.calibration_malformed,
                  (long long)r.flows_written, (long long)r.status_written, (long long)c.pairs_lost_calibration_change);
     std::fprintf(stderr, "lidarflow-lcm-bridge: input quality of the results: %s\n", c.quality_text().c_str());
-    if (frames.first > 0 || frames.last < INT64_MAX)
-        std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range not "
-                             "computed, %s\n",
-                     (long long)frames.first, (long long)frames.last, (long long)r.stereo_before_range,
+    if (frames.first > 0 || frames.last < INT64_MAX) {
+        // Fed: what the estimator took (a warm-up frame dropped, e.g. before any calibration, fed nothing).
+        const std::string before =
+            frames.warm_up > 0
+                ? printf_string(", warm-up %lld: the last %lld handed over, %lld fed to the estimator, %lld pairs "
+                                "computed and not written",
+                                (long long)frames.warm_up, (long long)r.stereo_warm_up, (long long)c.warm_up_fed,
+                                (long long)c.warm_up_pairs)
+                : std::string(" not computed");
+        std::fprintf(stderr, "lidarflow-lcm-bridge: frames %lld:%lld: %lld stereo frame(s) before the range%s, %s\n",
+                     (long long)frames.first, (long long)frames.last, (long long)r.stereo_before_range, before.c_str(),
                      r.stopped_after_range ? "stopped at the frame after it"
                                            : printf_string("the log ended after %lld stereo frame(s)",
                                                            (long long)r.stereo_in_log).c_str());
+    }
     return r.lost.empty() && !r.interrupted && r.stereo_not_replayed == 0 ? 0 : 3;
 }
 
@@ -147,7 +158,7 @@ std::vector<lidarflow::cli::OptionSpec> bridge_options() {
                              "pair-buffer", "lidar-channel", "calib-channel", "flow-channel", "ego-channel", "quality-channel",
                              "status-channel", "calib", "lidar-tolerance-ms", "lidar-wait-ms", "lidar-to-camera",
                              "lidar-buffer", "queue", "shard", "shard-timeout", "shard-key", "encoding", "step", "option", "status-period", "replay",
-                             "out", "frames"})
+                             "out", "frames", "warm-up"})
         spec.push_back({name, true, ""});
     spec.push_back({"verbose", false, ""});
     spec.push_back({"quiet", false, ""});
@@ -284,6 +295,17 @@ bool parse_command_line(int argc, char **argv, lidarflow::bridge::BridgeConfig *
         }
         frames->first = a;
         frames->last = b;
+    }
+    if (args.has("warm-up")) {
+        // Refused rather than ignored: a live stream has no frames before it to warm up on.
+        const int n = args.integer("warm-up", 0);
+        if (replay_in->empty() || n < 0 || n > 1000) {
+            std::fprintf(stderr, "lidarflow-lcm-bridge: --warm-up %s: expected a number of frames in [0, 1000], with "
+                                 "--replay\n",
+                         args.str("warm-up", "").c_str());
+            return false;
+        }
+        frames->warm_up = n;
     }
     config->step = static_cast<int>(args.number_in("step", config->step, 1, 16));
     config->status_period_s = args.number_in("status-period", config->status_period_s, 0, 3600);

@@ -112,6 +112,29 @@ const char *drop_reason(const Counters &a, const Counters &b) {
     return "?";
 }
 
+// The LOST lines of a stereo frame handed to the bridge: what its counters say became of it.
+void note_losses(const Counters &before, const Counters &after, const LogEvent &event, std::vector<std::string> *lost) {
+    StereoMessage m;
+    const bool decodable = decode_stereo(event.data.data(), event.data.size(), m).empty();
+    const std::string which =
+        decodable ? printf_string("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
+                                  ", log event %" PRId64 ")",
+                                  m.msg().utime, m.msg().sequence, m.msg().frame_number, event.event_number)
+                  : printf_string("stereo log event %" PRId64, event.event_number);
+    if (after.dropped() > before.dropped()) {
+        // last_error is this frame's only for the reasons that set it.
+        const bool own_error = after.dropped_malformed > before.dropped_malformed ||
+                               after.dropped_estimator_error > before.dropped_estimator_error;
+        lost->push_back(printf_string("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
+                                      own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
+    }
+    if (after.pairs_lost_calibration_change > before.pairs_lost_calibration_change)
+        lost->push_back(printf_string("%s: no result, the calibration changed since the frame before", which.c_str()));
+    if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
+        lost->push_back(printf_string("%" PRId64 " frame(s) missing from the log before %s",
+                                      after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
+}
+
 }  // namespace
 
 std::string run_replay(const BridgeConfig &config_in, const std::string &in_path, const std::string &out_path,
@@ -148,7 +171,7 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
         }
         auto handled = [&] {
             const Counters c = bridge->counters();
-            return c.stereo_received + c.lidar_received + c.calibration_received;
+            return c.stereo_received + c.warm_up_received + c.lidar_received + c.calibration_received;
         };
         bool interrupted = false;
         // Until the bridge has taken `target` input messages, its worker is idle and every
@@ -222,10 +245,15 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
             } else if (channel == config.calibration_channel) {
                 ++report->calibration_events;
                 feed(*event);
-            } else if (channel == config.stereo_channel && ++stereo_index < frames.first) {
+            } else if (channel == config.stereo_channel && ++stereo_index < frames.first - frames.warm_up) {
                 ++report->stereo_before_range;  // its LiDAR is handed over in log order
             } else if (channel == config.stereo_channel) {
-                ++report->stereo_events;
+                // A warm-up frame goes the range's way (LiDAR look-ahead included) so that the
+                // stream reaches the range as the whole log's replay would have it.
+                const bool warm_up = stereo_index < frames.first;
+                report->stereo_before_range += warm_up;
+                report->stereo_warm_up += warm_up;
+                report->stereo_events += !warm_up;
                 // Sweeps logged shortly after the frame reach the live bridge while the frame
                 // waits for them; hand them over first. The wait is bounded as the live one is:
                 // by log time (a frame stamped ahead of the log's clock waits from the log time
@@ -259,37 +287,19 @@ std::string run_replay(const BridgeConfig &config_in, const std::string &in_path
                         event->event_number, event->utime, cut,
                         report->lookahead_cut == kMaxNotesPerKind ? "; further such frames only counted" : ""));
                 if (!error.empty() || interrupted) {
-                    report->stereo_not_replayed += interrupted;
+                    report->stereo_not_replayed += interrupted && !warm_up;
                     break;
                 }
+                bridge->set_warm_up(warm_up);
                 const Counters before = bridge->counters();
                 if (!feed(*event)) break;
-                const Counters after = bridge->counters();
-                StereoMessage m;
-                const bool decodable = decode_stereo(event->data.data(), event->data.size(), m).empty();
-                const std::string which =
-                    decodable ? printf_string("stereo frame utime %" PRId64 " (sequence %d, frame_number %" PRId64
-                                    ", log event %" PRId64 ")",
-                                    m.msg().utime, m.msg().sequence, m.msg().frame_number, event->event_number)
-                              : printf_string("stereo log event %" PRId64, event->event_number);
-                if (after.dropped() > before.dropped()) {
-                    // last_error is this frame's only for the reasons that set it.
-                    const bool own_error = after.dropped_malformed > before.dropped_malformed ||
-                                           after.dropped_estimator_error > before.dropped_estimator_error;
-                    report->lost.push_back(printf_string("%s dropped: %s%s%s", which.c_str(), drop_reason(before, after),
-                                               own_error ? ": " : "", own_error ? after.last_error.c_str() : ""));
+                if (!warm_up) {  // a warm-up frame's fate is not the range's
+                    note_losses(before, bridge->counters(), *event, &report->lost);
+                    // The event ends after its 28-byte header (sync, number, time, two lengths), channel and data.
+                    if (progress)
+                        progress(report->stereo_events,
+                                 event->offset + 28 + static_cast<int64_t>(event->channel.size() + event->data.size()));
                 }
-                if (after.pairs_lost_calibration_change > before.pairs_lost_calibration_change)
-                    report->lost.push_back(printf_string("%s: no result, the calibration changed since the frame before",
-                                                         which.c_str()));
-                if (after.stereo_lost_in_transport > before.stereo_lost_in_transport)
-                    report->lost.push_back(
-                        printf_string("%" PRId64 " frame(s) missing from the log before %s",
-                            after.stereo_lost_in_transport - before.stereo_lost_in_transport, which.c_str()));
-                // The event ends after its 28-byte header (sync, number, time, two lengths), channel and data.
-                if (progress)
-                    progress(report->stereo_events,
-                             event->offset + 28 + static_cast<int64_t>(event->channel.size() + event->data.size()));
             } else {
                 ++report->other_events;
             }

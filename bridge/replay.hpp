@@ -34,7 +34,8 @@ struct ReplayReport {
     int64_t lookahead_cut = 0;        // stereo frames whose LiDAR look-ahead stopped at a bound (notes)
     int64_t lookahead_peak_bytes = 0; // the most data read ahead for one frame
     int64_t clock_jumps = 0;          // log time jumping by more than a day between events (notes)
-    int64_t stereo_before_range = 0;  // stereo frames before ReplayFrames::first, not handed over
+    int64_t stereo_before_range = 0;  // stereo frames before ReplayFrames::first (warm-up ones included)
+    int64_t stereo_warm_up = 0;       // of those, handed over as warm-up (ReplayFrames::warm_up)
     bool stopped_after_range = false; // a stereo frame after ReplayFrames::last ended the replay
     int64_t stereo_in_log = 0;        // stereo frames read (all of the log's unless stopped after the range)
     // One line per stereo frame that did not reach the estimator, frames missing from the log
@@ -48,12 +49,16 @@ struct ReplayReport {
 };
 
 // A range of stereo frames, numbered 0.. in log order (every event on the stereo channel), both
-// ends included: only the pairs of two frames inside it are computed. Calibration and LiDAR
-// events before the range are still handed over, so a range's results are those of the whole
-// log's replay; reading ends at the first stereo frame after `last`.
+// ends included: only the pairs of two frames inside it are published. Calibration and LiDAR
+// events before the range are still handed over; reading ends at the first stereo frame after
+// `last`. The estimator's stream carries priors from pair to pair, so the range's stream starts
+// `warm_up` stereo frames before `first` (as far as the log has them): those frames go to the
+// bridge in warm-up (Bridge::set_warm_up), their pairs computed and not published. A range
+// whose warm-up reaches the log's first frame gets the whole log's results.
 struct ReplayFrames {
     int64_t first = 0;
     int64_t last = INT64_MAX;
+    int64_t warm_up = 0;
 };
 
 // Replays `in_path` into `out_path` (created or truncated) through a bridge configured by

@@ -31,6 +31,6 @@ for c in $commands; do has "$page" "$c"; done
 
 if [ -n "$bridge" ]; then
     page="$(render "$dir/lidarflow-lcm-bridge.1.gz")"
-    has "$page" "LIDARFLOW-LCM-BRIDGE(1)" "--replay" "--frames A:B" "--shard K/N" "Exit status" "a bad command line"
+    has "$page" "LIDARFLOW-LCM-BRIDGE(1)" "--replay" "--frames A:B" "--warm-up N" "--shard K/N" "Exit status" "a bad command line"
 fi
 echo "man pages: ok"

@@ -51,6 +51,12 @@ printf '0123456789abcdef0123\n' >"$short_key"
 expect 2 '--shard-key needs --shard K/N with N > 1' --shard-key "$short_key"
 rm -f "$short_key"
 expect 2 '--quiet and --verbose exclude each other' --quiet --verbose
+expect 2 '--warm-up 3: expected a number of frames in \[0, 1000\], with --replay' --warm-up 3
+expect 2 '--warm-up -1: expected a number of frames in \[0, 1000\]' --replay in.log --out out.log --frames 2:4 --warm-up -1
+expect 2 '--warm-up 1001: expected a number of frames in \[0, 1000\]' --replay in.log --out out.log --warm-up 1001
+expect 2 '--warm-up expects an integer, got .x.' --replay in.log --out out.log --warm-up x
+expect 2 '--warm-up expects an integer, got .2.5.' --replay in.log --out out.log --warm-up 2.5
+expect 2 '--warm-up expects an integer, got .99999999999.' --replay in.log --out out.log --warm-up 99999999999
 expect 0 '^usage: lidarflow-lcm-bridge' --help
 expect 0 '^lidarflow-lcm-bridge [0-9]' --queue 0 --version
 

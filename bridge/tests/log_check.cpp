@@ -24,10 +24,12 @@
 //   log_check throughput LOG [--stereo-channel NAME]
 //       Results per second of a recorded live run: from the first stereo frame's to the last
 //       result's arrival at the logger.
-//   log_check compare A.log B.log
+//   log_check compare A.log B.log [--bytes]
 //       The results of two runs of the same frames (times may differ: paired by order) must be
 //       equal value by value: same pair length t1 - t0, LiDAR flags, planes and valid pixels.
-//       E.g. one scan sent as LiDAR-frame points and once as projected disparities.
+//       E.g. one scan sent as LiDAR-frame points and once as projected disparities. --bytes:
+//       also the same t0 and t1 and the same bytes of the u, v, d0, d1 and valid planes (a part
+//       of a log replayed against the whole log's replay).
 //   log_check edit IN.log OUT.log --drop CHANNEL:N [--drop ...]
 //       Copies IN.log without the N-th (from 0) event on CHANNEL: logs with missing frames.
 //   log_check replay LOG [--option K=V]... [--min-results N] [--encoding E] [--step N]
@@ -139,8 +141,9 @@ int check_flows(const std::vector<Event> &events, const std::vector<std::vector<
 }
 
 // log_check compare: see the top of the file.
-int compare_results(const std::string &path_a, const std::string &path_b) {
+int compare_results(const std::string &path_a, const std::string &path_b, bool bytes) {
     std::vector<DecodedFlow> runs[2];
+    std::vector<std::vector<uint8_t>> raw[2];
     for (int k = 0; k < 2; ++k) {
         std::vector<Event> events;
         if (!read_log(k ? path_b : path_a, events)) {
@@ -156,6 +159,7 @@ int compare_results(const std::string &path_a, const std::string &path_b) {
                 return 1;
             }
             runs[k].push_back(std::move(d));
+            raw[k].push_back(e.data);
         }
     }
     if (runs[0].size() != runs[1].size() || runs[0].empty()) {
@@ -173,6 +177,19 @@ int compare_results(const std::string &path_a, const std::string &path_b) {
                          i, (long long)(ha.utime - ha.utime0), (long long)(hb.utime - hb.utime0), ha.lidar_flags,
                          hb.lidar_flags, ha.width, ha.height, hb.width, hb.height);
             return 1;
+        }
+        if (bytes) {
+            // The planes end the message (scene_flow_t.lcm): u, v, d0, d1, then valid.
+            const size_t planes = 4 * static_cast<size_t>(ha.plane_size) + static_cast<size_t>(ha.valid_size);
+            const std::vector<uint8_t> &ra = raw[0][i], &rb = raw[1][i];
+            if (ha.utime != hb.utime || ha.utime0 != hb.utime0 || ha.encoding != hb.encoding || ha.step != hb.step ||
+                ha.plane_size != hb.plane_size || !std::equal(ra.end() - static_cast<std::ptrdiff_t>(planes), ra.end(),
+                                                              rb.end() - static_cast<std::ptrdiff_t>(planes))) {
+                std::fprintf(stderr, "log_check: compare --bytes: result %zu (t0 %lld / %lld, t1 %lld / %lld): the plane "
+                                     "bytes differ\n",
+                             i, (long long)ha.utime0, (long long)hb.utime0, (long long)ha.utime, (long long)hb.utime);
+                rc = 1;
+            }
         }
         const std::vector<float> *pa[4] = {&a.u, &a.v, &a.d0, &a.d1}, *pb[4] = {&b.u, &b.v, &b.d0, &b.d1};
         size_t valid = 0, differ = 0;
@@ -204,7 +221,10 @@ int main(int argc, char **argv) {
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
-    if (mode == "compare") return argc != 4 ? 2 : compare_results(path, argv[3]);
+    if (mode == "compare") {
+        const bool bytes = argc == 5 && std::strcmp(argv[4], "--bytes") == 0;
+        return argc != 4 && !bytes ? 2 : compare_results(path, argv[3], bytes);
+    }
     if (mode == "edit") {
         if (argc < 4) return 2;
         std::map<std::string, std::vector<int>> drop;  // channel -> event indices

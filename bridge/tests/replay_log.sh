@@ -8,6 +8,7 @@
 #  3. --frames A:B replays stereo frames A..B only: their pairs, equal to the whole log's;
 #  4. logs with a frame missing (frame_number gap) or a calibration missing (frames before any
 #     calibration) exit 3 and name the frames;
+#     With --warm-up, frames missing or dropped before the range are not the range's (exit 0);
 #  5. piped, publish-kitti and --replay write progress lines with elapsed time and ETA; --quiet
 #     silences them.
 set -euo pipefail
@@ -93,6 +94,18 @@ expect_lost "$tmp/gap.log" "LOST: 1 frame(s) missing from the log before stereo 
 "$LIDARFLOW_LOG_CHECK" edit "$tmp/in.log" "$tmp/nocal.log" --drop LIDARFLOW_CALIB:0
 expect_lost "$tmp/nocal.log" "LOST: stereo frame .*sequence 0, frame_number 0.* dropped: no calibration" \
     "LOST: stereo frame .*sequence 0, frame_number 1.* dropped: no calibration"
+# --warm-up: a warm-up frame's problems are not the range's. The gap (frame_number 2 missing) lies
+# between warm-up frames 1 and 3, the frames of sequence 0 (before any calibration) are all
+# warm-up: the range is complete (exit 0), and the summary counts what the warm-up fed.
+expect_warm_up() {  # LOG FRAMES WARM_UP PROCESSED SUMMARY
+    "$LIDARFLOW_BRIDGE" --replay "$1" --out "$tmp/warm_out.log" --frames "$2" --warm-up "$3" "${opts[@]}" 2>"$tmp/warm.err" \
+        || { rc=$?; cat "$tmp/warm.err"; fail "replay of $1 --frames $2 --warm-up $3 exited $rc"; }
+    cat "$tmp/warm.err"
+    grep -q "stereo processed $4, dropped 0, missing from the log 0" "$tmp/warm.err" || fail "--warm-up $3: range counts"
+    grep -q -- "$5" "$tmp/warm.err" || fail "--warm-up $3: no '$5'"
+}
+expect_warm_up "$tmp/gap.log" 3:6 3 4 "warm-up 3: the last 3 handed over, 3 fed to the estimator, 1 pairs computed and not written"
+expect_warm_up "$tmp/nocal.log" 2:7 2 6 "warm-up 2: the last 2 handed over, 0 fed to the estimator, 0 pairs computed and not written"
 # Garbage appended to a good log (a torn write): every frame still processed, exit 0.
 cp "$tmp/in.log" "$tmp/torn.log" && head -c 1000 /dev/urandom >>"$tmp/torn.log"
 "$LIDARFLOW_BRIDGE" --replay "$tmp/torn.log" --out "$tmp/torn_out.log" "${opts[@]}" 2>"$tmp/torn.err" \

@@ -3,7 +3,7 @@
 // equal to the C ABI's for the same frames (float32, int16, subsampled; LiDAR as disparities,
 // camera-frame and LiDAR-frame points; no LiDAR), malformed and truncated messages, frames
 // before the calibration, out-of-order timestamps, a burst faster than the estimator, shutdown
-// with frames queued, the status heartbeat, transport gaps, option errors and a soak of
+// with frames queued, the status heartbeat, transport gaps, the replay's warm-up, option errors and a soak of
 // 10,000 mixed messages. Every case checks that each received stereo
 // message ends processed or dropped with a reason.
 #include <sys/stat.h>
@@ -136,7 +136,7 @@ struct Rig {
     }
     int64_t handled() const {
         const Counters c = bridge->counters();
-        return c.stereo_received + c.lidar_received + c.calibration_received;
+        return c.stereo_received + c.warm_up_received + c.lidar_received + c.calibration_received;
     }
     // Publishes and waits until the bridge has handled the message and is idle again.
     void send(const char *channel, const std::vector<uint8_t> &bytes) {
@@ -1332,6 +1332,53 @@ void test_transport_gaps(void **) {
     lidarflow_status_t_decode_cleanup(&s);
 }
 
+// set_warm_up (offline replay's --warm-up): frames fed while it is on reach the estimator's
+// stream only: no result of a pair that starts at one is published, and neither they nor their
+// problems (a malformed message, a gap in frame_number) are counted as the stream's, in the
+// counters or in status_t; the first pair after them is published.
+void test_warm_up(void **) {
+    BridgeConfig config;
+    config.status_period_s = 0;
+    Rig rig(config);
+    rig.send("LIDARFLOW_CALIB", calibration_bytes());
+    const uint8_t *left[2] = {g_scene.left0, g_scene.left1}, *right[2] = {g_scene.right0, g_scene.right1};
+    rig.bridge->set_warm_up(true);
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(left[0], right[0], 0, 0, 0));
+    rig.send("LIDARFLOW_STEREO", {9, 9, 9});
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(left[1], right[1], 100000, 0, 1));
+    rig.bridge->set_warm_up(false);
+    // frame_number 5 after 1: the gap lies before the part, not in it.
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(left[0], right[0], 200000, 0, 5));
+    Counters c = rig.bridge->counters();
+    assert_int_equal(c.warm_up_received, 3);
+    assert_int_equal(c.warm_up_fed, 2);
+    assert_int_equal(c.warm_up_pairs, 2);  // (0, 1) and (1, 5): t0 a warm-up frame
+    assert_int_equal(c.stereo_received, 1);
+    assert_int_equal(c.stereo_processed, 1);
+    assert_int_equal(c.dropped(), 0);
+    assert_int_equal(c.stereo_lost_in_transport, 0);
+    assert_int_equal(rig.flows.size(), 0);
+    rig.send("LIDARFLOW_STEREO", stereo_bytes(left[1], right[1], 300000, 0, 6));
+    assert_int_equal(rig.flows.size(), 1);
+    DecodedFlow d;
+    assert_string_equal(decode_scene_flow(rig.flows[0].data(), rig.flows[0].size(), d).c_str(), "");
+    assert_int_equal(d.header.utime0, 200000);
+    assert_int_equal(d.header.utime, 300000);
+    rig.bridge->stop();
+    c = rig.bridge->counters();
+    assert_int_equal(c.results_published, 1);
+    assert_int_equal(c.warm_up_pairs, 2);
+    assert_accounted(c);
+    lcm_handle_timeout(rig.lcm, 100);  // deliver the final status stop() published
+    assert_false(rig.statuses.empty());
+    StatusMessage s;
+    assert_string_equal(decode_status(rig.statuses.back().data(), rig.statuses.back().size(), s).c_str(), "");
+    assert_int_equal(s.fields.stereo_received, 2);
+    assert_int_equal(s.fields.stereo_processed, 2);
+    assert_int_equal(s.fields.dropped_malformed, 0);
+    assert_int_equal(s.fields.results_published, 1);
+}
+
 // Resident set size in bytes (/proc/self/statm).
 long resident_bytes() {
     long pages = 0, resident = 0;
@@ -1527,6 +1574,7 @@ int main(void) {
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_option_errors),
         cmocka_unit_test(test_transport_gaps),
+        cmocka_unit_test(test_warm_up),
         cmocka_unit_test(test_soak),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);

@@ -73,7 +73,9 @@ SynthScene render(const SynthConfig &config);
 // t0 -> t1 motions (the ego-motion and every box's) repeated once per frame, frame k at time k,
 // so pair k -> k+1 of the drive looks like render()'s pair, moved on by k steps. Each frame is
 // rendered once with its own noise, so consecutive pairs share their images bit for bit.
-// Longer drives would run into the car ahead for the faster ego-motions of make_street_scene.
+// Longer drives would run into the car ahead for the faster ego-motions of make_street_scene
+// (each seed's drive is checked against its cars), and the street itself is finite: its end
+// wall stands 40-50 m ahead of a camera that moves 0.7-1.1 m and turns up to 1 deg a frame.
 constexpr int kMaxDriveFrames = 12;
 
 struct DriveFrame {

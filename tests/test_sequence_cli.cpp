@@ -228,6 +228,32 @@ void copy_drive(const fs::path &from, const fs::path &to) {
     fs::copy(from, to, fs::copy_options::recursive);
 }
 
+// A frame of another street swapped into the drive: the pair that ends there fits no rigid
+// motion in its tracks, so it hands no motion prior on, and the pairs after it are those of a
+// stream that starts at the swapped frame (a prior from the cut would mislead them).
+void test_swapped_frame_drops_the_prior(void **) {
+    const Fixture &f = fixture();
+    const fs::path other = f.dir / "other_drive", drive = f.dir / "swapped_drive";
+    expect_code(test::run_cli("synth --drive " + q(other) + " --frames 3 --width 320 --height 96 --seed 5 --quiet"), 0);
+    copy_drive(f.drive, drive);
+    for (const char *file : {"image_02/data/", "image_03/data/"})
+        fs::copy_file(other / (file + name(2) + ".png"), drive / (file + name(2) + ".png"),
+                      fs::copy_options::overwrite_existing);
+    fs::copy_file(other / ("velodyne_points/data/" + name(2) + ".bin"), drive / ("velodyne_points/data/" + name(2) + ".bin"),
+                  fs::copy_options::overwrite_existing);
+    const fs::path whole = f.dir / "swapped_whole", part = f.dir / "swapped_part";
+    const test::CliRun r = test::run_cli("sequence --drive " + q(drive) + " --out " + q(whole) +
+                                         " --format npy --threads 2 --verbose --preset " + kPreset);
+    expect_code(r, 0);
+    expect_contains(r, "no motion prior for the next frame: this pair's tracks fit no rigid motion");
+    expect_code(test::run_cli("sequence --drive " + q(drive) + " --out " + q(part) +
+                              " --format npy --threads 2 --quiet --frames 2:4 --preset " + kPreset),
+                0);
+    for (int k : {2, 3})
+        for (const char *map : {"disp_0", "disp_1", "flow"})
+            assert_true(file_bytes(whole / map / (name(k) + ".npy")) == file_bytes(part / map / (name(k) + ".npy")));
+}
+
 // A black last frame: its pair is computed, flagged on its progress line and counted.
 void test_blank_frame_counted(void **) {
     const Fixture &f = fixture();
@@ -550,6 +576,7 @@ int main() {
         cmocka_unit_test(test_reset_drops_the_stream),
         cmocka_unit_test(test_bad_frames_skip_only_their_pairs),
         cmocka_unit_test(test_blank_frame_counted),
+        cmocka_unit_test(test_swapped_frame_drops_the_prior),
         cmocka_unit_test(test_frames_and_skip_existing),
         cmocka_unit_test(test_warm_up),
         cmocka_unit_test(test_errors),

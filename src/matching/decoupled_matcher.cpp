@@ -271,6 +271,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     t = Clock::now();
     motion::EgoMotion motion;
     if (opt.flow.prior_track_step > 0) motion = track_rigid_motion(tracks, r.sgm0, r.sgm1, camera, opt.random_seed);
+    r.tracked_motion = motion.valid;
     if (opt.flow.prior_track_step > 0 && !motion.valid)
         log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "
                                         "inverse search starts from zero flow (image-only prior)");

@@ -30,6 +30,10 @@ struct DecoupledResult {
     DisparityMap sgm0;        // SGM disparity of (I_l^0, I_r^0), invalid < 0
     DisparityMap sgm1;        // SGM disparity of (I_l^1, I_r^1), invalid < 0
     bool reused_t0 = false;   // sgm0 came from the caller's t0_reuse
+    // The grid tracks fit a rigid background motion (where DIS starts); false also when the
+    // tracks are off (prior_track_step 0). A pair without one is no continuous stream (a cut,
+    // a swapped frame): the estimator makes no prior from it.
+    bool tracked_motion = false;
     // The points that guided sgm1: the t1 scan's, or where there is none (and carry_lidar), the
     // t0 points carried by the camera's motion.
     SparseLidar guide1;

@@ -307,13 +307,19 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         std::shared_ptr<matching::DecoupledStereo> next;
-        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r, next);
+        bool tracked_motion = false;
+        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r, next, tracked_motion);
         if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
         if (next) {
-            // The next pair's prior, only from a final result with a calibrated background motion.
+            // The next pair's prior, only from a final result with a calibrated background motion
+            // that the pair's own tracks also found (stage 4 fits one even to a cut's matches).
             if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
-                next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
-                if (next->object_motion.empty())
+                if (!tracked_motion)
+                    log::write(log::Level::Info, "no motion prior for the next frame: this pair's tracks fit no rigid "
+                                                 "motion (a cut or a frame out of order?)");
+                else
+                    next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
+                if (tracked_motion && next->object_motion.empty())
                     log::write(log::Level::Info, "no motion prior for the next frame: this pair has no calibrated "
                                                  "background motion");
             }
@@ -367,7 +373,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 
 DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
                                       StreamCache *cache, int threads, EstimatorResult &r,
-                                      std::shared_ptr<matching::DecoupledStereo> &next) const {
+                                      std::shared_ptr<matching::DecoupledStereo> &next,
+                                      bool &tracked_motion) const {
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
@@ -387,6 +394,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
         next->lidar = m.guide1;
         next->disparity = m.sgm1;
     }
+    tracked_motion = m.tracked_motion;
     r.timings.push_back({"matching_stereo", m.seconds_stereo});
     r.timings.push_back({"matching_flow", m.seconds_flow});
     r.forward = std::move(m.forward);

@@ -197,10 +197,11 @@ private:
                            const DisparityMap &sgm, int threads, EstimatorResult &r) const;
     // Stage 1 of the decoupled design (matching/decoupled_matcher.hpp); returns stage 2's SGM.
     // With a cache, `next` is the t1 pair's stereo, which the caller stores in the cache once
-    // the pair's result is complete.
+    // the pair's result is complete; `tracked_motion` says whether the pair's tracks fit a
+    // rigid background motion (DecoupledResult::tracked_motion).
     DisparityMap run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
                                StreamCache *cache, int threads, EstimatorResult &r,
-                               std::shared_ptr<matching::DecoupledStereo> &next) const;
+                               std::shared_ptr<matching::DecoupledStereo> &next, bool &tracked_motion) const;
     // Empties every field but output() unless options_.keep_stage_fields.
     EstimatorResult drop_stage_fields(EstimatorResult r) const;
 

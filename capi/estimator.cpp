@@ -157,6 +157,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             in.lidar1 = frame->lidar;
             in.camera = estimator->calibration.camera;
             in.calibration_size = rig.rect.image_size;
+            in.step_us = timestamp_us - prev->timestamp_us;
             result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
             if (rig.rectify) {
                 result->rectified = true;

@@ -125,9 +125,17 @@ struct Pushed {
     cv::Mat1b valid;
 };
 
-// The drive's frames pushed through the C ABI, one result per pair; with reset_at >= 0,
-// lf_reset before frame reset_at (which then starts a new sequence: no pair ends there).
-std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1) {
+std::vector<int> all_frames() {
+    std::vector<int> k(kFrames);
+    for (int i = 0; i < kFrames; ++i) k[static_cast<size_t>(i)] = i;
+    return k;
+}
+
+// The drive's `frames` pushed through the C ABI (frame k at 100000 k us), one result per pair;
+// with reset_at >= 0, lf_reset before frame reset_at (which then starts a new sequence: no pair
+// ends there).
+std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
+                                       const std::vector<int> &frames = all_frames()) {
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     assert_int_equal(lf_read_kitti_calibration((drive / "calib_cam_to_cam.txt").c_str(),
@@ -140,7 +148,7 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1)
     assert_int_equal(lf_create(opt, &cal, &est), LF_OK);
     lf_options_destroy(opt);
     std::vector<Pushed> out;
-    for (int k = 0; k < kFrames; ++k) {
+    for (const int k : frames) {
         const cv::Mat left = io::read_any_image((drive / "image_02/data" / (name(k) + ".png")).string());
         const cv::Mat right = io::read_any_image((drive / "image_03/data" / (name(k) + ".png")).string());
         const std::string bin = file_bytes(drive / "velodyne_points/data" / (name(k) + ".bin"));
@@ -152,7 +160,7 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1)
         const lf_lidar_t lidar{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(bin.size() / 16), bin.data(), 16};
         if (k == reset_at) assert_int_equal(lf_reset(est), LF_OK);
         if (lf_push_frame(est, int64_t{100000} * k, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
-        if (k == 0 || k == reset_at) continue;
+        if (k == frames.front() || k == reset_at) continue;
         Pushed p{cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()),
                  cv::Mat1b(left.size())};
         lf_result_buffers_t b;
@@ -221,6 +229,33 @@ void test_reset_drops_the_stream(void **) {
     expect_pushed_result(pushed[0], f.clean, 0);
     for (int k : {2, 3}) expect_pushed_result(pushed[static_cast<size_t>(k - 1)], from2, k);
     assert_false(file_bytes(from2 / "flow" / (name(3) + ".npy")) == file_bytes(f.clean / "flow" / (name(3) + ".npy")));
+}
+
+bool same_mat(const cv::Mat &a, const cv::Mat &b) {
+    return a.size() == b.size() && a.type() == b.type() &&
+           std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;  // continuous: made by Pushed
+}
+
+bool same_pushed(const Pushed &a, const Pushed &b) {
+    return same_mat(a.u, b.u) && same_mat(a.v, b.v) && same_mat(a.d0, b.d0) && same_mat(a.d1, b.d1) &&
+           same_mat(a.valid, b.valid);
+}
+
+// A dropped frame doubles the pair's time step: the motion prior (one step's motion) is dropped,
+// so pair 2->4 is that of a stream that starts at frame 2 (the reused disparity is the same).
+// Seed 1's drive, where a car approaches at 40-60 px a frame: the prior acts on every pair.
+void test_dropped_frame_drops_the_prior(void **) {
+    const Fixture &f = fixture();
+    const fs::path drive = f.dir / "approach_drive";
+    expect_code(test::run_cli("synth --drive " + q(drive) + " --frames 7 --quiet"), 0);
+    const std::vector<Pushed> gap = push_through_c_abi(drive, -1, {2, 3, 4, 6});
+    const std::vector<Pushed> fresh = push_through_c_abi(drive, -1, {4, 6});
+    assert_int_equal(gap.size(), 3);
+    assert_int_equal(fresh.size(), 1);
+    assert_true(same_pushed(gap[2], fresh[0]));
+    // Where the step is kept the prior acts: pair 4->5 of a stream is not a fresh one.
+    const std::vector<Pushed> kept = push_through_c_abi(drive, -1, {3, 4, 5}), from4 = push_through_c_abi(drive, -1, {4, 5});
+    assert_false(same_pushed(kept[1], from4[0]));
 }
 
 void copy_drive(const fs::path &from, const fs::path &to) {
@@ -577,6 +612,7 @@ int main() {
         cmocka_unit_test(test_bad_frames_skip_only_their_pairs),
         cmocka_unit_test(test_blank_frame_counted),
         cmocka_unit_test(test_swapped_frame_drops_the_prior),
+        cmocka_unit_test(test_dropped_frame_drops_the_prior),
         cmocka_unit_test(test_frames_and_skip_existing),
         cmocka_unit_test(test_warm_up),
         cmocka_unit_test(test_errors),

@@ -11,6 +11,7 @@
 // through stages 2-4, as the anchor of the interpolation. Each part runs at O(pixels x range)
 // with small, cache-resident working sets, instead of PatchMatch over 128-byte descriptors in
 // four dimensions.
+#include <cstdint>
 #include <memory>
 
 #include <opencv2/core.hpp>
@@ -50,6 +51,7 @@ struct DecoupledStereo {
     // The pair's movers as carry_object_motion leaves them at these images' pixels (the next
     // pair's prior); empty when the pair had no calibrated background motion.
     cv::Mat3f object_motion;
+    int64_t step_us = 0;  // t1 - t0 of the pair that made it (FrameInput::step_us); 0 = unknown
     // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };

@@ -20,6 +20,13 @@
 namespace lidarflow::pipeline {
 namespace {
 
+// Two pairs' time steps agree within 25 % (either unknown: assumed to).
+bool similar_steps(int64_t a, int64_t b) {
+    if (a <= 0 || b <= 0) return true;
+    const double r = static_cast<double>(a) / static_cast<double>(b);
+    return r >= 0.8 && r <= 1.25;
+}
+
 using Clock = std::chrono::steady_clock;
 
 // The confidence's measured support (pipeline/confidence.hpp): agreement within 1 px in a 7 x 7
@@ -235,7 +242,8 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
                            lidar_in_use(options_, input.lidar0),
                            lidar_in_use(options_, input.lidar1),
                            input.camera,
-                           input.calibration_size};
+                           input.calibration_size,
+                           input.step_us};
     report_hidden(input.lidar0, frame.lidar0, "t0");
     report_hidden(input.lidar1, frame.lidar1, "t1");
     const auto t_quality = Clock::now();
@@ -378,9 +386,19 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
+    std::shared_ptr<const matching::DecoupledStereo> reuse = cache ? cache->stereo_t1_ : nullptr;
+    if (reuse && !reuse->object_motion.empty() && !similar_steps(reuse->step_us, frame.step_us)) {
+        // The prior is one step's motion: a pair of another step (a dropped frame) would be misled.
+        log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(frame.step_us) +
+                                         " us, the previous one " + std::to_string(reuse->step_us) +
+                                         " us (a dropped frame?)");
+        auto without = std::make_shared<matching::DecoupledStereo>(*reuse);
+        without->object_motion = cv::Mat3f();
+        reuse = std::move(without);
+    }
     matching::DecoupledResult m = matching::match_decoupled(mi, mo,
                                                             stage_options_.consistency.sgm, frame.camera, both,
-                                                            cache ? cache->stereo_t1_.get() : nullptr);
+                                                            reuse.get());
     if (cache) {
         if (cache->stereo_t1_ && !m.reused_t0)
             log::write(log::Level::Info,
@@ -393,6 +411,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
         next->right = frame.right1.clone();
         next->lidar = m.guide1;
         next->disparity = m.sgm1;
+        next->step_us = frame.step_us;
     }
     tracked_motion = m.tracked_motion;
     r.timings.push_back({"matching_stereo", m.seconds_stereo});

@@ -4,6 +4,7 @@
 // -> stage 3 sparsification -> stage 4 interpolation. It owns the options of every stage,
 // can stop after any stage (for Table I and ablations), and returns every intermediate field
 // with per-stage timings. This is what the C ABI and the CLI wrap.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -104,6 +105,9 @@ struct FrameInput {
     StereoCamera camera; // the rectified rig; all zero (default) = unknown (calibration-free
                          // models); anything else must lie in the ranges of core/limits.hpp
     cv::Size calibration_size;  // the image size `camera` describes; 0 = unknown (not checked)
+    // t1 - t0 [us] of a stream's pair; 0 = unknown. A stream keeps its motion prior only from a
+    // pair of about the same step (a dropped frame doubles it).
+    int64_t step_us = 0;
 };
 
 // Why EstimatorResult::ego is or is not the metric ego-motion (values of the C ABI's

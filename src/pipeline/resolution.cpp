@@ -55,6 +55,7 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     out.lidar0 = downscale_lidar(f.lidar0, size, sx, sy);
     out.lidar1 = downscale_lidar(f.lidar1, size, sx, sy);
     out.camera = f.camera;
+    out.step_us = f.step_us;
     if (f.camera.valid()) {
         out.camera.fx = f.camera.fx * sx;
         out.camera.fy = f.camera.fy * sy;

@@ -48,8 +48,9 @@ def parse(argv):
                    help="seconds a chunk may run before it is killed and reported (default: 120 + 60 per pair; "
                         "0 = no limit)")
     p.add_argument("--warm-up", type=int, default=3, metavar="N",
-                   help="drives: each chunk's stream starts N frames before its first, for the priors a whole run "
-                        "has there (lidarflow sequence --warm-up; default 3, 0 = none)")
+                   help="each chunk's stream (drive or log) starts N frames before its first, not before the "
+                        "range's first, for the priors a whole run has there (lidarflow sequence --warm-up, "
+                        "lidarflow-lcm-bridge --replay --warm-up; default 3, 0 = none)")
     group = p.add_argument_group("drives' rig, instead of their calibration files (lidarflow sequence's options)",
                                  "docs/CALIBRATION.md. Each file must be there (same path) on every worker; "
                                  "relative paths are made absolute here.")

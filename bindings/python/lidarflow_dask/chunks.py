@@ -11,6 +11,7 @@ is a dict (plain data, so it pickles to any worker):
     out       the output folder (shared storage)
     preset, options, formats, threads, force, bin_dir, stereo_channel, bridge_args, timeout   see runner.Settings
     rig_args  a drive's rig options for lidarflow sequence, paths absolute (Settings.rig_args)
+    warm_up   frames before `first` that feed the stream's priors, not written (0 for a source's first chunk)
 
 run_chunk() never raises for bad data or a missing tool: it returns a result dict (rc, pairs,
 seconds, host, message) that the caller reports. It is safe to run twice, also concurrently:
@@ -79,6 +80,11 @@ def option_args(options):
     return out
 
 
+def warm_up_args(chunk):
+    """The chunk's --warm-up, which lidarflow sequence and the bridge's --replay take alike."""
+    return ["--warm-up", str(chunk["warm_up"])] if chunk.get("warm_up") else []
+
+
 def command(chunk, tool, tmp_log=None):
     """The chunk's command line."""
     frames = "%d:%d" % (chunk["first"], chunk["last"])
@@ -89,11 +95,9 @@ def command(chunk, tool, tmp_log=None):
             cmd += ["--preset", chunk["preset"]]
         if not chunk["force"]:
             cmd.append("--skip-existing")
-        if chunk.get("warm_up"):
-            cmd += ["--warm-up", str(chunk["warm_up"])]
-        return cmd + option_args(chunk["options"]) + list(chunk["rig_args"])
-    cmd = [tool, "--replay", chunk["source"], "--out", tmp_log, "--frames", frames,
-           "--option", "threads=%d" % chunk["threads"]]
+        return cmd + warm_up_args(chunk) + option_args(chunk["options"]) + list(chunk["rig_args"])
+    cmd = [tool, "--replay", chunk["source"], "--out", tmp_log, "--frames", frames] + warm_up_args(chunk) + \
+        ["--option", "threads=%d" % chunk["threads"]]
     if chunk["preset"]:
         cmd += ["--option", "preset=" + chunk["preset"]]
     return cmd + option_args(chunk["options"]) + list(chunk["bridge_args"])

@@ -10,8 +10,9 @@ from .rig import rig_args
 class Settings:
     """What every chunk of a run shares (see chunks.py). frames: (A, B), 'A:B' or None (every
     frame); formats: sequence's --format names (drives); chunk_timeout: seconds, None for the
-    default (chunks.default_timeout), 0 for none; warm_up: frames before a drive chunk that feed its
-    stream's priors without being written (lidarflow sequence --warm-up); calib ('FILE' or
+    default (chunks.default_timeout), 0 for none; warm_up: frames before a chunk (back to the range's
+    first) that feed its stream's priors without being written (lidarflow sequence --warm-up, the
+    bridge's --replay --warm-up); calib ('FILE' or
     'LEFT,RIGHT'), calib_velo, camera ({fx, cx, cy, baseline[, fy]}), strict: the drives' rig,
     as lidarflow sequence's --calib, --calib-velo, --fx ..., --strict (rig.py)."""
 

@@ -70,11 +70,13 @@ class Source:
         self.chunks = []
         for r0, r1 in present:
             for a, b in frames.plan(r0, r1, settings.chunk):
+                # Not before the range's first frame, where the serial run (and the first chunk) starts cold.
+                warm_up = min(settings.warm_up, a - self.first)
                 self.chunks.append({"kind": self.kind, "source": self.path, "name": self.name, "first": a, "last": b,
                                     "out": settings.out, "preset": settings.preset, "options": settings.options,
                                     "formats": settings.formats, "threads": settings.threads,
                                     "rig_args": settings.rig_args,
-                                    "warm_up": settings.warm_up if a > self.first else 0,
+                                    "warm_up": warm_up,
                                     "force": settings.force, "bin_dir": settings.bin_dir,
                                     "stereo_channel": settings.stereo_channel, "bridge_args": settings.bridge_args,
                                     "timeout": ch.default_timeout(b - a) if settings.chunk_timeout is None

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <string>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -228,6 +229,13 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
     return f;
 }
 
+// Two pairs' time steps agree within 25 % (either unknown: assumed to).
+bool similar_steps(int64_t a, int64_t b) {
+    if (a <= 0 || b <= 0) return true;
+    const double r = static_cast<double>(a) / static_cast<double>(b);
+    return r >= 0.8 && r <= 1.25;
+}
+
 }  // namespace
 
 bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &guide) const {
@@ -236,7 +244,8 @@ bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLi
 
 
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,
-                                const StereoCamera &camera, bool backward, const DecoupledStereo *t0_reuse) {
+                                const StereoCamera &camera, bool backward, const DecoupledStereo *t0_reuse,
+                                int64_t step_us) {
     opt.validate();
     require(!in.left0.empty() && in.left0.size() == in.right0.size() && in.left0.size() == in.left1.size() &&
                 in.left0.size() == in.right1.size(),
@@ -279,7 +288,13 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     const int rc = opt.flow.rigid_choice_radius;
     // A stream's movers keep their motion: it joins the background's in the prior, and so in
     // DIS's start and in the per-pixel choice.
-    const cv::Mat3f objects = opt.stream_prior && r.reused_t0 && motion.calibrated ? t0_reuse->object_motion : cv::Mat3f();
+    const bool prior = opt.stream_prior && r.reused_t0 && motion.calibrated && !t0_reuse->object_motion.empty();
+    const bool same_step = prior && similar_steps(t0_reuse->step_us, step_us);
+    if (prior && !same_step)
+        log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(step_us) +
+                                         " us, the previous one " + std::to_string(t0_reuse->step_us) +
+                                         " us (a dropped frame?)");
+    const cv::Mat3f objects = same_step ? t0_reuse->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
     add_object_motion(motion, r.sgm0, objects, prior0);
     const cv::Mat2f flow0 =

@@ -60,9 +60,11 @@ struct DecoupledStereo {
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
 // pixel-identical to (left0, right0) and made with the same guiding points (lidar0 when the
 // stereo is guided and the LiDAR on, else none), supplies the t0 disparity. Throws lidarflow::Error for bad inputs. Deterministic.
-// `camera` (all zero = unknown) is the rig at the images' resolution.
+// `camera` (all zero = unknown) is the rig at the images' resolution. `step_us` is this pair's
+// t1 - t0 (0 = unknown): t0_reuse's motion prior, one step's motion, is left out (and that
+// logged) when the step that made it differs by more than 25 % (a dropped frame).
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,
                                 const consistency::SgmOptions &sgm, const StereoCamera &camera, bool backward,
-                                const DecoupledStereo *t0_reuse = nullptr);
+                                const DecoupledStereo *t0_reuse = nullptr, int64_t step_us = 0);
 
 }  // namespace lidarflow::matching

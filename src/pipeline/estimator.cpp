@@ -13,19 +13,12 @@
 #include "core/threads.hpp"
 #include "lidar/binning.hpp"
 #include "matching/motion_prior.hpp"
-#include "pipeline/confidence.hpp"
 #include "matching/scene_flow_matcher.hpp"
+#include "pipeline/confidence.hpp"
 #include "pipeline/resolution.hpp"
 
 namespace lidarflow::pipeline {
 namespace {
-
-// Two pairs' time steps agree within 25 % (either unknown: assumed to).
-bool similar_steps(int64_t a, int64_t b) {
-    if (a <= 0 || b <= 0) return true;
-    const double r = static_cast<double>(a) / static_cast<double>(b);
-    return r >= 0.8 && r <= 1.25;
-}
 
 using Clock = std::chrono::steady_clock;
 
@@ -322,14 +315,13 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
             // The next pair's prior, only from a final result with a calibrated background motion
             // that the pair's own tracks also found (stage 4 fits one even to a cut's matches).
             if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
-                if (!tracked_motion)
-                    log::write(log::Level::Info, "no motion prior for the next frame: this pair's tracks fit no rigid "
-                                                 "motion (a cut or a frame out of order?)");
-                else
-                    next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
-                if (tracked_motion && next->object_motion.empty())
-                    log::write(log::Level::Info, "no motion prior for the next frame: this pair has no calibrated "
-                                                 "background motion");
+                if (tracked_motion) next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
+                if (next->object_motion.empty())
+                    log::write(log::Level::Info, tracked_motion
+                                                     ? "no motion prior for the next frame: this pair has no "
+                                                       "calibrated background motion"
+                                                     : "no motion prior for the next frame: this pair's tracks fit no "
+                                                       "rigid motion (a cut or a frame out of order?)");
             }
             cache->stereo_t1_ = std::move(next);
         }
@@ -386,19 +378,9 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
-    std::shared_ptr<const matching::DecoupledStereo> reuse = cache ? cache->stereo_t1_ : nullptr;
-    if (reuse && !reuse->object_motion.empty() && !similar_steps(reuse->step_us, frame.step_us)) {
-        // The prior is one step's motion: a pair of another step (a dropped frame) would be misled.
-        log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(frame.step_us) +
-                                         " us, the previous one " + std::to_string(reuse->step_us) +
-                                         " us (a dropped frame?)");
-        auto without = std::make_shared<matching::DecoupledStereo>(*reuse);
-        without->object_motion = cv::Mat3f();
-        reuse = std::move(without);
-    }
     matching::DecoupledResult m = matching::match_decoupled(mi, mo,
                                                             stage_options_.consistency.sgm, frame.camera, both,
-                                                            reuse.get());
+                                                            cache ? cache->stereo_t1_.get() : nullptr, frame.step_us);
     if (cache) {
         if (cache->stereo_t1_ && !m.reused_t0)
             log::write(log::Level::Info,

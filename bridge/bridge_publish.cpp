@@ -7,6 +7,7 @@
 
 #include "bridge_core.hpp"
 #include "lidarflow_status_t.h"
+#include "wire_detail.hpp"
 
 namespace lidarflow::bridge {
 namespace {
@@ -155,8 +156,7 @@ void Bridge::publish_mac(const std::string &channel, const void *payload, size_t
     }
     if (config_.shard_key.empty() || kind != ShardMacKind::Status || shard_timeout_ <= 0) return;
     // The tag the other shards echo: a status of theirs that holds it was sent after this one.
-    uint64_t tag = 0;
-    for (size_t i = m.size() - 32; i < m.size() - 24; ++i) tag = tag << 8 | m[i];
+    const uint64_t tag = static_cast<uint64_t>(detail::read_be(&m[m.size() - 32], 8));
     const double now = monotonic_seconds();
     std::lock_guard<std::mutex> lock(mutex_);
     own_tags_.emplace_back(tag, now);

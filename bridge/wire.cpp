@@ -21,6 +21,10 @@ int64_t read_be(const uint8_t *p, int bytes) {
     return static_cast<int64_t>(v);
 }
 
+void write_be(uint8_t *p, uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v);
+}
+
 int bytes_per_pixel(int8_t format) {
     switch (format) {
     case LIDARFLOW_STEREO_T_PIXEL_GRAY8: return 1;

@@ -266,7 +266,7 @@ void Bridge::handle_stereo(const lcm_recv_buf_t *rbuf) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++(frame->warm_up ? counters_.warm_up_received : counters_.stereo_received);
     if (!err.empty()) {
-        if (!frame->warm_up) ++counters_.dropped_malformed;
+        frame->count_in(counters_.dropped_malformed);
         counters_.last_error = "stereo: " + err;
         log("malformed message on %s (%u bytes), dropped: %s", config_.stereo_channel.c_str(), rbuf->data_size,
             err.c_str());
@@ -355,10 +355,9 @@ void Bridge::expire_unpaired() {
 // then the latest-wins queue.
 void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     const lidarflow_stereo_t &m = frame->stereo.msg();
-    // A warm-up frame's fate is not the replayed part's: it is counted nowhere, and the part's
-    // first frame checks for transport gaps as if it came first.
+    // A warm-up frame is counted nowhere (Frame::count_in), and the part's first frame checks
+    // for transport gaps as if it came first.
     const bool warm_up = frame->warm_up;
-    auto count = [warm_up](int64_t &counter) { counter += warm_up ? 0 : 1; };
     if (frame->stereo.has_frame_number() && !warm_up) count_transport_gap(m.frame_number);
     frame->index = frame->stereo.has_frame_number() ? m.frame_number : arrival_index_++;
     if (shard_timeout_ > 0 && !warm_up) note_pair_locked(frame->index, m.sequence, m.utime);
@@ -368,7 +367,7 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
         const auto n = static_cast<uint64_t>(config_.shard_count);
         const uint64_t r = static_cast<uint64_t>(frame->index) % n, k = static_cast<uint64_t>(config_.shard_index);
         if (r != k && (r + 1) % n != k) {
-            count(counters_.skipped_other_shard);
+            frame->count_in(counters_.skipped_other_shard);
             return;
         }
         frame->t0_only = r != k;
@@ -378,7 +377,7 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     } else {
         const FramePairing::CalibrationOutcome cal = pairing_.calibration_for(m.width, m.height, &frame->calibration);
         if (cal == FramePairing::CalibrationOutcome::None) {
-            count(counters_.dropped_no_calibration);
+            frame->count_in(counters_.dropped_no_calibration);
             if (!warned_no_calibration_)
                 log("no calibration on %s yet (and no --calib): dropping stereo frames until one arrives",
                     config_.calibration_channel.c_str());
@@ -386,14 +385,14 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
             return;
         }
         if (cal == FramePairing::CalibrationOutcome::SizeMismatch) {
-            count(counters_.dropped_calibration_mismatch);
+            frame->count_in(counters_.dropped_calibration_mismatch);
             log("stereo frame %" PRId64 " is %dx%d but the calibration is for %dx%d: dropped", m.utime, m.width,
                 m.height, pairing_.calibration_width(), pairing_.calibration_height());
             return;
         }
     }
     if (have_last_ && m.sequence == last_sequence_ && m.utime <= last_utime_) {
-        count(counters_.dropped_out_of_order);
+        frame->count_in(counters_.dropped_out_of_order);
         log("stereo frame %" PRId64 " is not after the previous one (%" PRId64 "): dropped as out of order", m.utime,
             last_utime_);
         return;
@@ -402,7 +401,7 @@ void Bridge::accept_locked(std::unique_ptr<Frame> frame) {
     last_sequence_ = m.sequence;
     last_utime_ = m.utime;
     if (static_cast<int>(queue_.size()) >= config_.queue_capacity) {
-        counters_.dropped_stale += queue_.front()->warm_up ? 0 : 1;  // the frame dropped, not this one
+        queue_.front()->count_in(counters_.dropped_stale);  // the frame dropped, not this one
         queue_.pop_front();
     }
     queue_.push_back(std::move(frame));
@@ -517,7 +516,7 @@ void Bridge::stop() {
     if (worker_.joinable()) worker_.join();
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        for (const std::unique_ptr<Frame> &f : queue_) counters_.dropped_shutdown += f->warm_up ? 0 : 1;
+        for (const std::unique_ptr<Frame> &f : queue_) f->count_in(counters_.dropped_shutdown);
         queue_.clear();
         std::vector<FramePairing::Unpaired> unpaired;
         pairing_.drop_all_images("the bridge stopped", &unpaired);

@@ -12,6 +12,9 @@ struct Bridge::Frame {
     int64_t index = 0;
     bool t0_only = false;
     bool warm_up = false;  // Bridge::set_warm_up(): feeds the stream only
+    // Adds the frame to a Counters count, unless it is a warm-up frame: its fate is not the
+    // replayed part's, so it is counted nowhere.
+    void count_in(int64_t &counter) const { counter += warm_up ? 0 : 1; }
     lf_calibration_t calibration{};
     double received_seconds = 0;
 };

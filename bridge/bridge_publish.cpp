@@ -7,6 +7,7 @@
 
 #include "bridge_core.hpp"
 #include "lidarflow_status_t.h"
+#include "wire_detail.hpp"
 
 namespace lidarflow::bridge {
 namespace {
@@ -31,35 +32,25 @@ void Bridge::flush_outbox() {
         std::lock_guard<std::mutex> lock(mutex_);
         out.swap(outbox_);
     }
+    // False, with the failure noted, when LCM refused the message.
+    auto publish = [this](const std::string &channel, const std::vector<uint8_t> &bytes) {
+        if (lcm_publish(lcm_, channel.c_str(), bytes.data(), static_cast<unsigned>(bytes.size())) == 0) return true;
+        std::lock_guard<std::mutex> lock(mutex_);
+        counters_.last_error = "publishing on " + channel + " failed";
+        log("publishing %zu bytes on %s failed", bytes.size(), channel.c_str());
+        return false;
+    };
     for (const Outgoing &o : out) {
         // The ego-motion and the quality first: a consumer (and --replay, which counts results)
         // that has the flow then has its ego-motion and quality too.
-        if (lcm_publish(lcm_, config_.ego_channel.c_str(), o.ego_bytes.data(), static_cast<unsigned>(o.ego_bytes.size())) !=
-            0) {
-            std::lock_guard<std::mutex> lock(mutex_);
-            counters_.last_error = "publishing on " + config_.ego_channel + " failed";
-            log("publishing %zu bytes on %s failed", o.ego_bytes.size(), config_.ego_channel.c_str());
-        }
-        if (lcm_publish(lcm_, config_.quality_channel.c_str(), o.quality_bytes.data(),
-                        static_cast<unsigned>(o.quality_bytes.size())) != 0) {
-            std::lock_guard<std::mutex> lock(mutex_);
-            counters_.last_error = "publishing on " + config_.quality_channel + " failed";
-            log("publishing %zu bytes on %s failed", o.quality_bytes.size(), config_.quality_channel.c_str());
-        }
-        const int rc = lcm_publish(lcm_, config_.flow_channel.c_str(), o.bytes.data(),
-                                   static_cast<unsigned>(o.bytes.size()));
-        if (rc == 0) {
-            int64_t t1 = 0;
-            scene_flow_utime(o.bytes.data(), o.bytes.size(), &t1);
-            publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size(), ShardMacKind::Result, t1);
-        }
+        publish(config_.ego_channel, o.ego_bytes);
+        publish(config_.quality_channel, o.quality_bytes);
+        if (!publish(config_.flow_channel, o.bytes)) continue;
+        int64_t t1 = 0;
+        scene_flow_utime(o.bytes.data(), o.bytes.size(), &t1);
+        publish_mac(config_.flow_channel, o.bytes.data(), o.bytes.size(), ShardMacKind::Result, t1);
         const double latency_ms = 1000.0 * (monotonic_seconds() - o.received_seconds);
         std::lock_guard<std::mutex> lock(mutex_);
-        if (rc != 0) {
-            counters_.last_error = "publishing on " + config_.flow_channel + " failed";
-            log("publishing %zu bytes on %s failed", o.bytes.size(), config_.flow_channel.c_str());
-            continue;
-        }
         ++counters_.results_published;
         if (o.quality_flags == 0) ++counters_.quality_ok;
         for (int b = 0; b < 5; ++b) counters_.quality_flagged[b] += (o.quality_flags >> b) & 1u;
@@ -155,8 +146,7 @@ void Bridge::publish_mac(const std::string &channel, const void *payload, size_t
     }
     if (config_.shard_key.empty() || kind != ShardMacKind::Status || shard_timeout_ <= 0) return;
     // The tag the other shards echo: a status of theirs that holds it was sent after this one.
-    uint64_t tag = 0;
-    for (size_t i = m.size() - 32; i < m.size() - 24; ++i) tag = tag << 8 | m[i];
+    const uint64_t tag = static_cast<uint64_t>(detail::read_be(&m[m.size() - 32], 8));
     const double now = monotonic_seconds();
     std::lock_guard<std::mutex> lock(mutex_);
     own_tags_.emplace_back(tag, now);

@@ -50,7 +50,7 @@ void Bridge::worker_loop() {
             sweep = pairing_.lidar_for(utime);
         if (!sweep) sweep = pairing_.lidar_for(utime);
         if (stop_worker_) {
-            counters_.dropped_shutdown += frame->warm_up ? 0 : 1;
+            frame->count_in(counters_.dropped_shutdown);
             counters_.busy = false;
             return;
         }
@@ -65,11 +65,9 @@ void Bridge::worker_loop() {
 
 void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     const lidarflow_stereo_t &m = frame.stereo.msg();
-    // A warm-up frame's problems are not the replayed part's (Bridge::set_warm_up): not counted.
-    auto count = [&frame](int64_t &counter) { counter += frame.warm_up ? 0 : 1; };
     auto drop = [&](const std::string &why) {
         std::lock_guard<std::mutex> lock(mutex_);
-        count(counters_.dropped_estimator_error);
+        frame.count_in(counters_.dropped_estimator_error);
         counters_.last_error = why;
         log("stereo frame %" PRId64 " dropped: %s", m.utime, why.c_str());
     };
@@ -92,7 +90,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
     if (new_camera && estimator_has_frame_) {
         // The pair (previous frame, this one) cannot be computed across a camera change.
         std::lock_guard<std::mutex> lock(mutex_);
-        count(counters_.pairs_lost_calibration_change);
+        frame.count_in(counters_.pairs_lost_calibration_change);
         log("stereo frame %" PRId64 ": the calibration changed since frame %" PRId64 ", their pair is lost", m.utime,
             prev_utime_);
     }
@@ -132,7 +130,7 @@ void Bridge::process(Frame &frame, std::shared_ptr<const LidarSweep> sweep) {
             st = LF_OK;
             with_lidar = false;
             std::lock_guard<std::mutex> lock(mutex_);
-            count(counters_.lidar_rejected);
+            frame.count_in(counters_.lidar_rejected);
             counters_.last_error = "lidar: " + why;
             log("LiDAR sweep %" PRId64 " rejected by the estimator (%s): frame %" PRId64 " processed without LiDAR",
                 sweep->utime, why.c_str(), m.utime);

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "wire.hpp"
+#include "wire_detail.hpp"
 
 namespace lidarflow::bridge {
 namespace {
@@ -20,10 +21,6 @@ uint64_t be(const uint8_t *p, int n) {
     uint64_t v = 0;
     for (int i = 0; i < n; ++i) v = v << 8 | p[i];
     return v;
-}
-
-void put_be(uint8_t *p, uint64_t v, int n) {
-    for (int i = n - 1; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v);
 }
 
 }  // namespace
@@ -168,10 +165,10 @@ bool EventLogWriter::write(int64_t utime, const std::string &channel, const void
     }
     uint8_t head[kHeaderSize];
     std::memcpy(head, kSync, sizeof kSync);
-    put_be(head + 4, static_cast<uint64_t>(next_number_), 8);
-    put_be(head + 12, static_cast<uint64_t>(utime), 8);
-    put_be(head + 20, channel.size(), 4);
-    put_be(head + 24, size, 4);
+    detail::write_be(head + 4, static_cast<uint64_t>(next_number_), 8);
+    detail::write_be(head + 12, static_cast<uint64_t>(utime), 8);
+    detail::write_be(head + 20, channel.size(), 4);
+    detail::write_be(head + 24, size, 4);
     errno = 0;
     if (std::fwrite(head, 1, sizeof head, f_) != sizeof head ||
         std::fwrite(channel.data(), 1, channel.size(), f_) != channel.size() ||

@@ -9,21 +9,16 @@
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 
+#include "wire_detail.hpp"
+
 namespace lidarflow::bridge {
+
+using detail::read_be;
+using detail::write_be;
 
 namespace {
 
 constexpr size_t kMacHead = 64;  // up to the echoes
-
-void put_be(uint8_t *p, uint64_t v, int bytes) {
-    for (int i = 0; i < bytes; ++i) p[i] = static_cast<uint8_t>(v >> (8 * (bytes - 1 - i)));
-}
-
-uint64_t get_be(const uint8_t *p, int bytes) {
-    uint64_t v = 0;
-    for (int i = 0; i < bytes; ++i) v = v << 8 | p[i];
-    return v;
-}
 
 // HMAC-SHA256 of a MAC message's bytes before the HMAC, bound to its channel.
 bool mac_of(const std::string &key, const std::string &channel, const uint8_t *bytes, size_t size, uint8_t out[32]) {
@@ -53,14 +48,14 @@ std::vector<uint8_t> shard_mac_message(const std::string &key, ShardMacKind kind
     std::vector<uint8_t> out(body + 32);
     std::memcpy(out.data(), "LFMAC\x02", 6);
     out[6] = static_cast<uint8_t>(kind);
-    put_be(&out[8], static_cast<uint32_t>(index), 4);
-    put_be(&out[12], static_cast<uint32_t>(count), 4);
-    put_be(&out[16], static_cast<uint64_t>(utime), 8);
-    put_be(&out[24], static_cast<uint64_t>(instance), 8);
+    write_be(&out[8], static_cast<uint32_t>(index), 4);
+    write_be(&out[12], static_cast<uint32_t>(count), 4);
+    write_be(&out[16], static_cast<uint64_t>(utime), 8);
+    write_be(&out[24], static_cast<uint64_t>(instance), 8);
     Digest digest;
     if (!message_digest(payload, size, &digest)) return {};
     std::memcpy(&out[32], digest.data(), digest.size());
-    for (size_t j = 0; j < echoes.size(); ++j) put_be(&out[kMacHead + 8 * j], echoes[j], 8);
+    for (size_t j = 0; j < echoes.size(); ++j) write_be(&out[kMacHead + 8 * j], echoes[j], 8);
     if (!mac_of(key, channel, out.data(), body, &out[body])) return {};
     return out;
 }
@@ -74,7 +69,7 @@ std::string check_shard_mac(const std::string &key, int32_t count, const std::st
         return "not a MAC message of " + std::to_string(count) + " shards (" + std::to_string(size) + " bytes)";
     if (std::memcmp(d, "LFMAC\x02", 6) != 0 || d[7] != 0 || (d[6] != 1 && d[6] != 2))
         return "not a MAC message (bad header)";
-    if (static_cast<int32_t>(get_be(d + 12, 4)) != count) return "a MAC of another split";
+    if (static_cast<int32_t>(read_be(d + 12, 4)) != count) return "a MAC of another split";
     const auto kind = static_cast<ShardMacKind>(d[6]);
     const size_t body = size - 32;
     uint8_t mac[32];
@@ -82,15 +77,16 @@ std::string check_shard_mac(const std::string &key, int32_t count, const std::st
         return "libcrypto failed";
     if (CRYPTO_memcmp(mac, d + body, 32) != 0) return "wrong MAC (another key, or altered)";
     out->kind = kind;
-    out->index = static_cast<int32_t>(get_be(d + 8, 4));
+    out->index = static_cast<int32_t>(read_be(d + 8, 4));
     out->count = count;
     if (out->index < 0 || out->index >= count) return "shard index out of range";
-    out->utime = static_cast<int64_t>(get_be(d + 16, 8));
-    out->instance = static_cast<int64_t>(get_be(d + 24, 8));
+    out->utime = read_be(d + 16, 8);
+    out->instance = read_be(d + 24, 8);
     std::memcpy(out->digest.data(), d + 32, out->digest.size());
     out->echoes.resize(static_cast<size_t>(count));
-    for (size_t j = 0; j < out->echoes.size(); ++j) out->echoes[j] = get_be(d + kMacHead + 8 * j, 8);
-    out->tag = get_be(d + body, 8);
+    for (size_t j = 0; j < out->echoes.size(); ++j)
+        out->echoes[j] = static_cast<uint64_t>(read_be(d + kMacHead + 8 * j, 8));
+    out->tag = static_cast<uint64_t>(read_be(d + body, 8));
     return "";
 }
 
@@ -98,9 +94,9 @@ std::vector<uint8_t> shard_receipt_message(int32_t index, int32_t count, int64_t
                                            const void *payload, size_t size) {
     std::vector<uint8_t> out(48);
     std::memcpy(out.data(), "LFRCP\x01\0\0", 8);
-    put_be(&out[8], static_cast<uint32_t>(index), 4);
-    put_be(&out[12], static_cast<uint32_t>(count), 4);
-    put_be(&out[16], static_cast<uint64_t>(instance), 8);
+    write_be(&out[8], static_cast<uint32_t>(index), 4);
+    write_be(&out[12], static_cast<uint32_t>(count), 4);
+    write_be(&out[16], static_cast<uint64_t>(instance), 8);
     unsigned char digest[EVP_MAX_MD_SIZE];
     unsigned int len = 0;
     EVP_MD_CTX *ctx = EVP_MD_CTX_new();

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "bridge_core.hpp"
+#include "wire_detail.hpp"
 
 namespace lidarflow::bridge {
 
@@ -192,10 +193,7 @@ void Bridge::on_mac(const lcm_recv_buf_t *rbuf, const char *, void *self) {
     // Without a key, a receipt (a MAC is no proof here).
     if (rbuf->data_size != 48 || std::memcmp(d, "LFRCP\x01\0\0", 8) != 0) return;
     std::vector<uint8_t> mac(d, d + rbuf->data_size);
-    int64_t instance = 0;
-    uint64_t u = 0;
-    for (int i = 0; i < 8; ++i) u = u << 8 | mac[16 + i];
-    instance = static_cast<int64_t>(u);
+    const int64_t instance = detail::read_be(&mac[16], 8);
     std::fill(mac.begin() + 16, mac.begin() + 24, 0);  // matched without it, then checked
     std::lock_guard<std::mutex> lock(b->mutex_);
     const double now = monotonic_seconds();

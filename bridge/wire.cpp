@@ -21,6 +21,10 @@ int64_t read_be(const uint8_t *p, int bytes) {
     return static_cast<int64_t>(v);
 }
 
+void write_be(uint8_t *p, uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v);
+}
+
 int bytes_per_pixel(int8_t format) {
     switch (format) {
     case LIDARFLOW_STEREO_T_PIXEL_GRAY8: return 1;
@@ -36,6 +40,16 @@ using detail::bytes_per_pixel;
 using detail::read_be;
 
 namespace {
+
+// lcm-gen's encoder of any message type: the bytes, empty when encoding failed.
+template <typename Msg>
+std::vector<uint8_t> encode_message(const Msg &msg, int (*encoded_size)(const Msg *),
+                                    int (*encode)(void *, int, int, const Msg *)) {
+    std::vector<uint8_t> buf(static_cast<size_t>(encoded_size(&msg)));
+    const int n = encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
+    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
+    return buf;
+}
 
 // One length field of a message: its byte offset after the fingerprint and the bytes one unit
 // of it adds to the message.
@@ -365,10 +379,7 @@ bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step
 }
 
 std::vector<uint8_t> encode_scene_flow(lidarflow_scene_flow_t &msg) {
-    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_scene_flow_t_encoded_size(&msg)));
-    const int n = lidarflow_scene_flow_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
-    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
-    return buf;
+    return encode_message(msg, lidarflow_scene_flow_t_encoded_size, lidarflow_scene_flow_t_encode);
 }
 
 bool scene_flow_utime(const void *data, size_t size, int64_t *utime) {
@@ -479,10 +490,7 @@ lidarflow_ego_motion_t ego_motion_message(const lf_ego_motion_t &ego, int64_t ut
 }
 
 std::vector<uint8_t> encode_ego_motion(lidarflow_ego_motion_t &msg) {
-    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_ego_motion_t_encoded_size(&msg)));
-    const int n = lidarflow_ego_motion_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &msg);
-    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
-    return buf;
+    return encode_message(msg, lidarflow_ego_motion_t_encoded_size, lidarflow_ego_motion_t_encode);
 }
 
 std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t sequence, uint32_t flags, const char *reason) {
@@ -493,10 +501,7 @@ std::vector<uint8_t> encode_quality(int64_t utime, int64_t utime0, int32_t seque
     m.sequence = sequence;
     m.flags = static_cast<int32_t>(flags);
     m.reason = const_cast<char *>(reason);  // lcm-gen's struct is not const-correct; only read
-    std::vector<uint8_t> buf(static_cast<size_t>(lidarflow_quality_t_encoded_size(&m)));
-    const int n = lidarflow_quality_t_encode(buf.data(), 0, static_cast<int>(buf.size()), &m);
-    buf.resize(n < 0 ? 0 : static_cast<size_t>(n));
-    return buf;
+    return encode_message(m, lidarflow_quality_t_encoded_size, lidarflow_quality_t_encode);
 }
 
 std::string decode_ego_motion(const void *data, size_t size, lidarflow_ego_motion_t &out) {

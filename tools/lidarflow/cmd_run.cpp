@@ -16,6 +16,7 @@
 #include "rig_args.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"
+#include "core/size_text.hpp"
 #include "io/calib.hpp"
 #include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
@@ -54,8 +55,7 @@ double rotation_degrees(const cv::Matx44d &T) {
 SparseLidar read_lidar(const std::string &path, const cv::Size &size, const char *what) {
     const DisparityMap map = io::read_disparity_png(path);
     require(map.size() == size, ErrorCode::SizeMismatch,
-            std::string(what) + " " + path + " is " + std::to_string(map.cols) + "x" + std::to_string(map.rows) +
-                ", the images are " + std::to_string(size.width) + "x" + std::to_string(size.height));
+            std::string(what) + " " + path + " is " + size_text(map.size()) + ", the images are " + size_text(size));
     return SparseLidar::from_map(map);
 }
 
@@ -74,8 +74,6 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
 }
 
 const char *const kImageNames[4] = {"left0", "right0", "left1", "right1"};
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 // Colour and gray images together (a colour left camera, a monochrome right one) are all matched
 // in gray, as the estimator matches intensities; said before estimating, not found out after.

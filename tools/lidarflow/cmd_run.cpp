@@ -11,6 +11,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "ego_matrix.hpp"
 #include "log.hpp"
 #include "result_files.hpp"
 #include "rig_args.hpp"
@@ -36,16 +37,6 @@
 
 namespace lidarflow::cli {
 namespace {
-
-// The rigid background motion as the C ABI's T (X1 = T X0); identity where there is none.
-cv::Matx44d ego_matrix(const motion::EgoMotion &e) {
-    cv::Matx44d T = cv::Matx44d::eye();
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) T(i, j) = e.R[3 * i + j];
-        T(i, 3) = e.t[i];
-    }
-    return T;
-}
 
 double rotation_degrees(const cv::Matx44d &T) {
     const double c = std::clamp((T(0, 0) + T(1, 1) + T(2, 2) - 1) / 2, -1.0, 1.0);

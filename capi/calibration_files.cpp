@@ -19,11 +19,7 @@ namespace {
 
 void check_out(const lf_calibration_t *out) {
     require_non_null(out, "out");
-    require(out->struct_size == LF_CALIBRATION_V1_SIZE || out->struct_size >= sizeof(lf_calibration_t),
-            ErrorCode::InvalidArgument,
-            "out->struct_size is " + std::to_string(out->struct_size) + ", needs " +
-                std::to_string(sizeof(lf_calibration_t)) + " (call lf_calibration_init) or " +
-                std::to_string(LF_CALIBRATION_V1_SIZE) + " (the first layout)");
+    check_calibration_size(out->struct_size, "out");
 }
 
 int32_t fill(const lidarflow::io::Rig &rig, const char *velo_to_cam_path, lf_calibration_t *out) {

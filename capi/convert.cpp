@@ -136,6 +136,15 @@ io::Rig convert_rig(const lf_calibration_t &c, const StereoCamera &camera) {
 
 }  // namespace
 
+void check_calibration_size(uint32_t struct_size, const char *what) {
+    require(struct_size == LF_CALIBRATION_V1_SIZE || struct_size >= sizeof(lf_calibration_t),
+            ErrorCode::InvalidArgument, [&] {
+                return std::string(what) + ".struct_size is " + std::to_string(struct_size) + ", expected " +
+                       std::to_string(sizeof(lf_calibration_t)) + " (lf_calibration_init) or " +
+                       std::to_string(LF_CALIBRATION_V1_SIZE) + " (the first layout)";
+            });
+}
+
 lf_calibration_t calibration_of_rig(const io::Rig &rig) {
     lf_calibration_t c;
     lf_calibration_init(&c);
@@ -156,11 +165,7 @@ lf_calibration_t calibration_of_rig(const io::Rig &rig) {
 }
 
 Calibration convert_calibration(const lf_calibration_t &given) {
-    require(given.struct_size == LF_CALIBRATION_V1_SIZE || given.struct_size >= sizeof(lf_calibration_t),
-            ErrorCode::InvalidArgument,
-            "calibration.struct_size is " + std::to_string(given.struct_size) + ", expected " +
-                std::to_string(sizeof(lf_calibration_t)) + " (lf_calibration_init) or " +
-                std::to_string(LF_CALIBRATION_V1_SIZE) + " (the first layout)");
+    check_calibration_size(given.struct_size, "calibration");
     if (given.struct_size > sizeof(lf_calibration_t))
         check_struct_size(&given, given.struct_size, sizeof(lf_calibration_t), "calibration");
     // The first layout's caller owns only its first bytes: the later fields read as zero.

@@ -12,6 +12,9 @@
 
 namespace lidarflow::capi {
 
+// Throws InvalidArgument unless `struct_size` (of the lf_calibration_t `what` names) is
+// LF_CALIBRATION_V1_SIZE or at least sizeof(lf_calibration_t).
+void check_calibration_size(uint32_t struct_size, const char *what);
 
 // lf_calibration_t of any accepted struct_size (LF_CALIBRATION_V1_SIZE, or sizeof and more
 // with a zero unknown tail) -> Calibration. Throws InvalidArgument (see lf_create).

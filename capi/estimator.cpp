@@ -10,11 +10,13 @@
 
 #include "convert.hpp"
 #include "core/log.hpp"
+#include "core/size_text.hpp"
 #include "guard.hpp"
 #include "handles.hpp"
 
 using lidarflow::ErrorCode;
 using lidarflow::require;
+using lidarflow::size_text;
 using namespace lidarflow::capi;
 using lidarflow::pipeline::OptionValues;
 
@@ -37,8 +39,6 @@ public:
 private:
     lf_estimator_t *e_;
 };
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 const char *format_text(int type) { return type == CV_8UC1 ? "gray" : "colour"; }
 

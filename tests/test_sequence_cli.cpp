@@ -338,13 +338,6 @@ void test_bad_frames_skip_only_their_pairs(void **) {
     expect_contains(m, "sequence: frame 0000000003: image_02/data/0000000003.png: missing; pairs 2->3, 3->4 skipped");
 }
 
-std::vector<std::string> temporaries(const fs::path &out) {
-    std::vector<std::string> t;
-    for (const auto &e : fs::recursive_directory_iterator(out))
-        if (e.path().filename().string().rfind(".tmp-", 0) == 0) t.push_back(e.path().string());
-    return t;
-}
-
 // A part of the drive that warms up from the drive's first frame is the whole run's stream:
 // its pairs equal the clean run's byte for byte (the motion prior included).
 void test_warm_up(void **) {
@@ -389,7 +382,7 @@ void test_frames_and_skip_existing(void **) {
     assert_true(file_bytes(out / "flow" / (name(0) + ".npy")) == file_bytes(f.pairs / "flow" / (name(0) + ".npy")));
     // The first pair of a stream has no prior: the same with it on.
     assert_true(file_bytes(f.clean / "flow" / (name(0) + ".npy")) == file_bytes(f.pairs / "flow" / (name(0) + ".npy")));
-    assert_true(temporaries(out).empty());
+    assert_true(test::temporaries(out).empty());
     // --quiet: the summary and progress lines go, the exit status stays.
     const test::CliRun c = test::run_cli(base + " --frames 0:3 --skip-existing --quiet");
     expect_code(c, 0);

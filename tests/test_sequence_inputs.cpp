@@ -271,13 +271,6 @@ void test_bad_calibration_is_exit_1(void **) {
     assert_non_null(std::strstr(lf_last_error(nullptr), "is a FIFO"));
 }
 
-std::vector<std::string> temporaries(const fs::path &out) {
-    std::vector<std::string> t;
-    for (const auto &e : fs::recursive_directory_iterator(out))
-        if (e.path().filename().string().rfind(".tmp-", 0) == 0) t.push_back(e.path().string());
-    return t;
-}
-
 void test_failed_write_leaves_no_temporary(void **) {
     const fs::path out = base_dir() / "unwritable_out";
     fs::remove_all(out);
@@ -285,7 +278,7 @@ void test_failed_write_leaves_no_temporary(void **) {
     write_text(out / "flow", "a file where the flow folder goes\n");
     const test::CliRun r = sequence(drive(), out, "--frames 0:1");
     expect_code(r, 1);
-    for (const std::string &t : temporaries(out)) fail_msg("temporary file left: %s", t.c_str());
+    for (const std::string &t : test::temporaries(out)) fail_msg("temporary file left: %s", t.c_str());
 }
 
 std::string file_bytes(const fs::path &p) {
@@ -319,7 +312,7 @@ void test_skip_existing_trusts_only_its_manifest(void **) {
     expect_contains(sequence(drive(), out, "--frames 1:2 --skip-existing --option use_lidar=0"), "1 pairs: 1 computed");
     // A format the manifest does not list is computed.
     expect_contains(sequence(drive(), out, "--frames 2:3 --skip-existing --format kitti"), "1 pairs: 1 computed");
-    assert_true(temporaries(out).empty());
+    assert_true(test::temporaries(out).empty());
 }
 
 }  // namespace

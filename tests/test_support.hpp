@@ -10,6 +10,7 @@
 #include <functional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <sys/wait.h>
 
@@ -93,6 +94,14 @@ inline std::filesystem::path scratch_dir(const std::string &name) {
     std::filesystem::remove_all(p);
     std::filesystem::create_directories(p);
     return p;
+}
+
+// The temporary files (".tmp-*", as the CLI names them while writing) anywhere under `folder`.
+inline std::vector<std::string> temporaries(const std::filesystem::path &folder) {
+    std::vector<std::string> t;
+    for (const auto &e : std::filesystem::recursive_directory_iterator(folder))
+        if (e.path().filename().string().rfind(".tmp-", 0) == 0) t.push_back(e.path().string());
+    return t;
 }
 
 // What `lidarflow ARGS` printed and returned. code -1: killed by a signal.

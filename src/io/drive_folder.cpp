@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/regular_file.hpp"
+#include "core/size_text.hpp"
 #include "io/image_file.hpp"
 #include "io/read_file.hpp"
 
@@ -50,8 +51,6 @@ std::string reason_of(const std::string &message, const std::string &path) {
         if (message.compare(0, prefix.size(), prefix) == 0) return message.substr(prefix.size());
     return message;
 }
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 cv::Mat read_drive_image(const std::string &path, cv::Size size) {
     cv::Mat m = read_any_image(path);

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/size_text.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -32,8 +33,7 @@ void rectify(const cv::Mat &in, const cv::Mat &xy, const cv::Mat &frac, cv::Mat 
 Rectifier::Rectifier(const Rig &rig, cv::Size size) : size_(size) {
     require(size.width > 0 && size.height > 0 && size.width <= kMaxImageSide && size.height <= kMaxImageSide,
             ErrorCode::InvalidArgument,
-            "rectifier: image size " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                " out of range");
+            "rectifier: image size " + size_text(size) + " out of range");
     make_tables(rig.left, size, left_xy_, left_frac_);
     make_tables(rig.right, size, right_xy_, right_frac_);
 }

@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/size_text.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -377,9 +378,7 @@ Rig read_rig(const std::string &spec) {
 
 std::string image_size_mismatch(cv::Size calibration, cv::Size input) {
     if (calibration.empty() || calibration == input) return "";
-    return "the images are " + std::to_string(input.width) + "x" + std::to_string(input.height) +
-           " but the calibration is for " + std::to_string(calibration.width) + "x" +
-           std::to_string(calibration.height);
+    return "the images are " + size_text(input) + " but the calibration is for " + size_text(calibration);
 }
 
 }  // namespace lidarflow::io

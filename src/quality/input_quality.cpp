@@ -12,6 +12,7 @@
 
 #include "core/gray.hpp"
 #include "core/log.hpp"
+#include "core/size_text.hpp"
 
 namespace lidarflow::quality {
 namespace {
@@ -31,8 +32,6 @@ std::string format(const char *fmt, double a, double b = 0, double c = 0) {
     std::snprintf(buf, sizeof buf, fmt, a, b, c);
     return buf;
 }
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 // An integer reduction, which INTER_AREA does as a plain box average.
 double work_scale(cv::Size s) { return 1.0 / std::max(1, (s.width + kWorkWidth - 1) / kWorkWidth); }

@@ -11,11 +11,13 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "ego_matrix.hpp"
 #include "log.hpp"
 #include "result_files.hpp"
 #include "rig_args.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"
+#include "core/size_text.hpp"
 #include "io/calib.hpp"
 #include "io/image_file.hpp"
 #include "io/kitti_layout.hpp"
@@ -36,16 +38,6 @@
 namespace lidarflow::cli {
 namespace {
 
-// The rigid background motion as the C ABI's T (X1 = T X0); identity where there is none.
-cv::Matx44d ego_matrix(const motion::EgoMotion &e) {
-    cv::Matx44d T = cv::Matx44d::eye();
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) T(i, j) = e.R[3 * i + j];
-        T(i, 3) = e.t[i];
-    }
-    return T;
-}
-
 double rotation_degrees(const cv::Matx44d &T) {
     const double c = std::clamp((T(0, 0) + T(1, 1) + T(2, 2) - 1) / 2, -1.0, 1.0);
     return std::acos(c) * 180 / CV_PI;
@@ -54,8 +46,7 @@ double rotation_degrees(const cv::Matx44d &T) {
 SparseLidar read_lidar(const std::string &path, const cv::Size &size, const char *what) {
     const DisparityMap map = io::read_disparity_png(path);
     require(map.size() == size, ErrorCode::SizeMismatch,
-            std::string(what) + " " + path + " is " + std::to_string(map.cols) + "x" + std::to_string(map.rows) +
-                ", the images are " + std::to_string(size.width) + "x" + std::to_string(size.height));
+            std::string(what) + " " + path + " is " + size_text(map.size()) + ", the images are " + size_text(size));
     return SparseLidar::from_map(map);
 }
 
@@ -74,8 +65,6 @@ SparseLidar project_scan(const std::string &path, const io::CamToCamCalib &calib
 }
 
 const char *const kImageNames[4] = {"left0", "right0", "left1", "right1"};
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 // Colour and gray images together (a colour left camera, a monochrome right one) are all matched
 // in gray, as the estimator matches intensities; said before estimating, not found out after.

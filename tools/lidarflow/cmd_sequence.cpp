@@ -19,6 +19,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "ego_matrix.hpp"
 #include "log.hpp"
 #include "result_files.hpp"
 #include "result_manifest.hpp"
@@ -118,12 +119,7 @@ void report_frame(bool tty, long k, const io::DriveFileError &e, const std::vect
 // A pair's metric ego-motion [R | t] (points of the t0 camera -> the t1 camera), if it has one.
 std::optional<cv::Matx34d> metric_ego(const pipeline::EstimatorResult &r) {
     if (r.ego_state != pipeline::EgoState::Ok) return std::nullopt;
-    cv::Matx34d m;
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) m(i, j) = r.ego.R[3 * i + j];
-        m(i, 3) = r.ego.t[i];
-    }
-    return m;
+    return ego_matrix(r.ego).get_minor<3, 4>(0, 0);
 }
 
 // The rig and LiDAR transform when they are not the drive's own files, for the manifests:

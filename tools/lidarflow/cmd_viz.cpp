@@ -9,6 +9,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/size_text.hpp"
 #include "io/image_file.hpp"
 #include "io/kitti_png.hpp"
 #include "io/point_cloud.hpp"
@@ -22,8 +23,6 @@
 
 namespace lidarflow::cli {
 namespace {
-
-std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
 // Inputs drawn together must be of one size; the message names both.
 void same_size(cv::Size a, const char *what_a, cv::Size b, const char *what_b) {

@@ -47,14 +47,19 @@ void sync_path(const std::string &path) {
     require(ok, ErrorCode::Io, [&] { return "cannot sync " + path + ": " + std::strerror(err); });
 }
 
+// Dot-prefixed and with the process id: hidden from `ls`, and two processes writing the same
+// file never share a temporary one.
+std::string temporary_name(const std::string &name) {
+    return ".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + name;
+}
+
 }  // namespace
 
 void write_text_durably(const std::string &path, const std::string &text) {
     namespace fs = std::filesystem;
     const fs::path target(path);
     const fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-    const std::string tmp =
-        (folder / (".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + target.filename().string())).string();
+    const std::string tmp = (folder / temporary_name(target.filename().string())).string();
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     require(fd >= 0, ErrorCode::Io, [&] { return "cannot write " + tmp + ": " + std::strerror(errno); });
     const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
@@ -72,9 +77,7 @@ std::vector<std::string> write_result_files(const std::string &out, const std::s
                                             const std::vector<io::ResultFormat> &formats) {
     namespace fs = std::filesystem;
     io::check_output_name(id);
-    // Dot-prefixed and with the process id: hidden from `ls`, and two processes writing the same
-    // pair never share a temporary file.
-    const std::string tmp_id = ".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + id.substr(0, 100);
+    const std::string tmp_id = temporary_name(id.substr(0, 100));
     std::vector<std::string> temporaries;
     const auto remove_temporaries = [&] {
         std::error_code ignored;

@@ -9,8 +9,7 @@ long write_sequence_poses(const std::string &path, long first, const std::map<lo
                           const std::vector<double> &stamps, io::PoseFormat format) {
     std::vector<cv::Matx34d> poses = {cv::Matx34d::eye()};
     std::vector<long> frames = {first};
-    for (auto it = motions.find(first); it != motions.end() && it->first == frames.back();
-         it = motions.find(frames.back())) {
+    for (auto it = motions.find(first); it != motions.end(); it = motions.find(frames.back())) {
         poses.push_back(io::compose_pose(poses.back(), it->second));
         frames.push_back(frames.back() + 1);
     }

@@ -22,8 +22,7 @@ def chunk_complete(c, done_t0s):
     else:
         have = results.count_flows(ch.chunk_log_path(c)) or 0
     if have != pairs:
-        return None, "%s frames %d:%d was complete, but %d of its %d results are there: recomputing" \
-            % (c["source"], c["first"], c["last"], have, pairs)
+        return None, "%s was complete, but %d of its %d results are there: recomputing" % (ch.describe(c), have, pairs)
     return pairs, ""
 
 

@@ -20,10 +20,6 @@ def capped(lines, limit=MAX_NOTES):
     return lines[:limit] + (["... and %d more" % (len(lines) - limit)] if len(lines) > limit else [])
 
 
-def describe(chunk):
-    return "%s frames %d:%d" % (chunk["source"], chunk["first"], chunk["last"])
-
-
 class Report:
     """Collects the chunk results: a line per chunk (when asked) and the final summary."""
 
@@ -38,7 +34,7 @@ class Report:
             self.failed.append(result)
         if self.lines:
             state_text = "ok" if result["rc"] == 0 else "FAILED"
-            print("chunk %s: %s, %d pairs, %.1f s on %s" % (describe(c), state_text, result["pairs"],
+            print("chunk %s: %s, %d pairs, %.1f s on %s" % (ch.describe(c), state_text, result["pairs"],
                                                            result["seconds"], result["host"]),
                   file=self.stream, flush=True)
 
@@ -132,7 +128,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
     pairs = sum(r["pairs"] for r in report.results)
     lost = sum(s.lost for s in sources)
     summary = {"sources": len(sources), "chunks": len(pending), "pairs": pairs, "pairs_complete_before": done_before,
-               "failed": [(describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
+               "failed": [(ch.describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
                "pairs_per_second": pairs / seconds if seconds > 0 else 0.0, "pairs_missing_frames": lost}
     for line in capped("%s: %s" % (what, why.replace("\n", "\n    ")) for what, why in summary["failed"]):
         print("FAILED: %s" % line, file=stream)

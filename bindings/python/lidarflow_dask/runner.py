@@ -42,7 +42,7 @@ class Report:
         self.add({"chunk": chunk, "host": "?", "rc": -1, "pairs": 0, "seconds": 0.0, "message": why})
 
 
-def merge_logs(sources, report, settings):
+def merge_logs(sources, report):
     """Writes the result log of each LCM source whose chunks changed or whose result log is not
     the chunks' results; a chunk log lost since its chunk completed is reported as failed."""
     computed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.results}
@@ -118,7 +118,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
                     report.add(ch.run_chunk(c))
             elif pending:
                 cluster.run_dask(pending, report, client, progress_bar)
-            merge_logs(sources, report, settings)
+            merge_logs(sources, report)
             merge_poses(sources, report, stream)
         finally:
             for s in made:

@@ -90,7 +90,7 @@ class State(unittest.TestCase):
         report = runner.Report(None, lines=False)
         # Chunk 0:3 computed by this run, chunk 3:6's log lost since it completed.
         report.add({"chunk": src.chunks[0], "host": "h", "rc": 0, "pairs": 3, "seconds": 1.0, "message": ""})
-        runner.merge_logs([src], report, ld.Settings(out, **self.f.settings))
+        runner.merge_logs([src], report)
         self.assertEqual(len(report.failed), 1)
         self.assertIn("0000000003-0000000006.log is missing or unreadable at the merge", report.failed[0]["message"])
         n, missing = results.merge([chunks.chunk_log_path(c) for c in src.chunks], os.path.join(out, "x.log"))

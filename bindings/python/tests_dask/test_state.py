@@ -14,7 +14,7 @@ import shutil
 import socket
 import unittest
 
-from dask_fixture import BIN, READY, SKIP, cli, fixture, flows, serial_args
+from dask_fixture import BIN, FixtureCase, cli, flows, serial_args
 
 if BIN:
     import lidarflow_dask as ld
@@ -23,12 +23,7 @@ if BIN:
 KEYS = ["0000000000-0000000003", "0000000003-0000000006", "0000000006-0000000008"]
 
 
-@unittest.skipUnless(READY, SKIP)
-class State(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.f = fixture()
-
+class State(FixtureCase):
     def copy_serial(self, name):
         out = os.path.join(self.f.folder(name), "out")
         shutil.copytree(self.f.serial, out)

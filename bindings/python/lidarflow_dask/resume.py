@@ -45,14 +45,15 @@ def prepare(sources, settings):
             except FileNotFoundError:
                 pass
         if not settings.force:
+            now = settings.signature(s.kind)
             try:
-                old = state.check_settings(s.settings_path(), settings.signature(s.kind))
+                old = state.check_settings(s.settings_path(), now)
             except state.StateError as e:
                 raise SourceError("%s: use --force to recompute, or another --out" % e) from None
-            if old is not None and old != settings.signature(s.kind):
+            if old is not None and old != now:
                 raise SourceError("%s holds results of %s computed with other settings (%s, now %s): "
                                   "use --force to recompute, or another --out"
-                                  % (settings.out, s.path, json.dumps(old), json.dumps(settings.signature(s.kind))))
+                                  % (settings.out, s.path, json.dumps(old), json.dumps(now)))
         done_t0s = set() if s.kind != "drive" or settings.force else \
             results.drive_complete_t0s(s.result_path(), settings.formats)
         for c in s.chunks:

@@ -2,6 +2,7 @@
 """A drive's camera trajectory from its chunks: `lidarflow sequence --frames A:B` writes
 poses_A-B.txt (KITTI odometry format, frame A the origin); chained chunk after chunk they give
 OUT/<drive>/poses.txt with the drive's first frame as the origin, as a serial run writes it."""
+import math
 import os
 
 from . import state
@@ -23,7 +24,7 @@ def _read(path):
         with open(path) as f:
             for line in f:
                 v = [float(x) for x in line.split()]
-                if len(v) != 12 or any(x != x or abs(x) == float("inf") for x in v):
+                if len(v) != 12 or not all(map(math.isfinite, v)):
                     return None
                 poses.append([v[0:4], v[4:8], v[8:12], [0.0, 0.0, 0.0, 1.0]])
         return poses

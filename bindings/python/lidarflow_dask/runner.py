@@ -79,16 +79,15 @@ def check_where_chunks_run(sources, settings, client):
     """The executables, then the options, checked where the chunks will run (here, or on every
     worker and then one of them): ToolNotFound / ClusterError, ValueError for bad options."""
     kinds = {s.kind for s in sources}
+    args = (settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir, settings.rig_args)
     if client is None:
         why = check_tools(kinds, settings.bin_dir)
         if why:
             raise ToolNotFound(why)
-        why = ch.check_settings(settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir,
-                                settings.rig_args)
+        why = ch.check_settings(*args)
     else:
         cluster.check_workers(client, kinds, settings.bin_dir)
-        why = cluster.on_one_worker(client, ch.check_settings, settings.preset, settings.options, settings.formats,
-                                    settings.threads, settings.bin_dir, settings.rig_args)
+        why = cluster.on_one_worker(client, ch.check_settings, *args)
     if why:
         raise ValueError(why)
 

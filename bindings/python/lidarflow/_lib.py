@@ -176,9 +176,8 @@ def _load():
 LOG_FN = ctypes.CFUNCTYPE(None, ctypes.c_int32, ctypes.c_char_p, ctypes.c_void_p)
 
 
-# lf_quality_flag_t: bit -> name, in bit order.
-QUALITY_FLAGS = {1: "left_right_swapped", 2: "not_rectified", 4: "calibration_size_mismatch", 8: "blank_frame",
-                 16: "lidar_disagrees"}
+# lf_quality_flag_t's bits, in order; lf_quality_name names them.
+QUALITY_FLAGS = (1, 2, 4, 8, 16)
 
 
 def _declare(lib):

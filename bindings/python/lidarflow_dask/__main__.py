@@ -5,6 +5,8 @@ import logging
 import os
 import sys
 
+from lidarflow_lcm import CHANNELS
+
 from . import cluster, frames, results, rig, runner, state
 from .tools import ToolNotFound
 
@@ -70,8 +72,8 @@ def parse(argv):
                    help="where lidarflow and lidarflow-lcm-bridge are, for every worker (default: "
                         "$LIDARFLOW_BIN_DIR, else each worker looks next to its lidarflow_dask, then on its PATH); a "
                         "build tree works")
-    p.add_argument("--stereo-channel", default="LIDARFLOW_STEREO", metavar="NAME",
-                   help="LCM logs: the stereo channel (default LIDARFLOW_STEREO)")
+    p.add_argument("--stereo-channel", default=CHANNELS["stereo"], metavar="NAME",
+                   help="LCM logs: the stereo channel (default %s)" % CHANNELS["stereo"])
     p.add_argument("--bridge-arg", action="append", default=[], metavar="ARG",
                    help="LCM logs: an argument for lidarflow-lcm-bridge --replay, repeatable "
                         "(e.g. --bridge-arg=--lidar-channel --bridge-arg=VELO)")
@@ -97,7 +99,7 @@ def parse(argv):
     for kv in a.option:
         if "=" not in kv or kv.startswith("="):
             p.error("--option %s: expected K=V" % kv)
-    if a.stereo_channel != "LIDARFLOW_STEREO":
+    if a.stereo_channel != CHANNELS["stereo"]:
         a.bridge_arg = ["--stereo-channel", a.stereo_channel] + a.bridge_arg
     return a
 

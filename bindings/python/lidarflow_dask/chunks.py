@@ -69,6 +69,10 @@ def chunk_log_path(chunk):
     return os.path.join(state.state_dir(chunk["out"], chunk["name"]), chunk_key(chunk) + ".log")
 
 
+def describe(chunk):
+    return "%s frames %d:%d" % (chunk["source"], chunk["first"], chunk["last"])
+
+
 def drive_out(chunk):
     return os.path.join(chunk["out"], chunk["name"])
 

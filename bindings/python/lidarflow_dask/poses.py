@@ -2,7 +2,10 @@
 """A drive's camera trajectory from its chunks: `lidarflow sequence --frames A:B` writes
 poses_A-B.txt (KITTI odometry format, frame A the origin); chained chunk after chunk they give
 OUT/<drive>/poses.txt with the drive's first frame as the origin, as a serial run writes it."""
+import math
 import os
+
+from . import state
 
 MAX_BYTES = 64 << 20  # a poses file of 1,000,000 frames is ~130 MB; chunks are far smaller
 
@@ -21,7 +24,7 @@ def _read(path):
         with open(path) as f:
             for line in f:
                 v = [float(x) for x in line.split()]
-                if len(v) != 12 or any(x != x or abs(x) == float("inf") for x in v):
+                if len(v) != 12 or not all(map(math.isfinite, v)):
                     return None
                 poses.append([v[0:4], v[4:8], v[8:12], [0.0, 0.0, 0.0, 1.0]])
         return poses
@@ -35,7 +38,7 @@ def _mul(a, b):
 
 def merge(out_dir, chunks):
     """Chains the poses files of `chunks` (dicts with first/last, consecutive chunks sharing a
-    frame) into out_dir/poses.txt (written under a temporary name, then renamed). Returns
+    frame) into out_dir/poses.txt (state.write_atomically). Returns
     (last frame written, None) or (last frame written, why the trajectory stops there)."""
     chunks = sorted(chunks, key=lambda c: c["first"])
     rows, why = [], None
@@ -57,11 +60,6 @@ def merge(out_dir, chunks):
             break
     if not rows:
         return None, why
-    tmp = os.path.join(out_dir, ".poses.txt.tmp.%d" % os.getpid())
-    with open(tmp, "w") as f:
-        for p in rows:
-            f.write(" ".join("%.9e" % p[i][j] for i in range(3) for j in range(4)) + "\n")
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, os.path.join(out_dir, "poses.txt"))
+    text = "".join(" ".join("%.9e" % p[i][j] for i in range(3) for j in range(4)) + "\n" for p in rows)
+    state.write_atomically(os.path.join(out_dir, "poses.txt"), text.encode())
     return chunks[0]["first"] + len(rows) - 1, why

@@ -3,12 +3,13 @@
 the chunk logs joined into OUT/<name>.log."""
 import os
 
+from lidarflow_lcm import CHANNELS
 from lidarflow_lcm.eventlog import LogReader, LogWriter
 
 from . import state
 
-FLOW_CHANNEL = "LIDARFLOW_FLOW"
-EGO_CHANNEL = "LIDARFLOW_EGO_MOTION"  # the ego_motion_t that comes with each result
+FLOW_CHANNEL = CHANNELS["flow"]
+EGO_CHANNEL = CHANNELS["ego_motion"]  # the ego_motion_t that comes with each result
 # `lidarflow sequence --format`: the files of one pair, (folder, extension), as io::result_paths.
 FORMAT_FILES = {
     "kitti": (("disp_0", "png"), ("disp_1", "png"), ("flow", "png")),

@@ -22,8 +22,7 @@ def chunk_complete(c, done_t0s):
     else:
         have = results.count_flows(ch.chunk_log_path(c)) or 0
     if have != pairs:
-        return None, "%s frames %d:%d was complete, but %d of its %d results are there: recomputing" \
-            % (c["source"], c["first"], c["last"], have, pairs)
+        return None, "%s was complete, but %d of its %d results are there: recomputing" % (ch.describe(c), have, pairs)
     return pairs, ""
 
 
@@ -46,14 +45,15 @@ def prepare(sources, settings):
             except FileNotFoundError:
                 pass
         if not settings.force:
+            now = settings.signature(s.kind)
             try:
-                old = state.check_settings(s.settings_path(), settings.signature(s.kind))
+                old = state.check_settings(s.settings_path(), now)
             except state.StateError as e:
                 raise SourceError("%s: use --force to recompute, or another --out" % e) from None
-            if old is not None and old != settings.signature(s.kind):
+            if old is not None and old != now:
                 raise SourceError("%s holds results of %s computed with other settings (%s, now %s): "
                                   "use --force to recompute, or another --out"
-                                  % (settings.out, s.path, json.dumps(old), json.dumps(settings.signature(s.kind))))
+                                  % (settings.out, s.path, json.dumps(old), json.dumps(now)))
         done_t0s = set() if s.kind != "drive" or settings.force else \
             results.drive_complete_t0s(s.result_path(), settings.formats)
         for c in s.chunks:

@@ -20,10 +20,6 @@ def capped(lines, limit=MAX_NOTES):
     return lines[:limit] + (["... and %d more" % (len(lines) - limit)] if len(lines) > limit else [])
 
 
-def describe(chunk):
-    return "%s frames %d:%d" % (chunk["source"], chunk["first"], chunk["last"])
-
-
 class Report:
     """Collects the chunk results: a line per chunk (when asked) and the final summary."""
 
@@ -38,7 +34,7 @@ class Report:
             self.failed.append(result)
         if self.lines:
             state_text = "ok" if result["rc"] == 0 else "FAILED"
-            print("chunk %s: %s, %d pairs, %.1f s on %s" % (describe(c), state_text, result["pairs"],
+            print("chunk %s: %s, %d pairs, %.1f s on %s" % (ch.describe(c), state_text, result["pairs"],
                                                            result["seconds"], result["host"]),
                   file=self.stream, flush=True)
 
@@ -46,7 +42,7 @@ class Report:
         self.add({"chunk": chunk, "host": "?", "rc": -1, "pairs": 0, "seconds": 0.0, "message": why})
 
 
-def merge_logs(sources, report, settings):
+def merge_logs(sources, report):
     """Writes the result log of each LCM source whose chunks changed or whose result log is not
     the chunks' results; a chunk log lost since its chunk completed is reported as failed."""
     computed = {(r["chunk"]["source"], r["chunk"]["first"]) for r in report.results}
@@ -83,16 +79,15 @@ def check_where_chunks_run(sources, settings, client):
     """The executables, then the options, checked where the chunks will run (here, or on every
     worker and then one of them): ToolNotFound / ClusterError, ValueError for bad options."""
     kinds = {s.kind for s in sources}
+    args = (settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir, settings.rig_args)
     if client is None:
         why = check_tools(kinds, settings.bin_dir)
         if why:
             raise ToolNotFound(why)
-        why = ch.check_settings(settings.preset, settings.options, settings.formats, settings.threads, settings.bin_dir,
-                                settings.rig_args)
+        why = ch.check_settings(*args)
     else:
         cluster.check_workers(client, kinds, settings.bin_dir)
-        why = cluster.on_one_worker(client, ch.check_settings, settings.preset, settings.options, settings.formats,
-                                    settings.threads, settings.bin_dir, settings.rig_args)
+        why = cluster.on_one_worker(client, ch.check_settings, *args)
     if why:
         raise ValueError(why)
 
@@ -122,7 +117,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
                     report.add(ch.run_chunk(c))
             elif pending:
                 cluster.run_dask(pending, report, client, progress_bar)
-            merge_logs(sources, report, settings)
+            merge_logs(sources, report)
             merge_poses(sources, report, stream)
         finally:
             for s in made:
@@ -132,7 +127,7 @@ def run(source_paths, settings, client=None, stream=sys.stderr, progress_bar=Fal
     pairs = sum(r["pairs"] for r in report.results)
     lost = sum(s.lost for s in sources)
     summary = {"sources": len(sources), "chunks": len(pending), "pairs": pairs, "pairs_complete_before": done_before,
-               "failed": [(describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
+               "failed": [(ch.describe(r["chunk"]), r["message"]) for r in report.failed], "seconds": seconds,
                "pairs_per_second": pairs / seconds if seconds > 0 else 0.0, "pairs_missing_frames": lost}
     for line in capped("%s: %s" % (what, why.replace("\n", "\n    ")) for what, why in summary["failed"]):
         print("FAILED: %s" % line, file=stream)

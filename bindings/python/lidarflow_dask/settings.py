@@ -2,6 +2,8 @@
 """What every chunk of a run shares, checked as it is given."""
 import os
 
+from lidarflow_lcm import CHANNELS
+
 from . import results
 from .frames import parse_frames
 from .rig import rig_args
@@ -17,7 +19,7 @@ class Settings:
     as lidarflow sequence's --calib, --calib-velo, --fx ..., --strict (rig.py)."""
 
     def __init__(self, out, preset=None, options=(), chunk=20, threads=1, force=False, bin_dir=None,
-                 stereo_channel="LIDARFLOW_STEREO", bridge_args=(), formats=("kitti",), frames=None,
+                 stereo_channel=CHANNELS["stereo"], bridge_args=(), formats=("kitti",), frames=None,
                  chunk_timeout=None, warm_up=3, calib=None, calib_velo=None, camera=None, strict=False):
         if not out:
             raise ValueError("--out: the output folder must be named (got '')")

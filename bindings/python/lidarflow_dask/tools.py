@@ -10,6 +10,10 @@ class ToolNotFound(RuntimeError):
     """The lidarflow CLI or the bridge is not installed where it is looked for."""
 
 
+def _executable(path):
+    return os.path.isfile(path) and os.access(path, os.X_OK)
+
+
 def find_tool(name, bin_dir=None):
     """Path of the executable `name`: in bin_dir (else $LIDARFLOW_BIN_DIR) when given, else next
     to this package's installation (PREFIX/bin for PREFIX/lib/python3/dist-packages), else on
@@ -19,7 +23,7 @@ def find_tool(name, bin_dir=None):
         # A build tree keeps the CLI and the bridge in folders of their own.
         for sub in ("", "tools/lidarflow", "bridge"):
             path = os.path.join(bin_dir, sub, name)
-            if os.path.isfile(path) and os.access(path, os.X_OK):
+            if _executable(path):
                 return path
         raise ToolNotFound("%s not found in %s (LIDARFLOW_BIN_DIR / --bin-dir) on %s"
                            % (name, bin_dir, socket.gethostname()))
@@ -27,11 +31,11 @@ def find_tool(name, bin_dir=None):
     prefix = os.path.normpath(os.path.join(here, "..", "..", "..", ".."))
     looked = [os.path.join(prefix, "bin")]
     path = os.path.join(looked[0], name)
-    if os.path.isfile(path) and os.access(path, os.X_OK):
+    if _executable(path):
         return path
     for d in os.environ.get("PATH", "").split(os.pathsep):
         path = os.path.join(d or ".", name)
-        if os.path.isfile(path) and os.access(path, os.X_OK):
+        if _executable(path):
             return path
     raise ToolNotFound("%s not found in %s or on the PATH on %s (install lidarflow-tools, or set "
                        "LIDARFLOW_BIN_DIR / --bin-dir to a build tree)" % (name, looked[0], socket.gethostname()))

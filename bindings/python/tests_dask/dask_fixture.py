@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import unittest
 
 import lidarflow_lcm as ll
 
@@ -124,6 +125,15 @@ def fixture():
     if _fixture is None:
         _fixture = Fixture()
     return _fixture
+
+
+@unittest.skipUnless(READY, SKIP)
+class FixtureCase(unittest.TestCase):
+    """Tests on the shared fixture (cls.f), skipped without the executables or Dask."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.f = fixture()
 
 
 def fake_bin(folder, frames_command):

@@ -12,7 +12,7 @@ import subprocess
 import time
 import unittest
 
-from dask_fixture import BIN, PY, READY, SKIP, cli, cmdline, fake_bin, fixture, processes, serial_args
+from dask_fixture import BIN, PY, FixtureCase, cli, cmdline, fake_bin, processes, serial_args
 
 if BIN:
     from lidarflow_dask import chunks
@@ -57,12 +57,7 @@ def hung(pids_before=()):
     return [p for p, _, comm in processes() if comm == "sleep" and "637" in cmdline(p) and p not in pids_before]
 
 
-@unittest.skipUnless(READY, SKIP)
-class Cluster(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.f = fixture()
-
+class Cluster(FixtureCase):
     def test_local_cluster_on_loopback_scratch_under_tmpdir(self):
         tmp = self.f.folder("tmpdir")
         old = os.environ.get("TMPDIR")

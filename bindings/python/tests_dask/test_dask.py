@@ -19,7 +19,7 @@ import threading
 import time
 import unittest
 
-from dask_fixture import BIN, CHUNK, READY, SKIP, alive, cli, egos, fixture, flows, lidarflow, processes, same_tree
+from dask_fixture import BIN, CHUNK, FixtureCase, alive, cli, egos, flows, lidarflow, processes, same_tree
 
 if BIN:
     import lidarflow_dask as ld
@@ -27,11 +27,11 @@ if BIN:
     from lidarflow_dask.cluster import local_cluster
 
 
-@unittest.skipUnless(READY, SKIP)
-class Dask(unittest.TestCase):
+class Dask(FixtureCase):
     @classmethod
     def setUpClass(cls):
-        f = fixture()  # the serial run, the reference of the others
+        super().setUpClass()
+        f = cls.f  # the serial run, the reference of the others
         cls.tmp, cls.drive, cls.log, cls.settings = f, f.drive, f.log, f.settings
         cls.serial, cls.serial_rc, cls.serial_summary = f.serial, f.serial_rc, f.serial_summary
         cls.whole, cls.whole_ego = f.whole, f.whole_ego

@@ -12,7 +12,7 @@ import shutil
 import time
 import unittest
 
-from dask_fixture import BIN, CHUNK, READY, SKIP, cli, fixture, serial_args
+from dask_fixture import BIN, CHUNK, FixtureCase, cli, serial_args
 
 if BIN:
     import lidarflow_dask as ld
@@ -26,12 +26,7 @@ def stray(drive, copy_to, name):
     return copy_to
 
 
-@unittest.skipUnless(READY, SKIP)
-class Plan(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.f = fixture()
-
+class Plan(FixtureCase):
     def test_stray_frame_past_the_bound_refused(self):
         drive = stray(self.f.drive, os.path.join(self.f.folder("stray"), "drive"), "9999999999.png")
         out = self.f.folder("stray_out")

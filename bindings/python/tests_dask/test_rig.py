@@ -14,7 +14,7 @@ import shutil
 import subprocess
 import unittest
 
-from dask_fixture import BIN, CHUNK, PY, READY, SKIP, fake_bin, fixture, lidarflow, same_tree, serial_args
+from dask_fixture import BIN, CHUNK, PY, FixtureCase, fake_bin, lidarflow, same_tree, serial_args
 
 WIDTH, HEIGHT = 320, 96  # the fixture drive's
 
@@ -38,11 +38,11 @@ def run(args, cwd):
     return subprocess.run([PY, "-m", "lidarflow_dask"] + args, capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
-@unittest.skipUnless(READY, SKIP)
-class Rig(unittest.TestCase):
+class Rig(FixtureCase):
     @classmethod
     def setUpClass(cls):
-        f = cls.f = fixture()
+        super().setUpClass()
+        f = cls.f
         # The drive without calibration files; its rig in rig/, as a user keeps their own.
         cls.dir = f.folder("rig")
         cls.drive = os.path.join(cls.dir, "drive")

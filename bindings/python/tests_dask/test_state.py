@@ -14,7 +14,7 @@ import shutil
 import socket
 import unittest
 
-from dask_fixture import BIN, READY, SKIP, cli, fixture, flows, serial_args
+from dask_fixture import BIN, FixtureCase, cli, flows, serial_args
 
 if BIN:
     import lidarflow_dask as ld
@@ -23,12 +23,7 @@ if BIN:
 KEYS = ["0000000000-0000000003", "0000000003-0000000006", "0000000006-0000000008"]
 
 
-@unittest.skipUnless(READY, SKIP)
-class State(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.f = fixture()
-
+class State(FixtureCase):
     def copy_serial(self, name):
         out = os.path.join(self.f.folder(name), "out")
         shutil.copytree(self.f.serial, out)
@@ -90,7 +85,7 @@ class State(unittest.TestCase):
         report = runner.Report(None, lines=False)
         # Chunk 0:3 computed by this run, chunk 3:6's log lost since it completed.
         report.add({"chunk": src.chunks[0], "host": "h", "rc": 0, "pairs": 3, "seconds": 1.0, "message": ""})
-        runner.merge_logs([src], report, ld.Settings(out, **self.f.settings))
+        runner.merge_logs([src], report)
         self.assertEqual(len(report.failed), 1)
         self.assertIn("0000000003-0000000006.log is missing or unreadable at the merge", report.failed[0]["message"])
         n, missing = results.merge([chunks.chunk_log_path(c) for c in src.chunks], os.path.join(out, "x.log"))

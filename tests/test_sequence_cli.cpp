@@ -51,7 +51,7 @@ namespace {
 
 constexpr int kFrames = 5;
 const char *const kPreset = "default";
-const char *const kNoPrior = " --option matching.stream_prior=0";
+const char *const kNoPrior = " --option matching.stream_prior=0,matching.stream_lidar_frames=0";
 
 std::string q(const fs::path &p) { return test::quoted(p); }
 
@@ -61,8 +61,8 @@ constexpr auto expect_contains = test::expect_output_has;
 
 // One drive and one clean sequence run, shared by the tests (rendering and estimating are the
 // slow parts).
-// `pairs` is the drive without the stream's motion prior, whose results depend on where the
-// stream started: a restarted stream gives its results.
+// `pairs` is the drive without the stream's priors (movers, carried points), whose results
+// depend on where the stream started: a restarted stream gives its results.
 struct Fixture {
     fs::path dir, drive, clean, pairs;
 };

@@ -3,6 +3,9 @@
 //  - on an exact scene flow (a static plane and a box that moves on its own while the camera
 //    drives), the box's object motion is carried to its t1 pixels and nothing else is marked;
 //    the next pair's prior predicts the box's flow exactly, and the way back inverts it;
+//  - on the same scene, the static LiDAR points are carried to where they land at t1 with their
+//    t1 disparity, the box's points and points past their age stay behind, and the next pair
+//    takes a carried point only on a free pixel its stereo confirms;
 //  - on a synthetic drive whose cars overtake and approach, `lidarflow sequence` with the prior
 //    scores better than the same pairs without it (the pairs one by one).
 // Runs the built binary ($LIDARFLOW_CLI, set by CTest).
@@ -138,6 +141,68 @@ void object_motion_is_carried_and_predicted(void **) {
     assert_true(cv::norm(before, after, cv::NORM_INF) == 0);
 }
 
+// t0 points every 4 px over the scene, aged 0 except every fifth, which is 3 frames old.
+void static_points_are_carried(void **) {
+    const SceneFlowField f = exact_field();
+    SparseLidar t0{W, H, {}};
+    std::vector<uint8_t> age;
+    for (int y = 2; y < H; y += 4)
+        for (int x = 2; x < W; x += 4) {
+            t0.points.push_back({x, y, f.d0(y, x)});
+            age.push_back(t0.points.size() % 5 == 0 ? 3 : 0);
+        }
+    const matching::CarriedLidar c = matching::carry_static_points(t0, age, f, ego(), 3);
+    assert_int_equal(c.points.points.size(), c.age.size());
+    // Each carried point is a young plane point moved by the camera's motion, a frame older.
+    size_t expected = 0;
+    cv::Mat1f want(H, W, -1.0f);
+    cv::Mat1b want_age(H, W, static_cast<uchar>(0));
+    for (size_t i = 0; i < t0.points.size(); ++i) {
+        const LidarPoint &p = t0.points[i];
+        if (age[i] >= 3 || in_box(p.x, p.y)) continue;
+        double q[3], x1, y1;
+        back_project(kCam, p.x, p.y, p.disparity, q);
+        for (int k = 0; k < 3; ++k) q[k] += kT[k];
+        pixel_of(q, x1, y1);
+        const int tx = static_cast<int>(std::lround(x1)), ty = static_cast<int>(std::lround(y1));
+        if (tx < 0 || ty < 0 || tx >= W || ty >= H) continue;
+        const float d = static_cast<float>(kCam.disparity_from_depth(q[2]));
+        if (d <= want(ty, tx)) continue;
+        expected += want(ty, tx) < 0;
+        want(ty, tx) = d;
+        want_age(ty, tx) = static_cast<uchar>(age[i] + 1);
+    }
+    std::printf("%zu of %zu points carried (%zu expected)\n", c.points.points.size(), t0.points.size(), expected);
+    assert_true(expected > 300);
+    assert_int_equal(c.points.points.size(), expected);
+    for (size_t i = 0; i < c.points.points.size(); ++i) {
+        const LidarPoint &p = c.points.points[i];
+        assert_true(std::fabs(p.disparity - want(p.y, p.x)) < 1e-3f);
+        assert_int_equal(c.age[i], want_age(p.y, p.x));
+    }
+    // Without a calibrated background motion, or with no earlier frame to keep, nothing is carried.
+    assert_true(matching::carry_static_points(t0, age, f, motion::EgoMotion{}, 3).empty());
+    assert_true(matching::carry_static_points(t0, age, f, ego(), 0).empty());
+
+    // The next pair: its own point on the first carried pixel wins; the stereo sees a nearer
+    // surface at the second and nothing at the third; the rest join, with their ages.
+    const std::vector<LidarPoint> &cp = c.points.points;
+    SparseLidar own{W, H, {{cp[0].x, cp[0].y, 9.0f}}};
+    DisparityMap d = c.points.to_map();
+    d(cp[1].y, cp[1].x) = cp[1].disparity + 5.0f;
+    d(cp[2].y, cp[2].x) = kInvalidDisparity;
+    std::vector<uint8_t> merged_age;
+    const SparseLidar merged = matching::merge_carried(own, c, d, 2.0f, merged_age);
+    assert_int_equal(merged.points.size(), cp.size() - 2);
+    assert_int_equal(merged_age.size(), merged.points.size());
+    assert_true(merged.points[0] == own.points[0]);
+    assert_int_equal(merged_age[0], 0);
+    for (size_t i = 1; i < merged.points.size(); ++i) {
+        assert_true(merged.points[i] == cp[i + 2]);
+        assert_int_equal(merged_age[i], c.age[i + 2]);
+    }
+}
+
 std::string name(int k) {
     char buf[16];
     std::snprintf(buf, sizeof buf, "%010d", k);
@@ -185,6 +250,7 @@ void stream_beats_pairs_on_a_drive(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(object_motion_is_carried_and_predicted),
+        cmocka_unit_test(static_points_are_carried),
         cmocka_unit_test(stream_beats_pairs_on_a_drive),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

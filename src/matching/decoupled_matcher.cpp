@@ -290,6 +290,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     // DIS's start and in the per-pixel choice.
     const bool prior = opt.stream_prior && r.reused_t0 && motion.calibrated && !t0_reuse->object_motion.empty();
     const bool same_step = prior && similar_steps(t0_reuse->step_us, step_us);
+    r.stream_continues = r.reused_t0 && motion.valid && motion.calibrated && similar_steps(t0_reuse->step_us, step_us);
     if (prior && !same_step)
         log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(step_us) +
                                          " us, the previous one " + std::to_string(t0_reuse->step_us) +

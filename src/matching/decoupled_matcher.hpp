@@ -21,6 +21,7 @@
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
 #include "matching/matching_options.hpp"
+#include "matching/motion_prior.hpp"
 #include "matching/scene_flow_matcher.hpp"
 
 namespace lidarflow::matching {
@@ -35,6 +36,9 @@ struct DecoupledResult {
     // tracks are off (prior_track_step 0). A pair without one is no continuous stream (a cut,
     // a swapped frame): the estimator makes no prior from it.
     bool tracked_motion = false;
+    // sgm0 came from t0_reuse, over a time step like the one that made it, and the tracks fit a
+    // calibrated motion: t0_reuse's priors (its movers, its carried points) apply to this pair.
+    bool stream_continues = false;
     // The points that guided sgm1: the t1 scan's, or where there is none (and carry_lidar), the
     // t0 points carried by the camera's motion.
     SparseLidar guide1;
@@ -51,6 +55,9 @@ struct DecoupledStereo {
     // The pair's movers as carry_object_motion leaves them at these images' pixels (the next
     // pair's prior); empty when the pair had no calibrated background motion.
     cv::Mat3f object_motion;
+    // Static LiDAR points of this and earlier pairs at these images' pixels (the next pair's
+    // extra t0 points, MatchingOptions::stream_lidar_frames); empty when off or not made.
+    CarriedLidar carried;
     int64_t step_us = 0;  // t1 - t0 of the pair that made it (FrameInput::step_us); 0 = unknown
     // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;

@@ -83,6 +83,8 @@ void MatchingOptions::validate() const {
           "flow.refine_iterations must be in [0, 100]");
     check(flow.prior_track_step >= 0 && flow.prior_track_step <= 256, "flow.prior_track_step must be in [0, 256]");
     check(flow.rigid_choice_radius >= 0 && flow.rigid_choice_radius <= 16, "flow.rigid_choice_radius must be in [0, 16]");
+    check(stream_lidar_frames >= 0 && stream_lidar_frames <= kMaxStreamLidarFrames,
+          "stream_lidar_frames must be in [0, 16]");
     stereo.validate();
     check(use_lidar || (!support_window && !const1 && !const2),
           "support_window / const1 / const2 need use_lidar");

@@ -80,6 +80,8 @@ enum class MatchVariant { ImageOnly, ImLidar, ImLidarWin, ImLidarWinConst1, Full
 // Name as in Table I ("im-only", "im+LiDAR", "im+LiDAR+win", ...).
 const char *variant_name(MatchVariant v);
 
+constexpr int kMaxStreamLidarFrames = 16;  // matching_options.cpp's message says 16
+
 struct MatchingOptions {
     MatchMethod method = MatchMethod::PatchMatch;
     FlowSearchOptions flow;  // decoupled design only
@@ -93,6 +95,9 @@ struct MatchingOptions {
     // Decoupled only, in a stream: the previous pair's movers, carried to this pair's t0, keep
     // their object motion in the flow's prior (matching/motion_prior.hpp).
     bool stream_prior = true;
+    // Decoupled only, in a stream: stages 2-4 also see the static LiDAR points of up to this many
+    // earlier frames, carried by stage 4's background motion (0 = only the pair's own points).
+    int stream_lidar_frames = 0;  // [0, kMaxStreamLidarFrames]
     stereo::GuidedSgmOptions stereo;
 
     // Pyramid: factor 0.5 per level; levels are added while the coarser image stays at least

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/limits.hpp"
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
 
@@ -103,6 +104,60 @@ cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow,
             back(ty, tx) = r;
         }
     return close_gaps(back);
+}
+
+CarriedLidar carry_static_points(const SparseLidar &points, const std::vector<uint8_t> &age,
+                                 const SceneFlowField &field, const motion::EgoMotion &ego, int max_age) {
+    CarriedLidar out;
+    out.points = SparseLidar{points.width, points.height, {}};
+    if (!ego.valid || !ego.calibrated || max_age < 1 || field.u.empty() || age.size() != points.points.size())
+        return out;
+    const cv::Size size(points.width, points.height);
+    cv::Mat1f nearest(size, 0.0f);
+    cv::Mat1b older(size, static_cast<uchar>(0));
+    for (size_t i = 0; i < points.points.size(); ++i) {
+        const LidarPoint &p = points.points[i];
+        if (age[i] >= max_age || p.x < 0 || p.y < 0 || p.x >= field.width() || p.y >= field.height() ||
+            !field.valid(p.y, p.x))
+            continue;
+        float d1 = 0, u = 0, v = 0;
+        if (!ego.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v) || !(d1 > 0.0f) ||
+            d1 > kMaxLidarDisparity)
+            continue;
+        if (std::hypot(field.u(p.y, p.x) - u, field.v(p.y, p.x) - v) > kMinImageMotion ||
+            std::fabs(field.d1(p.y, p.x) - d1) > kMinImageMotion)
+            continue;
+        const int tx = static_cast<int>(std::lround(p.x + u)), ty = static_cast<int>(std::lround(p.y + v));
+        if (tx < 0 || ty < 0 || tx >= size.width || ty >= size.height || d1 <= nearest(ty, tx)) continue;
+        nearest(ty, tx) = d1;
+        older(ty, tx) = static_cast<uint8_t>(age[i] + 1);
+    }
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x)
+            if (older(y, x)) {
+                out.points.points.push_back({x, y, nearest(y, x)});
+                out.age.push_back(older(y, x));
+            }
+    return out;
+}
+
+SparseLidar merge_carried(const SparseLidar &measured, const CarriedLidar &carried, const DisparityMap &d,
+                          float tolerance, std::vector<uint8_t> &age) {
+    SparseLidar out = measured;
+    age.assign(measured.points.size(), 0);
+    if (carried.empty() || carried.points.width != measured.width || carried.points.height != measured.height ||
+        d.size() != cv::Size(measured.width, measured.height))
+        return out;
+    cv::Mat1b held(measured.height, measured.width, static_cast<uchar>(0));
+    for (const LidarPoint &p : measured.points) held(p.y, p.x) = 1;
+    for (size_t i = 0; i < carried.points.points.size(); ++i) {
+        const LidarPoint &p = carried.points.points[i];
+        if (held(p.y, p.x) || !disparity_valid(d(p.y, p.x)) || std::fabs(d(p.y, p.x) - p.disparity) > tolerance)
+            continue;
+        out.points.push_back(p);
+        age.push_back(carried.age[i]);
+    }
+    return out;
 }
 
 }  // namespace lidarflow::matching

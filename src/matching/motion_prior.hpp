@@ -3,9 +3,13 @@
 // A stream's motion prior: what moved in the previous pair is expected to go on moving the same
 // way. The object motion of each point (its scene flow with the camera's own motion taken out)
 // is carried to the pixel where the point lands at t1, which is the next pair's t0.
+#include <cstdint>
+#include <vector>
+
 #include <opencv2/core.hpp>
 
 #include "core/camera.hpp"
+#include "core/lidar.hpp"
 #include "core/maps.hpp"
 #include "motion/ego_motion.hpp"
 
@@ -26,5 +30,27 @@ void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const 
 // `objects` at t0 carried along `flow` to the t1 pixels they land on, turned into the motion
 // t1 -> t0 under the background motion `m` (for the backward direction's prior).
 cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m);
+
+// LiDAR points of earlier frames, at the pixels of the images a stream's next pair starts from.
+struct CarriedLidar {
+    SparseLidar points;
+    std::vector<uint8_t> age;  // per point: how many frames ago it was measured (>= 1)
+    bool empty() const { return points.points.empty(); }
+};
+
+// The static points among `points` (a pair's t0 points; `age` per point, 0 = measured with this
+// pair) moved by the background motion `ego` to the t1 pixels they land on (the nearest of
+// several on one pixel), each a frame older; points older than max_age stay behind. A point is
+// static when `field` (the pair's final result) moves it as `ego` does from the point's own
+// disparity, within 1 px of flow and of d1: movers and points the result does not explain are
+// left out. Empty when ego is not valid and calibrated or max_age < 1.
+CarriedLidar carry_static_points(const SparseLidar &points, const std::vector<uint8_t> &age,
+                                 const SceneFlowField &field, const motion::EgoMotion &ego, int max_age);
+
+// `measured` with the carried points added on pixels no measurement holds, where the stereo
+// disparity `d` (of the same images) confirms them within `tolerance` px (a point now hidden,
+// or carried wrong, is not); `age` receives 0 for the measured points and the carried ages.
+SparseLidar merge_carried(const SparseLidar &measured, const CarriedLidar &carried, const DisparityMap &d,
+                          float tolerance, std::vector<uint8_t> &age);
 
 }  // namespace lidarflow::matching

@@ -29,6 +29,9 @@ constexpr double kSupportTolerance = 1.0;
 constexpr float kSupportWeight = 0.2f;
 // The confidence of a result whose inputs the quality checks flag (swapped, not rectified, ...).
 constexpr float kFlaggedConfidenceScale = 0.25f;
+// A carried LiDAR point joins a pair where its t0 stereo disparity agrees within this [px]:
+// without the check 3 % of them were > 3 px off on the synthetic drives (occlusions), with it 0.2 %.
+constexpr float kCarriedTolerance = 2.0f;
 
 void report_hidden(const SparseLidar &given, const SparseLidar &kept, const char *which) {
     const size_t removed = given.points.size() - kept.points.size();
@@ -176,6 +179,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
+        o.matching.stream_lidar_frames = 3;  // a stream's static points of 3 earlier frames
         if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;
             o.matching.flow.patch_size = 6;
@@ -309,11 +313,25 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         std::shared_ptr<matching::DecoupledStereo> next;
         bool tracked_motion = false;
-        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r, next, tracked_motion);
-        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, lidar0, lidar1, sgm, threads, r);
+        matching::CarriedLidar carried;
+        const DisparityMap sgm = run_decoupled(frame, lidar0, lidar1, cache, threads, r, next, tracked_motion, carried);
+        // A stream's earlier static points join this pair's own in stages 2-4 (the stereo keeps
+        // the pair's own: its t0 disparity is the previous pair's t1 one, made with those).
+        std::vector<uint8_t> age;
+        const SparseLidar stage_lidar0 = matching::merge_carried(lidar0, carried, sgm, kCarriedTolerance, age);
+        if (!carried.empty() && log::enabled(log::Level::Debug))
+            log::write(log::Level::Debug, std::to_string(stage_lidar0.points.size() - lidar0.points.size()) + " of " +
+                                              std::to_string(carried.points.points.size()) +
+                                              " LiDAR points of earlier frames added to this pair's " +
+                                              std::to_string(lidar0.points.size()));
+        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r);
         if (next) {
             // The next pair's prior, only from a final result with a calibrated background motion
             // that the pair's own tracks also found (stage 4 fits one even to a cut's matches).
+            // Its static points too, under the same conditions (empty when stream_lidar_frames is 0).
+            if (tracked_motion && options_.use_lidar && options_.last_stage == Stage::Interpolation)
+                next->carried = matching::carry_static_points(stage_lidar0, age, r.dense, r.ego,
+                                                              options_.matching.stream_lidar_frames);
             if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
                 if (tracked_motion) next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
                 if (next->object_motion.empty())
@@ -374,7 +392,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
 DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
                                       StreamCache *cache, int threads, EstimatorResult &r,
                                       std::shared_ptr<matching::DecoupledStereo> &next,
-                                      bool &tracked_motion) const {
+                                      bool &tracked_motion, matching::CarriedLidar &carried) const {
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
@@ -387,6 +405,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
                        "the previous frame's stereo disparity was not reused (its t1 images differ from this t0): "
                        "computed again");
         cache->last_reused_ = m.reused_t0;
+        if (m.stream_continues && options_.matching.stream_lidar_frames > 0) carried = cache->stereo_t1_->carried;
         cache->stereo_t1_.reset();
         next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();

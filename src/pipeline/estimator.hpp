@@ -205,7 +205,8 @@ private:
     // rigid background motion (DecoupledResult::tracked_motion).
     DisparityMap run_decoupled(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
                                StreamCache *cache, int threads, EstimatorResult &r,
-                               std::shared_ptr<matching::DecoupledStereo> &next, bool &tracked_motion) const;
+                               std::shared_ptr<matching::DecoupledStereo> &next, bool &tracked_motion,
+                               matching::CarriedLidar &carried) const;
     // Empties every field but output() unless options_.keep_stage_fields.
     EstimatorResult drop_stage_fields(EstimatorResult r) const;
 

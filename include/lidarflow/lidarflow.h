@@ -180,6 +180,11 @@ typedef struct lf_options lf_options_t;
  *                                                   moved in the previous pair starts this
  *                                                   pair's flow with its object motion
  *                                                   (default 1)
+ *   "matching.stream_lidar_frames"    int   [0, 16] (decoupled) in a stream of frames, stages
+ *                                                   2-4 also see the static LiDAR points of
+ *                                                   up to this many earlier frames, moved by
+ *                                                   the background motion (3 in the decoupled
+ *                                                   presets; 0 = only the pair's own points)
  *   guided SGM (matching.guided_stereo 1): census 9x7 costs, 8 or 4 paths
  *   "stereo.p1"               int   [0, 255]     penalty of a 1 px step (default 10)
  *   "stereo.p2"               int   [1, 1023]    penalty of a larger step (default 120), > p1
@@ -474,8 +479,9 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * previous frame (t0, the reference) and this one (t1): the previous frame's LiDAR is D_l^0,
  * this frame's is D_l^1. The new result replaces the previous one. In a stream the result also
  * depends on the frames before: the decoupled presets start each pair's flow from what moved
- * in the previous pair ("matching.stream_prior"), so a stream that starts later gives other
- * (at its start, less informed) results; lf_reset() forgets it. That prior is one frame
+ * in the previous pair ("matching.stream_prior") and add the static LiDAR points of the last 3
+ * frames to the pair's own ("matching.stream_lidar_frames"), so a stream that starts later
+ * gives other (at its start, less informed) results; lf_reset() forgets both. That prior is one frame
  * step's motion: a pair whose time step (from timestamp_us) differs from the previous pair's
  * by more than 25 % (a dropped frame) is computed without it, and so is the pair after one
  * whose background motion could not be tracked (a cut); the log says so.

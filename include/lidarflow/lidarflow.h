@@ -481,10 +481,10 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * depends on the frames before: the decoupled presets start each pair's flow from what moved
  * in the previous pair ("matching.stream_prior") and add the static LiDAR points of the last 3
  * frames to the pair's own ("matching.stream_lidar_frames"), so a stream that starts later
- * gives other (at its start, less informed) results; lf_reset() forgets both. That prior is one frame
- * step's motion: a pair whose time step (from timestamp_us) differs from the previous pair's
- * by more than 25 % (a dropped frame) is computed without it, and so is the pair after one
- * whose background motion could not be tracked (a cut); the log says so.
+ * gives other (at its start, less informed) results; lf_reset() forgets both. Both rest on one
+ * frame step's motion: a pair whose time step (from timestamp_us) differs from the previous
+ * pair's by more than 25 % (a dropped frame) is computed without them, and so is the pair after
+ * one whose background motion could not be tracked (a cut); the log says so.
  * With a calibration of rectify = 1 the pair is rectified first (both images raw, of the size
  * the tables were made for, made again when it changes); LiDAR entries are placed in the
  * rectified left image, and every result is in the rectified left camera.

@@ -97,12 +97,9 @@ double occ_outliers(const std::string &kitti, const fs::path &est, int component
     return parts[component]->outlier_pct();
 }
 
-// Share [%] of the pixels whose disparity differs by more than 1 px between two results.
+// Share [%] of the pixels whose disparity differs by more than 1 px between two PNG results.
 double share_off(const fs::path &a, const fs::path &b) {
-    const DisparityMap x = io::read_disparity_png(a.string()), y = io::read_disparity_png(b.string());
-    cv::Mat1f d;
-    cv::absdiff(x, y, d);
-    return 100.0 * cv::countNonZero(d > 1) / static_cast<double>(d.total());
+    return test::share_off(io::read_disparity_png(a.string()), io::read_disparity_png(b.string()));
 }
 
 void test_documented_examples(void **) {

@@ -450,10 +450,7 @@ bool same_results(const fs::path &a, const fs::path &b, int pairs) {
 
 // Share [%] of the pixels whose disparity differs by more than 1 px between two results.
 double share_off(const fs::path &a, const fs::path &b) {
-    const DisparityMap x = io::read_disparity_file(a.string()), y = io::read_disparity_file(b.string());
-    cv::Mat1f d;
-    cv::absdiff(x, y, d);
-    return 100.0 * cv::countNonZero(d > 1) / static_cast<double>(d.total());
+    return test::share_off(io::read_disparity_file(a.string()), io::read_disparity_file(b.string()));
 }
 
 // --calib (OpenCV file, camera_info pair) and --fx ... describe the drive's own rectified rig in

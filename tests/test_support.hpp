@@ -14,7 +14,10 @@
 
 #include <sys/wait.h>
 
+#include <opencv2/core.hpp>
+
 #include "core/error.hpp"
+#include "core/maps.hpp"
 
 #include <setjmp.h>
 #include <stdarg.h>
@@ -154,5 +157,12 @@ inline std::string frame_name(long k) {
 
 // A path as one single-quoted shell word.
 inline std::string quoted(const std::filesystem::path &p) { return "'" + p.string() + "'"; }
+
+// Share [%] of the pixels whose disparity differs by more than 1 px between two maps of one size.
+inline double share_off(const DisparityMap &x, const DisparityMap &y) {
+    cv::Mat1f d;
+    cv::absdiff(x, y, d);
+    return 100.0 * cv::countNonZero(d > 1) / static_cast<double>(d.total());
+}
 
 }  // namespace lidarflow::test

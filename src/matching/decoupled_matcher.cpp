@@ -288,14 +288,14 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     const int rc = opt.flow.rigid_choice_radius;
     // A stream's movers keep their motion: it joins the background's in the prior, and so in
     // DIS's start and in the per-pixel choice.
+    const bool same_step = r.reused_t0 && similar_steps(t0_reuse->step_us, step_us);
+    r.stream_continues = same_step && motion.valid && motion.calibrated;
     const bool prior = opt.stream_prior && r.reused_t0 && motion.calibrated && !t0_reuse->object_motion.empty();
-    const bool same_step = prior && similar_steps(t0_reuse->step_us, step_us);
-    r.stream_continues = r.reused_t0 && motion.valid && motion.calibrated && similar_steps(t0_reuse->step_us, step_us);
     if (prior && !same_step)
         log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(step_us) +
                                          " us, the previous one " + std::to_string(t0_reuse->step_us) +
                                          " us (a dropped frame?)");
-    const cv::Mat3f objects = same_step ? t0_reuse->object_motion : cv::Mat3f();
+    const cv::Mat3f objects = prior && same_step ? t0_reuse->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
     add_object_motion(motion, r.sgm0, objects, prior0);
     const cv::Mat2f flow0 =

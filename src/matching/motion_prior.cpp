@@ -7,6 +7,7 @@
 #include "core/limits.hpp"
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
+#include "lidar/projection.hpp"
 
 namespace lidarflow::matching {
 namespace {
@@ -127,8 +128,8 @@ CarriedLidar carry_static_points(const SparseLidar &points, const std::vector<ui
         if (std::hypot(field.u(p.y, p.x) - u, field.v(p.y, p.x) - v) > kMinImageMotion ||
             std::fabs(field.d1(p.y, p.x) - d1) > kMinImageMotion)
             continue;
-        const int tx = static_cast<int>(std::lround(p.x + u)), ty = static_cast<int>(std::lround(p.y + v));
-        if (tx < 0 || ty < 0 || tx >= size.width || ty >= size.height || d1 <= nearest(ty, tx)) continue;
+        int tx = 0, ty = 0;
+        if (!lidar::nearest_pixel(p.x + u, p.y + v, size, tx, ty) || d1 <= nearest(ty, tx)) continue;
         nearest(ty, tx) = d1;
         older(ty, tx) = static_cast<uint8_t>(age[i] + 1);
     }
@@ -148,11 +149,11 @@ SparseLidar merge_carried(const SparseLidar &measured, const CarriedLidar &carri
     if (carried.empty() || carried.points.width != measured.width || carried.points.height != measured.height ||
         d.size() != cv::Size(measured.width, measured.height))
         return out;
-    cv::Mat1b held(measured.height, measured.width, static_cast<uchar>(0));
-    for (const LidarPoint &p : measured.points) held(p.y, p.x) = 1;
+    const DisparityMap held = measured.to_map();
     for (size_t i = 0; i < carried.points.points.size(); ++i) {
         const LidarPoint &p = carried.points.points[i];
-        if (held(p.y, p.x) || !disparity_valid(d(p.y, p.x)) || std::fabs(d(p.y, p.x) - p.disparity) > tolerance)
+        if (disparity_valid(held(p.y, p.x)) || !disparity_valid(d(p.y, p.x)) ||
+            std::fabs(d(p.y, p.x) - p.disparity) > tolerance)
             continue;
         out.points.push_back(p);
         age.push_back(carried.age[i]);

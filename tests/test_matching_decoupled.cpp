@@ -298,6 +298,13 @@ void threads_follow_the_idle_cpus(void **) {
     for (pid_t pid : busy) waitpid(pid, nullptr, 0);
     std::printf("%d CPUs: %d thread(s) now, %d with every CPU busy in other processes\n", cpus, now, loaded);
     assert_int_equal(loaded, 1);
+    // One of our idle workers caught running by the kernel's count and asleep at one of our own
+    // reads is still ours, not another process's; the caller always counts as ours.
+    assert_int_equal(other_runnable_tasks(2, 2, 1), 0);
+    assert_int_equal(other_runnable_tasks(2, 1, 2), 0);
+    assert_int_equal(other_runnable_tasks(3, 1, 2), 1);
+    assert_int_equal(other_runnable_tasks(2, 0, 0), 1);
+    assert_int_equal(other_runnable_tasks(1, 3, 3), 0);
     // Releasing the OpenMP pool is harmless outside a region and refused inside one.
     release_openmp_workers();
     int inside = 0;

@@ -68,12 +68,19 @@ int default_threads() {
     return std::clamp(cpus, 1, 256);  // 256: the "threads" key's upper bound
 }
 
+int other_runnable_tasks(int running, int own_before, int own_after) {
+    return std::max(0, running - std::max({1, own_before, own_after}));  // the caller is one of ours
+}
+
 int threads_for_now(int requested) {
     if (requested <= 1) return std::max(1, requested);
+    // Our idle workers spin a while and then sleep: one read of our threads could miss one that
+    // the kernel's count caught running and take it for another process. A thread counts as ours
+    // when it runs at either read around the kernel's count.
+    const int before = own_runnable_threads();
     const int cpus = usable_cpus(), running = runnable_tasks();
     if (cpus <= 0 || running <= 0) return requested;
-    const int others = std::max(0, running - std::max(1, own_runnable_threads()));  // the caller is one of ours
-    return std::clamp(cpus - others, 1, requested);
+    return std::clamp(cpus - other_runnable_tasks(running, before, own_runnable_threads()), 1, requested);
 }
 
 void release_openmp_workers() {

@@ -11,11 +11,17 @@ int default_threads();
 
 // How many of `requested` OpenMP threads a frame should use now: the CPUs this process may run
 // on, less the tasks other processes keep runnable at this moment (the kernel's count in
-// /proc/loadavg less this process's own runnable threads), at least 1 and at most `requested`. A team larger than the idle CPUs makes
+// /proc/loadavg less this process's own runnable threads, read before and after it), at least 1 and at most `requested`. A team larger than the idle CPUs makes
 // every barrier wait for a descheduled thread, so a shared machine ran 2 threads slower than 1.
 // Results never depend on it (every stage is deterministic for any thread count). Without
 // /proc it returns `requested`. Thread-safe; never throws.
 int threads_for_now(int requested);
+
+// The tasks of other processes among `running` (the kernel's count of runnable tasks, the caller
+// included), when this process had own_before and own_after runnable threads just before and
+// just after that count was read: the larger of the two is this process's share (at least the
+// caller). Never negative.
+int other_runnable_tasks(int running, int own_before, int own_after);
 
 // Ends the calling thread's OpenMP worker pool when it is outside any parallel region, so that
 // its idle workers sleep (they exit) instead of spin-waiting for the next region (libgomp spins

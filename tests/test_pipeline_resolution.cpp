@@ -132,6 +132,8 @@ void upscale_keeps_edges_the_image_shows(void **) {
     cv::cvtColor(full, full3, cv::COLOR_GRAY2BGR);
     const EdgeGuide bgr(small3, full3, 3.0f);
     assert_true(test::same_field(upscale_field(s, 8, 2, &bgr), edge));
+    // Rows shared among threads give the same field.
+    assert_true(test::same_field(upscale_field(s, 8, 2, &guide, 3), edge));
     assert_true(test::throws_code(ErrorCode::SizeMismatch, [&] { upscale_field(s, 16, 4, &guide); }));
 }
 

@@ -293,7 +293,7 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
     const EdgeGuide edges0(small.left0, frame.left0, options_.upscale_edge_step);
     const EdgeGuide edges1(small.left1, frame.left1, r.backward.u.empty() ? 0.0f : options_.upscale_edge_step);
     for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense}) {
-        *f = upscale_field(*f, W, H, f == &r.backward ? &edges1 : &edges0);  // empty fields stay empty
+        *f = upscale_field(*f, W, H, f == &r.backward ? &edges1 : &edges0, threads);  // empty fields stay empty
         if (options_.use_lidar && f != &r.backward) restore_lidar_d0(*f, frame.lidar0);
     }
     r.timings.push_back({"upscale", seconds_since(t)});

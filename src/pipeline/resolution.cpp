@@ -95,7 +95,8 @@ int edge_corner(const SceneFlowField &s, const EdgeGuide &g, int x, int y, int x
 
 }  // namespace
 
-SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges) {
+SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges,
+                             int threads) {
     if (small.u.empty()) return {};
     const int w = small.width(), h = small.height();
     require(width >= w && height >= h, ErrorCode::InvalidArgument, "upscale_field: target smaller than the field");
@@ -108,6 +109,7 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
     if (edge)
         require(edges->small.size() == small.d0.size() && edges->full.size() == cv::Size(width, height),
                 ErrorCode::SizeMismatch, "upscale_field: the edge guide's images differ in size from the fields");
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < height; ++y) {
         const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
         const int y0 = std::min(std::max(0, h - 2), static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);

@@ -34,7 +34,9 @@ struct EdgeGuide {
     float step = 0;         // [small px]; 0 blends everywhere
     EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, float step);
 };
-SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges = nullptr);
+// Rows are shared among `threads` OpenMP threads (the result does not depend on it).
+SceneFlowField upscale_field(const SceneFlowField &small, int width, int height, const EdgeGuide *edges = nullptr,
+                             int threads = 1);
 
 // Restores the measured d0 at the LiDAR pixels of an upscaled field where it is valid (the small
 // grid averaged them with their neighbours). Points must lie inside the field.

@@ -202,6 +202,7 @@ int run_bench(int argc, char **argv) {
         std::map<std::string, std::vector<double>> stage;
         std::vector<std::string> order;
         std::vector<double> total, base;
+        int fewer = 0;  // frames adaptive_threads ran on fewer threads than asked
         pipeline::EstimatorResult last;
         eval::Estimate base_est;
         bench::release_free_heap();
@@ -217,6 +218,7 @@ int run_bench(int argc, char **argv) {
                 stage[t.name].push_back(t.seconds);
             }
             total.push_back(last.total_seconds);
+            fewer += last.threads < opt.threads;
         }
         const double rss_pipeline = bench::peak_rss_mib();
         // Streaming: pair, reversed pair, pair, ... through one cache (t0 of each = t1 before).
@@ -235,6 +237,7 @@ int run_bench(int argc, char **argv) {
         for (int r = 0; r <= a.runs; ++r) {
             const pipeline::EstimatorResult sr = estimator.run(r % 2 ? rev : c.input, &cache);
             if (r == 0) continue;  // the first frame of a stream has nothing to reuse
+            fewer += sr.threads < opt.threads;
             reused += cache.last_reused() ? 1 : 0;
             stream_total.push_back(sr.total_seconds);
             for (const pipeline::StageTime &t : sr.timings) stream_stage[t.name].push_back(t.seconds);
@@ -254,6 +257,10 @@ int run_bench(int argc, char **argv) {
                     bench::median(total), rss_pipeline, rss_before);
         std::printf("  %-22s %7.3f s   peak RSS %s (%d of %d frames reused the previous t1)\n",
                     "streaming, per frame", bench::median(stream_total), rss_stream.c_str(), reused, a.runs);
+        if (fewer > 0)
+            std::printf("  %d of %d frames ran on fewer than %d threads: other processes kept CPUs busy "
+                        "(adaptive_threads; --set adaptive_threads=0 for a fixed count)\n",
+                        fewer, 2 * a.runs, opt.threads);
         print_scores("lidarflow", ours, bench::median(total));
         print_scores("OpenCV SGBM+DIS", eval::evaluate_frame(c.gt, base_est, eo), bench::median(base));
         // The stages other than matching (features, SGM, checks, interpolation, scaling) bound what

@@ -45,6 +45,7 @@ void thread_count_does_not_change_results(void **) {
     const EstimatorResult one = Estimator(small_options(1)).run(in);
     for (int threads : {2, 3}) {
         const EstimatorResult many = Estimator(small_options(threads)).run(in);
+        assert_int_equal(many.threads, threads);  // without adaptive_threads, the count asked for
         assert_true(same_field(one.forward, many.forward));
         assert_true(same_field(one.backward, many.backward));
         assert_true(same_field(one.after_sgm, many.after_sgm));
@@ -57,6 +58,7 @@ void thread_count_does_not_change_results(void **) {
         for (const char *n : {"features", "matching_forward", "matching_backward", "sgm", "consistency", "interpolation"})
             named += t.name == n ? 1 : 0;
     assert_int_equal(named, 6);
+    assert_int_equal(one.threads, 1);
 }
 
 // A wide LiDAR support window links grid seeds to LiDAR seeds several strips away; the matcher

@@ -231,6 +231,10 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
         ~ReleaseWorkers() { release_openmp_workers(); }
     } release_at_end;
     const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
+    if (threads < options_.threads && log::enabled(log::Level::Debug))
+        log::write(log::Level::Debug, "this frame runs on " + std::to_string(threads) + " of " +
+                                          std::to_string(options_.threads) +
+                                          " threads: other processes keep the other CPUs busy (adaptive_threads)");
     // Every stage, and the LiDAR d0 restored after a scaled run, sees only the points in use.
     const FrameInput frame{input.left0,
                            input.right0,
@@ -260,6 +264,7 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
         for (SceneFlowField *f : {&r.forward, &r.backward, &r.after_sgm, &r.after_fb, &r.sparse, &r.dense})
             if (!f->confidence.empty()) f->confidence *= kFlaggedConfidenceScale;
     r.quality = std::move(verdict);
+    r.threads = threads;
     r.timings.insert(r.timings.begin(), {"input_quality", quality_seconds});
     r.total_seconds += quality_seconds;
     return r;

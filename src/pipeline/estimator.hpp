@@ -142,6 +142,9 @@ struct EstimatorResult {
 
     std::vector<StageTime> timings;  // in execution order
     double total_seconds = 0;
+    // The OpenMP threads the frame ran with: options.threads, or fewer where adaptive_threads
+    // left busy CPUs to other processes (core/threads.hpp). Results never depend on it.
+    int threads = 0;
 };
 
 // What a stream of frames keeps between consecutive Estimator::run calls: the newer stereo

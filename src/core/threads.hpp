@@ -10,9 +10,10 @@ namespace lidarflow {
 int default_threads();
 
 // How many of `requested` OpenMP threads a frame should use now: the CPUs this process may run
-// on, less the tasks other processes keep runnable at this moment (the kernel's count in
-// /proc/loadavg less this process's own runnable threads, read before and after it), at least 1 and at most `requested`. A team larger than the idle CPUs makes
-// every barrier wait for a descheduled thread, so a shared machine ran 2 threads slower than 1.
+// on, less the tasks other processes keep runnable at this moment (other_runnable_tasks: the
+// kernel's count in /proc/loadavg less this process's own runnable threads, read before and
+// after it), at least 1 and at most `requested`. A team larger than the idle CPUs makes every
+// barrier wait for a descheduled thread, so a shared machine ran 2 threads slower than 1.
 // Results never depend on it (every stage is deterministic for any thread count). Without
 // /proc it returns `requested`. Thread-safe; never throws.
 int threads_for_now(int requested);

@@ -410,7 +410,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
                        "the previous frame's stereo disparity was not reused (its t1 images differ from this t0): "
                        "computed again");
         cache->last_reused_ = m.reused_t0;
-        if (m.stream_continues && options_.matching.stream_lidar_frames > 0) carried = cache->stereo_t1_->carried;
+        if (m.stream_continues) carried = cache->stereo_t1_->carried;  // empty when stream_lidar_frames is 0
         cache->stereo_t1_.reset();
         next = std::make_shared<matching::DecoupledStereo>();
         next->left = frame.left1.clone();

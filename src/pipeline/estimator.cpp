@@ -185,10 +185,16 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
             o.matching.flow.patch_size = 6;
             // "fast": fewer DIS patches for time; flow detail matters most with a dense scan.
             o.matching.flow.patch_stride = name == "fast" ? 3 : 2;
+            // Stage 4's flow tolerance nearer the evaluator's 3 px at full size (the scaled
+            // 1.95 px loses the drives' fast movers).
+            o.interpolation.flow_inlier = 2.5f;
         } else {  // every stage at 0.55; stage 4 with fewer, larger superpixels and neighbours
             o.processing_scale = 0.55;
             o.interpolation.superpixels.region_size = 20;
             o.interpolation.num_neighbors = 128;
+            // Stage 4's tolerances are the full-size 3 px (flow) and 2 px (disparity) at 0.55.
+            o.interpolation.flow_inlier = 1.65f;
+            o.interpolation.disparity_inlier = 1.1f;
         }
         return o;
     }

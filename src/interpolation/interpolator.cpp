@@ -888,6 +888,7 @@ int initial_hypotheses(int hypotheses, int size, int largest) {
 
 RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : options_(options) {
     validate_options(options_);
+    prepare_superpixels();
     if (options_.edges.method == EdgeMethod::StructuredForest)
         sed_ = std::make_shared<const SedModel>(options_.edges.sed_model_path);
 }

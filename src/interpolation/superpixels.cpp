@@ -92,6 +92,11 @@ LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *_
 
 }  // namespace
 
+void prepare_superpixels() {
+    cv::Mat1f planes[3];
+    to_lab_planes(cv::Mat(1, 1, CV_8UC3, cv::Scalar::all(0)), planes);
+}
+
 Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o) {
     require(!image.empty(), ErrorCode::InvalidArgument, "superpixels: empty image");
     require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),

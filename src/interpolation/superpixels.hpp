@@ -31,4 +31,8 @@ struct Superpixels {
 // unsupported image or options out of range. Deterministic.
 Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &options);
 
+// Makes OpenCV build its 8-bit Lab tables (~70 ms, once per process) now rather than in the
+// first compute_superpixels: a stream's first frame is then as fast as the next. Thread-safe.
+void prepare_superpixels();
+
 }  // namespace lidarflow::interpolation

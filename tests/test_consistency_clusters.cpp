@@ -105,6 +105,38 @@ void lidar_references_keep_their_cluster(void **) {
     assert_int_equal(r.field.valid(3, 3), 1);
 }
 
+// Clusters are found in strips of rows, one per thread: regions that wind across the strips'
+// borders (a random field, values on a coarse random grid) come out the same for any count.
+void clusters_do_not_depend_on_threads(void **) {
+    const int w = 64, h = 97;
+    SceneFlowField f = SceneFlowField::zeros(w, h);
+    cv::RNG rng(7);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (rng.uniform(0, 10) == 0) continue;  // holes
+            const float c = static_cast<float>(((x / 3) * 7 + (y / 2) * 13) % 5);
+            set_match(f, x, y, c + rng.uniform(0.0f, 0.5f), c, 10 + c, 10 + c);
+        }
+    const LidarReference lidar = LidarReference::build(lidar_at(w, h, {{5, 50, 11.0f}, {40, 24, 12.0f}}), w, h, 3);
+    for (int step : {1, 2})
+        for (bool eight : {true, false}) {
+            ConsistencyOptions opt = cluster_opt(12);
+            opt.grid_step = step;
+            opt.cluster_8_neighbours = eight;
+            opt.threads = 1;
+            const ClusterResult one = remove_small_clusters(f, lidar, cv::Mat1b(), opt);
+            assert_true(one.removed_clusters > 0 && one.removed_clusters < one.clusters);
+            for (int threads : {2, 3, 5, 16}) {
+                opt.threads = threads;
+                const ClusterResult many = remove_small_clusters(f, lidar, cv::Mat1b(), opt);
+                assert_int_equal(many.clusters, one.clusters);
+                assert_int_equal(many.removed_clusters, one.removed_clusters);
+                assert_int_equal(many.removed_matches, one.removed_matches);
+                assert_int_equal(cv::countNonZero(many.field.valid != one.field.valid), 0);
+            }
+        }
+}
+
 void sparsify_keeps_most_consistent_per_block(void **) {
     // 10 x 7: blocks of 3x3, cut to 1 column / 1 row at the right / bottom border.
     const int w = 10, h = 7;
@@ -277,6 +309,7 @@ int main() {
         cmocka_unit_test(each_component_can_split_a_cluster),
         cmocka_unit_test(neighbourhood_and_grid_step),
         cmocka_unit_test(lidar_references_keep_their_cluster),
+        cmocka_unit_test(clusters_do_not_depend_on_threads),
         cmocka_unit_test(sparsify_keeps_most_consistent_per_block),
         cmocka_unit_test(sparsify_prefers_matches_inside_consistent_regions),
         cmocka_unit_test(lidar_pixels_survive_every_filter),

@@ -305,6 +305,22 @@ void threads_follow_the_idle_cpus(void **) {
     assert_int_equal(other_runnable_tasks(3, 1, 2), 1);
     assert_int_equal(other_runnable_tasks(2, 0, 0), 1);
     assert_int_equal(other_runnable_tasks(1, 3, 3), 0);
+    // Another process runnable for a moment (the first sample) does not take threads when the
+    // second sample finds it gone; one that stays does.
+    auto samples = [](std::vector<int> seq, int requested, int cpus, int *pauses) {
+        size_t next = 0;
+        return threads_from_samples(requested, cpus, [&] { return seq.at(next++); }, [&] { ++*pauses; });
+    };
+    int pauses = 0;
+    assert_int_equal(samples({1, 0}, 2, 2, &pauses), 2);
+    assert_int_equal(pauses, 1);
+    assert_int_equal(samples({1, 1}, 2, 2, &pauses), 1);
+    assert_int_equal(samples({0}, 2, 2, &pauses), 2);
+    assert_int_equal(samples({-1}, 4, 2, &pauses), 4);
+    assert_int_equal(pauses, 2);
+    assert_int_equal(samples({2, 1}, 4, 4, &pauses), 3);
+    assert_int_equal(samples({1, 3}, 4, 4, &pauses), 3);
+    assert_int_equal(samples({5, 5}, 4, 4, &pauses), 1);
     // Releasing the OpenMP pool is harmless outside a region and refused inside one.
     release_openmp_workers();
     int inside = 0;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -72,15 +73,33 @@ int other_runnable_tasks(int running, int own_before, int own_after) {
     return std::max(0, running - std::max({1, own_before, own_after}));  // the caller is one of ours
 }
 
-int threads_for_now(int requested) {
+int threads_from_samples(int requested, int cpus, const std::function<int()> &other_tasks,
+                         const std::function<void()> &pause) {
     if (requested <= 1) return std::max(1, requested);
+    if (cpus <= 0) return requested;
+    auto idle = [&] {
+        const int others = other_tasks();
+        return others < 0 ? requested : std::clamp(cpus - others, 1, requested);
+    };
+    const int first = idle();
+    if (first >= requested) return first;
+    pause();
+    return std::max(first, idle());
+}
+
+int threads_for_now(int requested) {
     // Our idle workers spin a while and then sleep: one read of our threads could miss one that
     // the kernel's count caught running and take it for another process. A thread counts as ours
     // when it runs at either read around the kernel's count.
-    const int before = own_runnable_threads();
-    const int cpus = usable_cpus(), running = runnable_tasks();
-    if (cpus <= 0 || running <= 0) return requested;
-    return std::clamp(cpus - other_runnable_tasks(running, before, own_runnable_threads()), 1, requested);
+    const auto other_tasks = [] {
+        const int before = own_runnable_threads();
+        const int running = runnable_tasks();
+        return running <= 0 ? -1 : other_runnable_tasks(running, before, own_runnable_threads());
+    };
+    // A process that hands over the frame (a camera driver, the LCM publisher) is often still
+    // running when the frame starts; 2 ms later it has gone back to sleep.
+    return threads_from_samples(requested, usable_cpus(), other_tasks,
+                                [] { std::this_thread::sleep_for(std::chrono::milliseconds(2)); });
 }
 
 void release_openmp_workers() {

@@ -2,6 +2,8 @@
 #pragma once
 // How the estimator shares the machine with other processes (docs/ARCHITECTURE.md, "Threads").
 
+#include <functional>
+
 namespace lidarflow {
 
 // The default "threads" of the library, the CLI, Python and the bridge: the CPUs this process
@@ -10,13 +12,21 @@ namespace lidarflow {
 int default_threads();
 
 // How many of `requested` OpenMP threads a frame should use now: the CPUs this process may run
-// on, less the tasks other processes keep runnable at this moment (other_runnable_tasks: the
-// kernel's count in /proc/loadavg less this process's own runnable threads, read before and
-// after it), at least 1 and at most `requested`. A team larger than the idle CPUs makes every
-// barrier wait for a descheduled thread, so a shared machine ran 2 threads slower than 1.
-// Results never depend on it (every stage is deterministic for any thread count). Without
-// /proc it returns `requested`. Thread-safe; never throws.
+// on, less the tasks other processes keep runnable (other_runnable_tasks: the kernel's count in
+// /proc/loadavg less this process's own runnable threads, read before and after it), at least 1
+// and at most `requested`; a count that would take threads away is read again 2 ms later
+// (threads_from_samples), so a process busy for a moment does not halve a frame. A team larger
+// than the idle CPUs makes every barrier wait for a descheduled thread, so a shared machine ran
+// 2 threads slower than 1. Results never depend on it (every stage is deterministic for any
+// thread count). Without /proc it returns `requested`. Thread-safe; never throws.
 int threads_for_now(int requested);
+
+// threads_for_now's rule on given samples: other_tasks() returns the other processes' runnable
+// tasks (< 0: unknown, all `requested` threads). When the first sample leaves fewer than
+// `requested` of the `cpus` idle, pause() runs and the second sample decides unless the first
+// left more threads. Never throws unless the callbacks do.
+int threads_from_samples(int requested, int cpus, const std::function<int()> &other_tasks,
+                         const std::function<void()> &pause);
 
 // The tasks of other processes among `running` (the kernel's count of runnable tasks, the caller
 // included), when this process had own_before and own_after runnable threads just before and

@@ -115,6 +115,14 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
             return nullptr;
         }
     }
+    int64_t in_flight = 1;
+    if (lf_options_get_int(b->options_, "frames_in_flight", &in_flight) == LF_OK && in_flight != 1) {
+        // Each message is published as its frame's pair completes; late, out-of-step results
+        // would carry the wrong frame's LiDAR flags.
+        *error = "estimator option frames_in_flight=" + std::to_string(in_flight) +
+                 ": the bridge computes one pair at a time (frames_in_flight must be 1)";
+        return nullptr;
+    }
     if (config.fixed_calibration) {
         // Fail at start-up, not at the first frame, when the C ABI rejects the options or camera.
         lf_estimator_t *probe = nullptr;

@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: MIT
-// lf_create / lf_destroy / lf_push_frame / lf_reset: the estimator handle of the C ABI. A push
-// builds the new frame and result aside and commits them only when everything succeeded, so a
-// failed call leaves the handle exactly as it was.
+// lf_create / lf_destroy / lf_push_frame / lf_flush / lf_reset: the estimator handle of the C ABI.
+// A push builds the new frame and result aside and commits them only when everything succeeded,
+// so a failed call leaves the handle exactly as it was; with frames in flight, a pair's own
+// failure is handed over in place of its result, and the result readers report it.
 #include <chrono>
 #include <cstdio>
+#include <exception>
+#include <functional>
+#include <future>
 #include <limits>
 #include <memory>
 #include <string>
@@ -25,12 +29,16 @@ namespace {
 ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
 
 // Holds the handle's busy flag for one mutating call; throws BadState when another holds it.
+// The handle whose pair the calling thread computes (a frame worker's log callback runs there).
+thread_local const lf_estimator_t *pair_owner = nullptr;
+
 class BusyScope {
 public:
     BusyScope(lf_estimator_t *e, const char *call) : e_(e) {
-        require(!e_->busy.exchange(true), ErrorCode::BadState,
-                std::string(call) + ": the estimator is inside another call (lf_push_frame or lf_reset, e.g. "
-                                    "from its log callback); the handle allows one call at a time");
+        // From a frame worker of this handle, waiting for its own pair would never return.
+        require(pair_owner != e_ && !e_->busy.exchange(true), ErrorCode::BadState,
+                std::string(call) + ": the estimator is inside another call (lf_push_frame, lf_flush or lf_reset, "
+                                    "e.g. from its log callback); the handle allows one call at a time");
     }
     ~BusyScope() { e_->busy.store(false); }
     BusyScope(const BusyScope &) = delete;
@@ -71,6 +79,62 @@ std::unique_ptr<Result> make_result(const lidarflow::pipeline::EstimatorResult &
     return out;
 }
 
+// The scene flow of prev -> cur, as lf_push_frame serves it. cache: the stream's, or null for a
+// pair on its own (frames in flight).
+std::unique_ptr<Result> compute_pair(const lf_estimator_t &e, const Frame &prev, const Frame &cur,
+                                     lidarflow::pipeline::StreamCache *cache, double rectify_seconds) {
+    lidarflow::pipeline::FrameInput in;
+    in.left0 = prev.left;
+    in.right0 = prev.right;
+    in.left1 = cur.left;
+    in.right1 = cur.right;
+    in.lidar0 = prev.lidar;
+    in.lidar1 = cur.lidar;
+    in.camera = e.calibration.camera;
+    in.calibration_size = e.calibration.rig.rect.image_size;
+    in.step_us = cur.timestamp_us - prev.timestamp_us;
+    std::unique_ptr<Result> result = make_result(e.estimator.run(in, cache), prev.timestamp_us, cur.timestamp_us);
+    if (e.calibration.rig.rectify) {
+        result->rectified = true;
+        result->timings.insert(result->timings.begin(), {"rectify", rectify_seconds});
+        result->total_seconds += rectify_seconds;
+    }
+    return result;
+}
+
+// A pair computed on a frame worker: its errors name the pair, since a later call reports them.
+std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::shared_ptr<const Frame> prev,
+                                                  std::shared_ptr<const Frame> cur, double rectify_seconds) {
+    return [e, prev = std::move(prev), cur = std::move(cur), rectify_seconds] {
+        char context[112];
+        std::snprintf(context, sizeof context, "estimator %p pair %lld -> %lld us", static_cast<const void *>(e),
+                      static_cast<long long>(prev->timestamp_us), static_cast<long long>(cur->timestamp_us));
+        pair_owner = e;
+        struct Clear {
+            ~Clear() { pair_owner = nullptr; }
+        } clear;
+        const lidarflow::log::Scope log_scope(context);
+        try {
+            return compute_pair(*e, *prev, *cur, nullptr, rectify_seconds);
+        } catch (const lidarflow::Error &err) {
+            throw lidarflow::Error(err.code(), std::string(context) + ": " + err.what());
+        }
+    };
+}
+
+// The oldest pair in flight: its result, or (result null) its error in *error. bad_alloc passes.
+std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *error) {
+    std::future<std::unique_ptr<Result>> f = e.pool->take_oldest();
+    try {
+        return f.get();
+    } catch (const std::bad_alloc &) {
+        throw;
+    } catch (...) {
+        *error = std::current_exception();
+        return nullptr;
+    }
+}
+
 }  // namespace
 
 extern "C" {
@@ -85,8 +149,13 @@ LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *ca
         const OptionValues &values = options ? options->values : defaults;
         lidarflow::pipeline::EstimatorOptions estimator_options = values.estimator;
         estimator_options.keep_stage_fields = false;  // a result holds the output field only
-        *out = new lf_estimator(estimator_options, cal);
-        (*out)->strict_input = values.estimator.strict_input;
+        const int in_flight = estimator_options.frames_in_flight;
+        estimator_options.threads = estimator_options.per_frame_threads();
+        auto handle = std::make_unique<lf_estimator>(estimator_options, cal);
+        handle->strict_input = values.estimator.strict_input;
+        if (in_flight > 1)
+            handle->pool = std::make_unique<lidarflow::OrderedPool<std::unique_ptr<Result>>>(in_flight);
+        *out = handle.release();
         return static_cast<int32_t>(LF_OK);
     });
 }
@@ -104,7 +173,8 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         std::snprintf(context, sizeof context, "estimator %p frame %lld us", static_cast<void *>(estimator),
                       static_cast<long long>(timestamp_us));
         const lidarflow::log::Scope log_scope(context);
-        const Frame *prev = estimator->previous.get();
+        const std::shared_ptr<const Frame> prev_frame = estimator->previous;
+        const Frame *prev = prev_frame.get();
         require(!prev || timestamp_us > prev->timestamp_us, ErrorCode::InvalidArgument,
                 "timestamp " + std::to_string(timestamp_us) + " us is not after the previous frame's (" +
                     (prev ? std::to_string(prev->timestamp_us) : std::string()) + " us)");
@@ -112,7 +182,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
                 "left and right have different formats (" + std::to_string(left->format) + " and " +
                     std::to_string(right->format) + ")");
 
-        auto frame = std::make_unique<Frame>();
+        auto frame = std::make_shared<Frame>();
         frame->timestamp_us = timestamp_us;
         frame->left = convert_image(*left, "left");
         frame->right = convert_image(*right, "right");
@@ -147,26 +217,23 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         frame->lidar = convert_lidar(lidar, size, estimator->calibration);
 
         std::unique_ptr<Result> result;
-        if (prev) {
-            lidarflow::pipeline::FrameInput in;
-            in.left0 = prev->left;
-            in.right0 = prev->right;
-            in.left1 = frame->left;
-            in.right1 = frame->right;
-            in.lidar0 = prev->lidar;
-            in.lidar1 = frame->lidar;
-            in.camera = estimator->calibration.camera;
-            in.calibration_size = rig.rect.image_size;
-            in.step_us = timestamp_us - prev->timestamp_us;
-            result = make_result(estimator->estimator.run(in, &estimator->stream), prev->timestamp_us, timestamp_us);
-            if (rig.rectify) {
-                result->rectified = true;
-                result->timings.insert(result->timings.begin(), {"rectify", rectify_seconds});
-                result->total_seconds += rectify_seconds;
+        bool delivered = false;      // frames in flight: the oldest pair was handed over
+        std::exception_ptr failed;   // ... and had failed (the readers report it)
+        if (prev && estimator->pool) {
+            // The new pair runs beside the older ones while the oldest is waited for.
+            estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds));
+            if (estimator->pool->full()) {
+                delivered = true;
+                result = take_oldest_pair(*estimator, &failed);
             }
+        } else if (prev) {
+            result = compute_pair(*estimator, *prev, *frame, &estimator->stream, rectify_seconds);
         }
         // Commit: nothing below can throw.
-        if (result) estimator->result = std::move(result);
+        if (result || delivered) {
+            estimator->result = std::move(result);
+            estimator->pair_error = failed;
+        }
         estimator->previous = std::move(frame);
         estimator->rectifier = std::move(rectifier);
         estimator->size_warned = estimator->size_warned || warn_size;
@@ -178,9 +245,24 @@ LF_API int32_t lf_reset(lf_estimator_t *estimator) {
     return guarded(sink_of(estimator), "lf_reset", [&] {
         require_non_null(estimator, "estimator");
         const BusyScope busy(estimator, "lf_reset");
+        if (estimator->pool) estimator->pool->drain();
         estimator->previous.reset();
         estimator->result.reset();
+        estimator->pair_error = nullptr;
         estimator->stream.clear();
+        return static_cast<int32_t>(LF_OK);
+    });
+}
+
+LF_API int32_t lf_flush(lf_estimator_t *estimator) {
+    return guarded(sink_of(estimator), "lf_flush", [&] {
+        require_non_null(estimator, "estimator");
+        const BusyScope busy(estimator, "lf_flush");
+        require(estimator->pool && estimator->pool->in_flight() > 0, ErrorCode::NotReady,
+                "no pair in flight (with frames_in_flight 1 every push computes its pair)");
+        std::exception_ptr failed;
+        estimator->result = take_oldest_pair(*estimator, &failed);
+        estimator->pair_error = failed;
         return static_cast<int32_t>(LF_OK);
     });
 }

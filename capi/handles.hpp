@@ -3,6 +3,7 @@
 // What the opaque C handles are. Private to capi/.
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <memory>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "core/ordered_pool.hpp"
 #include "io/rectify.hpp"
 #include "io/rig.hpp"
 #include "pipeline/estimator.hpp"
@@ -63,8 +65,11 @@ struct lf_estimator {
     bool size_warned = false;    // the calibration-size warning was logged (once per handle)
     // Tables for the pushed size when calibration.rig.rectify; made at the first push.
     std::shared_ptr<const lidarflow::io::Rectifier> rectifier;
-    std::unique_ptr<lidarflow::capi::Frame> previous;  // null before the first frame / after reset
+    // Null before the first frame / after reset; shared with the pairs in flight that read it.
+    std::shared_ptr<const lidarflow::capi::Frame> previous;
     std::unique_ptr<lidarflow::capi::Result> result;   // null until two frames were pushed
+    // Frames in flight: why the pair handed over last has no result (the readers report it).
+    std::exception_ptr pair_error;
     // The newer pair's descriptors, reused by the next push (frame k's t1 is frame k+1's t0).
     lidarflow::pipeline::StreamCache stream;
     mutable std::string error;                          // lf_last_error
@@ -72,4 +77,7 @@ struct lf_estimator {
     // same handle (its log callback, which may run on any of the call's threads) is refused
     // instead of freeing the frame the outer call is reading.
     std::atomic<bool> busy{false};
+    // With "frames_in_flight" > 1: the pairs being computed, oldest first. Declared last: it is
+    // destroyed (waiting for its jobs, which read the members above) first.
+    std::unique_ptr<lidarflow::OrderedPool<std::unique_ptr<lidarflow::capi::Result>>> pool;
 };

@@ -24,9 +24,14 @@ ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr)
 
 const Result &ready_result(const lf_estimator_t *h) {
     require_non_null(h, "estimator");
-    require(h->result != nullptr, ErrorCode::NotReady,
-            h->previous ? "no result yet: one frame pushed, the result comes with the second"
-                        : "no result yet: push two frames first");
+    if (!h->result && h->pair_error) std::rethrow_exception(h->pair_error);
+    require(h->result != nullptr, ErrorCode::NotReady, [&] {
+        if (h->pool && h->pool->in_flight() > 0)
+            return "no result yet: " + std::to_string(h->pool->in_flight()) +
+                   " pair(s) in flight, each handed over frames_in_flight - 1 pushes later or by lf_flush";
+        return std::string(h->previous ? "no result yet: one frame pushed, the result comes with the second"
+                                       : "no result yet: push two frames first");
+    });
     return *h->result;
 }
 

@@ -103,6 +103,18 @@ typedef struct lf_options lf_options_t;
  *                                        shared machine never runs it slower than one thread;
  *                                        0 = always "threads". Idle workers sleep between stages
  *                                        and frames either way
+ *   "frames_in_flight" int    [1, 64]    pairs one handle computes at once (default 1), each
+ *                                        on a thread of its own with threads /
+ *                                        frames_in_flight OpenMP threads (at least 1): more
+ *                                        pairs per second where one pair does not use all the
+ *                                        threads. Above 1, lf_push_frame starts the pair;
+ *                                        when that makes frames_in_flight pairs in flight it
+ *                                        waits for the oldest and hands it over (results in
+ *                                        order, frames_in_flight - 1 pushes late; lf_flush
+ *                                        hands over the rest at the end). Each
+ *                                        pair is then computed on its own, as after lf_reset:
+ *                                        without the stream's priors and the reuse of the
+ *                                        previous pair's stereo
  *   "preset"           string "default"  resets every option except "threads" to the preset:
  *                                        "default" (matching.method "decoupled": the LiDAR-
  *                                        guided SGM stereo and DIS flow at processing_scale
@@ -468,7 +480,8 @@ typedef struct lf_estimator lf_estimator_t;
 LF_API int32_t lf_create(const lf_options_t *options, const lf_calibration_t *calibration,
                          lf_estimator_t **out);
 
-/* Frees the estimator and everything it owns (views from it become invalid). NULL is a no-op.
+/* Frees the estimator and everything it owns (views from it become invalid), after waiting for
+ * its pairs in flight. NULL is a no-op.
  * Not concurrently with another call on the same estimator, nor from its log callback. */
 LF_API void lf_destroy(lf_estimator_t *estimator);
 
@@ -500,18 +513,37 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * other than the calibration's image_width x image_height with the option "input.strict"),
  * LF_ERR_BAD_STATE (called while lf_push_frame or lf_reset runs on the same estimator, e.g.
  * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
- * unchanged: the previous frame and the previous result stay. One thread at a time per estimator (this and every function below
- * that takes one); distinct estimators may push concurrently. */
+ * unchanged: the previous frame and the previous result stay.
+ * With "frames_in_flight" N > 1 the call starts computing the pair on one of the handle's own
+ * threads (which may call the log callback) and, when that makes N pairs in flight, waits for
+ * the oldest and makes its result the current one: the result of the pair that ended with
+ * frame k comes with the push of frame k + N - 1 (or lf_flush). The errors above are
+ * then this frame's; a pair that fails is handed over without a result: lf_has_result is 0
+ * and the result readers (lf_get_result_info, ...) return its error, whose message names the
+ * pair's timestamps.
+ * One thread at a time per estimator (this and every function below that takes one);
+ * distinct estimators may push concurrently. */
 LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
                              const lf_image_t *right, const lf_lidar_t *lidar);
 
+/* With "frames_in_flight" > 1: waits for the oldest pair in flight and hands it over as
+ * lf_push_frame does (its result becomes the current one; a failed pair leaves none, and the
+ * readers return its error). At the end of a stream, take every remaining result with
+ *     while (lf_flush(est) == LF_OK) if (lf_has_result(est)) ... read the result ...
+ * Errors: LF_ERR_INVALID_ARGUMENT (NULL), LF_ERR_NOT_READY (no pair in flight; always so with
+ * "frames_in_flight" 1, whose pushes compute their pair), LF_ERR_BAD_STATE (as lf_push_frame),
+ * LF_ERR_OUT_OF_MEMORY. One thread at a time per estimator. Added in 0.3.0. */
+LF_API int32_t lf_flush(lf_estimator_t *estimator);
+
 /* Forgets the previous frame, the result and what the stream carried (the next push starts a
- * new sequence, any size, as on a fresh estimator); views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL),
+ * new sequence, any size, as on a fresh estimator); pairs in flight are waited for and dropped;
+ * views from the estimator become invalid. Errors: LF_ERR_INVALID_ARGUMENT (NULL),
  * LF_ERR_BAD_STATE (as lf_push_frame: called from inside a call on the same estimator).
  * One thread at a time per estimator. */
 LF_API int32_t lf_reset(lf_estimator_t *estimator);
 
-/* 1 when a result is available (two frames pushed since creation or lf_reset), else 0
+/* 1 when a result is available (two frames pushed since creation or lf_reset; with
+ * "frames_in_flight" N, a pair handed over and not failed), else 0
  * (also for NULL). Changes nothing, not even the last error. One thread at a time per
  * estimator. */
 LF_API int32_t lf_has_result(const lf_estimator_t *estimator);

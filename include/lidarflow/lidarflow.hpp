@@ -767,6 +767,19 @@ public:
     }
 #endif
 
+    // With the option "frames_in_flight" > 1 (pushes hand results over late, in order): waits
+    // for the oldest pair in flight and hands it over (lf_flush). Returns false when no pair was
+    // in flight; true otherwise, then has_result() says whether it has a result (a failed pair
+    // has none: the readers throw its error). At the end of a stream:
+    //     while (est.flush()) if (est.has_result()) ... read the result ...
+    // Throws Error(LF_ERR_BAD_STATE / LF_ERR_OUT_OF_MEMORY).
+    bool flush() {
+        const int32_t status = lf_flush(handle_);
+        if (status == LF_ERR_NOT_READY) return false;
+        detail::check(status, [this] { return lf_last_error(handle_); });
+        return true;
+    }
+
     // Forgets the previous frame and the result (lf_reset): the next push starts a new sequence,
     // of any size. ResultViews become invalid.
     void reset() { detail::check(lf_reset(handle_), [this] { return lf_last_error(handle_); }); }

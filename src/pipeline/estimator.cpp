@@ -146,6 +146,8 @@ void EstimatorOptions::validate() const {
     require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "threads must be in [1, 256]");
     require(last_stage >= Stage::Matching && last_stage <= Stage::Interpolation, ErrorCode::InvalidArgument,
             "last_stage out of range");
+    require(frames_in_flight >= 1 && frames_in_flight <= 64, ErrorCode::InvalidArgument,
+            "frames_in_flight must be in [1, 64]");
     require(lidar_cell >= 0 && lidar_cell <= 64, ErrorCode::InvalidArgument, "lidar_cell must be in [0, 64]");
     require(std::isfinite(processing_scale) && processing_scale >= 0.125 && processing_scale <= 1.0,
             ErrorCode::InvalidArgument, "processing_scale must be in [0.125, 1]");

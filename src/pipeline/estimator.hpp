@@ -61,6 +61,13 @@ struct EstimatorOptions {
     // refused instead of logged as a warning once. Checked by the callers that hold the
     // calibration (the C ABI handle, `lidarflow run`) with io::image_size_mismatch.
     bool strict_input = false;
+    // Pairs one stream computes at once, in [1, 64] (docs/ARCHITECTURE.md, "Frames in flight").
+    // Above 1 the callers that stream (the C ABI handle, `lidarflow sequence`) compute each pair
+    // on its own (no StreamCache, so without the stream's priors) on an OrderedPool, each frame
+    // on per_frame_threads() threads; Estimator::run itself does not read it.
+    int frames_in_flight = 1;
+    // threads shared by the frames in flight: threads / frames_in_flight, at least 1.
+    int per_frame_threads() const { return threads / frames_in_flight > 1 ? threads / frames_in_flight : 1; }
 
     // LiDAR points the camera cannot see (behind an object's edge, seen past it from the
     // LiDAR's position) are removed from lidar0 and lidar1 before every stage, at the input's

@@ -48,6 +48,9 @@ const OptionKey kKeys[] = {
     {"adaptive_threads",
      "each frame uses at most the CPUs other processes leave idle (at least one); 0 = always threads",
      OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(adaptive_threads)},
+    {"frames_in_flight",
+     "pairs computed at once, each on threads / frames_in_flight threads, results in order and without the stream's priors",
+     OptionKeyType::Int, 1, 64, false, Extra::None, LF_INT_FIELD(frames_in_flight)},
     {"preset",
      "resets every key except threads to the named preset; set it before other keys",
      OptionKeyType::String, 0, 0, false, Extra::None, nullptr, nullptr, nullptr, nullptr},
@@ -525,6 +528,8 @@ std::string result_settings_text(const EstimatorOptions &options) {
     std::string text;
     for (const OptionKey &k : kKeys) {
         if (is_key(k, "threads") || is_key(k, "adaptive_threads") || is_key(k, "preset")) continue;
+        // Results made one pair at a time say so; a stream's settings read as before the key existed.
+        if (is_key(k, "frames_in_flight") && options.frames_in_flight == 1) continue;
         text += k.name;
         text += '=';
         if (k.type == OptionKeyType::String) {

@@ -54,7 +54,8 @@ const char *get_option_string(const OptionValues &values, const OptionKey &k);
 
 // Every option that can change a result, one "key=value" per line in table order (floats to 17
 // digits): what a result written by these options records of them. Leaves out the keys that
-// only schedule the work (threads, adaptive_threads) and the preset's name (its values are in).
+// only schedule the work (threads, adaptive_threads), frames_in_flight at 1 (the stream) and the
+// preset's name (its values are in).
 std::string result_settings_text(const EstimatorOptions &options);
 
 // The option values of a named preset (threads kept from `current`). Throws

@@ -106,6 +106,27 @@ void test_log_handler_not_from_a_handler(void **) {
     assert_int_equal(refused, calls);
 }
 
+// frames_in_flight 2: the pair comes one push late, or from flush(), equal to the pair alone.
+void test_frames_in_flight(void **) {
+    Scene sc;
+    lf::Estimator alone(sc.calibration(), scene_options());
+    assert_false(alone.flush());  // one pair at a time: nothing is ever in flight
+    push_pair(alone, sc);
+    const lf::Result single = alone.result();
+    lf::Options o = scene_options();
+    o.set("frames_in_flight", 2);
+    lf::Estimator e(sc.calibration(), o);
+    push_pair(e, sc);
+    assert_false(e.has_result());
+    assert_true(e.flush());
+    assert_true(e.has_result());
+    assert_false(e.flush());
+    const lf::Result r = e.result();
+    assert_int_equal(r.info.t1_us, 100000);
+    assert_true(same_bits(r.u, single.u) && same_bits(r.v, single.v) && same_bits(r.d0, single.d0) &&
+                same_bits(r.d1, single.d1));
+}
+
 // The C++ layer refuses what C would silently misread: a key or value with an embedded NUL,
 // and (with OpenCV) a 3 x N Mat of points; a rigid lidar_to_camera is checked by the C ABI.
 void test_cpp_checks(void **) {
@@ -581,6 +602,7 @@ int main() {
         cmocka_unit_test(test_version), cmocka_unit_test(test_options),  cmocka_unit_test(test_errors),
         cmocka_unit_test(test_dense_run), cmocka_unit_test(test_quality), cmocka_unit_test(test_nan_holes), cmocka_unit_test(test_inputs),
         cmocka_unit_test(test_log_handler_not_from_a_handler), cmocka_unit_test(test_cpp_checks),
+        cmocka_unit_test(test_frames_in_flight),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -202,6 +202,7 @@ def _declare(lib):
         "lf_destroy": (None, [c.c_void_p]),
         "lf_push_frame": (i32, [c.c_void_p, i64, P(Image), P(Image), P(Lidar)]),
         "lf_reset": (i32, [c.c_void_p]),
+        "lf_flush": (i32, [c.c_void_p]),
         "lf_has_result": (i32, [c.c_void_p]),
         "lf_get_result_info": (i32, [c.c_void_p, P(ResultInfo)]),
         "lf_get_timing": (i32, [c.c_void_p, u32, P(c.c_char_p), P(c.c_double)]),

@@ -226,6 +226,19 @@ class Estimator:
             self._last_timestamp = timestamp
             return bool(lib.lf_has_result(h))
 
+    def flush(self):
+        """With the option frames_in_flight > 1 (push hands results over late, in order): waits
+        for the oldest pair in flight and hands it over. Returns None when no pair was in
+        flight, else whether it has a result (a failed pair has none; reading it raises the
+        pair's error). At the end of a stream: ``while est.flush() is not None: ...``."""
+        with self._busy:
+            h = self._h()
+            status = lib.lf_flush(h)
+            if status == _lib.ERR_NOT_READY:
+                return None
+            _check(status, h)
+            return bool(lib.lf_has_result(h))
+
     def reset(self):
         """Forgets the previous frame and the result (a new sequence, any size, may follow)."""
         with self._busy:

@@ -490,6 +490,31 @@ class Lifetime(unittest.TestCase):
 
 
 class Threads(unittest.TestCase):
+    def test_frames_in_flight_hand_results_over_late_and_equal_single_pairs(self):
+        # A drive past the plane: frame k is the texture shifted by k * 3 px.
+        scene = make_scene(tu=3, tv=0)
+        frames = [(scene[0], scene[1]), (scene[2], scene[3])]
+        frames += [(np.roll(f[0], 3 * k, axis=1), np.roll(f[1], 3 * k, axis=1)) for k in (1, 2) for f in frames[:1]]
+        lidar = grid_lidar(10)
+        single = []
+        for k in range(len(frames) - 1):
+            with lidarflow.Estimator(options=dict(FAST, threads=2), **CAL) as est:
+                est.push(*frames[k], lidar, timestamp=k)
+                est.push(*frames[k + 1], lidar, timestamp=k + 1)
+                single.append(est.result())
+        handed = []
+        with lidarflow.Estimator(options=dict(FAST, threads=2, frames_in_flight=2), **CAL) as est:
+            self.assertIsNone(est.flush())  # nothing in flight yet
+            for k, f in enumerate(frames):
+                if est.push(*f, lidar, timestamp=k):  # pair k - 2 comes with frame k
+                    self.assertEqual(est.info()["t1_us"], k - 1)
+                    handed.append(est.result())
+            while est.flush() is not None:
+                handed.append(est.result())
+        self.assertEqual(len(handed), len(single))
+        for k in range(len(single)):
+            self.assertTrue(same(handed[k], single[k]), "pair %d differs" % k)
+
     def test_n_handles_in_n_threads_match_serial_runs(self):
         cases = [(make_scene(seed=s, tu=tu, tv=tv), grid_lidar(10)) for s, tu, tv in ((1, 3, 1), (2, -2, 0), (3, 1, 2))]
         serial = [run_pair(scene, lidar) for scene, lidar in cases]

@@ -26,12 +26,14 @@ using lidarflow::pipeline::OptionValues;
 
 namespace {
 
-ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
-
-// Holds the handle's busy flag for one mutating call; throws BadState when another holds it.
 // The handle whose pair the calling thread computes (a frame worker's log callback runs there).
 thread_local const lf_estimator_t *pair_owner = nullptr;
 
+// A call from one of the handle's frame workers leaves its message in lf_last_error(NULL): the
+// handle's own message belongs to the thread that owns the handle.
+ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h && pair_owner != h ? &h->error : nullptr); }
+
+// Holds the handle's busy flag for one mutating call; throws BadState when another holds it.
 class BusyScope {
 public:
     BusyScope(lf_estimator_t *e, const char *call) : e_(e) {

@@ -448,6 +448,25 @@ bool same_results(const fs::path &a, const fs::path &b, int pairs) {
     return true;
 }
 
+// --frames-in-flight computes each pair on its own (no stream) and writes them in order: every
+// pair equals a run of that pair alone, and differs from the stream's.
+void test_frames_in_flight(void **) {
+    const Fixture &f = fixture();
+    const fs::path out = f.dir / "in_flight", alone = f.dir / "alone";
+    const std::string base = "sequence --drive " + q(f.drive) + " --format npy --preset " + std::string(kPreset);
+    const test::CliRun r = test::run_cli(base + " --out " + q(out) + " --threads 2 --frames-in-flight 3");
+    expect_code(r, 0);
+    expect_contains(r, "4 pairs: 4 computed, 0 skipped (existing), 0 failed");
+    expect_contains(r, "[4/4] 3->4");
+    for (int k = 0; k + 1 < kFrames; ++k)
+        expect_code(test::run_cli(base + " --out " + q(alone) + " --threads 1 --quiet --frames " + std::to_string(k) +
+                                  ":" + std::to_string(k + 1)),
+                    0);
+    assert_true(same_results(out, alone, kFrames - 1));
+    assert_false(same_results(out, f.clean, kFrames - 1));
+    expect_code(test::run_cli(base + " --out " + q(out) + " --frames-in-flight 0"), 2);
+}
+
 // Share [%] of the pixels whose disparity differs by more than 1 px between two results.
 double share_off(const fs::path &a, const fs::path &b) {
     return test::share_off(io::read_disparity_file(a.string()), io::read_disparity_file(b.string()));
@@ -607,6 +626,7 @@ int main() {
         cmocka_unit_test(test_warm_up),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_rig_options),
+        cmocka_unit_test(test_frames_in_flight),
         cmocka_unit_test(test_accuracy_against_ground_truth),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

@@ -11,7 +11,8 @@
 #   tools/dev.sh build-clang configure + build everything with Debian's clang 14 (build-clang/)
 #   tools/dev.sh test-tsan   build the library with clang 14 + ThreadSanitizer
 #                            (build-tsan/), run the C ABI concurrency suites under it (N handles
-#                            on N threads; the log callback replaced while frames run)
+#                            on N threads; the log callback replaced while frames run; a
+#                            handle's own frame workers)
 #   tools/dev.sh fuzz [SECONDS] [TARGET...]  build the libFuzzer targets (clang 14, ASan + UBSan,
 #                            build-fuzz/) and run each for SECONDS (default 60); fails on a finding
 #   tools/dev.sh fuzz-runs [RUNS] [TARGET...]  the same, each for RUNS executions in one process
@@ -20,6 +21,10 @@
 #                            reader (bindings/python/tests_lcm/fuzz_lcm.py; default 10^6
 #                            executions); fails on a finding, left in build/fuzz-lcm-findings/
 #   tools/dev.sh package     build + Debian packages (CPack) in build/packages/, checked by lintian
+#   tools/dev.sh pairs-rate [PRESET] [THREADS...]  build, render a 12-frame 1242x375 synthetic
+#                            drive, and print `lidarflow sequence`'s pairs/s at each thread count
+#                            (default: 1 2 and every power of two up to the CPUs) as one stream
+#                            and with frames in flight (2, 4, ... up to the thread count)
 #   tools/dev.sh bridge-rate [PRESET] [HZ] [LOOPS]  build, then play the KITTI frames of
 #                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
 #                            2), LOOPS times (default 10), through the bridge at PRESET (default
@@ -151,6 +156,28 @@ bridge_rate() {
     rm -f "$log"
 }
 
+pairs_rate() {
+    local preset="$1"; shift
+    local threads=("$@") cli="$root/build/tools/lidarflow/lidarflow" dir
+    if [ ${#threads[@]} -eq 0 ]; then
+        threads=(1 2)
+        for ((t = 4; t <= $(nproc); t *= 2)); do threads+=("$t"); done
+    fi
+    dir="$(mktemp -d)"
+    "$cli" synth --drive "$dir/drive" --frames 12 --width 1242 --height 375 --seed 1 >/dev/null
+    printf '%-8s %-7s %-17s %s\n' preset threads frames_in_flight pairs/s
+    for t in "${threads[@]}"; do
+        for ((f = 1; f <= t; f *= 2)); do
+            rm -rf "$dir/out"
+            local line
+            line="$("$cli" sequence --drive "$dir/drive" --out "$dir/out" --preset "$preset" --threads "$t" \
+                --frames-in-flight "$f" --poses none 2>/dev/null | grep -o '[0-9.]* pairs/s')"
+            printf '%-8s %-7s %-17s %s\n' "$preset" "$t" "$f" "${line% pairs/s}"
+        done
+    done
+    rm -rf "$dir"
+}
+
 case "${1:-}" in
     deps) deps ;;
     build) deps; build build ;;
@@ -188,13 +215,16 @@ case "${1:-}" in
         # The library and the suite: CI's clang build of the core (the fuzz step compiles the
         # bridge's decoders and the readers with clang too). Everything else gets its clang build
         # from build-clang; in CI it is built twice by gcc already.
-        cmake --build "$root/build-tsan" -j "$jobs" --target lidarflow test_capi_concurrent test_capi_log
+        cmake --build "$root/build-tsan" -j "$jobs" --target lidarflow test_capi_concurrent test_capi_log \
+            test_capi_frames_in_flight
         # OpenMP stays at one thread per handle in the suite: libgomp is not instrumented, so its
         # barriers would be reported as races. The threads under test are the caller's.
         TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" LF_TEST_THREADS=4 LF_TEST_ROUNDS=6 \
             "$root/build-tsan/tests/test_capi_concurrent"
         # The log callback replaced while frames run on three threads.
-        TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" "$root/build-tsan/tests/test_capi_log" ;;
+        TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" "$root/build-tsan/tests/test_capi_log"
+        # A handle's own frame workers (frames_in_flight), one OpenMP thread per pair.
+        TSAN_OPTIONS="halt_on_error=1 ${TSAN_OPTIONS:-}" "$root/build-tsan/tests/test_capi_frames_in_flight" ;;
     fuzz|fuzz-runs)
         deps
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # libFuzzer, sanitizer runtimes, OpenMP
@@ -217,5 +247,6 @@ case "${1:-}" in
         lintian --fail-on error "$root"/build/packages/*.deb
         ls -1 "$root"/build/packages/*.deb ;;
     bridge-rate) deps; build build; shift; bridge_rate "${1:-default}" "${2:-2}" "${3:-10}" ;;
+    pairs-rate) deps; build build; shift; pairs_rate "${1:-realtime}" "${@:2}" ;;
     *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;
 esac

@@ -515,7 +515,8 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
  * unchanged: the previous frame and the previous result stay.
  * With "frames_in_flight" N > 1 the call starts computing the pair on one of the handle's own
- * threads (which may call the log callback) and, when that makes N pairs in flight, waits for
+ * threads (which may call the log callback: lf_push_frame, lf_flush and lf_reset on the same
+ * handle from there return LF_ERR_BAD_STATE with the message in lf_last_error(NULL)) and, when that makes N pairs in flight, waits for
  * the oldest and makes its result the current one: the result of the pair that ended with
  * frame k comes with the push of frame k + N - 1 (or lf_flush). The errors above are
  * then this frame's; a pair that fails is handed over without a result: lf_has_result is 0

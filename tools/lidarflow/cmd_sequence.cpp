@@ -9,8 +9,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
+#include <functional>
+#include <future>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -26,6 +30,7 @@
 #include "rig_args.hpp"
 #include "sequence_poses.hpp"
 #include "core/error.hpp"
+#include "core/ordered_pool.hpp"
 #include "io/calib.hpp"
 #include "io/drive_folder.hpp"
 #include "io/output_folder.hpp"
@@ -169,6 +174,7 @@ int run_sequence(int argc, char **argv) {
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
+               {"frames-in-flight", true, "N    pairs computed at once, each on threads / N threads, written in order; each pair on its own, without the stream's priors (default 1: one stream)"},
                {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
                {"warm-up", true, "N    with --frames A:B, start the stream N frames before A: pairs before A are computed for the stream's priors, not written (default 0)"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
@@ -193,8 +199,16 @@ int run_sequence(int argc, char **argv) {
     for (const std::string &a : given)
         for (const std::string &item : split_list(a)) assignments.push_back(item);
     pipeline::apply_option_assignments(opt, assignments);
+    if (args.has("frames-in-flight")) {
+        const long n = args.integer("frames-in-flight", 1);
+        require(n >= 1 && n <= 64, ErrorCode::InvalidArgument,
+                "sequence: --frames-in-flight must be in [1, 64], got " + std::to_string(n));
+        opt.frames_in_flight = static_cast<int>(n);
+    }
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
-    const pipeline::Estimator estimator(opt);  // checks the options before any file is read
+    pipeline::EstimatorOptions per_pair = opt;
+    per_pair.threads = opt.per_frame_threads();
+    const pipeline::Estimator estimator(per_pair);  // checks the options before any file is read
     const bool skip_existing = args.flag("skip-existing");
     const long warm_up = args.integer("warm-up", 0);
     require(warm_up >= 0 && warm_up <= 1000, ErrorCode::InvalidArgument,
@@ -284,12 +298,64 @@ int run_sequence(int argc, char **argv) {
     std::map<long, cv::Matx34d> motions;  // pair t0 -> its metric ego-motion [R | t]
     std::optional<Frame> prev;
     pipeline::StreamCache stream;
+    // What a pair writes once it is computed (now, or in its turn with frames in flight).
+    struct Pair {
+        long t0 = 0, k = 0;  // its frames
+        std::string id;
+        std::vector<std::string> files;
+        bool no_points = false;
+        uint64_t settings = 0;
+    };
+    struct Computed {
+        pipeline::EstimatorResult r;
+        double seconds = 0;
+    };
+    const auto finish = [&](const Pair &p, const std::function<Computed()> &compute) {
+        std::optional<Computed> c;
+        try {
+            c = compute();
+        } catch (const Error &e) {
+            if (tty) std::fprintf(stderr, "\r\033[K");
+            std::fprintf(stderr, "sequence: pair %s: %s\n", pair_text(p.t0).c_str(), e.what());
+            stream.clear();
+            lose(p.t0, "failed");
+        }
+        if (!c) return;
+        const pipeline::EstimatorResult &r = c->r;
+        const std::optional<cv::Matx34d> ego = metric_ego(r);
+        if (ego) motions[p.t0] = *ego;
+        write_result_files(out, p.id, r.output(), formats);
+        write_result_manifest(out, p.id, p.settings, p.files, ego);
+        ++computed;
+        computed_image_only += p.no_points ? 1 : 0;
+        quality.add(r.quality.flags);
+        std::string what = (p.no_points ? "image-only in " : "in ") + format_duration(c->seconds);
+        if (!r.quality.ok()) what += ", quality: " + r.quality.summary();
+        if (static_cast<size_t>(p.k) < stamps.seconds.size()) {
+            char dt[48];
+            std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
+                          stamps.seconds[static_cast<size_t>(p.k)] - stamps.seconds[static_cast<size_t>(p.t0)]);
+            what += dt;
+        }
+        progress(p.t0, what);
+    };
     // Warm-up: the frames before the range feed the stream only (a part of a drive then gets the
     // priors a whole run would have had); their problems are not the range's.
     const auto pair_input = [&](const Frame &a, const Frame &b) {
         return pipeline::FrameInput{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
     };
+    // Frames in flight: pairs on their own (no stream), written in their turn.
+    const std::unique_ptr<OrderedPool<Computed>> pool =
+        opt.frames_in_flight > 1 ? std::make_unique<OrderedPool<Computed>>(opt.frames_in_flight) : nullptr;
+    std::deque<Pair> in_flight;
+    const auto finish_oldest = [&] {
+        std::future<Computed> f = pool->take_oldest();
+        const Pair p = in_flight.front();
+        in_flight.pop_front();
+        finish(p, [&] { return f.get(); });
+    };
     const auto warm_pair = [&](const Frame &a, const Frame &b) {
+        if (pool) return;  // pairs on their own have no stream to warm up
         try {
             estimator.run(pair_input(a, b), &stream);
         } catch (const Error &) {
@@ -339,45 +405,32 @@ int run_sequence(int argc, char **argv) {
             if (no_points) image_only.insert(t0);
             const uint64_t pair_settings = no_points ? image_only_settings : settings;
             std::optional<cv::Matx34d> ego;
+            const Pair pair{t0, k, id, files, no_points, pair_settings};
             if (skip_existing && result_manifest_matches(out, id, pair_settings, files, ego)) {
                 if (ego) motions[t0] = *ego;
                 ++skipped;
                 progress(t0, "exists, skipped");
+            } else if (pool) {
+                pool->submit([&estimator, &pair_input, a = *prev, b = *cur] {
+                    const Stopwatch clock;
+                    Computed c{estimator.run(pair_input(a, b)), 0};
+                    c.seconds = clock.seconds();
+                    return c;
+                });
+                in_flight.push_back(pair);
+                if (pool->full()) finish_oldest();
             } else {
-                const pipeline::FrameInput in = pair_input(*prev, *cur);
-                const Stopwatch pair_clock;
-                std::optional<pipeline::EstimatorResult> r;
-                try {
-                    r = estimator.run(in, &stream);
-                } catch (const Error &e) {
-                    if (tty) std::fprintf(stderr, "\r\033[K");
-                    std::fprintf(stderr, "sequence: pair %s: %s\n", pair_text(t0).c_str(), e.what());
-                    stream.clear();
-                    lose(t0, "failed");
-                }
-                if (r) {
-                    ego = metric_ego(*r);
-                    if (ego) motions[t0] = *ego;
-                    write_result_files(out, id, r->output(), formats);
-                    write_result_manifest(out, id, pair_settings, files, ego);
-                    const double s = pair_clock.seconds();
-                    ++computed;
-                    computed_image_only += no_points ? 1 : 0;
-                    quality.add(r->quality.flags);
-                    std::string what = (no_points ? "image-only in " : "in ") + format_duration(s);
-                    if (!r->quality.ok()) what += ", quality: " + r->quality.summary();
-                    if (static_cast<size_t>(k) < stamps.seconds.size()) {
-                        char dt[48];
-                        std::snprintf(dt, sizeof dt, ", frames %.3f s apart",
-                                      stamps.seconds[static_cast<size_t>(k)] - stamps.seconds[static_cast<size_t>(t0)]);
-                        what += dt;
-                    }
-                    progress(t0, what);
-                }
+                finish(pair, [&] {
+                    const Stopwatch clock;
+                    Computed c{estimator.run(pair_input(*prev, *cur), &stream), 0};
+                    c.seconds = clock.seconds();
+                    return c;
+                });
             }
         }
         prev = std::move(cur);
     }
+    while (pool && pool->in_flight() > 0) finish_oldest();
     if (tty) std::fprintf(stderr, "\r\033[K");
     if (write_poses) {
         // A part of a drive (--frames) gets a file of its own: parts may share OUT.

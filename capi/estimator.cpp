@@ -4,6 +4,7 @@
 // so a failed call leaves the handle exactly as it was; with frames in flight, a pair's own
 // failure is handed over in place of its result, and the result readers report it.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <functional>
@@ -105,9 +106,12 @@ std::unique_ptr<Result> compute_pair(const lf_estimator_t &e, const Frame &prev,
 }
 
 // A pair computed on a frame worker: its errors name the pair, since a later call reports them.
+// `index`: its place in the sequence; `prior`: the movers of the pair `lag` before it, or null.
 std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::shared_ptr<const Frame> prev,
-                                                  std::shared_ptr<const Frame> cur, double rectify_seconds) {
-    return [e, prev = std::move(prev), cur = std::move(cur), rectify_seconds] {
+                                                  std::shared_ptr<const Frame> cur, double rectify_seconds,
+                                                  int64_t index, int lag,
+                                                  std::shared_ptr<const lidarflow::matching::DecoupledStereo> prior) {
+    return [e, prev = std::move(prev), cur = std::move(cur), rectify_seconds, index, lag, prior = std::move(prior)] {
         char context[112];
         std::snprintf(context, sizeof context, "estimator %p pair %lld -> %lld us", static_cast<const void *>(e),
                       static_cast<long long>(prev->timestamp_us), static_cast<long long>(cur->timestamp_us));
@@ -117,7 +121,12 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
         } clear;
         const lidarflow::log::Scope log_scope(context);
         try {
-            return compute_pair(*e, *prev, *cur, nullptr, rectify_seconds);
+            lidarflow::pipeline::StreamCache cache;
+            cache.set_in_flight(lag, prior);
+            std::unique_ptr<Result> result = compute_pair(*e, *prev, *cur, &cache, rectify_seconds);
+            result->pair_index = index;
+            result->prior_for_later = cache.prior_for_later();
+            return result;
         } catch (const lidarflow::Error &err) {
             throw lidarflow::Error(err.code(), std::string(context) + ": " + err.what());
         }
@@ -125,10 +134,18 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
 }
 
 // The oldest pair in flight: its result, or (result null) its error in *error. bad_alloc passes.
+// Its motion prior is kept for the pair frames_in_flight after it.
 std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *error) {
     std::future<std::unique_ptr<Result>> f = e.pool->take_oldest();
+    e.prior.reset();
+    e.prior_pair = -1;
     try {
-        return f.get();
+        std::unique_ptr<Result> r = f.get();
+        e.prior = r->prior_for_later;
+        e.prior_pair = r->pair_index;
+        e.prior_t0_us = r->t0_us;
+        e.prior_t1_us = r->t1_us;
+        return r;
     } catch (const std::bad_alloc &) {
         throw;
     } catch (...) {
@@ -222,8 +239,25 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         bool delivered = false;      // frames in flight: the oldest pair was handed over
         std::exception_ptr failed;   // ... and had failed (the readers report it)
         if (prev && estimator->pool) {
-            // The new pair runs beside the older ones while the oldest is waited for.
-            estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds));
+            // The new pair runs beside the older ones while the oldest is waited for. Its prior
+            // is that of the pair capacity() before it, handed over by now (deterministic).
+            const int lag = static_cast<int>(estimator->pool->capacity());
+            const int64_t index = estimator->pairs_started;
+            std::shared_ptr<const lidarflow::matching::DecoupledStereo> prior;
+            if (estimator->prior_pair == index - lag && estimator->prior) {
+                // Carried lag steps of its own length: the frames between must keep that pace.
+                const int64_t step = estimator->prior_t1_us - estimator->prior_t0_us;
+                const double expected = static_cast<double>(lag - 1) * static_cast<double>(step);
+                const double gap = static_cast<double>(prev->timestamp_us - estimator->prior_t1_us);
+                if (std::abs(gap - expected) <= 0.25 * expected)
+                    prior = estimator->prior;
+                else
+                    lidarflow::log::write(lidarflow::log::Level::Info,
+                                          "no motion prior for this pair: the frames since the pair that made it are "
+                                          "not evenly spaced (a dropped frame?)");
+            }
+            estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds, index, lag, prior));
+            ++estimator->pairs_started;
             if (estimator->pool->full()) {
                 delivered = true;
                 result = take_oldest_pair(*estimator, &failed);
@@ -248,6 +282,9 @@ LF_API int32_t lf_reset(lf_estimator_t *estimator) {
         require_non_null(estimator, "estimator");
         const BusyScope busy(estimator, "lf_reset");
         if (estimator->pool) estimator->pool->drain();
+        estimator->pairs_started = 0;
+        estimator->prior.reset();
+        estimator->prior_pair = -1;
         estimator->previous.reset();
         estimator->result.reset();
         estimator->pair_error = nullptr;

@@ -51,6 +51,10 @@ struct Result {
     pipeline::EgoState ego_state = pipeline::EgoState::NotRun;
     quality::Report quality;  // of the inputs (lf_get_quality)
     bool rectified = false;   // the pair was rectified inside (lf_result_info_t::rectified)
+    // Frames in flight: the pair's place in its sequence (0 = the first pair after lf_reset)
+    // and its movers for the pair frames_in_flight pairs later (StreamCache::set_in_flight).
+    int64_t pair_index = 0;
+    std::shared_ptr<const matching::DecoupledStereo> prior_for_later;
 };
 
 }  // namespace lidarflow::capi
@@ -77,6 +81,12 @@ struct lf_estimator {
     // same handle (its log callback, which may run on any of the call's threads) is refused
     // instead of freeing the frame the outer call is reading.
     std::atomic<bool> busy{false};
+    // Frames in flight: pairs started since lf_reset, and the motion prior of the pair handed
+    // over last (prior_pair: its pair_index; -1 none) for the pair frames_in_flight later.
+    int64_t pairs_started = 0;
+    std::shared_ptr<const lidarflow::matching::DecoupledStereo> prior;
+    int64_t prior_pair = -1;
+    int64_t prior_t0_us = 0, prior_t1_us = 0;  // that pair's frames
     // With "frames_in_flight" > 1: the pairs being computed, oldest first. Declared last: it is
     // destroyed (waiting for its jobs, which read the members above) first.
     std::unique_ptr<lidarflow::OrderedPool<std::unique_ptr<lidarflow::capi::Result>>> pool;

@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /* C ABI: the option "frames_in_flight". A handle with N > 1 pairs in flight hands each pair
- * over N - 1 pushes late, in order: its result equal bit for bit to the pair computed on its own
- * (lf_reset before each pair on a handle of one pair at a time), or, for a pair that failed, no
- * result and its error. lf_flush hands over the rest, lf_reset drops them, and a frame worker's
+ * over N - 1 pushes late, in order: here (a plane, no movers, so no motion prior) its result
+ * equal bit for bit to the pair computed on its own (lf_reset before each pair on a handle of
+ * one pair at a time), or, for a pair that failed, no result and its error. The movers' prior
+ * is checked against `lidarflow sequence --frames-in-flight` (test_sequence_cli). lf_flush hands over the rest, lf_reset drops them, and a frame worker's
  * log callback cannot wait for its own pair. */
 #include <setjmp.h>
 #include <stdarg.h>

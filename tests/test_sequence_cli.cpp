@@ -131,11 +131,27 @@ std::vector<int> all_frames() {
     return k;
 }
 
+// The estimator's current result.
+Pushed fetch(lf_estimator_t *est, cv::Size size) {
+    Pushed p{cv::Mat1f(size), cv::Mat1f(size), cv::Mat1f(size), cv::Mat1f(size), cv::Mat1b(size)};
+    lf_result_buffers_t b;
+    lf_result_buffers_init(&b);
+    b.width = static_cast<uint32_t>(size.width);
+    b.height = static_cast<uint32_t>(size.height);
+    b.u = {p.u.data, p.u.step[0]};
+    b.v = {p.v.data, p.v.step[0]};
+    b.d0 = {p.d0.data, p.d0.step[0]};
+    b.d1 = {p.d1.data, p.d1.step[0]};
+    b.valid = {p.valid.data, p.valid.step[0]};
+    if (lf_get_result(est, &b) != LF_OK) fail_msg("%s", lf_last_error(est));
+    return p;
+}
+
 // The drive's `frames` pushed through the C ABI (frame k at 100000 k us), one result per pair;
 // with reset_at >= 0, lf_reset before frame reset_at (which then starts a new sequence: no pair
 // ends there).
 std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
-                                       const std::vector<int> &frames = all_frames()) {
+                                       const std::vector<int> &frames = all_frames(), int in_flight = 1) {
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     assert_int_equal(lf_read_kitti_calibration((drive / "calib_cam_to_cam.txt").c_str(),
@@ -144,6 +160,7 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
     lf_options_t *opt = nullptr;
     assert_int_equal(lf_options_create(&opt), LF_OK);
     assert_int_equal(lf_options_set_string(opt, "preset", kPreset), LF_OK);
+    assert_int_equal(lf_options_set_int(opt, "frames_in_flight", in_flight), LF_OK);
     lf_estimator_t *est = nullptr;
     assert_int_equal(lf_create(opt, &cal, &est), LF_OK);
     lf_options_destroy(opt);
@@ -160,21 +177,11 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
         const lf_lidar_t lidar{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(bin.size() / 16), bin.data(), 16};
         if (k == reset_at) assert_int_equal(lf_reset(est), LF_OK);
         if (lf_push_frame(est, int64_t{100000} * k, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
-        if (k == frames.front() || k == reset_at) continue;
-        Pushed p{cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()), cv::Mat1f(left.size()),
-                 cv::Mat1b(left.size())};
-        lf_result_buffers_t b;
-        lf_result_buffers_init(&b);
-        b.width = static_cast<uint32_t>(left.cols);
-        b.height = static_cast<uint32_t>(left.rows);
-        b.u = {p.u.data, p.u.step[0]};
-        b.v = {p.v.data, p.v.step[0]};
-        b.d0 = {p.d0.data, p.d0.step[0]};
-        b.d1 = {p.d1.data, p.d1.step[0]};
-        b.valid = {p.valid.data, p.valid.step[0]};
-        assert_int_equal(lf_get_result(est, &b), LF_OK);
-        out.push_back(p);
+        if (k == frames.front() || k == reset_at || !lf_has_result(est)) continue;
+        out.push_back(fetch(est, left.size()));
     }
+    while (lf_flush(est) == LF_OK) out.push_back(fetch(est, cv::Size(static_cast<int>(out.front().u.cols),
+                                                                      static_cast<int>(out.front().u.rows))));
     lf_destroy(est);
     return out;
 }
@@ -448,21 +455,38 @@ bool same_results(const fs::path &a, const fs::path &b, int pairs) {
     return true;
 }
 
-// --frames-in-flight computes each pair on its own (no stream) and writes them in order: every
-// pair equals a run of that pair alone, and differs from the stream's.
+int uneven_messages = 0;
+extern "C" void count_uneven(int32_t, const char *message, void *) {
+    if (std::strstr(message, "not evenly spaced")) ++uneven_messages;
+}
+
+// --frames-in-flight N writes the pairs in order, as the C ABI's handle with frames_in_flight N
+// hands them over: the first N pairs as runs of each pair alone, the later ones with the motion
+// prior of the pair N before (not the stream's results either).
 void test_frames_in_flight(void **) {
     const Fixture &f = fixture();
     const fs::path out = f.dir / "in_flight", alone = f.dir / "alone";
     const std::string base = "sequence --drive " + q(f.drive) + " --format npy --preset " + std::string(kPreset);
-    const test::CliRun r = test::run_cli(base + " --out " + q(out) + " --threads 2 --frames-in-flight 3");
+    const test::CliRun r = test::run_cli(base + " --out " + q(out) + " --threads 2 --frames-in-flight 2");
     expect_code(r, 0);
     expect_contains(r, "4 pairs: 4 computed, 0 skipped (existing), 0 failed");
     expect_contains(r, "[4/4] 3->4");
+    lf_set_log_callback(count_uneven, LF_LOG_INFO, nullptr);
+    const std::vector<Pushed> pushed = push_through_c_abi(f.drive, -1, all_frames(), 2);
+    assert_int_equal(uneven_messages, 0);
+    // Frame 2 left out: pair 3->4 would take the prior of pair 0->1, carried one 100 ms step,
+    // but its t0 is 200 ms after that pair's t1.
+    assert_int_equal(push_through_c_abi(f.drive, -1, {0, 1, 3, 4}, 2).size(), 3);
+    lf_set_log_callback(nullptr, 0, nullptr);
+    assert_int_equal(uneven_messages, 1);
+    assert_int_equal(pushed.size(), kFrames - 1);
+    for (int k = 0; k + 1 < kFrames; ++k) expect_pushed_result(pushed[static_cast<size_t>(k)], out, k);
     for (int k = 0; k + 1 < kFrames; ++k)
         expect_code(test::run_cli(base + " --out " + q(alone) + " --threads 1 --quiet --frames " + std::to_string(k) +
                                   ":" + std::to_string(k + 1)),
                     0);
-    assert_true(same_results(out, alone, kFrames - 1));
+    assert_true(same_results(out, alone, 2));
+    assert_false(same_results(out, alone, kFrames - 1));  // the movers' prior acts
     assert_false(same_results(out, f.clean, kFrames - 1));
     expect_code(test::run_cli(base + " --out " + q(out) + " --frames-in-flight 0"), 2);
 }

@@ -111,10 +111,12 @@ typedef struct lf_options lf_options_t;
  *                                        when that makes frames_in_flight pairs in flight it
  *                                        waits for the oldest and hands it over (results in
  *                                        order, frames_in_flight - 1 pushes late; lf_flush
- *                                        hands over the rest at the end). Each
- *                                        pair is then computed on its own, as after lf_reset:
- *                                        without the stream's priors and the reuse of the
- *                                        previous pair's stereo
+ *                                        hands over the rest at the end). A
+ *                                        pair then starts its flow from the movers of the pair
+ *                                        frames_in_flight before it (finished by then), carried
+ *                                        that many steps at constant velocity, instead of the
+ *                                        previous pair's; it reuses nothing else of the stream
+ *                                        (no static points of earlier frames, no stereo)
  *   "preset"           string "default"  resets every option except "threads" to the preset:
  *                                        "default" (matching.method "decoupled": the LiDAR-
  *                                        guided SGM stereo and DIS flow at processing_scale

@@ -245,7 +245,7 @@ bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLi
 
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt, const consistency::SgmOptions &sgm,
                                 const StereoCamera &camera, bool backward, const DecoupledStereo *t0_reuse,
-                                int64_t step_us) {
+                                int64_t step_us, const DecoupledStereo *lagged_prior) {
     opt.validate();
     require(!in.left0.empty() && in.left0.size() == in.right0.size() && in.left0.size() == in.left1.size() &&
                 in.left0.size() == in.right1.size(),
@@ -288,14 +288,15 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     const int rc = opt.flow.rigid_choice_radius;
     // A stream's movers keep their motion: it joins the background's in the prior, and so in
     // DIS's start and in the per-pixel choice.
-    const bool same_step = r.reused_t0 && similar_steps(t0_reuse->step_us, step_us);
-    r.stream_continues = same_step && motion.valid && motion.calibrated;
-    const bool prior = opt.stream_prior && r.reused_t0 && motion.calibrated && !t0_reuse->object_motion.empty();
+    r.stream_continues = r.reused_t0 && similar_steps(t0_reuse->step_us, step_us) && motion.valid && motion.calibrated;
+    const DecoupledStereo *source = lagged_prior ? lagged_prior : r.reused_t0 ? t0_reuse : nullptr;
+    const bool same_step = source && similar_steps(source->step_us, step_us);
+    const bool prior = opt.stream_prior && source && motion.calibrated && !source->object_motion.empty();
     if (prior && !same_step)
         log::write(log::Level::Info, "no motion prior for this pair: it spans " + std::to_string(step_us) +
-                                         " us, the previous one " + std::to_string(t0_reuse->step_us) +
+                                         " us, the pair that made it " + std::to_string(source->step_us) +
                                          " us (a dropped frame?)");
-    const cv::Mat3f objects = prior && same_step ? t0_reuse->object_motion : cv::Mat3f();
+    const cv::Mat3f objects = prior && same_step ? source->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
     add_object_motion(motion, r.sgm0, objects, prior0);
     const cv::Mat2f flow0 =

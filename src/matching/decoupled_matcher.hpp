@@ -70,8 +70,12 @@ struct DecoupledStereo {
 // `camera` (all zero = unknown) is the rig at the images' resolution. `step_us` is this pair's
 // t1 - t0 (0 = unknown): t0_reuse's motion prior, one step's motion, is left out (and that
 // logged) when the step that made it differs by more than 25 % (a dropped frame).
+// `lagged_prior`, when not null, is the motion prior instead (frames in flight: the movers of a
+// pair some steps before, already carried to these t0 images); only its object_motion and
+// step_us are read, under the same step check.
 DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt,
                                 const consistency::SgmOptions &sgm, const StereoCamera &camera, bool backward,
-                                const DecoupledStereo *t0_reuse = nullptr, int64_t step_us = 0);
+                                const DecoupledStereo *t0_reuse = nullptr, int64_t step_us = 0,
+                                const DecoupledStereo *lagged_prior = nullptr);
 
 }  // namespace lidarflow::matching

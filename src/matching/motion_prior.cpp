@@ -48,9 +48,37 @@ cv::Mat3f close_gaps(const cv::Mat3f &m) {
     return out;
 }
 
+// One more frame step at constant velocity: every point (disparity d at its pixel) moves by the
+// background motion `ego` plus its object motion (none for the static ones, NaN in `objects`),
+// and lands on its new pixel, the nearest point winning.
+void advance_one_step(cv::Mat3f &objects, cv::Mat1f &d, const motion::EgoMotion &ego, const StereoCamera &c) {
+    cv::Mat3f moved(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat1f nearest(objects.size(), 0.0f);
+    for (int y = 0; y < d.rows; ++y)
+        for (int x = 0; x < d.cols; ++x) {
+            if (!(d(y, x) > 0.0f)) continue;
+            const cv::Vec3f o = objects(y, x);
+            const bool mover = finite3(o);
+            double p[3], q[3], tx, ty;
+            back_project(c, x, y, d(y, x), p);
+            rigid(ego.R, ego.t, p, q);
+            if (mover)
+                for (int i = 0; i < 3; ++i) q[i] += o[i];
+            if (!project(c, q, tx, ty)) continue;
+            const int px = static_cast<int>(std::lround(tx)), py = static_cast<int>(std::lround(ty));
+            const float nd = static_cast<float>(c.fx * c.baseline / q[2]);
+            if (px < 0 || py < 0 || px >= d.cols || py >= d.rows || !(nd > nearest(py, px))) continue;
+            nearest(py, px) = nd;
+            moved(py, px) = mover ? o : cv::Vec3f(kNaN, kNaN, kNaN);
+        }
+    objects = moved;
+    d = nearest;
+}
+
 }  // namespace
 
-cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &ego, const StereoCamera &camera) {
+cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &ego, const StereoCamera &camera,
+                              int steps) {
     if (!ego.valid || !ego.calibrated || !camera.valid() || f.u.empty()) return {};
     cv::Mat3f objects(f.height(), f.width(), cv::Vec3f(kNaN, kNaN, kNaN));
     cv::Mat1f nearest(f.height(), f.width(), 0.0f);  // d1 of the point written at each t1 pixel
@@ -71,6 +99,7 @@ cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &
                                                 static_cast<float>(obj[2]))
                                     : cv::Vec3f(kNaN, kNaN, kNaN);
         }
+    for (int s = 1; s < steps; ++s) advance_one_step(objects, nearest, ego, camera);
     return close_gaps(objects);
 }
 

@@ -19,7 +19,10 @@ namespace lidarflow::matching {
 // moved with respect to `ego` (a valid calibrated background motion), written at the t1 pixel the
 // point lands on (the nearest point where several do); NaN elsewhere, and on the static world.
 // Empty when ego is not valid and calibrated or the camera is unknown.
-cv::Mat3f carry_object_motion(const SceneFlowField &field, const motion::EgoMotion &ego, const StereoCamera &camera);
+// With steps > 1 the points go on (steps - 1) more frame steps at constant velocity (ego and
+// their own object motion), to the pixels of the pair that many frames later.
+cv::Mat3f carry_object_motion(const SceneFlowField &field, const motion::EgoMotion &ego, const StereoCamera &camera,
+                              int steps = 1);
 
 // `prior` (the background motion's flow at each pixel of the disparity map `d`) with the
 // flow of background motion + object motion where `objects` (carry_object_motion of the previous

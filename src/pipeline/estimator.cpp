@@ -343,6 +343,17 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                                               " LiDAR points of earlier frames added to this pair's " +
                                               std::to_string(lidar0.points.size()));
         if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r);
+        if (cache && cache->lag_ > 0) {
+            // Frames in flight: this pair's movers for the pair lag_ pairs later, under the
+            // conditions of the stream's own prior below.
+            cache->lagged_out_.reset();
+            if (tracked_motion && options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
+                auto later = std::make_shared<matching::DecoupledStereo>();
+                later->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, cache->lag_);
+                later->step_us = frame.step_us;
+                if (!later->object_motion.empty()) cache->lagged_out_ = std::move(later);
+            }
+        }
         if (next) {
             // The next pair's prior, only from a final result with a calibrated background motion
             // that the pair's own tracks also found (stage 4 fits one even to a cut's matches).
@@ -414,10 +425,11 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
     const matching::MatchInput mi{frame.left0, frame.right0, frame.left1, frame.right1, lidar0, lidar1};
     const bool both = options_.last_stage != Stage::Matching;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
-    matching::DecoupledResult m = matching::match_decoupled(mi, mo,
-                                                            stage_options_.consistency.sgm, frame.camera, both,
-                                                            cache ? cache->stereo_t1_.get() : nullptr, frame.step_us);
-    if (cache) {
+    const bool in_flight = cache && cache->lag_ > 0;
+    matching::DecoupledResult m = matching::match_decoupled(
+        mi, mo, stage_options_.consistency.sgm, frame.camera, both, cache ? cache->stereo_t1_.get() : nullptr,
+        frame.step_us, in_flight ? cache->lagged_in_.get() : nullptr);
+    if (cache && !in_flight) {
         if (cache->stereo_t1_ && !m.reused_t0)
             log::write(log::Level::Info,
                        "the previous frame's stereo disparity was not reused (its t1 images differ from this t0): "

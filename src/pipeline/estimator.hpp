@@ -62,9 +62,10 @@ struct EstimatorOptions {
     // calibration (the C ABI handle, `lidarflow run`) with io::image_size_mismatch.
     bool strict_input = false;
     // Pairs one stream computes at once, in [1, 64] (docs/ARCHITECTURE.md, "Frames in flight").
-    // Above 1 the callers that stream (the C ABI handle, `lidarflow sequence`) compute each pair
-    // on its own (no StreamCache, so without the stream's priors) on an OrderedPool, each frame
-    // on per_frame_threads() threads; Estimator::run itself does not read it.
+    // Above 1 the callers that stream (the C ABI handle, `lidarflow sequence`) run the pairs on
+    // an OrderedPool, each with a StreamCache of its own set by StreamCache::set_in_flight (the
+    // motion prior of the pair frames_in_flight before), each frame on per_frame_threads()
+    // threads; Estimator::run itself does not read it.
     int frames_in_flight = 1;
     // threads shared by the frames in flight: threads / frames_in_flight, at least 1.
     int per_frame_threads() const { return threads / frames_in_flight > 1 ? threads / frames_in_flight : 1; }
@@ -169,12 +170,29 @@ public:
         t1_.reset();
         spare_.reset();
         stereo_t1_.reset();
+        lag_ = 0;
+        lagged_in_.reset();
+        lagged_out_.reset();
     }
     // Whether the last run through this cache reused the previous frame's descriptors.
     bool last_reused() const { return last_reused_; }
 
+    // Frames in flight (docs/ARCHITECTURE.md): a pool computes pair k while pairs k-lag+1 ..
+    // k-1 are still running, so pair k's motion prior comes from pair k-lag, carried lag steps.
+    // A cache set so (one per pair, fresh) reuses nothing else; run() then reads `prior` (pair
+    // k-lag's prior_for_later(), or null) and leaves this pair's own movers carried lag steps
+    // ahead in prior_for_later() (null when it has none: no calibrated background motion, a
+    // cut, stream_prior off, another last stage).
+    void set_in_flight(int lag, std::shared_ptr<const matching::DecoupledStereo> prior) {
+        lag_ = lag;
+        lagged_in_ = std::move(prior);
+    }
+    std::shared_ptr<const matching::DecoupledStereo> prior_for_later() const { return lagged_out_; }
+
 private:
     friend class Estimator;
+    int lag_ = 0;
+    std::shared_ptr<const matching::DecoupledStereo> lagged_in_, lagged_out_;
     std::shared_ptr<const matching::StereoFeatures> t1_;
     std::shared_ptr<matching::StereoFeatures> spare_;  // storage for the next t1 pair
     std::shared_ptr<const matching::DecoupledStereo> stereo_t1_;  // decoupled design: t1 disparity

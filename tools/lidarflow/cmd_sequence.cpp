@@ -174,7 +174,7 @@ int run_sequence(int argc, char **argv) {
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
-               {"frames-in-flight", true, "N    pairs computed at once, each on threads / N threads, written in order; each pair on its own, without the stream's priors (default 1: one stream)"},
+               {"frames-in-flight", true, "N    pairs computed at once, each on threads / N threads, written in order; the motion prior comes from the pair N before, nothing else of the stream is reused (default 1: one stream)"},
                {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
                {"warm-up", true, "N    with --frames A:B, start the stream N frames before A: pairs before A are computed for the stream's priors, not written (default 0)"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
@@ -309,6 +309,7 @@ int run_sequence(int argc, char **argv) {
     struct Computed {
         pipeline::EstimatorResult r;
         double seconds = 0;
+        std::shared_ptr<const matching::DecoupledStereo> prior;  // frames in flight: for the pair N later
     };
     const auto finish = [&](const Pair &p, const std::function<Computed()> &compute) {
         std::optional<Computed> c;
@@ -344,15 +345,27 @@ int run_sequence(int argc, char **argv) {
     const auto pair_input = [&](const Frame &a, const Frame &b) {
         return pipeline::FrameInput{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
     };
-    // Frames in flight: pairs on their own (no stream), written in their turn.
+    // Frames in flight: pair k runs beside pairs k-N+1 .. k-1, with the motion prior of pair
+    // k-N (finished by then) as the C ABI's handle does; written in their turn.
+    const int lag = opt.frames_in_flight;
     const std::unique_ptr<OrderedPool<Computed>> pool =
-        opt.frames_in_flight > 1 ? std::make_unique<OrderedPool<Computed>>(opt.frames_in_flight) : nullptr;
+        lag > 1 ? std::make_unique<OrderedPool<Computed>>(lag) : nullptr;
     std::deque<Pair> in_flight;
+    long no_prior_before = 0;  // the frame after the last bad one
+    std::shared_ptr<const matching::DecoupledStereo> prior;  // of the pair written last
+    long prior_t0 = -1;                                    // its first frame (-1: none)
     const auto finish_oldest = [&] {
         std::future<Computed> f = pool->take_oldest();
         const Pair p = in_flight.front();
         in_flight.pop_front();
-        finish(p, [&] { return f.get(); });
+        prior.reset();
+        prior_t0 = -1;
+        finish(p, [&] {
+            Computed c = f.get();
+            prior = c.prior;
+            prior_t0 = p.t0;
+            return c;
+        });
     };
     const auto warm_pair = [&](const Frame &a, const Frame &b) {
         if (pool) return;  // pairs on their own have no stream to warm up
@@ -384,9 +397,10 @@ int run_sequence(int argc, char **argv) {
             if (k < last) lost.push_back(k);
             report_frame(tty, k, bad, lost, "skipped");
             for (long t0 : lost) lose(t0, "skipped (bad frame)");
-            // The stream restarts after a bad frame: no pair spans it.
+            // The stream restarts after a bad frame: no pair spans it, no prior crosses it.
             prev.reset();
             stream.clear();
+            no_prior_before = k + 1;
             continue;
         }
         if (!cur->scan_error.file.empty()) {
@@ -411,10 +425,16 @@ int run_sequence(int argc, char **argv) {
                 ++skipped;
                 progress(t0, "exists, skipped");
             } else if (pool) {
-                pool->submit([&estimator, &pair_input, a = *prev, b = *cur] {
+                // A bad frame restarts the stream: no prior across it (prev.reset() below).
+                std::shared_ptr<const matching::DecoupledStereo> lagged =
+                    prior_t0 == t0 - lag && prior_t0 >= no_prior_before ? prior : nullptr;
+                pool->submit([&estimator, &pair_input, a = *prev, b = *cur, lag, lagged] {
                     const Stopwatch clock;
-                    Computed c{estimator.run(pair_input(a, b)), 0};
+                    pipeline::StreamCache cache;
+                    cache.set_in_flight(lag, lagged);
+                    Computed c{estimator.run(pair_input(a, b), &cache), 0, nullptr};
                     c.seconds = clock.seconds();
+                    c.prior = cache.prior_for_later();
                     return c;
                 });
                 in_flight.push_back(pair);

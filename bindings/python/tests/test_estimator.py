@@ -491,7 +491,8 @@ class Lifetime(unittest.TestCase):
 
 class Threads(unittest.TestCase):
     def test_frames_in_flight_hand_results_over_late_and_equal_single_pairs(self):
-        # A drive past the plane: frame k is the texture shifted by k * 3 px.
+        # A drive past the plane: frame k is the texture shifted by k * 3 px. Nothing moves on
+        # its own, so the pairs have no motion prior and equal the single pairs.
         scene = make_scene(tu=3, tv=0)
         frames = [(scene[0], scene[1]), (scene[2], scene[3])]
         frames += [(np.roll(f[0], 3 * k, axis=1), np.roll(f[1], 3 * k, axis=1)) for k in (1, 2) for f in frames[:1]]

@@ -715,8 +715,9 @@ struct ResultViews {
 
 // Owns an lf_estimator_t: settings, the previous frame and the latest result. Push stereo frames
 // in time order; from the second push on, each push computes (synchronously) the scene flow from
-// the previous frame (t0, the reference) to the new one (t1) and replaces the result. Movable,
-// not copyable. One thread at a time per Estimator, readers included (they are not const for
+// the previous frame (t0, the reference) to the new one (t1) and replaces the result (with the
+// option "frames_in_flight" N, pairs run N at a time and each push hands over the pair N - 1
+// frames older: flush()). Movable, not copyable. One thread at a time per Estimator, readers included (they are not const for
 // that reason); distinct Estimators may run concurrently, each from its own thread.
 class Estimator {
 public:

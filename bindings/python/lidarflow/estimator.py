@@ -193,7 +193,8 @@ class Estimator:
     # --- frames ---
     def push(self, left, right, lidar=None, timestamp=None, lidar_kind="disparity", colour_order=None,
              color_order=None):
-        """Adds a stereo frame; returns True when a result (previous frame -> this one) is ready.
+        """Adds a stereo frame; returns True when a result (previous frame -> this one) is ready;
+        with the option frames_in_flight N, the pair that ended N - 1 frames before (see flush).
 
         left, right: uint8 arrays (H, W) gray or (H, W, 3) colour, packed pixels, any row
         stride; both the same shape. They are copied. Colour arrays need colour_order (or its

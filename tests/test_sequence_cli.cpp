@@ -488,6 +488,15 @@ void test_frames_in_flight(void **) {
     assert_true(same_results(out, alone, 2));
     assert_false(same_results(out, alone, kFrames - 1));  // the movers' prior acts
     assert_false(same_results(out, f.clean, kFrames - 1));
+    // A part warmed up from the drive's first frame gets the whole run's priors.
+    const fs::path part = f.dir / "in_flight_part";
+    expect_code(test::run_cli(base + " --out " + q(part) + " --threads 2 --quiet --frames-in-flight 2 --frames 2:4 "
+                                     "--warm-up 2"),
+                0);
+    for (int k : {2, 3})
+        for (const char *map : {"disp_0", "disp_1", "flow"})
+            assert_true(file_bytes(part / map / (name(k) + ".npy")) == file_bytes(out / map / (name(k) + ".npy")));
+    assert_false(fs::exists(part / "flow" / (name(1) + ".npy")));
     expect_code(test::run_cli(base + " --out " + q(out) + " --frames-in-flight 0"), 2);
 }
 

@@ -305,6 +305,7 @@ int run_sequence(int argc, char **argv) {
         std::vector<std::string> files;
         bool no_points = false;
         uint64_t settings = 0;
+        bool warm_up = false;  // computed for the priors only, not written
     };
     struct Computed {
         pipeline::EstimatorResult r;
@@ -360,6 +361,14 @@ int run_sequence(int argc, char **argv) {
         in_flight.pop_front();
         prior.reset();
         prior_t0 = -1;
+        if (p.warm_up) {
+            try {
+                prior = f.get().prior;
+                prior_t0 = p.t0;
+            } catch (const Error &) {
+            }
+            return;
+        }
         finish(p, [&] {
             Computed c = f.get();
             prior = c.prior;
@@ -367,8 +376,31 @@ int run_sequence(int argc, char **argv) {
             return c;
         });
     };
+    const auto submit = [&](const Frame &a, const Frame &b, const Pair &pair) {
+        // A bad frame restarts the stream: no prior across it.
+        std::shared_ptr<const matching::DecoupledStereo> lagged =
+            prior_t0 == pair.t0 - lag && prior_t0 >= no_prior_before ? prior : nullptr;
+        pool->submit([&estimator, &pair_input, a, b, lag, lagged] {
+            const Stopwatch clock;
+            pipeline::StreamCache cache;
+            cache.set_in_flight(lag, lagged);
+            Computed c{estimator.run(pair_input(a, b), &cache), 0, nullptr};
+            c.seconds = clock.seconds();
+            c.prior = cache.prior_for_later();
+            return c;
+        });
+        in_flight.push_back(pair);
+        if (pool->full()) finish_oldest();
+    };
     const auto warm_pair = [&](const Frame &a, const Frame &b) {
-        if (pool) return;  // pairs on their own have no stream to warm up
+        if (pool) {
+            Pair warm;
+            warm.t0 = a.index;
+            warm.k = b.index;
+            warm.warm_up = true;
+            submit(a, b, warm);
+            return;
+        }
         try {
             estimator.run(pair_input(a, b), &stream);
         } catch (const Error &) {
@@ -380,7 +412,10 @@ int run_sequence(int argc, char **argv) {
         std::optional<Frame> cur;
         if (present.count(k)) cur = read_frame(root, k, size, calib.camera, velo_to_left, rectify, ignored);
         if (cur && prev) warm_pair(*prev, *cur);
-        if (!cur) stream.clear();
+        if (!cur) {
+            stream.clear();
+            no_prior_before = k + 1;
+        }
         prev = std::move(cur);
     }
     for (long k = first; k <= last; ++k) {
@@ -419,30 +454,17 @@ int run_sequence(int argc, char **argv) {
             if (no_points) image_only.insert(t0);
             const uint64_t pair_settings = no_points ? image_only_settings : settings;
             std::optional<cv::Matx34d> ego;
-            const Pair pair{t0, k, id, files, no_points, pair_settings};
+            const Pair pair{t0, k, id, files, no_points, pair_settings, false};
             if (skip_existing && result_manifest_matches(out, id, pair_settings, files, ego)) {
                 if (ego) motions[t0] = *ego;
                 ++skipped;
                 progress(t0, "exists, skipped");
             } else if (pool) {
-                // A bad frame restarts the stream: no prior across it (prev.reset() below).
-                std::shared_ptr<const matching::DecoupledStereo> lagged =
-                    prior_t0 == t0 - lag && prior_t0 >= no_prior_before ? prior : nullptr;
-                pool->submit([&estimator, &pair_input, a = *prev, b = *cur, lag, lagged] {
-                    const Stopwatch clock;
-                    pipeline::StreamCache cache;
-                    cache.set_in_flight(lag, lagged);
-                    Computed c{estimator.run(pair_input(a, b), &cache), 0, nullptr};
-                    c.seconds = clock.seconds();
-                    c.prior = cache.prior_for_later();
-                    return c;
-                });
-                in_flight.push_back(pair);
-                if (pool->full()) finish_oldest();
+                submit(*prev, *cur, pair);
             } else {
                 finish(pair, [&] {
                     const Stopwatch clock;
-                    Computed c{estimator.run(pair_input(*prev, *cur), &stream), 0};
+                    Computed c{estimator.run(pair_input(*prev, *cur), &stream), 0, nullptr};
                     c.seconds = clock.seconds();
                     return c;
                 });

@@ -133,8 +133,9 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
     };
 }
 
-// The oldest pair in flight: its result, or (result null) its error in *error. bad_alloc passes.
-// Its motion prior is kept for the pair frames_in_flight after it.
+// The oldest pair in flight: its result, or (result null) its error in *error (out of memory
+// too: the call that hands it over has already started the next pair). Its motion prior is kept
+// for the pair frames_in_flight after it.
 std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *error) {
     std::future<std::unique_ptr<Result>> f = e.pool->take_oldest();
     e.prior.reset();
@@ -146,8 +147,6 @@ std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *
         e.prior_t0_us = r->t0_us;
         e.prior_t1_us = r->t1_us;
         return r;
-    } catch (const std::bad_alloc &) {
-        throw;
     } catch (...) {
         *error = std::current_exception();
         return nullptr;

@@ -534,8 +534,9 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
  * readers return its error). At the end of a stream, take every remaining result with
  *     while (lf_flush(est) == LF_OK) if (lf_has_result(est)) ... read the result ...
  * Errors: LF_ERR_INVALID_ARGUMENT (NULL), LF_ERR_NOT_READY (no pair in flight; always so with
- * "frames_in_flight" 1, whose pushes compute their pair), LF_ERR_BAD_STATE (as lf_push_frame),
- * LF_ERR_OUT_OF_MEMORY. One thread at a time per estimator. Added in 0.3.0. */
+ * "frames_in_flight" 1, whose pushes compute their pair), LF_ERR_BAD_STATE (as lf_push_frame).
+ * A pair that ran out of memory is handed over as failed (LF_ERR_OUT_OF_MEMORY from the
+ * readers). One thread at a time per estimator. Added in 0.3.0. */
 LF_API int32_t lf_flush(lf_estimator_t *estimator);
 
 /* Forgets the previous frame, the result and what the stream carried (the next push starts a

@@ -773,7 +773,7 @@ public:
     // in flight; true otherwise, then has_result() says whether it has a result (a failed pair
     // has none: the readers throw its error). At the end of a stream:
     //     while (est.flush()) if (est.has_result()) ... read the result ...
-    // Throws Error(LF_ERR_BAD_STATE / LF_ERR_OUT_OF_MEMORY).
+    // Throws Error(LF_ERR_BAD_STATE).
     bool flush() {
         const int32_t status = lf_flush(handle_);
         if (status == LF_ERR_NOT_READY) return false;

@@ -141,6 +141,40 @@ void object_motion_is_carried_and_predicted(void **) {
     assert_true(cv::norm(before, after, cv::NORM_INF) == 0);
 }
 
+// Frames in flight: carried two steps at constant velocity, the box lands where t0 + 2 (camera
+// + object motion) projects, with its object motion; nothing else is marked.
+void object_motion_is_carried_two_steps(void **) {
+    const cv::Mat3f objects = matching::carry_object_motion(exact_field(), ego(), kCam, 2);
+    double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
+    for (const double cx : {60.0, 99.0})
+        for (const double cy : {30.0, 69.0}) {
+            double p[3], x2, y2;
+            back_project(kCam, cx, cy, kCam.disparity_from_depth(8.0), p);
+            for (int i = 0; i < 3; ++i) p[i] += 2 * (kT[i] + kObject[i]);
+            pixel_of(p, x2, y2);
+            lo[0] = std::min(lo[0], x2), lo[1] = std::min(lo[1], y2);
+            hi[0] = std::max(hi[0], x2), hi[1] = std::max(hi[1], y2);
+        }
+    int inside = 0, marked_inside = 0, marked_outside = 0, wrong = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const bool in = x > lo[0] + 2 && x < hi[0] - 2 && y > lo[1] + 2 && y < hi[1] - 2;
+            const bool out = x < lo[0] - 2 || x > hi[0] + 2 || y < lo[1] - 2 || y > hi[1] + 2;
+            const bool marked = finite3(objects(y, x));
+            inside += in;
+            marked_inside += in && marked;
+            marked_outside += out && marked;
+            if (marked)
+                for (int i = 0; i < 3; ++i) wrong += std::fabs(objects(y, x)[i] - kObject[i]) > 1e-3;
+        }
+    std::printf("two steps: box at x %.1f..%.1f, y %.1f..%.1f; %d of %d inside marked, %d outside\n", lo[0], hi[0],
+                lo[1], hi[1], marked_inside, inside, marked_outside);
+    assert_true(inside > 2500);  // at 4.4 m the box is ~1.8x its t0 size
+    assert_int_equal(marked_inside, inside);
+    assert_int_equal(marked_outside, 0);
+    assert_int_equal(wrong, 0);
+}
+
 // t0 points every 4 px over the scene, aged 0 except every fifth, which is 3 frames old.
 void static_points_are_carried(void **) {
     const SceneFlowField f = exact_field();
@@ -250,6 +284,7 @@ void stream_beats_pairs_on_a_drive(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(object_motion_is_carried_and_predicted),
+        cmocka_unit_test(object_motion_is_carried_two_steps),
         cmocka_unit_test(static_points_are_carried),
         cmocka_unit_test(stream_beats_pairs_on_a_drive),
     };

@@ -1541,8 +1541,11 @@ void test_option_errors(void **) {
     assert_non_null(strstr(refusal("threads", "two").c_str(), "needs an integer"));
     assert_non_null(strstr(refusal("matching.stop_ratio", "x").c_str(), "needs a number"));
     assert_non_null(strstr(refusal("no.such.key", "1").c_str(), "no.such.key"));
+    // Each frame's pair is published as the frame arrives: no results N - 1 frames late.
+    assert_non_null(strstr(refusal("frames_in_flight", "2").c_str(), "frames_in_flight must be 1"));
     BridgeConfig ok;
-    ok.options = {{"threads", "1"}, {"last_stage", "matching"}, {"matching.stop_ratio", "0.01"}};
+    ok.options = {{"threads", "1"}, {"last_stage", "matching"}, {"matching.stop_ratio", "0.01"},
+                  {"frames_in_flight", "1"}};
     std::string err;
     assert_non_null(Bridge::create(ok, lcm, &err).get());
     lcm_destroy(lcm);

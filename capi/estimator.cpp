@@ -138,19 +138,29 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
 // for the pair frames_in_flight after it.
 std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *error) {
     std::future<std::unique_ptr<Result>> f = e.pool->take_oldest();
-    e.prior.reset();
-    e.prior_pair = -1;
     try {
         std::unique_ptr<Result> r = f.get();
-        e.prior = r->prior_for_later;
-        e.prior_pair = r->pair_index;
-        e.prior_t0_us = r->t0_us;
-        e.prior_t1_us = r->t1_us;
+        if (r->prior_for_later) e.priors.push_back({r->pair_index, r->t0_us, r->t1_us, r->prior_for_later});
         return r;
     } catch (...) {
         *error = std::current_exception();
         return nullptr;
     }
+}
+
+// The motion prior pair `index` starts from (t0_us: its first frame): that of the pair `lag`
+// before it, carried lag steps of that pair's length, so only when the frames since kept that
+// pace. Forgets the priors no later pair can take.
+std::shared_ptr<const lidarflow::matching::DecoupledStereo> lagged_prior(lf_estimator_t &e, int64_t index, int lag,
+                                                                         int64_t t0_us) {
+    while (!e.priors.empty() && e.priors.front().pair_index < index - lag) e.priors.pop_front();
+    if (e.priors.empty() || e.priors.front().pair_index != index - lag) return nullptr;
+    const HandedPrior &h = e.priors.front();
+    const double expected = static_cast<double>(lag - 1) * static_cast<double>(h.t1_us - h.t0_us);
+    if (std::abs(static_cast<double>(t0_us - h.t1_us) - expected) <= 0.25 * expected) return h.prior;
+    lidarflow::log::write(lidarflow::log::Level::Info, "no motion prior for this pair: the frames since the pair "
+                                                       "that made it are not evenly spaced (a dropped frame?)");
+    return nullptr;
 }
 
 }  // namespace
@@ -242,20 +252,8 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             // is that of the pair capacity() before it, handed over by now (deterministic).
             const int lag = static_cast<int>(estimator->pool->capacity());
             const int64_t index = estimator->pairs_started;
-            std::shared_ptr<const lidarflow::matching::DecoupledStereo> prior;
-            if (estimator->prior_pair == index - lag && estimator->prior) {
-                // Carried lag steps of its own length: the frames between must keep that pace.
-                const int64_t step = estimator->prior_t1_us - estimator->prior_t0_us;
-                const double expected = static_cast<double>(lag - 1) * static_cast<double>(step);
-                const double gap = static_cast<double>(prev->timestamp_us - estimator->prior_t1_us);
-                if (std::abs(gap - expected) <= 0.25 * expected)
-                    prior = estimator->prior;
-                else
-                    lidarflow::log::write(lidarflow::log::Level::Info,
-                                          "no motion prior for this pair: the frames since the pair that made it are "
-                                          "not evenly spaced (a dropped frame?)");
-            }
-            estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds, index, lag, prior));
+            estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds, index, lag,
+                                             lagged_prior(*estimator, index, lag, prev->timestamp_us)));
             ++estimator->pairs_started;
             if (estimator->pool->full()) {
                 delivered = true;
@@ -282,8 +280,7 @@ LF_API int32_t lf_reset(lf_estimator_t *estimator) {
         const BusyScope busy(estimator, "lf_reset");
         if (estimator->pool) estimator->pool->drain();
         estimator->pairs_started = 0;
-        estimator->prior.reset();
-        estimator->prior_pair = -1;
+        estimator->priors.clear();
         estimator->previous.reset();
         estimator->result.reset();
         estimator->pair_error = nullptr;

@@ -3,6 +3,7 @@
 // What the opaque C handles are. Private to capi/.
 #include <atomic>
 #include <cstdint>
+#include <deque>
 #include <exception>
 #include <memory>
 #include <string>
@@ -57,6 +58,13 @@ struct Result {
     std::shared_ptr<const matching::DecoupledStereo> prior_for_later;
 };
 
+// A handed-over pair's motion prior for the pair frames_in_flight after it, and its frames.
+struct HandedPrior {
+    int64_t pair_index = 0;
+    int64_t t0_us = 0, t1_us = 0;
+    std::shared_ptr<const matching::DecoupledStereo> prior;
+};
+
 }  // namespace lidarflow::capi
 
 struct lf_estimator {
@@ -81,12 +89,11 @@ struct lf_estimator {
     // same handle (its log callback, which may run on any of the call's threads) is refused
     // instead of freeing the frame the outer call is reading.
     std::atomic<bool> busy{false};
-    // Frames in flight: pairs started since lf_reset, and the motion prior of the pair handed
-    // over last (prior_pair: its pair_index; -1 none) for the pair frames_in_flight later.
+    // Frames in flight: pairs started since lf_reset, and the motion priors of pairs handed over
+    // that a pair not yet started may take (pair i's serves pair i + frames_in_flight), oldest
+    // first. Kept by index, so an lf_flush in mid-stream changes no later pair.
     int64_t pairs_started = 0;
-    std::shared_ptr<const lidarflow::matching::DecoupledStereo> prior;
-    int64_t prior_pair = -1;
-    int64_t prior_t0_us = 0, prior_t1_us = 0;  // that pair's frames
+    std::deque<lidarflow::capi::HandedPrior> priors;
     // With "frames_in_flight" > 1: the pairs being computed, oldest first. Declared last: it is
     // destroyed (waiting for its jobs, which read the members above) first.
     std::unique_ptr<lidarflow::OrderedPool<std::unique_ptr<lidarflow::capi::Result>>> pool;

@@ -151,7 +151,8 @@ Pushed fetch(lf_estimator_t *est, cv::Size size) {
 // with reset_at >= 0, lf_reset before frame reset_at (which then starts a new sequence: no pair
 // ends there).
 std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
-                                       const std::vector<int> &frames = all_frames(), int in_flight = 1) {
+                                       const std::vector<int> &frames = all_frames(), int in_flight = 1,
+                                       bool flush_each = false) {
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     assert_int_equal(lf_read_kitti_calibration((drive / "calib_cam_to_cam.txt").c_str(),
@@ -177,8 +178,12 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
         const lf_lidar_t lidar{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(bin.size() / 16), bin.data(), 16};
         if (k == reset_at) assert_int_equal(lf_reset(est), LF_OK);
         if (lf_push_frame(est, int64_t{100000} * k, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
-        if (k == frames.front() || k == reset_at || !lf_has_result(est)) continue;
-        out.push_back(fetch(est, left.size()));
+        if (k == frames.front() || k == reset_at) continue;
+        if (flush_each) {
+            while (lf_flush(est) == LF_OK) out.push_back(fetch(est, left.size()));
+        } else if (lf_has_result(est)) {
+            out.push_back(fetch(est, left.size()));
+        }
     }
     while (lf_flush(est) == LF_OK) out.push_back(fetch(est, cv::Size(static_cast<int>(out.front().u.cols),
                                                                       static_cast<int>(out.front().u.rows))));
@@ -481,6 +486,10 @@ void test_frames_in_flight(void **) {
     assert_int_equal(uneven_messages, 1);
     assert_int_equal(pushed.size(), kFrames - 1);
     for (int k = 0; k + 1 < kFrames; ++k) expect_pushed_result(pushed[static_cast<size_t>(k)], out, k);
+    // Taking each pair at once with lf_flush changes no later pair's prior.
+    const std::vector<Pushed> flushed = push_through_c_abi(f.drive, -1, all_frames(), 2, true);
+    assert_int_equal(flushed.size(), kFrames - 1);
+    for (int k = 0; k + 1 < kFrames; ++k) expect_pushed_result(flushed[static_cast<size_t>(k)], out, k);
     for (int k = 0; k + 1 < kFrames; ++k)
         expect_code(test::run_cli(base + " --out " + q(alone) + " --threads 1 --quiet --frames " + std::to_string(k) +
                                   ":" + std::to_string(k + 1)),

@@ -66,7 +66,7 @@ void advance_one_step(cv::Mat3f &objects, cv::Mat1f &d, const motion::EgoMotion 
                 for (int i = 0; i < 3; ++i) q[i] += o[i];
             if (!project(c, q, tx, ty)) continue;
             const int px = static_cast<int>(std::lround(tx)), py = static_cast<int>(std::lround(ty));
-            const float nd = static_cast<float>(c.fx * c.baseline / q[2]);
+            const float nd = static_cast<float>(c.disparity_from_depth(q[2]));
             if (px < 0 || py < 0 || px >= d.cols || py >= d.rows || !(nd > nearest(py, px))) continue;
             nearest(py, px) = nd;
             moved(py, px) = mover ? o : cv::Vec3f(kNaN, kNaN, kNaN);

@@ -4,6 +4,7 @@
 // -> stage 3 sparsification -> stage 4 interpolation. It owns the options of every stage,
 // can stop after any stage (for Table I and ablations), and returns every intermediate field
 // with per-stage timings. This is what the C ABI and the CLI wrap.
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -68,7 +69,7 @@ struct EstimatorOptions {
     // threads; Estimator::run itself does not read it.
     int frames_in_flight = 1;
     // threads shared by the frames in flight: threads / frames_in_flight, at least 1.
-    int per_frame_threads() const { return threads / frames_in_flight > 1 ? threads / frames_in_flight : 1; }
+    int per_frame_threads() const { return std::max(1, threads / frames_in_flight); }
 
     // LiDAR points the camera cannot see (behind an object's edge, seen past it from the
     // LiDAR's position) are removed from lidar0 and lidar1 before every stage, at the input's

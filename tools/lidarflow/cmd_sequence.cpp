@@ -198,13 +198,9 @@ int run_sequence(int argc, char **argv) {
     for (const std::string &a : args.all("set")) given.push_back(a);
     for (const std::string &a : given)
         for (const std::string &item : split_list(a)) assignments.push_back(item);
+    // The option key's own checks and message.
+    if (args.has("frames-in-flight")) assignments.push_back("frames_in_flight=" + args.str("frames-in-flight", "1"));
     pipeline::apply_option_assignments(opt, assignments);
-    if (args.has("frames-in-flight")) {
-        const long n = args.integer("frames-in-flight", 1);
-        require(n >= 1 && n <= 64, ErrorCode::InvalidArgument,
-                "sequence: --frames-in-flight must be in [1, 64], got " + std::to_string(n));
-        opt.frames_in_flight = static_cast<int>(n);
-    }
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
     pipeline::EstimatorOptions per_pair = opt;
     per_pair.threads = opt.per_frame_threads();

@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: MIT
 // core/ordered_pool.hpp: jobs of uneven length come back in submission order, run at the same
-// time, hand their exceptions to the owner, and at most capacity() are in flight.
+// time, hand their exceptions to the owner, at most capacity() are in flight, and a submit that
+// runs out of memory submits nothing.
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
+#include <new>
 #include <stdexcept>
 #include <thread>
 
@@ -11,6 +14,19 @@
 #include "test_support.hpp"
 
 using lidarflow::OrderedPool;
+
+namespace {
+// The calling thread's allocations to let through before one fails (-1: none fails).
+thread_local int allocations_before_failure = -1;
+}  // namespace
+
+void *operator new(std::size_t n) {
+    if (allocations_before_failure >= 0 && allocations_before_failure-- == 0) throw std::bad_alloc();
+    if (void *p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void operator delete(void *p) noexcept { std::free(p); }
+void operator delete(void *p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -83,6 +99,34 @@ void refuses_beyond_capacity_and_drains(void **) {
     assert_true(bad_size);
 }
 
+// Every allocation of every submit fails in turn (the deques grow by blocks, so 100 submits
+// meet their block allocations too): the pool then counts no job that will never run, and every
+// job submitted comes back once, in order.
+void a_submit_out_of_memory_submits_nothing(void **) {
+    OrderedPool<int> pool(8);
+    int next = 0, failures = 0;
+    for (int k = 0; k < 100; ++k) {
+        if (pool.full()) assert_int_equal(pool.take_oldest().get(), next++);
+        for (int fail_at = 0;; ++fail_at) {
+            const size_t before = pool.in_flight();
+            allocations_before_failure = fail_at;
+            bool out_of_memory = false;
+            try {
+                pool.submit([k] { return k; });
+            } catch (const std::bad_alloc &) {
+                out_of_memory = true;
+            }
+            allocations_before_failure = -1;
+            if (!out_of_memory) break;
+            ++failures;
+            assert_int_equal(pool.in_flight(), before);
+        }
+    }
+    while (pool.in_flight() > 0) assert_int_equal(pool.take_oldest().get(), next++);
+    assert_int_equal(next, 100);
+    assert_true(failures >= 100);  // at least the shared state of each job's future
+}
+
 }  // namespace
 
 int main() {
@@ -90,6 +134,7 @@ int main() {
         cmocka_unit_test(results_in_submission_order),
         cmocka_unit_test(errors_reach_the_owner_in_their_turn),
         cmocka_unit_test(refuses_beyond_capacity_and_drains),
+        cmocka_unit_test(a_submit_out_of_memory_submits_nothing),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

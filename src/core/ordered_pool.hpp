@@ -50,14 +50,18 @@ public:
     bool full() const { return results_.size() >= capacity_; }
 
     // Starts `job` on an idle thread. Throws Error(BadState) when full(): take_oldest() first.
+    // On any throw (std::bad_alloc too) nothing was submitted.
     void submit(std::function<T()> job) {
         require(!full(), ErrorCode::BadState, "every frame worker is busy");
         std::packaged_task<T()> task(std::move(job));
         std::future<T> result = task.get_future();
         results_.push_back(std::move(result));
-        {
+        try {
             const std::lock_guard<std::mutex> lock(mutex_);
             queue_.push_back(std::move(task));
+        } catch (...) {
+            results_.pop_back();  // the job never runs: it must not count as in flight
+            throw;
         }
         wake_.notify_one();
     }

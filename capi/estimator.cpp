@@ -27,13 +27,6 @@ using lidarflow::pipeline::OptionValues;
 
 namespace {
 
-// The handle whose pair the calling thread computes (a frame worker's log callback runs there).
-thread_local const lf_estimator_t *pair_owner = nullptr;
-
-// A call from one of the handle's frame workers leaves its message in lf_last_error(NULL): the
-// handle's own message belongs to the thread that owns the handle.
-ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h && pair_owner != h ? &h->error : nullptr); }
-
 // Holds the handle's busy flag for one mutating call; throws BadState when another holds it.
 class BusyScope {
 public:
@@ -52,6 +45,13 @@ private:
 };
 
 const char *format_text(int type) { return type == CV_8UC1 ? "gray" : "colour"; }
+
+// to - from for timestamps with to > from, saturated: any two int64 values may be pushed.
+int64_t elapsed_us(int64_t from, int64_t to) {
+    const uint64_t d = static_cast<uint64_t>(to) - static_cast<uint64_t>(from);
+    return d > static_cast<uint64_t>(std::numeric_limits<int64_t>::max()) ? std::numeric_limits<int64_t>::max()
+                                                                          : static_cast<int64_t>(d);
+}
 
 // The result the C ABI serves: the last stage's field, continuous, with a confidence plane; u,
 // v, d0, d1 are NaN and confidence 0 wherever the field is not valid (docs/CONVENTIONS.md).
@@ -95,7 +95,7 @@ std::unique_ptr<Result> compute_pair(const lf_estimator_t &e, const Frame &prev,
     in.lidar1 = cur.lidar;
     in.camera = e.calibration.camera;
     in.calibration_size = e.calibration.rig.rect.image_size;
-    in.step_us = cur.timestamp_us - prev.timestamp_us;
+    in.step_us = elapsed_us(prev.timestamp_us, cur.timestamp_us);
     std::unique_ptr<Result> result = make_result(e.estimator.run(in, cache), prev.timestamp_us, cur.timestamp_us);
     if (e.calibration.rig.rectify) {
         result->rectified = true;
@@ -129,6 +129,14 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
             return result;
         } catch (const lidarflow::Error &err) {
             throw lidarflow::Error(err.code(), std::string(context) + ": " + err.what());
+        } catch (const std::bad_alloc &) {
+            throw lidarflow::Error(ErrorCode::OutOfMemory, std::string(context) + ": out of memory");
+        } catch (const cv::Exception &err) {  // as guarded() maps them, with the pair named
+            if (err.code == cv::Error::StsNoMem)
+                throw lidarflow::Error(ErrorCode::OutOfMemory, std::string(context) + ": out of memory (OpenCV)");
+            throw lidarflow::Error(ErrorCode::Internal, std::string(context) + ": OpenCV: " + err.what());
+        } catch (const std::exception &err) {
+            throw lidarflow::Error(ErrorCode::Internal, std::string(context) + ": " + err.what());
         }
     };
 }
@@ -138,14 +146,19 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
 // for the pair frames_in_flight after it.
 std::unique_ptr<Result> take_oldest_pair(lf_estimator_t &e, std::exception_ptr *error) {
     std::future<std::unique_ptr<Result>> f = e.pool->take_oldest();
+    std::unique_ptr<Result> r;
     try {
-        std::unique_ptr<Result> r = f.get();
-        if (r->prior_for_later) e.priors.push_back({r->pair_index, r->t0_us, r->t1_us, r->prior_for_later});
-        return r;
+        r = f.get();
     } catch (...) {
         *error = std::current_exception();
         return nullptr;
     }
+    // Out of memory here costs the later pair its prior, not this pair its result.
+    try {
+        if (r->prior_for_later) e.priors.push_back({r->pair_index, r->t0_us, r->t1_us, r->prior_for_later});
+    } catch (const std::bad_alloc &) {
+    }
+    return r;
 }
 
 // The motion prior pair `index` starts from (t0_us: its first frame): that of the pair `lag`
@@ -156,8 +169,8 @@ std::shared_ptr<const lidarflow::matching::DecoupledStereo> lagged_prior(lf_esti
     while (!e.priors.empty() && e.priors.front().pair_index < index - lag) e.priors.pop_front();
     if (e.priors.empty() || e.priors.front().pair_index != index - lag) return nullptr;
     const HandedPrior &h = e.priors.front();
-    const double expected = static_cast<double>(lag - 1) * static_cast<double>(h.t1_us - h.t0_us);
-    if (std::abs(static_cast<double>(t0_us - h.t1_us) - expected) <= 0.25 * expected) return h.prior;
+    const double expected = static_cast<double>(lag - 1) * static_cast<double>(elapsed_us(h.t0_us, h.t1_us));
+    if (std::abs(static_cast<double>(elapsed_us(h.t1_us, t0_us)) - expected) <= 0.25 * expected) return h.prior;
     lidarflow::log::write(lidarflow::log::Level::Info, "no motion prior for this pair: the frames since the pair "
                                                        "that made it are not evenly spaced (a dropped frame?)");
     return nullptr;
@@ -245,8 +258,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
         frame->lidar = convert_lidar(lidar, size, estimator->calibration);
 
         std::unique_ptr<Result> result;
-        bool delivered = false;      // frames in flight: the oldest pair was handed over
-        std::exception_ptr failed;   // ... and had failed (the readers report it)
+        std::exception_ptr failed;   // frames in flight: the pair handed over failed
         if (prev && estimator->pool) {
             // The new pair runs beside the older ones while the oldest is waited for. Its prior
             // is that of the pair capacity() before it, handed over by now (deterministic).
@@ -255,15 +267,13 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             estimator->pool->submit(pair_job(estimator, prev_frame, frame, rectify_seconds, index, lag,
                                              lagged_prior(*estimator, index, lag, prev->timestamp_us)));
             ++estimator->pairs_started;
-            if (estimator->pool->full()) {
-                delivered = true;
-                result = take_oldest_pair(*estimator, &failed);
-            }
+            if (estimator->pool->full()) result = take_oldest_pair(*estimator, &failed);
         } else if (prev) {
             result = compute_pair(*estimator, *prev, *frame, &estimator->stream, rectify_seconds);
         }
-        // Commit: nothing below can throw.
-        if (result || delivered) {
+        // Commit: nothing below can throw. In flight, a push that hands nothing over (the first
+        // N - 1 after a flush) leaves no result, so lf_has_result says whether this one did.
+        if (result || (prev && estimator->pool)) {
             estimator->result = std::move(result);
             estimator->pair_error = failed;
         }
@@ -302,10 +312,14 @@ LF_API int32_t lf_flush(lf_estimator_t *estimator) {
     });
 }
 
-LF_API int32_t lf_has_result(const lf_estimator_t *estimator) { return estimator && estimator->result ? 1 : 0; }
+// From one of the handle's frame workers (its log callback) the handle's state belongs to the
+// owner's thread: no result, and the worker thread's own message.
+LF_API int32_t lf_has_result(const lf_estimator_t *estimator) {
+    return estimator && pair_owner != estimator && estimator->result ? 1 : 0;
+}
 
 LF_API const char *lf_last_error(const lf_estimator_t *estimator) {
-    return estimator ? estimator->error.c_str() : thread_last_error().c_str();
+    return estimator && pair_owner != estimator ? estimator->error.c_str() : thread_last_error().c_str();
 }
 
 }  // extern "C"

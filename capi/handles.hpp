@@ -14,6 +14,7 @@
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
 #include "core/ordered_pool.hpp"
+#include "guard.hpp"
 #include "io/rectify.hpp"
 #include "io/rig.hpp"
 #include "pipeline/estimator.hpp"
@@ -98,3 +99,15 @@ struct lf_estimator {
     // destroyed (waiting for its jobs, which read the members above) first.
     std::unique_ptr<lidarflow::OrderedPool<std::unique_ptr<lidarflow::capi::Result>>> pool;
 };
+
+namespace lidarflow::capi {
+
+// The handle whose pair the calling thread computes (a frame worker's log callback runs there),
+// else null.
+inline thread_local const lf_estimator_t *pair_owner = nullptr;
+
+// Where a call's error goes: the handle's message, except from one of the handle's frame
+// workers, whose message stays in lf_last_error(NULL) (the handle's belongs to its owner's thread).
+inline ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h && pair_owner != h ? &h->error : nullptr); }
+
+}  // namespace lidarflow::capi

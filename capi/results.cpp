@@ -20,10 +20,11 @@ using namespace lidarflow::capi;
 
 namespace {
 
-ErrorSink sink_of(lf_estimator_t *h) { return ErrorSink(h ? &h->error : nullptr); }
-
 const Result &ready_result(const lf_estimator_t *h) {
     require_non_null(h, "estimator");
+    // The owner's thread may replace the result meanwhile.
+    require(pair_owner != h, ErrorCode::BadState,
+            "the estimator's result cannot be read from the log callback of one of its frame workers");
     if (!h->result && h->pair_error) std::rethrow_exception(h->pair_error);
     require(h->result != nullptr, ErrorCode::NotReady, [&] {
         if (h->pool && h->pool->in_flight() > 0)

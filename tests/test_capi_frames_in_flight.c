@@ -11,6 +11,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -168,12 +169,54 @@ static void reset_drops_pairs_in_flight(void **state) {
     lf_destroy(e);
 }
 
-/* A frame worker's callback may not wait for its own pair (that would never return). */
+/* After a flush in mid-stream the pipeline fills again: a push that hands nothing over leaves no
+ * result (not the flushed one again), and later pairs are as before. */
+static void push_after_flush_hands_over_nothing(void **state) {
+    (void)state;
+    lf_estimator_t *e = new_estimator(2, 2);
+    for (int k = 0; k < 3; ++k) assert_int_equal(push(e, k), LF_OK);
+    expect_pair(e, 0);
+    assert_int_equal(lf_flush(e), LF_OK);
+    expect_pair(e, 1);
+    assert_int_equal(push(e, 3), LF_OK);
+    assert_int_equal(lf_has_result(e), 0);
+    assert_int_equal(lf_get_result_info(e, &(lf_result_info_t){.struct_size = sizeof(lf_result_info_t)}),
+                     LF_ERR_NOT_READY);
+    assert_int_equal(push(e, 4), LF_OK);
+    expect_pair(e, 2);
+    assert_int_equal(lf_flush(e), LF_OK);
+    expect_pair(e, 3);
+    lf_destroy(e);
+}
+
+/* Any increasing int64 timestamps are accepted, the most distant too (the time steps saturate
+ * rather than overflow: UBSan checks it). */
+static void extreme_timestamps(void **state) {
+    (void)state;
+    const int64_t stamps[] = {INT64_MIN, -1, INT64_MAX};
+    for (int n = 1; n <= 2; ++n) {
+        lf_estimator_t *e = new_estimator(n, n);
+        for (int k = 0; k < 3; ++k) {
+            const lf_image_t l = scene_image(left_of[k], W, H), r = scene_image(right_of[k], W, H);
+            assert_int_equal(lf_push_frame(e, stamps[k], &l, &r, NULL), LF_OK);
+        }
+        if (n > 1) assert_int_equal(lf_flush(e), LF_OK);
+        lf_result_info_t info;
+        lf_result_info_init(&info);
+        assert_int_equal(lf_get_result_info(e, &info), LF_OK);
+        assert_true(info.t0_us == -1 && info.t1_us == INT64_MAX);
+        lf_destroy(e);
+    }
+}
+
+/* A frame worker's callback may not wait for its own pair (that would never return), nor read
+ * the result its owner's thread may be replacing. */
 typedef struct reentry_t {
     lf_estimator_t *e;
     pthread_t caller;
-    int worker_calls;  /* callback calls on a frame worker */
-    int refused;       /* ... whose lf_flush and lf_reset were refused with LF_ERR_BAD_STATE */
+    /* Two frame workers may log at once. */
+    atomic_int worker_calls; /* callback calls on a frame worker */
+    atomic_int refused;      /* ... whose lf_flush, lf_reset and result reads were refused with LF_ERR_BAD_STATE */
 } reentry_t;
 
 static void reenter(int32_t level, const char *message, void *user) {
@@ -182,8 +225,11 @@ static void reenter(int32_t level, const char *message, void *user) {
     reentry_t *r = (reentry_t *)user;
     if (pthread_equal(pthread_self(), r->caller)) return;
     ++r->worker_calls;
+    lf_result_info_t info;
+    lf_result_info_init(&info);
     r->refused += lf_flush(r->e) == LF_ERR_BAD_STATE && strstr(lf_last_error(NULL), "lf_flush") &&
-                  lf_reset(r->e) == LF_ERR_BAD_STATE;
+                  lf_reset(r->e) == LF_ERR_BAD_STATE && lf_get_result_info(r->e, &info) == LF_ERR_BAD_STATE &&
+                  strstr(lf_last_error(r->e), "lf_get_result_info") && lf_has_result(r->e) == 0;
 }
 
 static void worker_callback_cannot_wait_for_itself(void **state) {
@@ -192,11 +238,12 @@ static void worker_callback_cannot_wait_for_itself(void **state) {
     r.e = new_estimator(2, 2);
     r.caller = pthread_self();
     r.worker_calls = r.refused = 0;
-    /* Frame 0 twice: the frozen pair's input quality is logged by the worker that computes it. */
+    /* Frame 0 three times: each frozen pair's input quality is logged by the worker that
+     * computes it, the second while the first is the handle's result. */
     assert_int_equal(lf_set_log_callback(reenter, LF_LOG_WARNING, &r), LF_OK);
     const lf_image_t l = scene_image(left_of[0], W, H), rr = scene_image(right_of[0], W, H);
-    assert_int_equal(lf_push_frame(r.e, 1, &l, &rr, NULL), LF_OK);
-    assert_int_equal(lf_push_frame(r.e, 2, &l, &rr, NULL), LF_OK);
+    for (int64_t t = 1; t <= 3; ++t) assert_int_equal(lf_push_frame(r.e, t, &l, &rr, NULL), LF_OK);
+    assert_int_equal(lf_has_result(r.e), 1);
     assert_int_equal(lf_flush(r.e), LF_OK);
     assert_int_equal(lf_set_log_callback(NULL, 0, NULL), LF_OK);
     assert_true(r.worker_calls > 0);
@@ -210,6 +257,8 @@ int main(void) {
         cmocka_unit_test(results_come_late_in_order_and_equal_single_pairs),
         cmocka_unit_test(flush_without_pairs_in_flight),
         cmocka_unit_test(reset_drops_pairs_in_flight),
+        cmocka_unit_test(push_after_flush_hands_over_nothing),
+        cmocka_unit_test(extreme_timestamps),
         cmocka_unit_test(worker_callback_cannot_wait_for_itself),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -517,13 +517,15 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * from the log callback of that call), LF_ERR_OUT_OF_MEMORY. On any error the estimator is
  * unchanged: the previous frame and the previous result stay.
  * With "frames_in_flight" N > 1 the call starts computing the pair on one of the handle's own
- * threads (which may call the log callback: lf_push_frame, lf_flush and lf_reset on the same
- * handle from there return LF_ERR_BAD_STATE with the message in lf_last_error(NULL)) and, when that makes N pairs in flight, waits for
+ * threads (which may call the log callback: from there, on the same handle, lf_push_frame,
+ * lf_flush, lf_reset and the result readers return LF_ERR_BAD_STATE, lf_has_result 0, and
+ * lf_last_error gives that thread's message) and, when that makes N pairs in flight, waits for
  * the oldest and makes its result the current one: the result of the pair that ended with
  * frame k comes with the push of frame k + N - 1 (or lf_flush). The errors above are
  * then this frame's; a pair that fails is handed over without a result: lf_has_result is 0
  * and the result readers (lf_get_result_info, ...) return its error, whose message names the
- * pair's timestamps.
+ * pair's timestamps. A push that hands nothing over (fewer than N pairs in flight: the first
+ * N - 1 pairs, and again after lf_flush) leaves no result either.
  * One thread at a time per estimator (this and every function below that takes one);
  * distinct estimators may push concurrently. */
 LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, const lf_image_t *left,
@@ -547,7 +549,7 @@ LF_API int32_t lf_flush(lf_estimator_t *estimator);
 LF_API int32_t lf_reset(lf_estimator_t *estimator);
 
 /* 1 when a result is available (two frames pushed since creation or lf_reset; with
- * "frames_in_flight" N, a pair handed over and not failed), else 0
+ * "frames_in_flight" N, a pair handed over by the last push or flush and not failed), else 0
  * (also for NULL). Changes nothing, not even the last error. One thread at a time per
  * estimator. */
 LF_API int32_t lf_has_result(const lf_estimator_t *estimator);
@@ -590,7 +592,7 @@ LF_API int32_t lf_get_result_info(lf_estimator_t *estimator, lf_result_info_t *i
 /* Per-stage timing `index` (0 .. timing_count - 1, in execution order) of the latest result:
  * *name (e.g. "matching_forward", "interpolation"; "rectify" first for a calibration with
  * rectify = 1: the pushed pair's rectification; owned by the estimator, valid until the
- * next push, reset or destroy) and *seconds. Either output may be NULL. Errors:
+ * next push, flush, reset or destroy) and *seconds. Either output may be NULL. Errors:
  * LF_ERR_INVALID_ARGUMENT (NULL estimator, index out of range), LF_ERR_NOT_READY. One thread
  * at a time per estimator. */
 LF_API int32_t lf_get_timing(lf_estimator_t *estimator, uint32_t index, const char **name, double *seconds);
@@ -648,7 +650,7 @@ static inline void lf_result_views_init(lf_result_views_t *v) {
 }
 
 /* Fills *views with pointers into the estimator; they stay valid until the next
- * lf_push_frame, lf_reset or lf_destroy on it (a failed push keeps them valid). Errors:
+ * lf_push_frame, lf_flush, lf_reset or lf_destroy on it (a failed push keeps them valid). Errors:
  * LF_ERR_INVALID_ARGUMENT (NULL, struct_size too small), LF_ERR_NOT_READY. Read them only
  * while no other thread calls into the estimator. */
 LF_API int32_t lf_get_result_views(lf_estimator_t *estimator, lf_result_views_t *views);
@@ -767,7 +769,7 @@ typedef enum lf_quality_flag_t {
 
 /* The input quality of the latest result: *flags (lf_quality_flag_t bits, 0 = ok) and *reason
  * (one English clause per set flag, "; "-separated, "" when ok; owned by the estimator, valid
- * until the next push, reset or destroy). Either output may be NULL. Errors:
+ * until the next push, flush, reset or destroy). Either output may be NULL. Errors:
  * LF_ERR_INVALID_ARGUMENT (NULL estimator), LF_ERR_NOT_READY (no result yet). One thread at a
  * time per estimator. A push that fails on inputs the checks flagged (e.g. swapped images in
  * which no stage finds a match) ends its message with "(input quality: NAME[, NAME...] (reason))".

@@ -693,7 +693,7 @@ struct ObjectMotion {
 
 // Borrowed, read-only views into the estimator's latest result (lf_get_result_views): no copy,
 // the C ABI's values (NaN where not valid; 0 from a 0.1.0 library). Valid until the next push,
-// reset, or the destruction of the Estimator (a push that throws keeps them valid); read them
+// flush, reset, or the destruction of the Estimator (a push that throws keeps them valid); read them
 // only while no other thread calls into that Estimator. Rows are stride_bytes apart.
 struct ResultViews {
     uint32_t width = 0, height = 0;
@@ -716,8 +716,9 @@ struct ResultViews {
 // Owns an lf_estimator_t: settings, the previous frame and the latest result. Push stereo frames
 // in time order; from the second push on, each push computes (synchronously) the scene flow from
 // the previous frame (t0, the reference) to the new one (t1) and replaces the result (with the
-// option "frames_in_flight" N, pairs run N at a time and each push hands over the pair N - 1
-// frames older: flush()). Movable, not copyable. One thread at a time per Estimator, readers included (they are not const for
+// option "frames_in_flight" N, pairs run N at a time and a push hands over the oldest once N
+// are in flight, i.e. the pair N - 1 frames older; one that hands nothing over leaves no
+// result: flush()). Movable, not copyable. One thread at a time per Estimator, readers included (they are not const for
 // that reason); distinct Estimators may run concurrently, each from its own thread.
 class Estimator {
 public:

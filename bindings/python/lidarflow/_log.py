@@ -10,6 +10,7 @@ library installed in this process.
 """
 import atexit
 import logging
+import threading
 
 from ._lib import LOG_FN, OK, lib
 
@@ -17,14 +18,26 @@ logger = logging.getLogger("lidarflow")
 logger.addHandler(logging.NullHandler())
 
 
+_state = threading.local()
+
+
+def in_callback():
+    """True on a thread that is running a handler of the library's messages."""
+    return getattr(_state, "depth", 0) > 0
+
+
 @LOG_FN
 def _forward(level, message, user):
-    # Runs on the thread of the library call, GIL taken by ctypes; nothing may raise into C.
+    # Runs on the thread of the library call (or on a frame worker of the estimator, with
+    # frames in flight), GIL taken by ctypes; nothing may raise into C.
+    _state.depth = getattr(_state, "depth", 0) + 1
     try:
         if logger.isEnabledFor(level):
             logger.log(level, message.decode("utf-8", "replace"))
     except Exception:  # noqa: BLE001 - an exception cannot cross into the library
         pass
+    finally:
+        _state.depth -= 1
 
 
 def _install():

@@ -7,7 +7,7 @@ import weakref
 
 import numpy as np
 
-from . import _lib
+from . import _lib, _log
 from ._lib import lib
 
 
@@ -18,6 +18,28 @@ class LidarflowError(RuntimeError):
         self.status = status
         self.message = message
         super().__init__("%s (%s)" % (message, lib.lf_status_string(status).decode()))
+
+
+class _Busy:
+    """Holds an Estimator's lock for one call. Inside a handler of the library's messages, a call
+    on an Estimator that another thread is using is refused (ERR_BAD_STATE) rather than waited
+    for: the handler may run on a frame worker whose frame that thread's call waits for, and
+    would then wait forever (the library refuses such calls too)."""
+
+    __slots__ = ("_lock",)
+
+    def __init__(self, lock):
+        self._lock = lock
+
+    def __enter__(self):
+        if not self._lock.acquire(blocking=not _log.in_callback()):
+            raise LidarflowError(_lib.ERR_BAD_STATE, "an Estimator call from a log handler while another "
+                                 "call on it runs (e.g. one waiting for the frame being logged)")
+        return self
+
+    def __exit__(self, *exc):
+        self._lock.release()
+        return False
 
 
 _LIDAR_KINDS = {"disparity": _lib.LIDAR_DISPARITY, "camera": _lib.LIDAR_POINTS_CAMERA,
@@ -170,7 +192,7 @@ class Estimator:
     # --- lifetime ---
     def close(self):
         """Frees the library handle. Idempotent; the Estimator is unusable afterwards."""
-        with self._busy:
+        with self._locked():
             self._finalizer()
             self._handle = None
 
@@ -190,11 +212,15 @@ class Estimator:
             raise ValueError("the Estimator is closed")
         return self._handle
 
+    def _locked(self):
+        return _Busy(self._busy)
+
     # --- frames ---
     def push(self, left, right, lidar=None, timestamp=None, lidar_kind="disparity", colour_order=None,
              color_order=None):
         """Adds a stereo frame; returns True when a result (previous frame -> this one) is ready;
-        with the option frames_in_flight N, the pair that ended N - 1 frames before (see flush).
+        with the option frames_in_flight N, when this push handed over a pair with a result: the
+        oldest in flight once N are, i.e. the pair that ended N - 1 frames before (see flush).
 
         left, right: uint8 arrays (H, W) gray or (H, W, 3) colour, packed pixels, any row
         stride; both the same shape. They are copied. Colour arrays need colour_order (or its
@@ -214,7 +240,7 @@ class Estimator:
         lv = None if lidar is None else _lidar_view(lidar, lidar_kind)
         if timestamp is not None:
             timestamp = _int64("timestamp", timestamp)
-        with self._busy:
+        with self._locked():
             h = self._h()
             # The default under the lock: two threads pushing with timestamp=None must not
             # both read the same previous timestamp.
@@ -232,7 +258,7 @@ class Estimator:
         for the oldest pair in flight and hands it over. Returns None when no pair was in
         flight, else whether it has a result (a failed pair has none; reading it raises the
         pair's error). At the end of a stream: ``while est.flush() is not None: ...``."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             status = lib.lf_flush(h)
             if status == _lib.ERR_NOT_READY:
@@ -242,20 +268,20 @@ class Estimator:
 
     def reset(self):
         """Forgets the previous frame and the result (a new sequence, any size, may follow)."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             _check(lib.lf_reset(h), h)
             self._last_timestamp = None
 
     @property
     def has_result(self):
-        with self._busy:
+        with self._locked():
             return bool(lib.lf_has_result(self._h()))
 
     # --- results ---
     def info(self):
         """dict: width, height, last_stage, t0_us, t1_us, total_seconds, timings [(name, s)]."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             i = _result_info(h)
             timings = []
@@ -277,7 +303,7 @@ class Estimator:
         keys (packed rows, any row stride, writeable); only those planes are written, in place,
         and out is returned. Raises LidarflowError (status ERR_NOT_READY) before two frames.
         """
-        with self._busy:
+        with self._locked():
             h = self._h()
             i = _result_info(h)
             shape = (i.height, i.width)
@@ -305,7 +331,7 @@ class Estimator:
         """The latest result in metres: dict with points and motion (H, W, 3) float32 (the point
         at t0 in the left camera frame at t0, and its position at t1 in the camera frame at t1
         minus that) and valid (H, W) uint8; NaN where not valid. out: as in result()."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             i = _result_info(h)
             shape = (i.height, i.width)
@@ -328,7 +354,7 @@ class Estimator:
         frame at t0 to those at t1, metres; the camera's own motion is inv(T)), and how many
         matches support it. Raises LidarflowError: ERR_NOT_READY before two frames,
         ERR_BAD_STATE when the result has none (the message says why, e.g. no stage 4)."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             e = _lib.EgoMotion()
             e.struct_size = ctypes.sizeof(_lib.EgoMotion)
@@ -344,7 +370,7 @@ class Estimator:
         "calibration_size_mismatch", "blank_frame", "lidar_disagrees"; empty when ok) and reason
         one English clause per state (docs/CONVENTIONS.md says what each means and what to do).
         Raises LidarflowError(ERR_NOT_READY) before two frames."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             flags = ctypes.c_uint32()
             reason = ctypes.c_char_p()
@@ -358,7 +384,7 @@ class Estimator:
         metres in the left camera frame at t1 (scene flow without the camera's own motion, about
         0 on the static world; NaN where not valid) and valid (H, W) uint8. out: as in result().
         Raises like ego_motion()."""
-        with self._busy:
+        with self._locked():
             h = self._h()
             i = _result_info(h)
             shape = (i.height, i.width)

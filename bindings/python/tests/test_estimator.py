@@ -5,6 +5,7 @@ Synthetic scene with exact truth: a textured fronto-parallel plane at disparity 
 (TU, TV) px, so every pixel's scene flow is (TU, TV, D, D)."""
 import ctypes
 import gc
+import logging
 import os
 import subprocess
 import sys
@@ -515,6 +516,39 @@ class Threads(unittest.TestCase):
         self.assertEqual(len(handed), len(single))
         for k in range(len(single)):
             self.assertTrue(same(handed[k], single[k]), "pair %d differs" % k)
+
+    def test_a_log_handler_on_a_frame_worker_is_refused_not_blocked(self):
+        # The same frame three times: each frozen pair's input check warns from the frame worker
+        # that computes it, while the owner's push or flush may be waiting for that pair.
+        scene = make_scene()
+        owner = threading.get_ident()
+        outcomes = []
+
+        class Reenter(logging.Handler):
+            def emit(self, record):
+                if threading.get_ident() == owner:
+                    return
+                try:
+                    est.flush()
+                    outcomes.append("returned")
+                except lidarflow.LidarflowError as e:
+                    outcomes.append(e.status)
+
+        logger = logging.getLogger("lidarflow")
+        handler, level = Reenter(logging.WARNING), logger.level
+        logger.addHandler(handler)
+        logger.setLevel(logging.WARNING)
+        try:
+            with lidarflow.Estimator(options=dict(FAST, threads=2, frames_in_flight=2), **CAL) as est:
+                for t in range(3):
+                    est.push(scene[0], scene[1], timestamp=t)
+                while est.flush() is not None:
+                    pass
+        finally:
+            logger.removeHandler(handler)
+            logger.setLevel(level)
+        self.assertTrue(outcomes)
+        self.assertEqual(set(outcomes), {lidarflow.ERR_BAD_STATE})
 
     def test_n_handles_in_n_threads_match_serial_runs(self):
         cases = [(make_scene(seed=s, tu=tu, tv=tv), grid_lidar(10)) for s, tu, tv in ((1, 3, 1), (2, -2, 0), (3, 1, 2))]

@@ -169,8 +169,9 @@ std::shared_ptr<const lidarflow::matching::DecoupledStereo> lagged_prior(lf_esti
     while (!e.priors.empty() && e.priors.front().pair_index < index - lag) e.priors.pop_front();
     if (e.priors.empty() || e.priors.front().pair_index != index - lag) return nullptr;
     const HandedPrior &h = e.priors.front();
-    const double expected = static_cast<double>(lag - 1) * static_cast<double>(elapsed_us(h.t0_us, h.t1_us));
-    if (std::abs(static_cast<double>(elapsed_us(h.t1_us, t0_us)) - expected) <= 0.25 * expected) return h.prior;
+    if (lidarflow::pipeline::lagged_prior_in_pace(static_cast<double>(h.t0_us), static_cast<double>(h.t1_us),
+                                                  static_cast<double>(t0_us), lag))
+        return h.prior;
     lidarflow::log::write(lidarflow::log::Level::Info, "no motion prior for this pair: the frames since the pair "
                                                        "that made it are not evenly spaced (a dropped frame?)");
     return nullptr;

@@ -147,12 +147,12 @@ Pushed fetch(lf_estimator_t *est, cv::Size size) {
     return p;
 }
 
-// The drive's `frames` pushed through the C ABI (frame k at 100000 k us), one result per pair;
-// with reset_at >= 0, lf_reset before frame reset_at (which then starts a new sequence: no pair
-// ends there).
+// The drive's `frames` pushed through the C ABI (frame k at 100000 k us, or at times[k]), one
+// result per pair; with reset_at >= 0, lf_reset before frame reset_at (which then starts a new
+// sequence: no pair ends there).
 std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
                                        const std::vector<int> &frames = all_frames(), int in_flight = 1,
-                                       bool flush_each = false) {
+                                       bool flush_each = false, const std::vector<int64_t> &times = {}) {
     lf_calibration_t cal;
     lf_calibration_init(&cal);
     assert_int_equal(lf_read_kitti_calibration((drive / "calib_cam_to_cam.txt").c_str(),
@@ -177,7 +177,8 @@ std::vector<Pushed> push_through_c_abi(const fs::path &drive, int reset_at = -1,
         const lf_image_t li = image(left), ri = image(right);
         const lf_lidar_t lidar{LF_LIDAR_POINTS_LIDAR, static_cast<uint32_t>(bin.size() / 16), bin.data(), 16};
         if (k == reset_at) assert_int_equal(lf_reset(est), LF_OK);
-        if (lf_push_frame(est, int64_t{100000} * k, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
+        const int64_t t = times.empty() ? int64_t{100000} * k : times[static_cast<size_t>(k)];
+        if (lf_push_frame(est, t, &li, &ri, &lidar) != LF_OK) fail_msg("%s", lf_last_error(est));
         if (k == frames.front() || k == reset_at) continue;
         if (flush_each) {
             while (lf_flush(est) == LF_OK) out.push_back(fetch(est, left.size()));
@@ -509,6 +510,43 @@ void test_frames_in_flight(void **) {
     expect_code(test::run_cli(base + " --out " + q(out) + " --frames-in-flight 0"), 2);
 }
 
+// Frame times with a frame left out between frames 1 and 2 (the images are the drive's): with 2
+// in flight, pairs 2->3 and 3->4 would take priors carried across the gap, so both do without
+// (computed as on their own), in `sequence` as in the C ABI fed the same times.
+void test_frames_in_flight_uneven_times(void **) {
+    const Fixture &f = fixture();
+    const fs::path drive = f.dir / "uneven", out = f.dir / "uneven_out", alone = f.dir / "uneven_alone";
+    fs::create_directories(drive / "image_02");
+    for (const char *entry : {"image_03", "velodyne_points", "calib_cam_to_cam.txt", "calib_velo_to_cam.txt"})
+        fs::create_symlink(fs::absolute(f.drive / entry), drive / entry);
+    fs::create_directory_symlink(fs::absolute(f.drive / "image_02" / "data"), drive / "image_02" / "data");
+    const std::vector<int64_t> times = {0, 100000, 300000, 400000, 500000};
+    {
+        std::ofstream t(drive / "image_02" / "timestamps.txt");
+        for (const int64_t us : times) {
+            char line[64];
+            std::snprintf(line, sizeof line, "2011-09-26 13:00:00.%09lld\n", static_cast<long long>(us * 1000));
+            t << line;
+        }
+    }
+    const std::string base = "sequence --drive " + q(drive) + " --format npy --quiet --preset " + std::string(kPreset);
+    expect_code(test::run_cli(base + " --out " + q(out) + " --threads 2 --frames-in-flight 2"), 0);
+    uneven_messages = 0;
+    lf_set_log_callback(count_uneven, LF_LOG_INFO, nullptr);
+    const std::vector<Pushed> pushed = push_through_c_abi(drive, -1, all_frames(), 2, false, times);
+    lf_set_log_callback(nullptr, 0, nullptr);
+    assert_int_equal(uneven_messages, 2);
+    assert_int_equal(pushed.size(), kFrames - 1);
+    for (int k = 0; k + 1 < kFrames; ++k) expect_pushed_result(pushed[static_cast<size_t>(k)], out, k);
+    for (int k = 2; k + 1 < kFrames; ++k)
+        expect_code(test::run_cli(base + " --out " + q(alone) + " --threads 1 --frames " + std::to_string(k) + ":" +
+                                  std::to_string(k + 1)),
+                    0);
+    for (int k = 2; k + 1 < kFrames; ++k)
+        for (const char *map : {"disp_0", "disp_1", "flow"})
+            assert_true(file_bytes(out / map / (name(k) + ".npy")) == file_bytes(alone / map / (name(k) + ".npy")));
+}
+
 // Share [%] of the pixels whose disparity differs by more than 1 px between two results.
 double share_off(const fs::path &a, const fs::path &b) {
     return test::share_off(io::read_disparity_file(a.string()), io::read_disparity_file(b.string()));
@@ -669,6 +707,7 @@ int main() {
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_rig_options),
         cmocka_unit_test(test_frames_in_flight),
+        cmocka_unit_test(test_frames_in_flight_uneven_times),
         cmocka_unit_test(test_accuracy_against_ground_truth),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

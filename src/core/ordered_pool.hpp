@@ -18,7 +18,7 @@ namespace lidarflow {
 // At most capacity() jobs in flight, each on its own persistent thread, so a job starts when it
 // is submitted. An owner that takes the oldest as soon as the pool is full keeps capacity() - 1
 // jobs running between its calls, and capacity() while it waits. Persistent threads keep their
-// OpenMP teams and heap arenas from job to job. One thread at a time submits and takes (the
+// heap arenas from job to job. One thread at a time submits and takes (the
 // owner); the jobs run concurrently with the owner and with each other. A job that throws hands
 // the exception to take_oldest().
 template <class T>

@@ -507,4 +507,9 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
     r.timings.push_back({"interpolation", seconds_since(t)});
 }
 
+bool lagged_prior_in_pace(double t0, double t1, double later_t0, int lag) {
+    const double expected = (lag - 1) * (t1 - t0);
+    return std::abs((later_t0 - t1) - expected) <= 0.25 * expected;
+}
+
 }  // namespace lidarflow::pipeline

@@ -165,6 +165,11 @@ struct EstimatorResult {
 // It also keeps the buffers of the pair the last frame no longer needed (its t0) and writes the
 // next frame's t1 descriptors into them: a stream then stops faulting in and clearing ~120 MB
 // of fresh pages per KITTI frame, at the price of holding them between frames.
+// Frames in flight: whether the motion prior of the pair t0 -> t1 may serve the pair `lag`
+// after it, which starts at later_t0 (any one time unit): the frames since kept that pair's
+// pace within 25 %, as the prior's carry over lag steps assumes (a dropped frame breaks it).
+bool lagged_prior_in_pace(double t0, double t1, double later_t0, int lag);
+
 class StreamCache {
 public:
     void clear() {

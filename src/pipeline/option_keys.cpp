@@ -49,7 +49,7 @@ const OptionKey kKeys[] = {
      "each frame uses at most the CPUs other processes leave idle (at least one); 0 = always threads",
      OptionKeyType::Bool, 0, 1, false, Extra::None, LF_INT_FIELD(adaptive_threads)},
     {"frames_in_flight",
-     "pairs computed at once, each on threads / frames_in_flight threads, results in order; the motion prior comes from the pair that many before",
+     "pairs computed at once, each on threads / frames_in_flight threads (at least 1), results in order; the motion prior comes from the pair that many before",
      OptionKeyType::Int, 1, 64, false, Extra::None, LF_INT_FIELD(frames_in_flight)},
     {"preset",
      "resets every key except threads to the named preset; set it before other keys",

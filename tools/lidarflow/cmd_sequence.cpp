@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
@@ -30,6 +31,7 @@
 #include "rig_args.hpp"
 #include "sequence_poses.hpp"
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/ordered_pool.hpp"
 #include "io/calib.hpp"
 #include "io/drive_folder.hpp"
@@ -174,7 +176,7 @@ int run_sequence(int argc, char **argv) {
                {"option", true, "K=V  any option key of the C ABI (lidarflow.h), after the preset; repeatable, or K=V,K=V"},
                {"set", true, "K=V,.. the same as --option (as `run` and `kitti` name it)"},
                {"threads", true, "N    OpenMP threads (default: every usable CPU, fewer while others are busy)"},
-               {"frames-in-flight", true, "N    pairs computed at once, each on threads / N threads, written in order; the motion prior comes from the pair N before, nothing else of the stream is reused (default 1: one stream)"},
+               {"frames-in-flight", true, "N    pairs computed at once, each on threads / N threads (at least 1), written in order; the motion prior comes from the pair N before, nothing else of the stream is reused (default 1: one stream)"},
                {"poses", true, "F    camera trajectory: kitti (default; OUT/poses.txt, KITTI odometry: frame A the origin) | tum | none"},
                {"warm-up", true, "N    with --frames A:B, start the stream N frames before A: pairs before A are computed for the stream's priors, not written (default 0)"},
                {"skip-existing", false, "do not recompute a pair whose manifest vouches for its files with these settings (counted as skipped)"}});
@@ -199,7 +201,8 @@ int run_sequence(int argc, char **argv) {
     for (const std::string &a : given)
         for (const std::string &item : split_list(a)) assignments.push_back(item);
     // The option key's own checks and message.
-    if (args.has("frames-in-flight")) assignments.push_back("frames_in_flight=" + args.str("frames-in-flight", "1"));
+    if (args.has("frames-in-flight"))
+        assignments.push_back("frames_in_flight=" + std::to_string(args.integer("frames-in-flight", 1)));
     pipeline::apply_option_assignments(opt, assignments);
     opt.keep_stage_fields = false;  // only the output is written, as the C ABI keeps only it
     pipeline::EstimatorOptions per_pair = opt;
@@ -339,8 +342,17 @@ int run_sequence(int argc, char **argv) {
     };
     // Warm-up: the frames before the range feed the stream only (a part of a drive then gets the
     // priors a whole run would have had); their problems are not the range's.
+    // The frame times, where the drive has them: a pair's time step lets the stream drop priors
+    // across a dropped frame, as the C ABI's timestamps do.
+    const auto time_of = [&](long k) -> std::optional<double> {
+        if (k < 0 || static_cast<size_t>(k) >= stamps.seconds.size()) return std::nullopt;
+        return stamps.seconds[static_cast<size_t>(k)];
+    };
     const auto pair_input = [&](const Frame &a, const Frame &b) {
-        return pipeline::FrameInput{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
+        pipeline::FrameInput in{a.left, a.right, b.left, b.right, a.lidar, b.lidar, calib.camera, calib.image_size};
+        const std::optional<double> ta = time_of(a.index), tb = time_of(b.index);
+        if (ta && tb && *tb > *ta) in.step_us = static_cast<int64_t>(std::llround((*tb - *ta) * 1e6));
+        return in;
     };
     // Frames in flight: pair k runs beside pairs k-N+1 .. k-1, with the motion prior of pair
     // k-N (finished by then) as the C ABI's handle does; written in their turn.
@@ -376,7 +388,16 @@ int run_sequence(int argc, char **argv) {
         // A bad frame restarts the stream: no prior across it.
         std::shared_ptr<const matching::DecoupledStereo> lagged =
             prior_t0 == pair.t0 - lag && prior_t0 >= no_prior_before ? prior : nullptr;
-        pool->submit([&estimator, &pair_input, a, b, lag, lagged] {
+        const std::optional<double> p0 = time_of(prior_t0), p1 = time_of(prior_t0 + 1), t0 = time_of(pair.t0);
+        const std::string context = "pair " + pair_text(pair.t0);
+        if (lagged && p0 && p1 && t0 && !pipeline::lagged_prior_in_pace(*p0, *p1, *t0, lag)) {
+            const log::Scope scope(context);
+            log::write(log::Level::Info, "no motion prior for this pair: the frames since the pair that made it "
+                                         "are not evenly spaced (a dropped frame?)");
+            lagged = nullptr;
+        }
+        pool->submit([&estimator, &pair_input, a, b, lag, lagged, context] {
+            const log::Scope scope(context);  // its messages name it: pairs in flight interleave
             const Stopwatch clock;
             pipeline::StreamCache cache;
             cache.set_in_flight(lag, lagged);

@@ -9,6 +9,7 @@
 //  - on a synthetic drive whose cars overtake and approach, `lidarflow sequence` with the prior
 //    scores better than the same pairs without it (the pairs one by one).
 // Runs the built binary ($LIDARFLOW_CLI, set by CTest).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -175,6 +176,85 @@ void object_motion_is_carried_two_steps(void **) {
     assert_int_equal(wrong, 0);
 }
 
+// The camera turns (3 degrees of yaw a frame) while the box keeps its motion in the world: in
+// the next frame's camera the box's object motion is turned by that rotation. The next pair's
+// prior, the way back and the two-step carry use the turned motion.
+void object_motion_turns_with_the_camera(void **) {
+    const double a = 3.0 * CV_PI / 180.0;
+    const double R[9] = {std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a)};
+    motion::EgoMotion m = ego();
+    for (int i = 0; i < 9; ++i) m.R[i] = R[i];
+    const auto turn = [&](const double v[3], double out[3]) {
+        for (int i = 0; i < 3; ++i) out[i] = R[3 * i] * v[0] + R[3 * i + 1] * v[1] + R[3 * i + 2] * v[2];
+    };
+    double turned[3];
+    turn(kObject, turned);
+    // The pair's exact field under the turning camera.
+    SceneFlowField f = SceneFlowField::zeros(W, H);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const double d0 = kCam.disparity_from_depth(depth0(x, y));
+            double p[3], q[3], x1, y1;
+            back_project(kCam, x, y, d0, p);
+            turn(p, q);
+            for (int i = 0; i < 3; ++i) q[i] += kT[i] + (in_box(x, y) ? kObject[i] : 0.0);
+            pixel_of(q, x1, y1);
+            f.u(y, x) = static_cast<float>(x1 - x);
+            f.v(y, x) = static_cast<float>(y1 - y);
+            f.d0(y, x) = static_cast<float>(d0);
+            f.d1(y, x) = static_cast<float>(kCam.disparity_from_depth(q[2]));
+            f.valid(y, x) = 1;
+        }
+    const cv::Mat3f objects = matching::carry_object_motion(f, m, kCam);
+    DisparityMap d1(H, W, static_cast<float>(kCam.disparity_from_depth(19.0)));
+    int marked = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            if (finite3(objects(y, x))) {
+                ++marked;
+                d1(y, x) = static_cast<float>(kCam.disparity_from_depth(6.2));
+            }
+    assert_true(marked > 1600);
+    cv::Mat2f prior(H, W, cv::Vec2f(0, 0));
+    matching::add_object_motion(m, d1, objects, prior);
+    double worst = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!finite3(objects(y, x))) continue;
+            double p[3], q[3], x2, y2;
+            back_project(kCam, x, y, d1(y, x), p);
+            turn(p, q);
+            for (int i = 0; i < 3; ++i) q[i] += kT[i] + turned[i];
+            pixel_of(q, x2, y2);
+            worst = std::max({worst, std::fabs(prior(y, x)[0] - (x2 - x)), std::fabs(prior(y, x)[1] - (y2 - y))});
+        }
+    std::printf("turning: %d pixels marked, worst prior error %.2g px\n", marked, worst);
+    assert_true(worst < 1e-3);
+    // The way back from this pair's object motion R o is -o.
+    cv::Mat2f flow(H, W);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) flow(y, x) = cv::Vec2f(f.u(y, x), f.v(y, x));
+    const cv::Mat3f back = matching::reverse_object_motion(objects, flow, m);
+    int back_marked = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            if (finite3(back(y, x))) {
+                ++back_marked;
+                for (int i = 0; i < 3; ++i) assert_true(std::fabs(back(y, x)[i] + kObject[i]) < 1e-3);
+            }
+    assert_true(back_marked > 1000);
+    // Two steps: the motion the pair after next starts from is the turned one.
+    const cv::Mat3f two = matching::carry_object_motion(f, m, kCam, 2);
+    int two_marked = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            if (finite3(two(y, x))) {
+                ++two_marked;
+                for (int i = 0; i < 3; ++i) assert_true(std::fabs(two(y, x)[i] - turned[i]) < 1e-3);
+            }
+    assert_true(two_marked > 1600);
+}
+
 // t0 points every 4 px over the scene, aged 0 except every fifth, which is 3 frames old.
 void static_points_are_carried(void **) {
     const SceneFlowField f = exact_field();
@@ -285,6 +365,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(object_motion_is_carried_and_predicted),
         cmocka_unit_test(object_motion_is_carried_two_steps),
+        cmocka_unit_test(object_motion_turns_with_the_camera),
         cmocka_unit_test(static_points_are_carried),
         cmocka_unit_test(stream_beats_pairs_on_a_drive),
     };

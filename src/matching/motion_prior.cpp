@@ -30,6 +30,14 @@ void rigid(const double R[9], const double t[3], const double p[3], double out[3
     for (int i = 0; i < 3; ++i) out[i] = R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2] + t[i];
 }
 
+// An object motion one frame step later at constant velocity: the same motion in the world,
+// so in the camera frame turned by the step's rotation R.
+cv::Vec3f next_step(const double R[9], const cv::Vec3f &o) {
+    cv::Vec3f r;
+    for (int i = 0; i < 3; ++i) r[i] = static_cast<float>(R[3 * i] * o[0] + R[3 * i + 1] * o[1] + R[3 * i + 2] * o[2]);
+    return r;
+}
+
 // Empty pixels take a 3x3 neighbour's value: a point that comes closer covers more pixels at t1
 // than it had at t0, and the splat leaves single-pixel gaps inside it.
 cv::Mat3f close_gaps(const cv::Mat3f &m) {
@@ -57,8 +65,8 @@ void advance_one_step(cv::Mat3f &objects, cv::Mat1f &d, const motion::EgoMotion 
     for (int y = 0; y < d.rows; ++y)
         for (int x = 0; x < d.cols; ++x) {
             if (!(d(y, x) > 0.0f)) continue;
-            const cv::Vec3f o = objects(y, x);
-            const bool mover = finite3(o);
+            const bool mover = finite3(objects(y, x));
+            const cv::Vec3f o = mover ? next_step(ego.R, objects(y, x)) : objects(y, x);
             double p[3], q[3], tx, ty;
             back_project(c, x, y, d(y, x), p);
             rigid(ego.R, ego.t, p, q);
@@ -108,8 +116,8 @@ void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const 
     const StereoCamera &c = m.camera;
     for (int y = 0; y < d.rows; ++y)
         for (int x = 0; x < d.cols; ++x) {
-            const cv::Vec3f o = objects(y, x);
-            if (!finite3(o) || !disparity_valid(d(y, x)) || !(d(y, x) > 0.0f)) continue;
+            if (!finite3(objects(y, x)) || !disparity_valid(d(y, x)) || !(d(y, x) > 0.0f)) continue;
+            const cv::Vec3f o = next_step(m.R, objects(y, x));
             double p[3], q[3], tx, ty;
             back_project(c, x, y, d(y, x), p);
             rigid(m.R, m.t, p, q);
@@ -128,10 +136,9 @@ cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow,
             if (!finite3(o) || !std::isfinite(f[0]) || !std::isfinite(f[1])) continue;
             const int tx = static_cast<int>(std::lround(x + f[0])), ty = static_cast<int>(std::lround(y + f[1]));
             if (tx < 0 || ty < 0 || tx >= back.cols || ty >= back.rows) continue;
-            // X0 = R^T (X1 - t - o): the object motion of the way back is -R^T o.
-            cv::Vec3f r;
-            for (int i = 0; i < 3; ++i) r[i] = -static_cast<float>(m.R[i] * o[0] + m.R[3 + i] * o[1] + m.R[6 + i] * o[2]);
-            back(ty, tx) = r;
+            // This step's object motion is R o (next_step); X0 = R^T (X1 - t - R o), so the way
+            // back's is -o.
+            back(ty, tx) = -o;
         }
     return close_gaps(back);
 }

@@ -234,6 +234,9 @@ void test_bad_files(void **) {
     refuse("one_info.yaml", camera_info(0), "camera_info");
     refuse("empty.yml", "", "not a KITTI");
     refuse("nul.yml", std::string("%YAML:1.0\nM1: [1\0, 2]\n", 20), "NUL");
+    // OpenCV's XML parser crashes on these (found by fuzz_io_calibration).
+    refuse("header.xml", "<?xml vzr=", "truncated");
+    refuse("attribute.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n<M1 type_id= \n", "truncated");
     // camera_info pairs.
     const fs::path l = write(dir, "l.yaml", camera_info(0)), r = write(dir, "r.yaml", camera_info(-175));
     const fs::path fish = write(dir, "fish.yaml", camera_info(0, "equidistant", "[0.1, 0, 0, 0]"));

@@ -54,6 +54,12 @@ cv::FileStorage open_storage(const std::string &text, const std::string &source)
     const bool tagged = starts_with(body, "%YAML") || starts_with(body, "<?xml") || starts_with(body, "<opencv_storage");
     const std::string input = tagged ? body : "%YAML:1.0\n---\n" + body;
     require(input.find('\0') == std::string::npos, ErrorCode::Format, source + ": a NUL byte in a text file");
+    // OpenCV 4.6's XML parser dereferences a null pointer on an attribute's '=' at the end of
+    // the text; a whole XML file ends with a closing '>'.
+    const bool xml = starts_with(body, "<");
+    const size_t last = body.find_last_not_of(" \t\r\n");
+    require(!xml || (last != std::string::npos && body[last] == '>'), ErrorCode::Format,
+            source + ": the XML ends before its last tag is closed (a truncated file?)");
     try {
         cv::FileStorage fs(input, cv::FileStorage::READ | cv::FileStorage::MEMORY);
         require(fs.isOpened(), ErrorCode::Format, source + ": not a YAML or XML file OpenCV can read");

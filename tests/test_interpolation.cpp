@@ -387,6 +387,15 @@ void sed_model_errors(void **) {
     o.edges.sed_model_path = yaml.string();
     expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Format);
 
+    // An XML model cut after an attribute's '=' (OpenCV's XML parser would crash on it).
+    const auto cut = dir / "cut.xml";
+    f = std::fopen(cut.string().c_str(), "w");
+    assert_non_null(f);
+    std::fputs("<?xml version=\"1.0\"?>\n<opencv_storage>\n<options type_id= \n", f);
+    std::fclose(f);
+    o.edges.sed_model_path = cut.string();
+    expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Format);
+
     // Built-in edge maps: soft, in [0, 1], high on the scene's region boundaries.
     const test::PlanarScene s = test::make_planar_scene();
     for (auto method : {interpolation::EdgeMethod::Gradient, interpolation::EdgeMethod::MultiScaleGradient}) {

@@ -11,6 +11,7 @@
 #include <opencv2/ximgproc/structured_edge_detection.hpp>
 
 #include "core/error.hpp"
+#include "io/storage_text.hpp"
 
 namespace lidarflow::interpolation {
 
@@ -25,6 +26,8 @@ SedModel::SedModel(const std::string &path) {
         require(probe.good() && std::filesystem::is_regular_file(path), ErrorCode::Io,
                 "cannot open SED model file: " + path);
     }
+    require(!io::xml_file_cut_short(path), ErrorCode::Format,
+            "SED model: the XML ends before its last tag is closed (a truncated file?): " + path);
     // OpenCV builds its forest from whatever nodes it finds and would fail later (or crash) on
     // a file that is YAML but not a model, so the forest's nodes are checked here first.
     try {

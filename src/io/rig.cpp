@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/limits.hpp"
 #include "core/size_text.hpp"
+#include "io/storage_text.hpp"
 
 namespace lidarflow::io {
 namespace {
@@ -54,11 +55,7 @@ cv::FileStorage open_storage(const std::string &text, const std::string &source)
     const bool tagged = starts_with(body, "%YAML") || starts_with(body, "<?xml") || starts_with(body, "<opencv_storage");
     const std::string input = tagged ? body : "%YAML:1.0\n---\n" + body;
     require(input.find('\0') == std::string::npos, ErrorCode::Format, source + ": a NUL byte in a text file");
-    // OpenCV 4.6's XML parser dereferences a null pointer on an attribute's '=' at the end of
-    // the text; a whole XML file ends with a closing '>'.
-    const bool xml = starts_with(body, "<");
-    const size_t last = body.find_last_not_of(" \t\r\n");
-    require(!xml || (last != std::string::npos && body[last] == '>'), ErrorCode::Format,
+    require(!xml_cut_short(body, body), ErrorCode::Format,
             source + ": the XML ends before its last tag is closed (a truncated file?)");
     try {
         cv::FileStorage fs(input, cv::FileStorage::READ | cv::FileStorage::MEMORY);

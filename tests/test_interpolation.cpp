@@ -4,6 +4,7 @@
 #include "test_support.hpp"
 
 #include <cmath>
+#include <fstream>
 #include <cstdio>
 #include <limits>
 
@@ -389,10 +390,7 @@ void sed_model_errors(void **) {
 
     // An XML model cut after an attribute's '=' (OpenCV's XML parser would crash on it).
     const auto cut = dir / "cut.xml";
-    f = std::fopen(cut.string().c_str(), "w");
-    assert_non_null(f);
-    std::fputs("<?xml version=\"1.0\"?>\n<opencv_storage>\n<options type_id= \n", f);
-    std::fclose(f);
+    std::ofstream(cut) << "<?xml version=\"1.0\"?>\n<opencv_storage>\n<options type_id= \n";
     o.edges.sed_model_path = cut.string();
     expect_error([&] { interpolation::RobustInterpolator{o}; }, ErrorCode::Format);
 

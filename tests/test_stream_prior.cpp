@@ -79,6 +79,19 @@ SceneFlowField exact_field() {
 
 bool finite3(const cv::Vec3f &v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
+// The pixels `objects` marks, each asserted to hold (a, b, c) within 1e-3.
+int marked_with(const cv::Mat3f &objects, double a, double b, double c) {
+    int marked = 0;
+    for (int y = 0; y < objects.rows; ++y)
+        for (int x = 0; x < objects.cols; ++x)
+            if (finite3(objects(y, x))) {
+                ++marked;
+                const double want[3] = {a, b, c};
+                for (int i = 0; i < 3; ++i) assert_true(std::fabs(objects(y, x)[i] - want[i]) < 1e-3);
+            }
+    return marked;
+}
+
 void object_motion_is_carried_and_predicted(void **) {
     const SceneFlowField f = exact_field();
     const cv::Mat3f objects = matching::carry_object_motion(f, ego(), kCam);
@@ -234,25 +247,10 @@ void object_motion_turns_with_the_camera(void **) {
     cv::Mat2f flow(H, W);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) flow(y, x) = cv::Vec2f(f.u(y, x), f.v(y, x));
-    const cv::Mat3f back = matching::reverse_object_motion(objects, flow, m);
-    int back_marked = 0;
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x)
-            if (finite3(back(y, x))) {
-                ++back_marked;
-                for (int i = 0; i < 3; ++i) assert_true(std::fabs(back(y, x)[i] + kObject[i]) < 1e-3);
-            }
-    assert_true(back_marked > 1000);
+    assert_true(marked_with(matching::reverse_object_motion(objects, flow, m), -kObject[0], -kObject[1], -kObject[2]) >
+                1000);
     // Two steps: the motion the pair after next starts from is the turned one.
-    const cv::Mat3f two = matching::carry_object_motion(f, m, kCam, 2);
-    int two_marked = 0;
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x)
-            if (finite3(two(y, x))) {
-                ++two_marked;
-                for (int i = 0; i < 3; ++i) assert_true(std::fabs(two(y, x)[i] - turned[i]) < 1e-3);
-            }
-    assert_true(two_marked > 1600);
+    assert_true(marked_with(matching::carry_object_motion(f, m, kCam, 2), turned[0], turned[1], turned[2]) > 1600);
 }
 
 // t0 points every 4 px over the scene, aged 0 except every fifth, which is 3 frames old.

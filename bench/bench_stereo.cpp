@@ -8,6 +8,7 @@
 //   bench_stereo --root DIR [--ids 000002,000003] [--scale 0.55] [--runs 5] [--threads 2]
 //                [--lidar paper|velodyne|none] [--beams K] [--placement P]
 //                [--p1 N] [--p2 N] [--paths 4|8] [--slope F] [--cap N] [--radius N] [--intensity N]
+//                [--ternary] [--census-threshold N]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -36,7 +37,7 @@ namespace {
     std::fprintf(stderr,
                  "%s\nusage: bench_stereo --root DIR [--ids A,B] [--scale S] [--runs N] [--threads N]\n"
                  "  [--lidar paper|velodyne|none] [--beams K] [--placement P] [--p1 N] [--p2 N] [--paths 4|8]\n"
-                 "  [--slope F] [--cap N] [--radius N] [--intensity N]\n",
+                 "  [--slope F] [--cap N] [--radius N] [--intensity N] [--ternary] [--census-threshold N]\n",
                  msg);
     std::exit(2);
 }
@@ -114,6 +115,8 @@ int main(int argc, char **argv) try {
         else if (a == "--cap") g.lidar_cap = std::atoi(next().c_str());
         else if (a == "--radius") g.lidar_radius = std::atoi(next().c_str());
         else if (a == "--intensity") g.lidar_intensity = std::atoi(next().c_str());
+        else if (a == "--ternary") g.ternary_census = true;
+        else if (a == "--census-threshold") g.census_threshold = std::atoi(next().c_str());
         else usage(("unknown argument " + a).c_str());
     }
     if (root.empty()) usage("--root is required");

@@ -302,6 +302,10 @@ static void test_named_presets(void **state) {
     assert_true(get_number(o, "matching.flow_patch_size") == 6.0);
     assert_true(get_number(o, "matching.flow_patch_stride") == 3.0); /* default's is 2 */
     assert_true(get_number(fresh, "matching.flow_patch_stride") == 2.0);
+    assert_true(get_number(o, "stereo.ternary_census") == 1.0); /* default's is binary */
+    assert_true(get_number(o, "stereo.census_threshold") == 1.0);
+    assert_true(get_number(fresh, "stereo.ternary_census") == 0.0);
+    assert_true(get_number(fresh, "stereo.census_threshold") == 0.0);
     assert_true(get_number(o, "matching.flow_prior_track_step") == 12.0);
     assert_true(get_number(o, "matching.min_coarsest_height") == get_number(fresh, "matching.min_coarsest_height"));
     assert_true(fabs(get_number(o, "processing_scale") - 0.65) < 1e-12);

@@ -228,7 +228,7 @@ void presets_do_not_depend_on_threads(void **) {
 
 // The `paper` preset is the paper's design (the field defaults: the same result); `default` is
 // the decoupled design with the LiDAR-guided stereo, and `fast` differs from it only in the DIS
-// patch stride (the same result once that is set back).
+// patch stride and the ternary census (the same result once those are set back).
 void paper_preset_is_the_papers_design(void **) {
     const synth::SynthScene s = scene();
     EstimatorOptions paper = EstimatorOptions::preset("paper"), fields;
@@ -244,8 +244,11 @@ void paper_preset_is_the_papers_design(void **) {
     assert_true(EstimatorOptions::preset("realtime").matching.guided_stereo);
     def.threads = fast.threads = 2;
     assert_int_equal(fast.matching.flow.patch_stride, 3);
+    assert_true(fast.matching.stereo.ternary_census && fast.matching.stereo.census_threshold == 1);
     assert_false(same_field(Estimator(def).run(frame_of(s)).dense, Estimator(fast).run(frame_of(s)).dense));
     fast.matching.flow.patch_stride = def.matching.flow.patch_stride;
+    fast.matching.stereo.ternary_census = def.matching.stereo.ternary_census;
+    fast.matching.stereo.census_threshold = def.matching.stereo.census_threshold;
     assert_true(same_field(Estimator(def).run(frame_of(s)).dense, Estimator(fast).run(frame_of(s)).dense));
 }
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The project's SGM with a LiDAR term (stereo/guided_sgm.hpp) and the thinning of dense scans
 // for stages 2-4 (lidar/binning.hpp): a textured pair at a known disparity, a textureless
-// square that only the LiDAR can place, determinism over threads, refused inputs.
+// square that only the LiDAR can place, a dithered flat square that only ternary census lets the
+// LiDAR place, determinism over threads, refused inputs.
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -99,6 +100,36 @@ void lidar_places_a_textureless_square(void **) {
     assert_true(share_near(guided, cv::Rect(52, 5, 40, 20), 8.0f, 0.5f) > 0.95);
 }
 
+// A flat square under a one-level dither (each image its own): binary census bits follow the
+// dither, so every disparity's cost is noise and the LiDAR points' priors do not carry across
+// the square; ternary census with a threshold of 1 sees no neighbour there, costs 0 at every
+// disparity, and the paths spread the points' disparity.
+void ternary_census_ignores_a_dithered_flat_square(void **) {
+    cv::Mat1b l, r;
+    scene(8, 24, 40, l, r);
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<int> bit(0, 1);
+    const cv::Rect sq(kW / 2 - 20, kH / 2 - 20, 40, 40);
+    for (cv::Mat1b *m : {&l, &r})
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x)
+                if ((*m)(y, x) == 128) (*m)(y, x) = static_cast<uint8_t>(128 + bit(rng));
+    SparseLidar lidar{kW, kH, {}};
+    for (int y = kH / 2 - 15; y <= kH / 2 + 15; y += 15)  // 9 points, 15 px apart
+        for (int x = kW / 2 - 15; x <= kW / 2 + 15; x += 15) lidar.points.push_back({x, y, 24.0f});
+    const cv::Rect inner(sq.x + 4, sq.y + 4, sq.width - 8, sq.height - 8);
+    stereo::GuidedSgmOptions binary = options(), ternary = options();
+    ternary.ternary_census = true;
+    ternary.census_threshold = 1;
+    const double b = share_near(stereo::guided_sgm(l, r, lidar, binary), inner, 24.0f, 1.0f);
+    const double t = share_near(stereo::guided_sgm(l, r, lidar, ternary), inner, 24.0f, 1.0f);
+    std::printf("dithered square at 24 +- 1 px with 9 points: %.3f binary census, %.3f ternary\n", b, t);
+    assert_true(t > 0.9);
+    assert_true(t > b + 0.2);
+    // The textured background keeps its disparity with either census.
+    assert_true(share_near(stereo::guided_sgm(l, r, lidar, ternary), cv::Rect(52, 5, 40, 20), 8.0f, 0.5f) > 0.95);
+}
+
 // Integer arithmetic throughout: one, two or three threads give the same map bit for bit.
 void threads_do_not_change_the_result(void **) {
     cv::Mat1b l, r;
@@ -111,6 +142,12 @@ void threads_do_not_change_the_result(void **) {
     const DisparityMap d4 = stereo::guided_sgm(l, r, lidar, four);
     four.threads = 3;
     assert_true(test::same_mat(d4, stereo::guided_sgm(l, r, lidar, four)));
+    stereo::GuidedSgmOptions ternary = options(1);
+    ternary.ternary_census = true;
+    ternary.census_threshold = 2;
+    const DisparityMap t1 = stereo::guided_sgm(l, r, lidar, ternary);
+    ternary.threads = 3;
+    assert_true(test::same_mat(t1, stereo::guided_sgm(l, r, lidar, ternary)));
 }
 
 // A densified prior: the point's own pixel at full weight, neighbours of another intensity none.
@@ -155,6 +192,11 @@ void bad_inputs_are_refused(void **) {
     bad.paths = 6;
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
     bad = options();
+    bad.census_threshold = 65;
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
+    bad.census_threshold = -1;
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
+    bad = options();
     bad.lidar_slope = NAN;
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { stereo::guided_sgm(l, r, none, bad); }));
 }
@@ -186,6 +228,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(textured_plane),
         cmocka_unit_test(lidar_places_a_textureless_square),
+        cmocka_unit_test(ternary_census_ignores_a_dithered_flat_square),
         cmocka_unit_test(threads_do_not_change_the_result),
         cmocka_unit_test(prior_stays_on_its_surface),
         cmocka_unit_test(bad_inputs_are_refused),

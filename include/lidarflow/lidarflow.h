@@ -123,7 +123,8 @@ typedef struct lf_options lf_options_t;
  *                                        0.65, DIS patches 6 / stride 2, superpixels sized
  *                                        by the LiDAR's density; about 3x the time of
  *                                        OpenCV's SGBM + DIS), "fast" ("default" with
- *                                        DIS patches every 3 px: about 2.5x), "realtime"
+ *                                        DIS patches every 3 px and ternary census with
+ *                                        threshold 1: about 2.7x), "realtime"
  *                                        ("decoupled" at 0.55, stage 4
  *                                        with 20 px superpixels and 128 neighbours: about
  *                                        1.5x), "paper" (the paper's design: PatchMatch
@@ -200,13 +201,20 @@ typedef struct lf_options lf_options_t;
  *                                                   the background motion (3 in the decoupled
  *                                                   presets; 0 = only the pair's own points)
  *   guided SGM (matching.guided_stereo 1): census 9x7 costs, 8 or 4 paths
+ *   "stereo.ternary_census"   0/1                a second census bit per neighbour: brighter
+ *                                                by more than the threshold (default 0;
+ *                                                "fast" 1): flat, noisy surfaces cost 0 at
+ *                                                every disparity and are filled by the paths
+ *   "stereo.census_threshold" int   [0, 64]      a census bit is set where a neighbour is
+ *                                                darker (ternary: or brighter) than the
+ *                                                centre by more than this (default 0; "fast" 1)
  *   "stereo.p1"               int   [0, 255]     penalty of a 1 px step (default 10)
  *   "stereo.p2"               int   [1, 1023]    penalty of a larger step (default 120), > p1
  *   "stereo.adaptive_p2"      0/1                P2 divided by the intensity step (default 1)
  *   "stereo.paths"            int   4 or 8       aggregation paths (default 8)
  *   "stereo.uniqueness_ratio" int   [0, 99]      [%] margin of the best cost (default 10)
  *   "stereo.lidar_slope"      float [0, 64]      LiDAR cost per px of |d - d_lidar| (default 4)
- *   "stereo.lidar_cap"        int   [0, 192]     largest LiDAR cost (default 40; census 0..63)
+ *   "stereo.lidar_cap"        int   [0, 192]     largest LiDAR cost (default 40; census 0..62)
  *   "stereo.lidar_radius"     int   [0, 32]      [px] a point guides pixels this near of its
  *                                                intensity (default 3), less with distance
  *   "stereo.lidar_intensity"  int   [0, 255]     intensity tolerance of that spread (default 12)

@@ -187,6 +187,10 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
             o.matching.flow.patch_size = 6;
             // "fast": fewer DIS patches for time; flow detail matters most with a dense scan.
             o.matching.flow.patch_stride = name == "fast" ? 3 : 2;
+            if (name == "fast") {  // flat, noisy surfaces filled by the paths, not matched by their noise
+                o.matching.stereo.ternary_census = true;
+                o.matching.stereo.census_threshold = 1;
+            }
             // Stage 4's flow tolerance nearer the evaluator's 3 px at full size (the scaled
             // 1.95 px loses the drives' fast movers).
             o.interpolation.flow_inlier = 2.5f;

@@ -25,47 +25,65 @@ namespace {
 constexpr int kCensusHalfW = 4, kCensusHalfH = 3;  // 9x7 window: 62 bits
 constexpr uint16_t kBig = 0x3FFF;                  // path sentinel: + P1 still fits 16 bits
 
-// Census signatures of one row: bit k set when neighbour k of the 9x7 window is darker than
-// the centre. `rows` are the window's 7 rows of the padded image (kCensusHalfW replicated
-// pixels each side), so the loop over x has no border case and vectorises.
+// Census signatures of one row: bit k of `dark` set when neighbour k of the 9x7 window is
+// darker than the centre by more than `t` grey levels; of `bright` (when not null) when it is
+// brighter by more than `t`. `rows` are the window's 7 rows of the padded image (kCensusHalfW
+// replicated pixels each side), so the loops over x have no border case and vectorise.
 LIDARFLOW_V3_CLONES
-void census_row(const uint8_t *const *rows, int w, uint64_t *out) {
+void census_row(const uint8_t *const *rows, int w, int t, uint64_t *dark, uint64_t *bright) {
     const uint8_t *centre = rows[kCensusHalfH] + kCensusHalfW;
-    std::fill(out, out + w, 0);
+    std::fill(dark, dark + w, 0);
+    if (bright) std::fill(bright, bright + w, 0);
     for (int k = 0; k < 2 * kCensusHalfH + 1; ++k)
         for (int j = 0; j < 2 * kCensusHalfW + 1; ++j) {
             if (k == kCensusHalfH && j == kCensusHalfW) continue;
             const uint8_t *n = rows[k] + j;
-            for (int x = 0; x < w; ++x) out[x] = (out[x] << 1) | static_cast<uint64_t>(n[x] < centre[x]);
+            for (int x = 0; x < w; ++x) dark[x] = (dark[x] << 1) | static_cast<uint64_t>(n[x] + t < centre[x]);
+            if (bright)
+                for (int x = 0; x < w; ++x) bright[x] = (bright[x] << 1) | static_cast<uint64_t>(n[x] > centre[x] + t);
         }
 }
 
-// Census signatures of the image, the window clamped at the border (replicated pixels).
-cv::Mat census(const cv::Mat1b &g, int threads) {
+// Census signatures of an image (8 bytes per pixel and plane, read as uint64), the window
+// clamped at the border (replicated pixels). `bright` stays empty unless `ternary`.
+struct Census {
+    cv::Mat dark, bright;
+};
+Census census(const cv::Mat1b &g, int t, bool ternary, int threads) {
     const int h = g.rows, w = g.cols;
     cv::Mat1b padded;
     cv::copyMakeBorder(g, padded, kCensusHalfH, kCensusHalfH, kCensusHalfW, kCensusHalfW, cv::BORDER_REPLICATE);
-    cv::Mat sig(h, w, CV_64F);  // 8 bytes per pixel, read as uint64
+    Census c{cv::Mat(h, w, CV_64F), ternary ? cv::Mat(h, w, CV_64F) : cv::Mat()};
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int y = 0; y < h; ++y) {
         const uint8_t *rows[2 * kCensusHalfH + 1];
         for (int k = 0; k < 2 * kCensusHalfH + 1; ++k) rows[k] = padded.ptr<uint8_t>(y + k);
-        census_row(rows, w, sig.ptr<uint64_t>(y));
+        census_row(rows, w, t, c.dark.ptr<uint64_t>(y), ternary ? c.bright.ptr<uint64_t>(y) : nullptr);
     }
-    return sig;
+    return c;
+}
+
+// Hamming distance of two pixels' signatures, 0..62: with two planes a neighbour counts 1 where
+// one side sees it within the threshold and 2 where it flips, halved so that P1, P2 and the
+// LiDAR term keep their scale.
+template <bool Ternary>
+inline uint8_t hamming(const uint64_t *dl, const uint64_t *bl, const uint64_t *dr, const uint64_t *br, int xl, int xr) {
+    if (!Ternary) return static_cast<uint8_t>(__builtin_popcountll(dl[xl] ^ dr[xr]));
+    return static_cast<uint8_t>((__builtin_popcountll(dl[xl] ^ dr[xr]) + __builtin_popcountll(bl[xl] ^ br[xr]) + 1) >> 1);
 }
 
 // One row of data costs: cost[x * D + d] = Hamming(left x, right x - d) (the right image's
-// column 0 stands in left of the image) + the LiDAR penalty. Integer only.
-LIDARFLOW_V3_CLONES
-void row_costs(const uint64_t *cl, const uint64_t *cr, const int16_t *prior16, const uint8_t *weight, int w, int D,
-               int slope16, int cap, uint8_t *cost) {
+// column 0 stands in left of the image) + the LiDAR penalty. Integer only. bl, br: the bright
+// planes (Ternary only).
+template <bool Ternary>
+LIDARFLOW_V3_CLONES void row_costs(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
+                                   const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap,
+                                   uint8_t *cost) {
     for (int x = 0; x < w; ++x) {
         uint8_t *c = cost + static_cast<size_t>(x) * D;
-        const uint64_t l = cl[x];
         const int lim = std::min(D, x + 1);
-        for (int d = 0; d < lim; ++d) c[d] = static_cast<uint8_t>(__builtin_popcountll(l ^ cr[x - d]));
-        const uint8_t edge = static_cast<uint8_t>(__builtin_popcountll(l ^ cr[0]));
+        for (int d = 0; d < lim; ++d) c[d] = hamming<Ternary>(dl, bl, dr, br, x, x - d);
+        const uint8_t edge = hamming<Ternary>(dl, bl, dr, br, x, 0);
         for (int d = lim; d < D; ++d) c[d] = edge;
         const int wt = weight[x];
         if (wt == 0) continue;
@@ -235,6 +253,8 @@ void GuidedSgmOptions::validate() const {
             "guided SGM: lidar_radius must be in [0, 32]");
     require(lidar_intensity >= 0 && lidar_intensity <= 255, ErrorCode::InvalidArgument,
             "guided SGM: lidar_intensity must be in [0, 255]");
+    require(census_threshold >= 0 && census_threshold <= 64, ErrorCode::InvalidArgument,
+            "guided SGM: census_threshold must be in [0, 64]");
     require(threads >= 1 && threads <= 256, ErrorCode::InvalidArgument, "guided SGM: threads must be in [1, 256]");
 }
 
@@ -279,7 +299,8 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     check_inputs(left, right, lidar, opt);
     const cv::Mat1b gl = gray8(left), gr = gray8(right);
     const int h = gl.rows, w = gl.cols, D = opt.num_disparities, T = opt.threads;
-    const cv::Mat cl = census(gl, T), cr = census(gr, T);
+    const bool ternary = opt.ternary_census;
+    const Census cl = census(gl, opt.census_threshold, ternary, T), cr = census(gr, opt.census_threshold, ternary, T);
     const LidarPrior prior = densify_lidar(gl, lidar, opt);
     const int slope16 = static_cast<int>(std::lround(opt.lidar_slope * 16));
 
@@ -295,8 +316,14 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         const float *pd = prior.disparity.ptr<float>(y);
         for (int x = 0; x < w; ++x)
             p16[x] = static_cast<int16_t>(std::lround(std::clamp(pd[x], 0.0f, 2047.0f) * 16));
-        row_costs(cl.ptr<uint64_t>(y), cr.ptr<uint64_t>(y), p16, prior.weight.ptr<uint8_t>(y), w, D, slope16,
-                  opt.lidar_cap, cost.get() + plane * y);
+        const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
+        uint8_t *out = cost.get() + plane * y;
+        if (ternary)
+            row_costs<true>(dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
+                            prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, out);
+        else
+            row_costs<false>(dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
+                             out);
     }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};

@@ -2,7 +2,8 @@
 #pragma once
 // Semi-global stereo matching with a LiDAR term in its data cost (the decoupled stage 1's
 // stereo). OpenCV's StereoSGBM takes no prior, so the project has its own SGM:
-//  - data cost: Hamming distance of 9x7 census signatures (0..63, one popcount per candidate);
+//  - data cost: Hamming distance of 9x7 census signatures (0..62, one popcount per candidate),
+//    or of ternary ones (darker / brighter by more than a threshold: two popcounts, halved);
 //  - LiDAR term: at and around each LiDAR pixel, + weight * min(slope * |d - d_lidar|, cap),
 //    on a map densified within `lidar_radius` px over pixels of similar intensity, the weight
 //    falling with the distance to the point (guided stereo matching in its additive form);
@@ -24,6 +25,12 @@ namespace lidarflow::stereo {
 
 struct GuidedSgmOptions {
     int num_disparities = 128;  // search range [0, num_disparities), multiple of 16, <= 512
+    // Census: a neighbour's bit is set where it is darker than the centre by more than
+    // census_threshold grey levels; ternary adds a second bit for brighter by more than it, so
+    // that a flat, noisy surface (all neighbours within the threshold) costs 0 everywhere and
+    // the paths fill it, instead of matching its noise.
+    bool ternary_census = false;
+    int census_threshold = 0;   // [grey levels] 0..64
     int p1 = 10;                // penalty of a 1 px disparity step along a path (census units)
     int p2 = 120;               // penalty of a larger step, before the intensity division
     bool adaptive_p2 = true;    // P2 / (1 + |I(p) - I(p - r)| / 8), at least P1 + 1
@@ -34,7 +41,7 @@ struct GuidedSgmOptions {
     int speckle_range = 2;      // disparity step [px] that splits speckle regions
     // LiDAR term (no effect without points).
     float lidar_slope = 4.0f;   // cost per px of |d - d_lidar| at full weight
-    int lidar_cap = 40;         // largest LiDAR penalty (census costs are 0..63)
+    int lidar_cap = 40;         // largest LiDAR penalty (census costs are 0..62)
     int lidar_radius = 3;       // [px] around each point; 0 = the point's pixel only
     int lidar_intensity = 12;   // a neighbour is guided when |I(q) - I(point)| <= this (0..255)
     int threads = 1;            // OpenMP threads; results do not depend on it

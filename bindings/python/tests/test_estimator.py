@@ -360,9 +360,10 @@ class Presets(unittest.TestCase):
                 self.assertFalse(est.push(scene[0], scene[1], lidar))
                 self.assertTrue(est.push(scene[2], scene[3], lidar))
                 results[name] = est.result()
-        self.assertFalse(same(results["fast"], default))  # sparser DIS patches
-        with lidarflow.Estimator(options={"preset": "fast", "matching.flow_patch_stride": 2, "threads": 2},
-                                 **CAL) as est:
+        self.assertFalse(same(results["fast"], default))  # sparser DIS patches, ternary census
+        back = {"preset": "fast", "matching.flow_patch_stride": 2, "stereo.ternary_census": 0,
+                "stereo.census_threshold": 0, "threads": 2}
+        with lidarflow.Estimator(options=back, **CAL) as est:
             est.push(scene[0], scene[1], lidar)
             est.push(scene[2], scene[3], lidar)
             self.assertTrue(same(est.result(), default))  # and nothing else

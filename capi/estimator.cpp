@@ -14,6 +14,7 @@
 #include <string>
 
 #include "convert.hpp"
+#include "core/error_of.hpp"
 #include "core/log.hpp"
 #include "core/size_text.hpp"
 #include "guard.hpp"
@@ -127,16 +128,8 @@ std::function<std::unique_ptr<Result>()> pair_job(const lf_estimator_t *e, std::
             result->pair_index = index;
             result->prior_for_later = cache.prior_for_later();
             return result;
-        } catch (const lidarflow::Error &err) {
-            throw lidarflow::Error(err.code(), std::string(context) + ": " + err.what());
-        } catch (const std::bad_alloc &) {
-            throw lidarflow::Error(ErrorCode::OutOfMemory, std::string(context) + ": out of memory");
-        } catch (const cv::Exception &err) {  // as guarded() maps them, with the pair named
-            if (err.code == cv::Error::StsNoMem)
-                throw lidarflow::Error(ErrorCode::OutOfMemory, std::string(context) + ": out of memory (OpenCV)");
-            throw lidarflow::Error(ErrorCode::Internal, std::string(context) + ": OpenCV: " + err.what());
-        } catch (const std::exception &err) {
-            throw lidarflow::Error(ErrorCode::Internal, std::string(context) + ": " + err.what());
+        } catch (...) {  // as guarded() maps them, with the pair named
+            throw lidarflow::error_of_current_exception(context);
         }
     };
 }

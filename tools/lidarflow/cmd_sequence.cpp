@@ -31,6 +31,7 @@
 #include "rig_args.hpp"
 #include "sequence_poses.hpp"
 #include "core/error.hpp"
+#include "core/error_of.hpp"
 #include "core/log.hpp"
 #include "core/ordered_pool.hpp"
 #include "io/calib.hpp"
@@ -183,8 +184,9 @@ int run_sequence(int argc, char **argv) {
     Args args("sequence", argc, argv, spec);
     if (args.help_requested()) {
         std::printf("%s", args.usage().c_str());
-        std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad images, image-only for\n"
-                    "             bad scans, or misnamed files\n"
+        std::printf("exit status: 0 every pair done; 3 some input bad: pairs skipped for bad images (or an error\n"
+                    "             of the estimator on the pair, out of memory included), image-only for bad scans,\n"
+                    "             or misnamed files\n"
                     "             (each reported on stderr); 1 other errors (unreadable drive, bad calibration,\n"
                     "             an output that cannot be written); 2 bad command line\n");
         return 0;
@@ -315,9 +317,10 @@ int run_sequence(int argc, char **argv) {
         std::optional<Computed> c;
         try {
             c = compute();
-        } catch (const Error &e) {
+        } catch (...) {  // a bad pair, OpenCV or memory: reported, and the drive goes on (exit 3)
+            const Error e = error_of_current_exception("sequence: pair " + pair_text(p.t0));
             if (tty) std::fprintf(stderr, "\r\033[K");
-            std::fprintf(stderr, "sequence: pair %s: %s\n", pair_text(p.t0).c_str(), e.what());
+            std::fprintf(stderr, "%s\n", e.what());
             stream.clear();
             lose(p.t0, "failed");
         }
@@ -373,7 +376,7 @@ int run_sequence(int argc, char **argv) {
             try {
                 prior = f.get().prior;
                 prior_t0 = p.t0;
-            } catch (const Error &) {
+            } catch (...) {  // a warm-up pair only feeds the priors: none from it
             }
             return;
         }
@@ -420,7 +423,7 @@ int run_sequence(int argc, char **argv) {
         }
         try {
             estimator.run(pair_input(a, b), &stream);
-        } catch (const Error &) {
+        } catch (...) {  // as above
             stream.clear();
         }
     };

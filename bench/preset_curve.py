@@ -8,7 +8,7 @@ y = final SF outliers (mean over the frames), one point per preset plus OpenCV's
 StereoSGBM + DISOpticalFlow baseline measured in the same runs.
 
     bench/preset_curve.py --bench build/bench/bench_pipeline --root KITTI_TRAINING \
-        [--presets paper,balanced,default,realtime] [--runs 3] [--threads 2] [--svg docs/preset_curve.svg]
+        [--presets paper,balanced,default,fast,realtime] [--runs 3] [--threads 2] [--svg docs/preset_curve.svg]
 
 Standard library only.
 """
@@ -80,7 +80,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bench", required=True)
     ap.add_argument("--root", default=os.environ.get("LIDARFLOW_KITTI_DIR", ""))
-    ap.add_argument("--presets", default="paper,balanced,default,realtime")
+    ap.add_argument("--presets", default="paper,balanced,default,fast,realtime")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--svg", default="")

@@ -156,7 +156,7 @@ const OptionKey kKeys[] = {
      OptionKeyType::Int, 0, 99, false, Extra::None,
      LF_INT_FIELD(matching.stereo.uniqueness_ratio)},
     {"stereo.census_threshold",
-     "guided SGM: a census bit is set where the neighbour is darker by more than this",
+     "guided SGM: a census bit where a neighbour is darker (ternary: or brighter) by more than this [grey levels]",
      OptionKeyType::Int, 0, 64, false, Extra::None, LF_INT_FIELD(matching.stereo.census_threshold)},
     {"stereo.ternary_census",
      "guided SGM: a second census bit per neighbour, brighter by more than the threshold",

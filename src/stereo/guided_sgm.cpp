@@ -69,7 +69,8 @@ Census census(const cv::Mat1b &g, int t, bool ternary, int threads) {
 template <bool Ternary>
 inline uint8_t hamming(const uint64_t *dl, const uint64_t *bl, const uint64_t *dr, const uint64_t *br, int xl, int xr) {
     if (!Ternary) return static_cast<uint8_t>(__builtin_popcountll(dl[xl] ^ dr[xr]));
-    return static_cast<uint8_t>((__builtin_popcountll(dl[xl] ^ dr[xr]) + __builtin_popcountll(bl[xl] ^ br[xr]) + 1) >> 1);
+    const int n = __builtin_popcountll(dl[xl] ^ dr[xr]) + __builtin_popcountll(bl[xl] ^ br[xr]);
+    return static_cast<uint8_t>((n + 1) >> 1);
 }
 
 // One row of data costs: cost[x * D + d] = Hamming(left x, right x - d) (the right image's

@@ -94,7 +94,8 @@ struct EstimatorOptions {
     //  "default"  the decoupled stage 1 (LiDAR-guided SGM + DIS from the rigid prior, t1
     //             stereo guided by the carried scan) at 0.65 size, DIS patches of 6 px every
     //             2 px, superpixels sized by the LiDAR's density;
-    //  "fast"     "default" with DIS patches every 3 px (a fifth less time);
+    //  "fast"     "default" with DIS patches every 3 px (a fifth less time) and the ternary
+    //             census with threshold 1 (flat, noisy surfaces filled by the paths);
     //  "realtime" the decoupled stage 1 at 0.55 size, stage 4 with 20 px superpixels and 128
     //             neighbours.
     // Throws Error(InvalidArgument) for another name.

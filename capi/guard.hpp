@@ -11,7 +11,19 @@
 #include <opencv2/core.hpp>
 
 #include "core/error.hpp"
+#include "core/error_of.hpp"
 #include "lidarflow/lidarflow.h"
+
+// guarded() returns the core's ErrorCode values as they are: they must be the statuses.
+static_assert(LF_ERR_INVALID_ARGUMENT == static_cast<int>(lidarflow::ErrorCode::InvalidArgument) &&
+                  LF_ERR_SIZE_MISMATCH == static_cast<int>(lidarflow::ErrorCode::SizeMismatch) &&
+                  LF_ERR_IO == static_cast<int>(lidarflow::ErrorCode::Io) &&
+                  LF_ERR_FORMAT == static_cast<int>(lidarflow::ErrorCode::Format) &&
+                  LF_ERR_BAD_STATE == static_cast<int>(lidarflow::ErrorCode::BadState) &&
+                  LF_ERR_NOT_READY == static_cast<int>(lidarflow::ErrorCode::NotReady) &&
+                  LF_ERR_OUT_OF_MEMORY == static_cast<int>(lidarflow::ErrorCode::OutOfMemory) &&
+                  LF_ERR_INTERNAL == static_cast<int>(lidarflow::ErrorCode::Internal),
+              "lf_status_t and ErrorCode must agree");
 
 namespace lidarflow::capi {
 
@@ -42,20 +54,9 @@ int32_t guarded(const ErrorSink &sink, const char *function, Body &&body) noexce
     try {
         sink.begin();
         return body();
-    } catch (const Error &e) {
-        return sink.fail(static_cast<int32_t>(e.code()), std::string(function) + ": " + e.what());
-    } catch (const std::bad_alloc &) {
-        return sink.fail(LF_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory");
-    } catch (const cv::Exception &e) {
-        // cv::Mat allocation failures arrive as cv::Exception, not std::bad_alloc.
-        if (e.code == cv::Error::StsNoMem)
-            return sink.fail(LF_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory (OpenCV)");
-        // OpenCV asserting on our data is a lidarflow bug: inputs are validated before.
-        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": OpenCV: " + e.what());
-    } catch (const std::exception &e) {
-        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": " + e.what());
     } catch (...) {
-        return sink.fail(LF_ERR_INTERNAL, std::string(function) + ": unknown exception");
+        const Error e = error_of_current_exception(function);
+        return sink.fail(static_cast<int32_t>(e.code()), e.what());
     }
 }
 

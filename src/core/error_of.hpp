@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// One mapping of any caught exception onto the core's Error, for the places that must go on
-// after one unit of work failed (a pair of a stream, a frame worker) and report it by code.
+// One mapping of any caught exception onto the core's Error: the C ABI's firewall (guarded()),
+// its frame workers, and `sequence`, which goes on after a pair failed.
 #include <string>
 
 #include "core/error.hpp"

@@ -185,9 +185,11 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;
             o.matching.flow.patch_size = 6;
-            // "fast": fewer DIS patches for time; flow detail matters most with a dense scan.
-            o.matching.flow.patch_stride = name == "fast" ? 3 : 2;
-            if (name == "fast") {  // flat, noisy surfaces filled by the paths, not matched by their noise
+            o.matching.flow.patch_stride = 2;
+            if (name == "fast") {
+                // Fewer DIS patches for time: flow detail matters most with a dense scan.
+                o.matching.flow.patch_stride = 3;
+                // Flat, noisy surfaces filled by the paths, not matched by their noise.
                 o.matching.stereo.ternary_census = true;
                 o.matching.stereo.census_threshold = 1;
             }

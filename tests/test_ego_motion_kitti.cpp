@@ -216,7 +216,7 @@ Measured run_frame(const char *preset, const std::string &id) {
 }
 
 void check_preset(const char *preset) {
-    for (const char *id : {"000002", "000003"}) {
+    for (const std::string &id : test::kitti_ids()) {
         const Measured m = run_frame(preset, id);
         assert_true(m.t_err < kTranslationBound);
         assert_true(m.r_err_deg < kRotationBound);

@@ -2,6 +2,7 @@
 // Golden test of the complete estimator on the two shared KITTI 2015 frames (paper LiDAR
 // protocol, the `paper` preset (the paper's design, also `default`); and the real Velodyne scan): the final dense scene flow must stay at
 // the accuracy recorded, within a tolerance, and meet the targets on the mean.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -61,7 +62,9 @@ Means score_golden(const Golden (&golden)[2], const eval::LidarInputOptions &lid
     opt.threads = 2;
     const pipeline::Estimator estimator(opt);
     Means m;
+    const std::vector<std::string> ids = test::kitti_ids();
     for (const Golden &g : golden) {
+        if (std::find(ids.begin(), ids.end(), g.id) == ids.end()) continue;
         const eval::KittiFrame f = eval::load_kitti_frame(g_root, g.id, lidar);
         const pipeline::EstimatorResult r = estimator.run(f.input);
         if (check) check(f, r.dense);
@@ -71,8 +74,8 @@ Means score_golden(const Golden (&golden)[2], const eval::LidarInputOptions &lid
                     g.d0, r.total_seconds);
         assert_true(std::fabs(sf - g.sf) <= kTolerance);
         assert_true(d0 <= g.d0 + kTolerance);
-        m.sf += sf / 2;
-        m.d0 += d0 / 2;
+        m.sf += sf / static_cast<double>(ids.size());
+        m.d0 += d0 / static_cast<double>(ids.size());
     }
     return m;
 }
@@ -84,7 +87,7 @@ void golden_frames(void **) {
             assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);
     });
     std::printf("mean SF %.2f %% (bound %.2f %%)\n", m.sf, kMeanBound);
-    assert_true(m.sf <= kMeanBound);
+    if (test::kitti_all_frames()) assert_true(m.sf <= kMeanBound);
 }
 
 void golden_frames_velodyne(void **) {
@@ -96,8 +99,10 @@ void golden_frames_velodyne(void **) {
     });
     std::printf("Velodyne: mean SF %.2f %% (bound %.2f %%), mean D0 %.2f %% (bound %.2f %%)\n", m.sf,
                 kVelodyneMeanBound, m.d0, kVelodyneD0MeanBound);
-    assert_true(m.sf <= kVelodyneMeanBound);
-    assert_true(m.d0 <= kVelodyneD0MeanBound);
+    if (test::kitti_all_frames()) {
+        assert_true(m.sf <= kVelodyneMeanBound);
+        assert_true(m.d0 <= kVelodyneD0MeanBound);
+    }
 }
 
 // The realtime preset with 16 of the scan's 64 beams (`--lidar velodyne --beams 16`, seed 1),
@@ -112,7 +117,7 @@ void golden_frames_realtime(void **) {
             assert_float_equal(out.d0(p.y, p.x), p.disparity, 1e-4);
     }, "realtime");
     std::printf("realtime: mean SF %.2f %% (bound %.2f %%)\n", m.sf, kRealtimeMeanBound);
-    assert_true(m.sf <= kRealtimeMeanBound);
+    if (test::kitti_all_frames()) assert_true(m.sf <= kRealtimeMeanBound);
 }
 
 void golden_frames_realtime_16_beams(void **) {
@@ -125,7 +130,7 @@ void golden_frames_realtime_16_beams(void **) {
                                      assert_true(f.input.lidar0.points.size() > 3000);
                                  }, "realtime");
     std::printf("realtime, 16 beams: mean SF %.2f %% (bound %.2f %%)\n", m.sf, kRealtime16BeamMeanBound);
-    assert_true(m.sf <= kRealtime16BeamMeanBound);
+    if (test::kitti_all_frames()) assert_true(m.sf <= kRealtime16BeamMeanBound);
 }
 
 }  // namespace

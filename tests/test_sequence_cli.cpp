@@ -261,7 +261,7 @@ bool same_pushed(const Pushed &a, const Pushed &b) {
 void test_dropped_frame_drops_the_prior(void **) {
     const Fixture &f = fixture();
     const fs::path drive = f.dir / "approach_drive";
-    expect_code(test::run_cli("synth --drive " + q(drive) + " --frames 7 --quiet"), 0);
+    expect_code(test::run_cli("synth --drive " + q(drive) + " --frames 7 --width 320 --height 96 --quiet"), 0);
     const std::vector<Pushed> gap = push_through_c_abi(drive, -1, {2, 3, 4, 6});
     const std::vector<Pushed> fresh = push_through_c_abi(drive, -1, {4, 6});
     assert_int_equal(gap.size(), 3);

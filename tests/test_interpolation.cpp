@@ -145,6 +145,19 @@ void superpixels_shrink_with_dense_lidar(void **) {
     assert_int_equal(rs.superpixel_size, 20);
     assert_int_equal(rd.superpixel_size, interpolation::superpixel_size(a, dense.points.size(), s.image.size()));
     assert_true(rd.superpixel_size < 20 && rd.num_superpixels > rs.num_superpixels);
+
+    // Merged back on the scene's planes: fewer superpixels, the same accuracy.
+    interpolation::InterpolationOptions merged = a;
+    merged.planar_merge_tolerance = 0.3f;
+    merged.merge_unseen = true;
+    const interpolation::InterpolationResult rm = interpolation::RobustInterpolator(merged).run(md, dense, s.image);
+    const auto d0_outliers = [&](const SceneFlowField &f) {
+        return cv::countNonZero(cv::abs(f.d0 - s.truth.d0) > 1.0f) / static_cast<double>(f.d0.total());
+    };
+    std::printf("dense LiDAR: %d superpixels, D0 outliers %.4f; merged on planes: %d, %.4f\n", rd.num_superpixels,
+                d0_outliers(rd.dense), rm.num_superpixels, d0_outliers(rm.dense));
+    assert_true(rm.num_superpixels < rd.num_superpixels * 3 / 4);
+    assert_true(d0_outliers(rm.dense) <= d0_outliers(rd.dense) + 0.005);
 }
 
 // A patch of the ground where matching failed coherently (every match there wrong the same

@@ -279,6 +279,14 @@ typedef struct lf_options lf_options_t;
  *                                                 pixel), down to min_superpixel_size (default
  *                                                 2; "paper" 0 = always superpixel_size)
  *   "interpolation.min_superpixel_size" int [4, 512] (default 10)
+ *   "interpolation.planar_merge" float [0, 100]  the small superpixels of that rule merged
+ *                                                 back (up to superpixel_size^2 px) where
+ *                                                 their LiDAR points lie on one plane within
+ *                                                 this [px] (default 0.3; "realtime" and
+ *                                                 "paper" 0 = never)
+ *   "interpolation.merge_unseen" bool            ... and where no LiDAR point is in them or
+ *                                                 their neighbours (default 1; "realtime"
+ *                                                 and "paper" 0)
  *   "interpolation.num_neighbors" int [1, 4096]  geodesic nearest matches per superpixel
  *                                                 (default 256)
  *   "interpolation.iterations"  int   [0, 1000]

@@ -19,6 +19,7 @@
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/piecewise_model.hpp"
+#include "interpolation/planar_merge.hpp"
 #include "motion/ego_motion.hpp"
 
 namespace lidarflow::interpolation {
@@ -141,6 +142,9 @@ void validate_options(const InterpolationOptions &o) {
     require(std::isfinite(o.lidar_points_per_superpixel) && o.lidar_points_per_superpixel >= 0.0f &&
                 o.lidar_points_per_superpixel <= 10000.0f,
             ErrorCode::InvalidArgument, "interpolation: lidar_points_per_superpixel must be in [0, 10000]");
+    require(std::isfinite(o.planar_merge_tolerance) && o.planar_merge_tolerance >= 0.0f &&
+                o.planar_merge_tolerance <= 100.0f,
+            ErrorCode::InvalidArgument, "interpolation: planar_merge_tolerance must be in [0, 100]");
     require(o.min_superpixel_size >= 4 && o.min_superpixel_size <= 512, ErrorCode::InvalidArgument,
             "interpolation: min_superpixel_size must be in [4, 512]");
     require(std::isfinite(o.superpixels.compactness) && o.superpixels.compactness > 0.0f,
@@ -553,9 +557,10 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
     return set;
 }
 
-// Phase 2: the edge map (res.edges) and the superpixels of the image.
-Superpixels segment(const cv::Mat &image, const SedModel *sed, const InterpolationOptions &o,
-                    InterpolationResult &res) {
+// Phase 2: the edge map (res.edges) and the superpixels of the image; below the largest size
+// (a dense scan), those on one LiDAR plane or out of its reach merged back up to its area.
+Superpixels segment(const cv::Mat &image, const SedModel *sed, const SeedSet &set, int largest,
+                    const InterpolationOptions &o, InterpolationResult &res) {
     auto t = Clock::now();
     res.edges = compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
@@ -564,6 +569,20 @@ Superpixels segment(const cv::Mat &image, const SedModel *sed, const Interpolati
     SuperpixelOptions spo = o.superpixels;
     spo.num_threads = o.num_threads;
     Superpixels sp = compute_superpixels(image, spo);
+    if (set.use_lidar && (o.planar_merge_tolerance > 0.0f || o.merge_unseen) && spo.region_size < largest) {
+        std::vector<cv::Point> pos;
+        std::vector<float> disparity;
+        for (int i = 0; i < set.seeds.size(); ++i)
+            if (set.seeds.is_lidar[i]) {
+                pos.push_back(set.seeds.pos[i]);
+                disparity.push_back(set.seeds.d0[i]);
+            }
+        PlanarMergeOptions pm;
+        pm.tolerance = o.planar_merge_tolerance;
+        pm.unseen = o.merge_unseen;
+        pm.max_area = largest * largest;
+        sp = merge_planar_superpixels(sp, pos, disparity, pm);
+    }
     res.superpixels = sp.labels;
     res.num_superpixels = sp.count;
     res.timings.superpixels_s = seconds_since(t);
@@ -635,7 +654,7 @@ struct Models {
 // Phase 4: per superpixel and channel, the model from random hypotheses, propagation from the
 // adjacent superpixels, random search and refinement.
 Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhoods &n, const InterpolationOptions &o,
-                  InterpolationResult &res) {
+                  int max_hypotheses, InterpolationResult &res) {
     const Seeds &seeds = set.seeds;
     const bool use_lidar = set.use_lidar, background = set.background;
     const LidarAnchors &anchors = n.anchors;
@@ -711,7 +730,11 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
                         consider(p, p.constant(p.anchor >= 0 ? p.anchor : 0), best);
                         if (background && c != kD0) consider(p, Model{}, best);
                         consider(p, p.constant(p.sample(rng)), best);
-                        for (int k = 0; k < o.initial_hypotheses; ++k)
+                        // A merged superpixel draws those of its parts, as a large one would.
+                        const int hypotheses =
+                            sp.parts.empty() ? o.initial_hypotheses
+                                             : std::min(max_hypotheses, o.initial_hypotheses * sp.parts[s]);
+                        for (int k = 0; k < hypotheses; ++k)
                             if (p.random_affine(rng, m)) consider(p, m, best);
                     } else {
                         consider(p, cur[slot], best);
@@ -913,9 +936,9 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     InterpolationResult res;
     res.superpixel_size = o.superpixels.region_size;
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
-    const Superpixels sp = segment(image, sed_.get(), o, res);
+    const Superpixels sp = segment(image, sed_.get(), seed_set, largest, o, res);
     const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);
-    const Models models = fit_models(seed_set, sp, neighbourhoods, o, res);
+    const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);
     write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);
     res.timings.total_s = seconds_since(t_start);
     return res;

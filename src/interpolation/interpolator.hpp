@@ -42,6 +42,12 @@ struct InterpolationOptions {
     // 0 = always region_size (the paper's design).
     float lidar_points_per_superpixel = 0.0f;
     int min_superpixel_size = 10;
+    // Below superpixels.region_size, adjacent superpixels are merged, up to region_size^2
+    // pixels, where their LiDAR points (>= 4 each) lie on one disparity plane within
+    // planar_merge_tolerance px (0 = never), and with merge_unseen where no LiDAR point is in
+    // them or their neighbours: a scan's small superpixels stay at depth boundaries.
+    float planar_merge_tolerance = 0.0f;
+    bool merge_unseen = false;
     float edge_gain = 3.0f;        // geodesic step cost 1 + edge_gain * edge (>= 0)
     // K geodesic nearest matches per anchor (>= 1). The hypotheses are drawn from, and scored
     // on, these K matches; at stage 3's ~6 % density fewer cover too few superpixels to outvote

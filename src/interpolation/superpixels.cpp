@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 
@@ -177,9 +178,16 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
         }
     }
 
+    cv::Mat1i labels;
+    const int count = enforce_connectivity(assign, std::max(1, o.region_size * o.region_size / 4), labels);
+    return superpixels_from_labels(std::move(labels), count);
+}
+
+Superpixels superpixels_from_labels(cv::Mat1i labels, int count) {
     Superpixels sp;
-    sp.count = enforce_connectivity(assign, std::max(1, o.region_size * o.region_size / 4), sp.labels);
-    const int n = sp.count;
+    sp.labels = std::move(labels);
+    sp.count = count;
+    const int n = count, w = sp.labels.cols, h = sp.labels.rows;
     std::vector<double> sx(n, 0.0), sy(n, 0.0);
     sp.pixel_count.assign(n, 0);
     for (int y = 0; y < h; ++y)

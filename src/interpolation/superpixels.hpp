@@ -25,11 +25,17 @@ struct Superpixels {
     std::vector<int> pixel_count;
     // Adjacency (4-neighbourhood), CSR: neighbours of s are adj[adj_start[s] .. adj_start[s+1]).
     std::vector<int> adj_start, adj;
+    // Superpixels merged into each label (merge_planar_superpixels); empty: one each.
+    std::vector<int> parts;
 };
 
 // Segments an 8-bit gray or BGR image. Throws Error(InvalidArgument) on an empty or
 // unsupported image or options out of range. Deterministic.
 Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &options);
+
+// The superpixels of a label map (labels 0 .. count-1, each 4-connected, every label used):
+// centroids, anchors, pixel counts and adjacency, as compute_superpixels returns them.
+Superpixels superpixels_from_labels(cv::Mat1i labels, int count);
 
 // Makes OpenCV build its 8-bit Lab tables (~70 ms, once per process) now rather than in the
 // first compute_superpixels: a stream's first frame is then as fast as the next. Thread-safe.

@@ -181,6 +181,10 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
+        if (name != "realtime") {  // ... merged back where they follow no depth boundary
+            o.interpolation.planar_merge_tolerance = 0.3f;
+            o.interpolation.merge_unseen = true;
+        }
         o.matching.stream_lidar_frames = 3;  // a stream's static points of 3 earlier frames
         if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;

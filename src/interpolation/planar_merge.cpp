@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: MIT
+#include "interpolation/planar_merge.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace lidarflow::interpolation {
+namespace {
+
+struct Point3 {
+    double x, y, d;
+};
+
+// Least-squares plane d = a x + b y + c through pts (coordinates relative to their first point,
+// for conditioning); false when the points are (nearly) collinear.
+bool fit_plane(const std::vector<Point3> &pts, double &a, double &b, double &c) {
+    const double ox = pts[0].x, oy = pts[0].y;
+    double sxx = 0, sxy = 0, syy = 0, sx = 0, sy = 0, n = 0, sxd = 0, syd = 0, sd = 0;
+    for (const Point3 &p : pts) {
+        const double x = p.x - ox, y = p.y - oy;
+        sxx += x * x, sxy += x * y, syy += y * y, sx += x, sy += y, n += 1;
+        sxd += x * p.d, syd += y * p.d, sd += p.d;
+    }
+    const cv::Matx33d A(sxx, sxy, sx, sxy, syy, sy, sx, sy, n);
+    const double det = cv::determinant(A);
+    if (!(std::fabs(det) > 1e-6 * std::max(1.0, sxx * syy * n))) return false;
+    const cv::Vec3d s = A.solve(cv::Vec3d(sxd, syd, sd), cv::DECOMP_LU);
+    a = s[0], b = s[1];
+    c = s[2] - a * ox - b * oy;
+    return true;
+}
+
+bool on_one_plane(const std::vector<Point3> &pts, float tolerance) {
+    double a, b, c;
+    if (pts.size() < 3 || !fit_plane(pts, a, b, c)) return false;
+    for (const Point3 &p : pts)
+        if (!(std::fabs(a * p.x + b * p.y + c - p.d) <= tolerance)) return false;
+    return true;
+}
+
+int find(std::vector<int> &parent, int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+}  // namespace
+
+Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv::Point> &pos,
+                                     const std::vector<float> &disparity, const PlanarMergeOptions &o) {
+    require(pos.size() == disparity.size(), ErrorCode::InvalidArgument,
+            "planar merge: one disparity per point position");
+    require(std::isfinite(o.tolerance) && o.tolerance >= 0.0f, ErrorCode::InvalidArgument,
+            "planar merge: tolerance must be finite and >= 0");
+    require(o.min_points >= 3, ErrorCode::InvalidArgument, "planar merge: min_points must be >= 3");
+    if ((o.tolerance <= 0.0f && !o.unseen) || o.max_area <= 0 || sp.count < 2) return sp;
+    const int n = sp.count, w = sp.labels.cols, h = sp.labels.rows;
+    std::vector<std::vector<Point3>> pts(n);
+    for (size_t i = 0; i < pos.size(); ++i) {
+        const cv::Point p = pos[i];
+        if (p.x < 0 || p.y < 0 || p.x >= w || p.y >= h || !std::isfinite(disparity[i])) continue;
+        pts[sp.labels(p.y, p.x)].push_back({static_cast<double>(p.x), static_cast<double>(p.y), disparity[i]});
+    }
+    std::vector<int> parent(n), area(sp.pixel_count);
+    std::iota(parent.begin(), parent.end(), 0);
+    // Planar: enough points, on one plane. Free (unseen): no point in it nor in a neighbour (sky,
+    // the image above the scan), where small superpixels have no LiDAR boundary to follow.
+    std::vector<uint8_t> planar(n), free(n);
+    for (int s = 0; s < n; ++s) {
+        planar[s] = o.tolerance > 0.0f && static_cast<int>(pts[s].size()) >= o.min_points &&
+                    on_one_plane(pts[s], o.tolerance);
+        free[s] = o.unseen && pts[s].empty();
+        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1] && free[s]; ++k) free[s] = pts[sp.adj[k]].empty();
+    }
+    std::vector<Point3> both;
+    for (int s = 0; s < n; ++s)
+        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1]; ++k) {
+            const int t = sp.adj[k];
+            if (t < s) continue;  // each pair once, in label order
+            const int rs = find(parent, s), rt = find(parent, t);
+            if (rs == rt || area[rs] + area[rt] > o.max_area) continue;
+            // A region is all free or all planar (free superpixels hold no points).
+            if (!(free[s] && free[t])) {
+                if (!planar[rs] || !planar[rt]) continue;
+                both = pts[rs];
+                both.insert(both.end(), pts[rt].begin(), pts[rt].end());
+                if (!on_one_plane(both, o.tolerance)) continue;
+            }
+            const int root = std::min(rs, rt), other = std::max(rs, rt);
+            parent[other] = root;
+            area[root] += area[other];
+            if (!(free[s] && free[t])) pts[root].swap(both);
+            pts[other].clear();
+        }
+    // Renumber: new labels in order of each region's smallest old label (its root).
+    std::vector<int> label(n, -1);
+    int count = 0;
+    for (int s = 0; s < n; ++s) {
+        const int r = find(parent, s);
+        if (label[r] < 0) label[r] = count++;
+        label[s] = label[r];
+    }
+    if (count == n) return sp;
+    cv::Mat1i labels(h, w);
+    for (int y = 0; y < h; ++y) {
+        const int *in = sp.labels.ptr<int>(y);
+        int *out = labels.ptr<int>(y);
+        for (int x = 0; x < w; ++x) out[x] = label[in[x]];
+    }
+    Superpixels merged = superpixels_from_labels(std::move(labels), count);
+    merged.parts.assign(count, 0);
+    for (int s = 0; s < n; ++s) ++merged.parts[label[s]];
+    return merged;
+}
+
+}  // namespace lidarflow::interpolation

@@ -820,6 +820,9 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             }
         }
     }
+    // A graph neighbour's weight depends only on the edge: once per edge, not per candidate.
+    std::vector<float> edge_weight(graph.weight.size());
+    for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
     std::vector<int> chosen(pairs.size() * kNumChannels);
 #pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 256)
     for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
@@ -839,7 +842,7 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
                     for (int e = graph.start[seed]; e < graph.start[seed + 1]; ++e) {
                         const int j = graph.nbr[e];
                         if (c != kD0 && !seeds.has_motion[j]) continue;
-                        if (residual(m, c, j) < tau) sc += std::exp(-graph.weight[e] / o.distance_sigma);
+                        if (residual(m, c, j) < tau) sc += edge_weight[e];
                     }
                     return sc;
                 };

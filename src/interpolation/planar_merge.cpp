@@ -42,7 +42,7 @@ bool on_one_plane(const std::vector<Point3> &pts, float tolerance) {
     return true;
 }
 
-int find(std::vector<int> &parent, int i) {
+int root_of(std::vector<int> &parent, int i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
 }
@@ -66,24 +66,25 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     }
     std::vector<int> parent(n), area(sp.pixel_count);
     std::iota(parent.begin(), parent.end(), 0);
-    // Planar: enough points, on one plane. Free (unseen): no point in it nor in a neighbour (sky,
-    // the image above the scan), where small superpixels have no LiDAR boundary to follow.
-    std::vector<uint8_t> planar(n), free(n);
+    // Planar: enough points, on one plane. Unseen: no point in it nor in a neighbour (sky, the
+    // image above the scan), where small superpixels have no LiDAR boundary to follow.
+    std::vector<uint8_t> planar(n), unseen(n);
     for (int s = 0; s < n; ++s) {
         planar[s] = o.tolerance > 0.0f && static_cast<int>(pts[s].size()) >= o.min_points &&
                     on_one_plane(pts[s], o.tolerance);
-        free[s] = o.unseen && pts[s].empty();
-        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1] && free[s]; ++k) free[s] = pts[sp.adj[k]].empty();
+        unseen[s] = o.unseen && pts[s].empty();
+        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1] && unseen[s]; ++k)
+            unseen[s] = pts[sp.adj[k]].empty();
     }
     std::vector<Point3> both;
     for (int s = 0; s < n; ++s)
         for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1]; ++k) {
             const int t = sp.adj[k];
             if (t < s) continue;  // each pair once, in label order
-            const int rs = find(parent, s), rt = find(parent, t);
+            const int rs = root_of(parent, s), rt = root_of(parent, t);
             if (rs == rt || area[rs] + area[rt] > o.max_area) continue;
-            // A region is all free or all planar (free superpixels hold no points).
-            if (!(free[s] && free[t])) {
+            // A region is all unseen or all planar (unseen superpixels hold no points).
+            if (!(unseen[s] && unseen[t])) {
                 if (!planar[rs] || !planar[rt]) continue;
                 both = pts[rs];
                 both.insert(both.end(), pts[rt].begin(), pts[rt].end());
@@ -92,14 +93,14 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
             const int root = std::min(rs, rt), other = std::max(rs, rt);
             parent[other] = root;
             area[root] += area[other];
-            if (!(free[s] && free[t])) pts[root].swap(both);
+            if (!(unseen[s] && unseen[t])) pts[root].swap(both);
             pts[other].clear();
         }
     // Renumber: new labels in order of each region's smallest old label (its root).
     std::vector<int> label(n, -1);
     int count = 0;
     for (int s = 0; s < n; ++s) {
-        const int r = find(parent, s);
+        const int r = root_of(parent, s);
         if (label[r] < 0) label[r] = count++;
         label[s] = label[r];
     }

@@ -317,7 +317,7 @@ const OptionKey kKeys[] = {
      OptionKeyType::Int, 4, 512, false, Extra::None,
      LF_INT_FIELD(interpolation.min_superpixel_size)},
     {"interpolation.planar_merge",
-     "merge a dense scan's small superpixels whose LiDAR points lie on one plane within this [px] (0 = off)",
+     "merge a dense scan's small superpixels whose LiDAR points lie on one plane within this [px] (0 = never)",
      OptionKeyType::Float, 0, 100, false, Extra::None,
      LF_FLOAT_FIELD(interpolation.planar_merge_tolerance)},
     {"interpolation.merge_unseen",

@@ -7,38 +7,25 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "interpolation/piecewise_model.hpp"
 
 namespace lidarflow::interpolation {
 namespace {
 
 struct Point3 {
-    double x, y, d;
+    float x, y, d;
 };
 
-// Least-squares plane d = a x + b y + c through pts (coordinates relative to their first point,
-// for conditioning); false when the points are (nearly) collinear.
-bool fit_plane(const std::vector<Point3> &pts, double &a, double &b, double &c) {
-    const double ox = pts[0].x, oy = pts[0].y;
-    double sxx = 0, sxy = 0, syy = 0, sx = 0, sy = 0, n = 0, sxd = 0, syd = 0, sd = 0;
-    for (const Point3 &p : pts) {
-        const double x = p.x - ox, y = p.y - oy;
-        sxx += x * x, sxy += x * y, syy += y * y, sx += x, sy += y, n += 1;
-        sxd += x * p.d, syd += y * p.d, sd += p.d;
-    }
-    const cv::Matx33d A(sxx, sxy, sx, sxy, syy, sy, sx, sy, n);
-    const double det = cv::determinant(A);
-    if (!(std::fabs(det) > 1e-6 * std::max(1.0, sxx * syy * n))) return false;
-    const cv::Vec3d s = A.solve(cv::Vec3d(sxd, syd, sd), cv::DECOMP_LU);
-    a = s[0], b = s[1];
-    c = s[2] - a * ox - b * oy;
-    return true;
-}
-
+// Whether one least-squares plane d = a x + b y + c fits every point within `tolerance`; false
+// for points that do not span a plane (fewer than three, or along a line).
 bool on_one_plane(const std::vector<Point3> &pts, float tolerance) {
-    double a, b, c;
-    if (pts.size() < 3 || !fit_plane(pts, a, b, c)) return false;
+    if (pts.size() < 3) return false;
+    PlaneLsq lsq(pts[0].x, pts[0].y);
+    for (const Point3 &p : pts) lsq.add(p.x, p.y, 1.0f, &p.d, 1);
+    Model m;
+    if (!lsq.solve(1, m)) return false;
     for (const Point3 &p : pts)
-        if (!(std::fabs(a * p.x + b * p.y + c - p.d) <= tolerance)) return false;
+        if (!(std::fabs(m.p[0].at(p.x, p.y) - p.d) <= tolerance)) return false;
     return true;
 }
 
@@ -62,7 +49,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     for (size_t i = 0; i < pos.size(); ++i) {
         const cv::Point p = pos[i];
         if (p.x < 0 || p.y < 0 || p.x >= w || p.y >= h || !std::isfinite(disparity[i])) continue;
-        pts[sp.labels(p.y, p.x)].push_back({static_cast<double>(p.x), static_cast<double>(p.y), disparity[i]});
+        pts[sp.labels(p.y, p.x)].push_back({static_cast<float>(p.x), static_cast<float>(p.y), disparity[i]});
     }
     std::vector<int> parent(n), area(sp.pixel_count);
     std::iota(parent.begin(), parent.end(), 0);

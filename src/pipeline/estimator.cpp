@@ -181,10 +181,6 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
-        if (name != "realtime") {  // ... merged back where they follow no depth boundary
-            o.interpolation.planar_merge_tolerance = 0.3f;
-            o.interpolation.merge_unseen = true;
-        }
         o.matching.stream_lidar_frames = 3;  // a stream's static points of 3 earlier frames
         if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;
@@ -200,6 +196,10 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
             // Stage 4's flow tolerance nearer the evaluator's 3 px at full size (the scaled
             // 1.95 px loses the drives' fast movers).
             o.interpolation.flow_inlier = 2.5f;
+            // A dense scan's small superpixels merged back where they follow no depth boundary
+            // (realtime's synthetic drives lost with it).
+            o.interpolation.planar_merge_tolerance = 0.3f;
+            o.interpolation.merge_unseen = true;
         } else {  // every stage at 0.55; stage 4 with fewer, larger superpixels and neighbours
             o.processing_scale = 0.55;
             o.interpolation.superpixels.region_size = 20;

@@ -2,10 +2,13 @@
 // The geodesic distance transform of build_seed_graph against the plain one-pixel-at-a-time
 // sweeps (each pixel tries W, N, NW, NE forward and E, S, SE, SW backward, keeping the first
 // least candidate): the same distances and nearest seeds, bit for bit, ties included. And the
-// seed search's one-traversal pair of neighbour lists against two separate searches.
+// seed search's one-traversal pair of neighbour lists against two separate searches; the seed
+// links against every border pixel pair; the search order against a plain Dijkstra.
 #include "test_support.hpp"
 
 #include <cstring>
+#include <map>
+#include <queue>
 #include <random>
 #include <vector>
 
@@ -135,12 +138,120 @@ void one_traversal_gives_both_neighbour_lists(void **) {
     assert_true(differ > 0);  // the lists are not trivially the same
 }
 
+// n distinct random pixels.
+std::vector<cv::Point> random_seeds(std::mt19937 &gen, cv::Size size, size_t n) {
+    std::vector<cv::Point> seeds;
+    cv::Mat1b used(size, 0);
+    std::uniform_int_distribution<int> px(0, size.width - 1), py(0, size.height - 1);
+    while (seeds.size() < n) {
+        const cv::Point p(px(gen), py(gen));
+        if (used(p)) continue;
+        used(p) = 1;
+        seeds.push_back(p);
+    }
+    return seeds;
+}
+
+// Every pair of 4-neighbouring pixels in different cells links the two seeds with the path
+// through it; a link keeps the least, lists sorted by neighbour.
+void seed_links_are_the_least_border_paths(void **) {
+    std::mt19937 gen(11);
+    for (int flat = 0; flat < 2; ++flat)
+        for (size_t n : {size_t{1}, size_t{2}, size_t{40}, size_t{900}}) {
+            const cv::Size size(61, 37);
+            cv::Mat1f edges(size, 0.0f);
+            if (!flat) cv::randu(edges, 0.0f, 1.0f);
+            const std::vector<cv::Point> seeds = random_seeds(gen, size, n);
+            const SeedGraph g = build_seed_graph(edges, seeds, 2.0f);
+            std::vector<std::map<int, float>> want(n);
+            const auto half = [&](int y, int x) { return 0.5f * (1.0f + 2.0f * edges(y, x)); };
+            for (int y = 0; y < size.height; ++y)
+                for (int x = 0; x < size.width; ++x)
+                    for (cv::Point q : {cv::Point(x + 1, y), cv::Point(x, y + 1)}) {
+                        if (q.x >= size.width || q.y >= size.height) continue;
+                        const int a = g.nearest(y, x), b = g.nearest(q);
+                        if (a == b) continue;
+                        const float wgt = g.distance(y, x) + half(y, x) + half(q.y, q.x) + g.distance(q);
+                        for (auto [i, j] : {std::pair{a, b}, std::pair{b, a}}) {
+                            auto it = want[i].find(j);
+                            if (it == want[i].end()) want[i][j] = wgt;
+                            else it->second = std::min(it->second, wgt);
+                        }
+                    }
+            assert_int_equal(g.num_seeds(), static_cast<int>(n));
+            for (size_t i = 0; i < n; ++i) {
+                assert_int_equal(g.start[i + 1] - g.start[i], static_cast<int>(want[i].size()));
+                int e = g.start[i];
+                for (const auto &[j, wgt] : want[i]) {
+                    assert_int_equal(g.nbr[e], j);
+                    assert_true(g.weight[e] == wgt);
+                    ++e;
+                }
+            }
+            if (n > 1) assert_true(g.start[n] > 0);
+        }
+}
+
+// The search settles seeds by (distance, seed index), as a plain Dijkstra over (distance,
+// seed) pairs does; on a flat map many distances tie.
+void search_settles_in_dijkstra_order(void **) {
+    std::mt19937 gen(13);
+    int compared = 0;
+    for (int flat = 0; flat < 2; ++flat) {
+        const cv::Size size(80, 50);
+        cv::Mat1f edges(size, 0.0f);
+        if (!flat) cv::randu(edges, 0.0f, 1.0f);
+        const std::vector<cv::Point> seeds = random_seeds(gen, size, 300);
+        const SeedGraph g = build_seed_graph(edges, seeds, 3.0f);
+        SeedSearch search(g.num_seeds());
+        std::uniform_int_distribution<int> px(0, size.width - 1), py(0, size.height - 1);
+        std::vector<std::pair<int, float>> got;
+        for (int q = 0; q < 30; ++q) {
+            const cv::Point from(px(gen), py(gen));
+            std::vector<std::pair<int, float>> want;
+            std::vector<float> best(seeds.size(), std::numeric_limits<float>::infinity());
+            std::vector<char> done(seeds.size(), 0);
+            std::priority_queue<std::pair<float, int>, std::vector<std::pair<float, int>>,
+                                std::greater<std::pair<float, int>>>
+                heap;
+            const int s0 = g.nearest(from);
+            best[s0] = g.distance(from);
+            heap.emplace(best[s0], s0);
+            while (!heap.empty()) {
+                const auto [d, s] = heap.top();
+                heap.pop();
+                if (done[s] || d > best[s]) continue;
+                done[s] = 1;
+                want.emplace_back(s, d);
+                for (int e = g.start[s]; e < g.start[s + 1]; ++e) {
+                    const int t = g.nbr[e];
+                    const float nd = d + g.weight[e];
+                    if (!done[t] && nd < best[t]) {
+                        best[t] = nd;
+                        heap.emplace(nd, t);
+                    }
+                }
+            }
+            for (int k : {1, 17, 300, 1000}) {
+                search.nearest(g, from, k, [](int) { return true; }, got);
+                const size_t n = std::min<size_t>(k, want.size());
+                assert_int_equal(got.size(), n);
+                assert_true(std::equal(got.begin(), got.end(), want.begin()));
+                ++compared;
+            }
+        }
+    }
+    assert_int_equal(compared, 2 * 30 * 4);
+}
+
 }  // namespace
 
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(distance_transform_equals_the_plain_sweeps),
         cmocka_unit_test(one_traversal_gives_both_neighbour_lists),
+        cmocka_unit_test(seed_links_are_the_least_border_paths),
+        cmocka_unit_test(search_settles_in_dijkstra_order),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

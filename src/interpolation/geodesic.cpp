@@ -125,36 +125,52 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
         }
     }
 
-    // Seed links across Voronoi borders: shortest seed-to-seed path through that border.
-    std::vector<std::vector<std::pair<int, float>>> links(n);
-    auto link = [&](int a, int b, float wgt) {
-        for (auto &e : links[a])
-            if (e.first == b) {
-                e.second = std::min(e.second, wgt);
-                return;
-            }
-        links[a].emplace_back(b, wgt);
-    };
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const int idx = y * w + x;
-            for (int q : {x + 1 < w ? idx + 1 : -1, y + 1 < h ? idx + w : -1}) {
-                if (q < 0 || lab[q] == lab[idx]) continue;
-                const float wgt = dist[idx] + hc[idx] + hc[q] + dist[q];
-                link(lab[idx], lab[q], wgt);
-                link(lab[q], lab[idx], wgt);
+    // Seed links across Voronoi borders: shortest seed-to-seed path through that border. Each
+    // seed's slots are sized by its border pixel pairs (an upper bound on its distinct
+    // neighbours), so the links need no allocation per seed.
+    std::vector<int> cap(static_cast<size_t>(n) + 1, 0);
+    auto each_border = [&](auto &&visit) {
+        for (int y = 0; y < h; ++y) {
+            const int *lr = lab + static_cast<size_t>(y) * w;
+            for (int x = 0; x < w; ++x) {
+                if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1);
+                if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x);
             }
         }
+    };
+    each_border([&](int p, int q) {
+        ++cap[lab[p] + 1];
+        ++cap[lab[q] + 1];
+    });
+    for (int i = 0; i < n; ++i) cap[i + 1] += cap[i];
+    std::vector<std::pair<int, float>> slots(static_cast<size_t>(cap[n]));
+    std::vector<int> used(n, 0);
+    auto link = [&](int a, int b, float wgt) {
+        std::pair<int, float> *first = slots.data() + cap[a], *last = first + used[a];
+        for (std::pair<int, float> *e = first; e != last; ++e)
+            if (e->first == b) {
+                e->second = std::min(e->second, wgt);
+                return;
+            }
+        *last = {b, wgt};
+        ++used[a];
+    };
+    each_border([&](int p, int q) {
+        const float wgt = dist[p] + hc[p] + hc[q] + dist[q];
+        link(lab[p], lab[q], wgt);
+        link(lab[q], lab[p], wgt);
+    });
     g.start.assign(n + 1, 0);
-    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + static_cast<int>(links[i].size());
+    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + used[i];
     g.nbr.resize(g.start[n]);
     g.weight.resize(g.start[n]);
     for (int i = 0; i < n; ++i) {
         // Sorted by neighbour index so the graph (and every query on it) is reproducible.
-        std::sort(links[i].begin(), links[i].end());
-        for (size_t j = 0; j < links[i].size(); ++j) {
-            g.nbr[g.start[i] + j] = links[i][j].first;
-            g.weight[g.start[i] + j] = links[i][j].second;
+        std::pair<int, float> *first = slots.data() + cap[i];
+        std::sort(first, first + used[i]);
+        for (int j = 0; j < used[i]; ++j) {
+            g.nbr[g.start[i] + j] = first[j].first;
+            g.weight[g.start[i] + j] = first[j].second;
         }
     }
     return g;

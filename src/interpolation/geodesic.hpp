@@ -5,6 +5,7 @@
 // Voronoi diagram); seeds whose cells touch are linked with the shortest path through the
 // shared border. The k nearest seeds of any pixel are then a small Dijkstra on that seed
 // graph, which is what makes thousands of per-superpixel queries cheap.
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -52,7 +53,8 @@ private:
     std::vector<float> dist_;
     std::vector<unsigned> stamp_;
     unsigned epoch_ = 0;
-    std::vector<std::pair<float, int>> heap_;
+    static uint64_t key(float d, int s);
+    std::vector<uint64_t> heap_;
 };
 
 }  // namespace lidarflow::interpolation

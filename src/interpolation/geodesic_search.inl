@@ -1,12 +1,22 @@
 // SPDX-License-Identifier: MIT
 // Template body of SeedSearch::nearest (included by geodesic.hpp only).
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <functional>
 
 namespace lidarflow::interpolation {
 
 // The traversal settles seeds in order of increasing distance whatever the callers collect,
 // and stops as soon as `visit(seed, distance)` says it has enough.
+// A heap entry as one integer: a non-negative float's bits order as the float does, so
+// (distance, seed) compare as the pair would, in one instruction.
+inline uint64_t SeedSearch::key(float d, int s) {
+    uint32_t bits;
+    std::memcpy(&bits, &d, sizeof bits);
+    return static_cast<uint64_t>(bits) << 32 | static_cast<uint32_t>(s);
+}
+
 template <class Visit>
 void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
     if (++epoch_ == 0) {  // wrapped: old stamps could alias the new epoch
@@ -19,12 +29,16 @@ void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
     heap_.clear();
     dist_[s0] = g.distance(from.y, from.x);
     stamp_[s0] = epoch_;
-    heap_.emplace_back(dist_[s0], s0);
-    const auto cmp = std::greater<std::pair<float, int>>();
+    heap_.push_back(key(dist_[s0], s0));
+    const auto cmp = std::greater<uint64_t>();
     while (!heap_.empty()) {
         std::pop_heap(heap_.begin(), heap_.end(), cmp);
-        const auto [d, s] = heap_.back();
+        const uint64_t top = heap_.back();
         heap_.pop_back();
+        const int s = static_cast<int>(static_cast<uint32_t>(top));
+        float d;
+        const uint32_t bits = static_cast<uint32_t>(top >> 32);
+        std::memcpy(&d, &bits, sizeof d);
         if (dist_[s] < 0.0f || d > dist_[s]) continue;  // settled or stale entry
         dist_[s] = -1.0f;
         if (visit(s, d)) return;
@@ -39,7 +53,7 @@ void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
             } else {
                 dist_[t] = nd;
             }
-            heap_.emplace_back(nd, t);
+            heap_.push_back(key(nd, t));
             std::push_heap(heap_.begin(), heap_.end(), cmp);
         }
     }

@@ -938,7 +938,9 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     const int w = image.cols, h = image.rows;
     InterpolationResult res;
     res.superpixel_size = o.superpixels.region_size;
+    const auto t_seeds = Clock::now();
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
+    res.timings.seeds_s = seconds_since(t_seeds);
     const Superpixels sp = segment(image, sed_.get(), seed_set, largest, o, res);
     const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);
     const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);

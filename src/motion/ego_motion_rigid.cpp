@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "core/random.hpp"
 #include "motion/ego_motion.hpp"
@@ -86,9 +87,9 @@ struct Data {
         e_f = std::sqrt(ex * ex + ey * ey);
     }
 
-    // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
-    bool step(Rigid &m, const int *ids, size_t n) const {
-        double A[36] = {}, b[6] = {};
+    // The normal equations' upper triangle (21 entries of J^T J, row-major) and J^T r of the
+    // points ids[0 .. n), added into A and b.
+    void accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const {
         for (size_t k = 0; k < n; ++k) {
             const int i = ids[k];
             const Prediction p = project(m, cam, x[i], y[i], d0[i]);
@@ -100,20 +101,44 @@ struct Data {
             const double gd[3] = {0, 0, -d_scale * d0[i] * iz * iz};
             const double r[3] = {p.xp - x[i] - u[i], p.yp - y[i] - v[i], d_scale * (p.d1 - d1[i])};
             const double *g[3] = {gx, gy, gd};
-            for (int k = 0; k < 3; ++k) {
+            for (int j = 0; j < 3; ++j) {
                 // dn / d(dw) = -[m]x, dn / d(dt) = w I
-                const double *q = g[k];
+                const double *q = g[j];
                 double J[6];
                 J[0] = q[2] * p.m[1] - q[1] * p.m[2];
                 J[1] = q[0] * p.m[2] - q[2] * p.m[0];
                 J[2] = q[1] * p.m[0] - q[0] * p.m[1];
                 J[3] = q[0] * p.w, J[4] = q[1] * p.w, J[5] = q[2] * p.w;
-                for (int a = 0; a < 6; ++a) {
-                    b[a] -= J[a] * r[k];
-                    for (int c = 0; c < 6; ++c) A[a * 6 + c] += J[a] * J[c];
+                for (int a = 0, e = 0; a < 6; ++a) {
+                    b[a] -= J[a] * r[j];
+                    for (int c = a; c < 6; ++c, ++e) A[e] += J[a] * J[c];
                 }
             }
         }
+    }
+
+    // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
+    // The sums go by blocks of a fixed size, added in block order: the same on any thread count.
+    bool step(Rigid &m, const int *ids, size_t n, int threads = 1) const {
+        constexpr size_t kBlock = 2048;
+        const size_t blocks = std::max<size_t>(1, (n + kBlock - 1) / kBlock);
+        double one[27] = {};  // RANSAC's minimal samples: no allocation
+        std::vector<double> many(blocks > 1 ? blocks * 27 : 0, 0.0);
+        double *partial = blocks > 1 ? many.data() : one;
+#pragma omp parallel for schedule(static) num_threads(threads) if (blocks > 1 && threads > 1)
+        for (size_t k = 0; k < blocks; ++k) {
+            const size_t first = k * kBlock;
+            accumulate(m, ids + std::min(first, n), std::min(kBlock, n - std::min(first, n)), &partial[k * 27],
+                       &partial[k * 27 + 21]);
+        }
+        double A[36] = {}, b[6] = {};
+        for (size_t k = 0; k < blocks; ++k) {
+            for (int a = 0, e = 0; a < 6; ++a)
+                for (int c = a; c < 6; ++c, ++e) A[a * 6 + c] += partial[k * 27 + e];
+            for (int a = 0; a < 6; ++a) b[a] += partial[k * 27 + 21 + a];
+        }
+        for (int a = 0; a < 6; ++a)
+            for (int c = 0; c < a; ++c) A[a * 6 + c] = A[c * 6 + a];
         // Levenberg damping: components the points cannot see (translation when all are far)
         // stay where they are instead of exploding.
         for (int a = 0; a < 6; ++a) A[a * 6 + a] += 1e-6 * A[a * 6 + a] + 1e-3;
@@ -260,7 +285,7 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         if (inliers_of(best, &in) < 4) break;
         Rigid m = best;
         bool ok = true;
-        for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in.data(), in.size());
+        for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in.data(), in.size(), threads);
         if (!ok) break;
         best = m;
     }

@@ -499,10 +499,10 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
         const interpolation::InterpolationTimings &it = ir.timings;
         char line[256];
         std::snprintf(line, sizeof line,
-                      "stage 4: %d superpixels of %d px; edges %.3f s, superpixels %.3f s, neighbours %.3f s, "
-                      "models %.3f s, output %.3f s",
-                      ir.num_superpixels, ir.superpixel_size, it.edges_s, it.superpixels_s, it.geodesic_s,
-                      it.models_s, it.output_s);
+                      "stage 4: %d superpixels of %d px; seeds %.3f s, edges %.3f s, superpixels %.3f s, "
+                      "neighbours %.3f s, models %.3f s, output %.3f s",
+                      ir.num_superpixels, ir.superpixel_size, it.seeds_s, it.edges_s, it.superpixels_s,
+                      it.geodesic_s, it.models_s, it.output_s);
         log::write(log::Level::Debug, line);
     }
     const double k = std::min(1.0, options_.processing_scale);

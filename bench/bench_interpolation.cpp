@@ -431,10 +431,10 @@ int main(int argc, char **argv) try {
             all.add(a);
             noc.add(n);
             const auto &t = r.timings;
-            std::printf("  %s: %.3f s (edges %.3f, superpixels %.3f, geodesic %.3f, models %.3f, output %.3f); "
+            std::printf("  %s: %.3f s (seeds %.3f, edges %.3f, superpixels %.3f, geodesic %.3f, models %.3f, output %.3f); "
                         "%d superpixels, LiDAR anchors geo %d / motion %d, ego-motion %s (%d inliers), %d hint seeds, %d occluded, "
                         "%d static d1, %d t1 LiDAR points\n",
-                        frames[i].id.c_str(), s, t.edges_s, t.superpixels_s, t.geodesic_s, t.models_s,
+                        frames[i].id.c_str(), s, t.seeds_s, t.edges_s, t.superpixels_s, t.geodesic_s, t.models_s,
                         t.output_s, r.num_superpixels, r.lidar_anchored_geometry, r.lidar_anchored_motion,
                         r.ego.valid ? "yes" : "no", r.ego.inliers, r.hint_seeds, r.occluded_seeds, r.static_d1_seeds,
                         r.lidar1_points);

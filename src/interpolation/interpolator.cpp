@@ -799,7 +799,8 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     cv::Mat1i pair_of(h, w);
     std::vector<std::pair<int, int>> pairs;  // (seed, superpixel)
     {
-        std::vector<std::vector<std::pair<int, int>>> by_seed(seeds.size());  // (superpixel, pair)
+        // Each seed's pairs as a list threaded through next_pair (no allocation per seed).
+        std::vector<int> first_pair(seeds.size(), -1), next_pair;
         for (int y = 0; y < h; ++y) {
             int last_seed = -1, last_sp = -1, last_pair = -1;
             for (int x = 0; x < w; ++x) {
@@ -807,13 +808,13 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
                 if (seed != last_seed || s != last_sp) {
                     last_seed = seed;
                     last_sp = s;
-                    last_pair = -1;
-                    for (const auto &e : by_seed[seed])
-                        if (e.first == s) last_pair = e.second;
+                    last_pair = first_pair[seed];
+                    while (last_pair >= 0 && pairs[last_pair].second != s) last_pair = next_pair[last_pair];
                     if (last_pair < 0) {
                         last_pair = static_cast<int>(pairs.size());
                         pairs.emplace_back(seed, s);
-                        by_seed[seed].emplace_back(s, last_pair);
+                        next_pair.push_back(first_pair[seed]);
+                        first_pair[seed] = last_pair;
                     }
                 }
                 pair_of(y, x) = last_pair;

@@ -667,6 +667,9 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     std::vector<Model> next(cur.size());
     std::vector<float> &share = models.share;
     share.assign(cur.size(), 0.0f);
+    // The neighbourhoods do not change between rounds: gathered (and weighted) once. ~30 MB on
+    // a KITTI frame, less than the matcher's peak, against 5x the exp() and gathers.
+    std::vector<Problem> problems(cur.size());
     auto build = [&](int s, int c, Problem &p) {
         const auto &nb = c == kD0 ? geo_nb[s] : mot_nb[s];
         const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
@@ -678,21 +681,27 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
         p.sx = sp.centroid[s].x;
         p.sy = sp.centroid[s].y;
         p.size = static_cast<float>(o.superpixels.region_size);
+        if (c == kFlow) {
+            // The flow's neighbours, anchor and weights are d1's (built before it): copied,
+            // only the values gathered.
+            const Problem &d1 = problems[static_cast<size_t>(s) * kNumChannels + kD1];
+            p.x = d1.x, p.y = d1.y, p.w = d1.w, p.cw = d1.cw;
+            p.anchor = d1.anchor;
+            p.z0.resize(nb.size());
+            p.z1.resize(nb.size());
+            for (size_t k = 0; k < nb.size(); ++k) {
+                p.z0[k] = seeds.zu[nb[k].first];
+                p.z1[k] = seeds.zv[nb[k].first];
+            }
+            return;
+        }
         for (auto *v : {&p.x, &p.y, &p.z0, &p.w, &p.cw}) v->reserve(nb.size());
-        if (p.dims == 2) p.z1.reserve(nb.size());
         float acc = 0;
         for (const auto &[id, dist] : nb) {
             if (id == anchor_seed) p.anchor = p.n();
             p.x.push_back(seeds.x[id]);
             p.y.push_back(seeds.y[id]);
-            if (c == kD0) {
-                p.z0.push_back(seeds.d0[id]);
-            } else if (c == kD1) {
-                p.z0.push_back(seeds.z1[id]);
-            } else {
-                p.z0.push_back(seeds.zu[id]);
-                p.z1.push_back(seeds.zv[id]);
-            }
+            p.z0.push_back(c == kD0 ? seeds.d0[id] : seeds.z1[id]);
             float wt = std::exp(-dist / o.distance_sigma);
             if (c == kD0 && use_lidar && seeds.is_lidar[id]) wt *= o.lidar_weight;
             if (seeds.is_hint[id]) wt *= o.hint_weight;
@@ -703,9 +712,6 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             p.cw.push_back(acc);
         }
     };
-    // The neighbourhoods do not change between rounds: gathered (and weighted) once. ~30 MB on
-    // a KITTI frame, less than the matcher's peak, against 5x the exp() and gathers.
-    std::vector<Problem> problems(cur.size());
     ParallelErrors build_errors;
 #pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 8)
     for (int s = 0; s < S; ++s) build_errors.run([&] {

@@ -165,6 +165,58 @@ void prior_stays_on_its_surface(void **) {
     assert_int_equal(p.weight(10, 5), 0);   // beyond the radius
 }
 
+// The densified prior against its definition, pixel by pixel: of the points within the radius
+// (Chebyshev) whose intensity the pixel shares, or whose own pixel it is, the nearest, then the
+// largest disparity; the weight by that distance. Dense points (ties of distance everywhere),
+// points on the border, any thread count.
+void prior_equals_its_definition(void **) {
+    std::mt19937 gen(31);
+    const int w = 61, h = 37;
+    std::uniform_int_distribution<int> grey(100, 140), px(0, w - 1), py(0, h - 1), step(0, 3);
+    cv::Mat1b g(h, w);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) g(y, x) = static_cast<uint8_t>(grey(gen));
+    for (int count : {1, 40, 600}) {
+        SparseLidar lidar{w, h, {}};
+        cv::Mat1b used(h, w, uchar(0));
+        lidar.points.push_back({0, h - 1, 3.0f});
+        used(h - 1, 0) = 1;
+        while (static_cast<int>(lidar.points.size()) < count) {
+            const int x = px(gen), y = py(gen);
+            if (used(y, x)) continue;
+            used(y, x) = 1;
+            // Few distinct disparities: equally near points often differ, sometimes not.
+            lidar.points.push_back({x, y, static_cast<float>(2 + step(gen))});
+        }
+        for (int r : {0, 1, 3}) {
+            stereo::GuidedSgmOptions o = options(1);
+            o.lidar_radius = r;
+            o.lidar_intensity = 12;
+            cv::Mat1f want_d(h, w, kInvalidDisparity);
+            cv::Mat1b want_w(h, w, uchar(0));
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    int best = r + 1;
+                    float d = kInvalidDisparity;
+                    for (const LidarPoint &pt : lidar.points) {
+                        const int dd = std::max(std::abs(x - pt.x), std::abs(y - pt.y));
+                        if (dd > r || (dd > 0 && std::abs(g(y, x) - g(pt.y, pt.x)) > o.lidar_intensity)) continue;
+                        if (dd < best || (dd == best && pt.disparity > d)) best = dd, d = pt.disparity;
+                    }
+                    if (best > r) continue;
+                    want_d(y, x) = d;
+                    want_w(y, x) = static_cast<uint8_t>(255 * (r + 1 - best) / (r + 1));
+                }
+            for (int threads : {1, 3}) {
+                o.threads = threads;
+                const stereo::LidarPrior p = stereo::densify_lidar(g, lidar, o);
+                assert_true(test::same_mat(p.disparity, want_d));
+                assert_true(test::same_mat(p.weight, want_w));
+            }
+        }
+    }
+}
+
 // A featureless pair ties at every disparity: no pixel gets one (not disparity 0), while one
 // LiDAR point still places the pixels its prior reaches.
 void featureless_pair_has_no_disparity(void **) {
@@ -232,6 +284,7 @@ int main() {
         cmocka_unit_test(ternary_census_ignores_a_dithered_flat_square),
         cmocka_unit_test(threads_do_not_change_the_result),
         cmocka_unit_test(prior_stays_on_its_surface),
+        cmocka_unit_test(prior_equals_its_definition),
         cmocka_unit_test(bad_inputs_are_refused),
         cmocka_unit_test(featureless_pair_has_no_disparity),
         cmocka_unit_test(binning_bounds_the_points),

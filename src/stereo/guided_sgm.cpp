@@ -262,35 +262,52 @@ void GuidedSgmOptions::validate() const {
 LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
     const int h = gray.rows, w = gray.cols, r = opt.lidar_radius, T = opt.threads;
     LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
-    // The points bucketed by row, so that each output row is written by one thread.
-    std::vector<int> first(static_cast<size_t>(h) + 1, 0), order(lidar.points.size());
+    // The points bucketed by row (x, own intensity, disparity), so that each output row is
+    // written by one thread and reads its rows' points in order.
+    struct Point {
+        int x, intensity;
+        float disparity;
+    };
+    std::vector<int> first(static_cast<size_t>(h) + 1, 0);
+    std::vector<Point> by_row(lidar.points.size());
     for (const LidarPoint &pt : lidar.points) ++first[static_cast<size_t>(pt.y) + 1];
     for (int y = 0; y < h; ++y) first[y + 1] += first[y];
     std::vector<int> fill(first.begin(), first.end() - 1);
-    for (size_t i = 0; i < lidar.points.size(); ++i) order[fill[lidar.points[i].y]++] = static_cast<int>(i);
+    for (const LidarPoint &pt : lidar.points) by_row[fill[pt.y]++] = {pt.x, gray(pt.y, pt.x), pt.disparity};
+    // The weight falls with the Chebyshev distance of the point that set the pixel.
+    std::vector<uint8_t> weight_at(static_cast<size_t>(r) + 1);
+    for (int dd = 0; dd <= r; ++dd) weight_at[dd] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
     std::vector<std::vector<int>> dist(T, std::vector<int>(w));  // Chebyshev distance of the point that set it
-#pragma omp parallel for num_threads(T) schedule(static)
+    // Rows dealt out in small chunks: a scan covers only the lower part of the image.
+#pragma omp parallel for num_threads(T) schedule(static, 4)
     for (int y = 0; y < h; ++y) {
-        std::vector<int> &dr = dist[static_cast<size_t>(omp_get_thread_num())];
-        std::fill(dr.begin(), dr.end(), r + 1);
+        int *dr = dist[static_cast<size_t>(omp_get_thread_num())].data();
+        std::fill(dr, dr + w, r + 1);
         float *disp = p.disparity.ptr<float>(y);
-        uint8_t *weight = p.weight.ptr<uint8_t>(y);
         const uint8_t *g = gray.ptr<uint8_t>(y);
-        for (int py = std::max(0, y - r); py <= std::min(h - 1, y + r); ++py)
+        bool any = false;
+        for (int py = std::max(0, y - r); py <= std::min(h - 1, y + r); ++py) {
+            const int dy = std::abs(y - py);
             for (int i = first[py]; i < first[py + 1]; ++i) {
-                const LidarPoint &pt = lidar.points[static_cast<size_t>(order[i])];
-                const int c = gray(pt.y, pt.x);
+                const Point pt = by_row[i];
+                any = true;
                 for (int x = std::max(0, pt.x - r); x <= std::min(w - 1, pt.x + r); ++x) {
-                    const int dd = std::max(std::abs(x - pt.x), std::abs(y - pt.y));
-                    if (dd > 0 && std::abs(g[x] - c) > opt.lidar_intensity) continue;
-                    // The nearest point wins; of equally near ones the larger disparity (the
-                    // nearer surface), so the order of the points does not matter.
-                    if (dd > dr[x] || (dd == dr[x] && pt.disparity <= disp[x])) continue;
-                    dr[x] = dd;
-                    disp[x] = pt.disparity;
-                    weight[x] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
+                    const int dd = std::max(std::abs(x - pt.x), dy);
+                    // Of the pixels of similar intensity (and the point's own), the nearest
+                    // point wins; of equally near ones the larger disparity (the nearer
+                    // surface), so the order of the points does not matter.
+                    if ((dd == 0 || std::abs(g[x] - pt.intensity) <= opt.lidar_intensity) &&
+                        (dd < dr[x] || (dd == dr[x] && pt.disparity > disp[x]))) {
+                        dr[x] = dd;
+                        disp[x] = pt.disparity;
+                    }
                 }
             }
+        }
+        if (!any) continue;
+        uint8_t *weight = p.weight.ptr<uint8_t>(y);
+        for (int x = 0; x < w; ++x)
+            if (dr[x] <= r) weight[x] = weight_at[dr[x]];
     }
     return p;
 }

@@ -11,6 +11,9 @@
 #include <cstdint>
 #include <vector>
 
+#include <omp.h>
+
+#include "core/cpu_dispatch.hpp"
 #include "core/random.hpp"
 #include "motion/ego_motion.hpp"
 
@@ -78,14 +81,6 @@ struct Data {
     const std::vector<float> &x, &y, &d0, &d1, &u, &v;
     const StereoCamera &cam;
     double d_scale;  // flow_inlier / disparity_inlier: both residuals in "flow pixels"
-
-    void errors(const Rigid &m, int i, double &e_d, double &e_f) const {
-        const Prediction p = project(m, cam, x[i], y[i], d0[i]);
-        e_d = std::fabs(p.d1 - d1[i]);
-        // sqrt, not hypot: residuals are finite and far from overflow, and this is RANSAC's inner loop.
-        const double ex = p.xp - x[i] - u[i], ey = p.yp - y[i] - v[i];
-        e_f = std::sqrt(ex * ex + ey * ey);
-    }
 
     // The normal equations' upper triangle (21 entries of J^T J, row-major) and J^T r of the
     // points ids[0 .. n), added into A and b.
@@ -174,6 +169,51 @@ struct Data {
     }
 };
 
+// A fixed set of matches laid out for counting a model's inliers in a loop the compiler
+// vectorises: the ray and inverse depth of project(), the observations as doubles.
+struct Probes {
+    std::vector<double> rx, ry, w, d0, x, y, u, v, d1;
+    Probes(const Data &data, const std::vector<int> &ids) {
+        for (auto *a : {&rx, &ry, &w, &d0, &x, &y, &u, &v, &d1}) a->resize(ids.size());
+        const StereoCamera &c = data.cam;
+        for (size_t k = 0; k < ids.size(); ++k) {
+            const int i = ids[k];
+            x[k] = data.x[i], y[k] = data.y[i], d0[k] = data.d0[i];
+            u[k] = data.u[i], v[k] = data.v[i], d1[k] = data.d1[i];
+            rx[k] = (x[k] - c.cx) / c.fx;
+            ry[k] = (y[k] - c.cy) / c.fy;
+            w[k] = d0[k] / (c.fx * c.baseline);
+        }
+    }
+};
+
+// How many of the probes first .. last - 1 m fits, and fit[k] = 1 for each: the d1 residual
+// and the flow's end-point residual [px] of project() below the inlier bounds. Written out in
+// project()'s order of operations, without calls, so the compiler vectorises it.
+LIDARFLOW_AVX2_CLONES
+int count_fits(const Rigid &m, const StereoCamera &c, const Probes &p, size_t first, size_t last,
+               double disparity_inlier, double flow_inlier, uint8_t *__restrict fit) {
+    // Locals, not loads through m and p: the byte stores below could alias them.
+    const double R0 = m.R[0], R1 = m.R[1], R2 = m.R[2], R3 = m.R[3], R4 = m.R[4], R5 = m.R[5], R6 = m.R[6],
+                 R7 = m.R[7], R8 = m.R[8], t0 = m.t[0], t1 = m.t[1], t2 = m.t[2];
+    const double fx = c.fx, fy = c.fy, cx = c.cx, cy = c.cy;
+    const double *__restrict rx = p.rx.data(), *__restrict ry = p.ry.data(), *__restrict w = p.w.data();
+    const double *__restrict d0 = p.d0.data(), *__restrict d1 = p.d1.data(), *__restrict x = p.x.data();
+    const double *__restrict y = p.y.data(), *__restrict u = p.u.data(), *__restrict v = p.v.data();
+    int count = 0;
+    for (size_t k = first; k < last; ++k) {
+        const double n0 = (R0 * rx[k] + R1 * ry[k] + R2 * 1.0) + t0 * w[k];
+        const double n1 = (R3 * rx[k] + R4 * ry[k] + R5 * 1.0) + t1 * w[k];
+        const double n2 = std::max((R6 * rx[k] + R7 * ry[k] + R8 * 1.0) + t2 * w[k], kMinDepthRatio);
+        const double ed = std::fabs(d0[k] / n2 - d1[k]);
+        const double ex = fx * n0 / n2 + cx - x[k] - u[k], ey = fy * n1 / n2 + cy - y[k] - v[k];
+        const int in = (ed < disparity_inlier) & (std::sqrt(ex * ex + ey * ey) < flow_inlier);
+        count += in;
+        fit[k] = static_cast<uint8_t>(in);
+    }
+    return count;
+}
+
 }  // namespace
 
 bool detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, float &d1, float &u, float &v) {
@@ -224,21 +264,19 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     Rng rng(0x516ull ^ (static_cast<uint64_t>(o.seed) << 17));
 
     const int threads = std::max(1, o.threads);
-    const auto fits = [&](const Rigid &m, int i) {
-        double ed, ef;
-        data.errors(m, i, ed, ef);
-        return ed < o.disparity_inlier && ef < o.flow_inlier;
-    };
     // Inliers of m among all matches; their ids, in order, into *out when given. The per-point
     // tests run in parallel, the count is an integer: the same on any thread count.
+    const Probes all(data, ids);
     std::vector<uint8_t> is_inlier(static_cast<size_t>(n));
     auto inliers_of = [&](const Rigid &m, std::vector<int> *out) {
+        constexpr int kChunk = 2048;
+        const int chunks = (n + kChunk - 1) / kChunk;
         int inliers = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inliers) num_threads(threads)
-        for (int k = 0; k < n; ++k) {
-            is_inlier[k] = fits(m, ids[k]);
-            inliers += is_inlier[k];
-        }
+        for (int b = 0; b < chunks; ++b)
+            inliers += count_fits(m, camera, all, static_cast<size_t>(b) * kChunk,
+                                  std::min(static_cast<size_t>(n), static_cast<size_t>(b + 1) * kChunk),
+                                  o.disparity_inlier, o.flow_inlier, is_inlier.data());
         if (out) {
             out->clear();
             for (int k = 0; k < n; ++k)
@@ -262,17 +300,17 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     }
     std::vector<Rigid> models(samples.size() / 3);
     std::vector<int> counts(samples.size() / 3, -1);
-    const int probes = static_cast<int>(probe.size());
+    const Probes probes(data, probe);
+    std::vector<std::vector<uint8_t>> scratch(threads, std::vector<uint8_t>(probe.size()));
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
     for (int h = 0; h < hypotheses; ++h) {
         Rigid m;
         bool ok = true;
         for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, &samples[3 * static_cast<size_t>(h)], 3);
         if (!ok) continue;
-        int count = 0;
-        for (int k = 0; k < probes; ++k) count += fits(m, probe[k]);
         models[h] = m;
-        counts[h] = count;
+        counts[h] = count_fits(m, camera, probes, 0, probe.size(), o.disparity_inlier, o.flow_inlier,
+                               scratch[static_cast<size_t>(omp_get_thread_num())].data());
     }
     Rigid best;
     int best_count = -1;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -100,7 +101,8 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
     if (small.u.empty()) return {};
     const int w = small.width(), h = small.height();
     require(width >= w && height >= h, ErrorCode::InvalidArgument, "upscale_field: target smaller than the field");
-    SceneFlowField out = SceneFlowField::zeros(width, height);
+    // Every pixel of every plane is written below (zeros where nothing is valid).
+    SceneFlowField out = SceneFlowField::uninitialized(width, height);
     const float rx = float(width) / w, ry = float(height) / h;
     const cv::Mat1f *in[5] = {&small.u, &small.v, &small.d0, &small.d1, &small.confidence};
     cv::Mat1f *res[5] = {&out.u, &out.v, &out.d0, &out.d1, &out.confidence};
@@ -109,6 +111,16 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
     if (edge)
         require(edges->small.size() == small.d0.size() && edges->full.size() == cv::Size(width, height),
                 ErrorCode::SizeMismatch, "upscale_field: the edge guide's images differ in size from the fields");
+    // The source columns and weight of each target column, the same for every row.
+    std::vector<int> col0(width), col1(width), coln(width);
+    std::vector<float> colw(width);
+    for (int x = 0; x < width; ++x) {
+        const float fx = std::clamp((x + 0.5f) / rx - 0.5f, 0.0f, float(w - 1));
+        col0[x] = std::min(std::max(0, w - 2), static_cast<int>(fx));
+        col1[x] = std::min(w - 1, col0[x] + 1);
+        colw[x] = fx - col0[x];
+        coln[x] = std::min(w - 1, static_cast<int>(x / rx));
+    }
 #pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < height; ++y) {
         const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
@@ -116,9 +128,8 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
         const float ay = fy - y0;
         const int yn = std::min(h - 1, static_cast<int>(y / ry));
         for (int x = 0; x < width; ++x) {
-            const float fx = std::clamp((x + 0.5f) / rx - 0.5f, 0.0f, float(w - 1));
-            const int x0 = std::min(std::max(0, w - 2), static_cast<int>(fx)), x1 = std::min(w - 1, x0 + 1);
-            const float ax = fx - x0;
+            const int x0 = col0[x], x1 = col1[x];
+            const float ax = colw[x];
             if (small.valid(y0, x0) && small.valid(y0, x1) && small.valid(y1, x0) && small.valid(y1, x1)) {
                 const int c = edge ? edge_corner(small, *edges, x, y, x0, x1, y0, y1) : -1;
                 if (c >= 0) {
@@ -136,10 +147,10 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
                 out.valid(y, x) = 1;
                 continue;
             }
-            const int xn = std::min(w - 1, static_cast<int>(x / rx));
-            if (!small.valid(yn, xn)) continue;
-            for (int c = 0; c < 5; ++c) (*res[c])(y, x) = gain[c] * (*in[c])(yn, xn);
-            out.valid(y, x) = 1;
+            const int xn = coln[x];
+            const bool near = small.valid(yn, xn) != 0;
+            for (int c = 0; c < 5; ++c) (*res[c])(y, x) = near ? gain[c] * (*in[c])(yn, xn) : 0.0f;
+            out.valid(y, x) = near ? 1 : 0;
         }
     }
     return out;

@@ -52,9 +52,9 @@ Tracks track_grid(const cv::Mat &g0, const cv::Mat &g1, const DisparityMap &d0, 
 }
 
 // The dominant rigid motion t0 -> t1, fitted to the tracks and the stereo disparities at both
-// ends (invalid when they support none).
+// ends (invalid when they support none), on `threads` threads (the same model on any count).
 motion::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap &d0, const DisparityMap &d1,
-                                            const StereoCamera &camera, uint64_t seed) {
+                                            const StereoCamera &camera, uint64_t seed, int threads) {
     std::vector<float> xs, ys, d0s, d1s, us, vs;
     for (size_t i = 0; i < tr.from.size(); ++i) {
         const int tx = static_cast<int>(std::lround(tr.to[i].x)), ty = static_cast<int>(std::lround(tr.to[i].y));
@@ -68,6 +68,7 @@ motion::EgoMotion track_rigid_motion(const Tracks &tr, const DisparityMap &d0, c
     }
     motion::EgoMotionOptions eo;
     eo.seed = static_cast<unsigned>(seed);
+    eo.threads = std::max(1, threads);
     return camera.valid() ? motion::fit_rigid_ego_motion(xs, ys, d0s, d1s, us, vs, eo, camera)
                           : motion::fit_ego_motion(xs, ys, d0s, d1s, us, vs, eo);
 }
@@ -279,7 +280,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
 
     t = Clock::now();
     motion::EgoMotion motion;
-    if (opt.flow.prior_track_step > 0) motion = track_rigid_motion(tracks, r.sgm0, r.sgm1, camera, opt.random_seed);
+    if (opt.flow.prior_track_step > 0) motion = track_rigid_motion(tracks, r.sgm0, r.sgm1, camera, opt.random_seed, opt.threads);
     r.tracked_motion = motion.valid;
     if (opt.flow.prior_track_step > 0 && !motion.valid)
         log::write(log::Level::Warning, "decoupled matching: no rigid background motion fits the tracks; dense "

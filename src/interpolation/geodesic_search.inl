@@ -7,8 +7,6 @@
 
 namespace lidarflow::interpolation {
 
-// The traversal settles seeds in order of increasing distance whatever the callers collect,
-// and stops as soon as `visit(seed, distance)` says it has enough.
 // A heap entry as one integer: a non-negative float's bits order as the float does, so
 // (distance, seed) compare as the pair would, in one instruction.
 inline uint64_t SeedSearch::key(float d, int s) {
@@ -17,6 +15,8 @@ inline uint64_t SeedSearch::key(float d, int s) {
     return static_cast<uint64_t>(bits) << 32 | static_cast<uint32_t>(s);
 }
 
+// The traversal settles seeds in order of increasing distance whatever the callers collect,
+// and stops as soon as `visit(seed, distance)` says it has enough.
 template <class Visit>
 void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
     if (++epoch_ == 0) {  // wrapped: old stamps could alias the new epoch

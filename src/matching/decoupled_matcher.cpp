@@ -126,11 +126,13 @@ SparseLidar carry_points(const SparseLidar &lidar0, const motion::EgoMotion &m) 
 // The flow of motion `m` at every pixel, with the disparity filled along the row where stereo
 // has none; empty when m is invalid. DIS resamples it down its pyramid, so it is predicted on a
 // 2 px grid and resized (a 4 px grid cost 0.2 points).
-cv::Mat2f rigid_flow(const motion::EgoMotion &m, const DisparityMap &d) {
+cv::Mat2f rigid_flow(const motion::EgoMotion &m, const DisparityMap &d, int threads) {
     if (!m.valid) return {};
     constexpr int kStep = 2;
     cv::Mat2f coarse((d.rows + kStep - 1) / kStep, (d.cols + kStep - 1) / kStep);
-    for (int y = 0; y < d.rows; y += kStep) {
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
+    for (int cy = 0; cy < coarse.rows; ++cy) {
+        const int y = cy * kStep;
         float last = -1.0f;
         for (int x = 0; x < d.cols; ++x) {
             if (disparity_valid(d(y, x))) last = d(y, x);
@@ -147,8 +149,9 @@ cv::Mat2f rigid_flow(const motion::EgoMotion &m, const DisparityMap &d) {
 
 // Sum of |from - to warped back by flow| over (2r + 1)^2 boxes (a target outside `to` reads 0:
 // an error of `from` itself). `from`, `to`: 8-bit gray.
-cv::Mat1f warp_error(const cv::Mat &from, const cv::Mat &to, const cv::Mat2f &flow, int r) {
+cv::Mat1f warp_error(const cv::Mat &from, const cv::Mat &to, const cv::Mat2f &flow, int r, int threads) {
     cv::Mat2f map(flow.size());
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < flow.rows; ++y)
         for (int x = 0; x < flow.cols; ++x) map(y, x) = flow(y, x) + cv::Vec2f(static_cast<float>(x), static_cast<float>(y));
     cv::Mat warped, diff;
@@ -162,9 +165,10 @@ cv::Mat1f warp_error(const cv::Mat &from, const cv::Mat &to, const cv::Mat2f &fl
 // DIS's flow, or the rigid prior where that explains the images better and rests on a measured
 // disparity (the static scene's exact motion from its depth; DIS drifts on weak texture).
 cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, const cv::Mat2f &rigid,
-                       const DisparityMap &d, int r) {
+                       const DisparityMap &d, int r, int threads) {
     if (r <= 0 || rigid.empty()) return dis;
-    const cv::Mat1f ed = warp_error(from, to, dis, r), er = warp_error(from, to, rigid, r);
+    const cv::Mat1f ed = warp_error(from, to, dis, r, threads), er = warp_error(from, to, rigid, r, threads);
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < dis.rows; ++y)
         for (int x = 0; x < dis.cols; ++x)
             if (disparity_valid(d(y, x)) && er(y, x) < ed(y, x)) dis(y, x) = rigid(y, x);
@@ -206,7 +210,7 @@ SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {
 // One direction's 4-vectors: d0 from the reference pair's disparity (the LiDAR measurement where
 // there is one), (u, v) from the flow, d1 from the other pair's disparity at the flow target.
 SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const DisparityMap &target,
-                        const SparseLidar &lidar) {
+                        const SparseLidar &lidar, int threads) {
     const int h = flow.rows, w = flow.cols;
     SceneFlowField f = SceneFlowField::zeros(w, h);
     DisparityMap d0 = ref.clone();
@@ -214,6 +218,7 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
         const DisparityMap measured = lidar.to_map();
         measured.copyTo(d0, measured >= 0.0f);
     }
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const cv::Vec2f m = flow(y, x);
@@ -298,17 +303,18 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
                                          " us, the pair that made it " + std::to_string(source->step_us) +
                                          " us (a dropped frame?)");
     const cv::Mat3f objects = prior && same_step ? source->object_motion : cv::Mat3f();
-    cv::Mat2f prior0 = rigid_flow(motion, r.sgm0);
+    cv::Mat2f prior0 = rigid_flow(motion, r.sgm0, opt.threads);
     add_object_motion(motion, r.sgm0, objects, prior0);
     const cv::Mat2f flow0 =
-        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc);
-    r.forward = assemble(flow0, r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none);
+        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc, opt.threads);
+    r.forward = assemble(flow0, r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none, opt.threads);
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
-        cv::Mat2f prior1 = rigid_flow(back, r.sgm1);
+        cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
         add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
-        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1, r.sgm1, rc),
-                              r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none);
+        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow, prior1.clone()), prior1,
+                                           r.sgm1, rc, opt.threads),
+                              r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none, opt.threads);
     }
     r.seconds_flow = seconds_tracks + seconds_since(t);
     return r;

@@ -695,21 +695,26 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             }
             return;
         }
-        for (auto *v : {&p.x, &p.y, &p.z0, &p.w, &p.cw}) v->reserve(nb.size());
+        const size_t n = nb.size();
+        for (auto *v : {&p.x, &p.y, &p.z0, &p.w, &p.cw}) v->resize(n);
+        // Written through plain pointers: push_back's size updates went through memory.
+        float *px = p.x.data(), *py = p.y.data(), *pz = p.z0.data(), *pw = p.w.data(), *pc = p.cw.data();
+        const float *value = c == kD0 ? seeds.d0.data() : seeds.z1.data();
         float acc = 0;
-        for (const auto &[id, dist] : nb) {
-            if (id == anchor_seed) p.anchor = p.n();
-            p.x.push_back(seeds.x[id]);
-            p.y.push_back(seeds.y[id]);
-            p.z0.push_back(c == kD0 ? seeds.d0[id] : seeds.z1[id]);
-            float wt = std::exp(-dist / o.distance_sigma);
+        for (size_t k = 0; k < n; ++k) {
+            const int id = nb[k].first;
+            if (id == anchor_seed) p.anchor = static_cast<int>(k);
+            px[k] = seeds.x[id];
+            py[k] = seeds.y[id];
+            pz[k] = value[id];
+            float wt = std::exp(-nb[k].second / o.distance_sigma);
             if (c == kD0 && use_lidar && seeds.is_lidar[id]) wt *= o.lidar_weight;
             if (seeds.is_hint[id]) wt *= o.hint_weight;
             // Floor keeps far neighbours sampleable when the anchor sits in a sparse region.
             wt = std::max(wt, 1e-6f);
-            p.w.push_back(wt);
+            pw[k] = wt;
             acc += wt;
-            p.cw.push_back(acc);
+            pc[k] = acc;
         }
     };
     ParallelErrors build_errors;

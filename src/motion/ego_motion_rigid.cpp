@@ -26,6 +26,10 @@ using Rng = SplitMix64;
 // ratio keeps a wild hypothesis finite (it is then simply a bad one).
 constexpr double kMinDepthRatio = 0.05;
 
+// Matches per block of the refit's sums and of the parallel inlier counts: a fixed size, so
+// the sums' order does not depend on the thread count.
+constexpr size_t kBlock = 2048;
+
 struct Rigid {
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
 };
@@ -115,7 +119,6 @@ struct Data {
     // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
     // The sums go by blocks of a fixed size, added in block order: the same on any thread count.
     bool step(Rigid &m, const int *ids, size_t n, int threads = 1) const {
-        constexpr size_t kBlock = 2048;
         const size_t blocks = std::max<size_t>(1, (n + kBlock - 1) / kBlock);
         double one[27] = {};  // RANSAC's minimal samples: no allocation
         std::vector<double> many(blocks > 1 ? blocks * 27 : 0, 0.0);
@@ -169,45 +172,35 @@ struct Data {
     }
 };
 
-// A fixed set of matches laid out for counting a model's inliers in a loop the compiler
-// vectorises: the ray and inverse depth of project(), the observations as doubles.
+// A fixed set of matches as arrays, so that a model's inliers are counted in a loop the
+// compiler vectorises.
 struct Probes {
-    std::vector<double> rx, ry, w, d0, x, y, u, v, d1;
+    std::vector<float> x, y, d0, d1, u, v;
     Probes(const Data &data, const std::vector<int> &ids) {
-        for (auto *a : {&rx, &ry, &w, &d0, &x, &y, &u, &v, &d1}) a->resize(ids.size());
-        const StereoCamera &c = data.cam;
+        for (auto *a : {&x, &y, &d0, &d1, &u, &v}) a->resize(ids.size());
         for (size_t k = 0; k < ids.size(); ++k) {
             const int i = ids[k];
             x[k] = data.x[i], y[k] = data.y[i], d0[k] = data.d0[i];
-            u[k] = data.u[i], v[k] = data.v[i], d1[k] = data.d1[i];
-            rx[k] = (x[k] - c.cx) / c.fx;
-            ry[k] = (y[k] - c.cy) / c.fy;
-            w[k] = d0[k] / (c.fx * c.baseline);
+            d1[k] = data.d1[i], u[k] = data.u[i], v[k] = data.v[i];
         }
     }
 };
 
-// How many of the probes first .. last - 1 m fits, and fit[k] = 1 for each: the d1 residual
-// and the flow's end-point residual [px] of project() below the inlier bounds. Written out in
-// project()'s order of operations, without calls, so the compiler vectorises it.
+// How many of the probes first .. last - 1 m fits (its d1 residual and the flow's end-point
+// residual [px] below the inlier bounds), and fit[k] = 1 for each.
 LIDARFLOW_AVX2_CLONES
-int count_fits(const Rigid &m, const StereoCamera &c, const Probes &p, size_t first, size_t last,
+int count_fits(const Rigid &model, const StereoCamera &camera, const Probes &p, size_t first, size_t last,
                double disparity_inlier, double flow_inlier, uint8_t *__restrict fit) {
-    // Locals, not loads through m and p: the byte stores below could alias them.
-    const double R0 = m.R[0], R1 = m.R[1], R2 = m.R[2], R3 = m.R[3], R4 = m.R[4], R5 = m.R[5], R6 = m.R[6],
-                 R7 = m.R[7], R8 = m.R[8], t0 = m.t[0], t1 = m.t[1], t2 = m.t[2];
-    const double fx = c.fx, fy = c.fy, cx = c.cx, cy = c.cy;
-    const double *__restrict rx = p.rx.data(), *__restrict ry = p.ry.data(), *__restrict w = p.w.data();
-    const double *__restrict d0 = p.d0.data(), *__restrict d1 = p.d1.data(), *__restrict x = p.x.data();
-    const double *__restrict y = p.y.data(), *__restrict u = p.u.data(), *__restrict v = p.v.data();
+    // Copies, not loads through references: the byte stores below could alias them.
+    const Rigid m = model;
+    const StereoCamera c = camera;
+    const float *__restrict x = p.x.data(), *__restrict y = p.y.data(), *__restrict d0 = p.d0.data();
+    const float *__restrict d1 = p.d1.data(), *__restrict u = p.u.data(), *__restrict v = p.v.data();
     int count = 0;
     for (size_t k = first; k < last; ++k) {
-        const double n0 = (R0 * rx[k] + R1 * ry[k] + R2 * 1.0) + t0 * w[k];
-        const double n1 = (R3 * rx[k] + R4 * ry[k] + R5 * 1.0) + t1 * w[k];
-        const double n2 = std::max((R6 * rx[k] + R7 * ry[k] + R8 * 1.0) + t2 * w[k], kMinDepthRatio);
-        const double ed = std::fabs(d0[k] / n2 - d1[k]);
-        const double ex = fx * n0 / n2 + cx - x[k] - u[k], ey = fy * n1 / n2 + cy - y[k] - v[k];
-        const int in = (ed < disparity_inlier) & (std::sqrt(ex * ex + ey * ey) < flow_inlier);
+        const Prediction q = project(m, c, x[k], y[k], d0[k]);
+        const double ex = q.xp - x[k] - u[k], ey = q.yp - y[k] - v[k];
+        const int in = (std::fabs(q.d1 - d1[k]) < disparity_inlier) & (std::sqrt(ex * ex + ey * ey) < flow_inlier);
         count += in;
         fit[k] = static_cast<uint8_t>(in);
     }
@@ -269,13 +262,11 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     const Probes all(data, ids);
     std::vector<uint8_t> is_inlier(static_cast<size_t>(n));
     auto inliers_of = [&](const Rigid &m, std::vector<int> *out) {
-        constexpr int kChunk = 2048;
-        const int chunks = (n + kChunk - 1) / kChunk;
+        const int chunks = static_cast<int>((static_cast<size_t>(n) + kBlock - 1) / kBlock);
         int inliers = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inliers) num_threads(threads)
         for (int b = 0; b < chunks; ++b)
-            inliers += count_fits(m, camera, all, static_cast<size_t>(b) * kChunk,
-                                  std::min(static_cast<size_t>(n), static_cast<size_t>(b + 1) * kChunk),
+            inliers += count_fits(m, camera, all, b * kBlock, std::min(static_cast<size_t>(n), (b + 1) * kBlock),
                                   o.disparity_inlier, o.flow_inlier, is_inlier.data());
         if (out) {
             out->clear();

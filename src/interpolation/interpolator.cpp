@@ -368,18 +368,27 @@ uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
 }
 
 // One superpixel's neighbourhood for one channel, gathered contiguously.
+// One neighbour list gathered for a superpixel: positions, weights, their running sum (for
+// sampling) and the anchor's index (-1: none). d1 and the flow share the motion list.
+struct Gathered {
+    std::vector<float> x, y, w, cw;
+    int anchor = -1;
+};
+
 struct Problem {
     int dims = 1;
     float tau = 1;
-    std::vector<float> x, y, z0, z1, w, cw;  // cw: cumulative weights for sampling
-    int anchor = -1;                          // index into the arrays, or -1
+    const float *x = nullptr, *y = nullptr, *w = nullptr, *cw = nullptr;  // a Gathered list's
+    int count = 0;
+    std::vector<float> z0, z1;  // the channel's values at the list's seeds
+    int anchor = -1;            // index into the arrays, or -1
     float anchor_tol = 0;
     float sx = 0, sy = 0;                     // superpixel centroid (perturbation pivot)
     float size = 16;
     // Cost factor of the all-zero model (the background model alone explains the seeds); 1 =
     // no preference. See InterpolationOptions::background_preference.
     float zero_factor = 1;
-    int n() const { return static_cast<int>(x.size()); }
+    int n() const { return count; }
     static bool is_zero(const Model &m) {
         for (const Plane &q : m.p)
             if (q.a != 0.0f || q.b != 0.0f || q.c != 0.0f) return false;
@@ -399,15 +408,15 @@ struct Problem {
         float acc[L] = {};
         const int count = n();
         const int full = count - count % L;
-        robust_lanes(m, dims, x.data(), y.data(), z0.data(), z1.data(), w.data(), full, tau, acc);
+        robust_lanes(m, dims, x, y, z0.data(), z1.data(), w, full, tau, acc);
         for (int i = full; i < count; ++i) acc[i - full] += w[i] * std::min(residual(m, i), tau);
         float c = 0;
         for (int k = 0; k < L; ++k) c += acc[k];
         return c;
     }
     int sample(Rng &rng) const {
-        const float t = rng.uniform() * cw.back();
-        const int i = static_cast<int>(std::upper_bound(cw.begin(), cw.end(), t) - cw.begin());
+        const float t = rng.uniform() * cw[count - 1];
+        const int i = static_cast<int>(std::upper_bound(cw, cw + count, t) - cw);
         return std::min(i, n() - 1);
     }
     Model constant(int i) const {
@@ -669,46 +678,22 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     share.assign(cur.size(), 0.0f);
     // The neighbourhoods do not change between rounds: gathered (and weighted) once. ~30 MB on
     // a KITTI frame, less than the matcher's peak, against 5x the exp() and gathers.
+    std::vector<Gathered> lists(2 * static_cast<size_t>(S));  // per superpixel: geometry, motion
     std::vector<Problem> problems(cur.size());
-    auto build = [&](int s, int c, Problem &p) {
-        const auto &nb = c == kD0 ? geo_nb[s] : mot_nb[s];
-        const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
-        p.dims = kDims[c];
-        p.tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
-        p.anchor_tol = c == kD0 ? o.lidar_disparity_tolerance : o.lidar_match_tolerance;
-        p.anchor = -1;
-        p.zero_factor = background && c != kD0 ? o.background_preference : 1.0f;
-        p.sx = sp.centroid[s].x;
-        p.sy = sp.centroid[s].y;
-        p.size = static_cast<float>(o.superpixels.region_size);
-        if (c == kFlow) {
-            // The flow's neighbours, anchor and weights are d1's (built before it): copied,
-            // only the values gathered.
-            const Problem &d1 = problems[static_cast<size_t>(s) * kNumChannels + kD1];
-            p.x = d1.x, p.y = d1.y, p.w = d1.w, p.cw = d1.cw;
-            p.anchor = d1.anchor;
-            p.z0.resize(nb.size());
-            p.z1.resize(nb.size());
-            for (size_t k = 0; k < nb.size(); ++k) {
-                p.z0[k] = seeds.zu[nb[k].first];
-                p.z1[k] = seeds.zv[nb[k].first];
-            }
-            return;
-        }
+    auto gather = [&](const std::vector<std::pair<int, float>> &nb, int anchor_seed, bool lidar_weighted,
+                      Gathered &g) {
         const size_t n = nb.size();
-        for (auto *v : {&p.x, &p.y, &p.z0, &p.w, &p.cw}) v->resize(n);
+        for (auto *v : {&g.x, &g.y, &g.w, &g.cw}) v->resize(n);
         // Written through plain pointers: push_back's size updates went through memory.
-        float *px = p.x.data(), *py = p.y.data(), *pz = p.z0.data(), *pw = p.w.data(), *pc = p.cw.data();
-        const float *value = c == kD0 ? seeds.d0.data() : seeds.z1.data();
+        float *px = g.x.data(), *py = g.y.data(), *pw = g.w.data(), *pc = g.cw.data();
         float acc = 0;
         for (size_t k = 0; k < n; ++k) {
             const int id = nb[k].first;
-            if (id == anchor_seed) p.anchor = static_cast<int>(k);
+            if (id == anchor_seed) g.anchor = static_cast<int>(k);
             px[k] = seeds.x[id];
             py[k] = seeds.y[id];
-            pz[k] = value[id];
             float wt = std::exp(-nb[k].second / o.distance_sigma);
-            if (c == kD0 && use_lidar && seeds.is_lidar[id]) wt *= o.lidar_weight;
+            if (lidar_weighted && seeds.is_lidar[id]) wt *= o.lidar_weight;
             if (seeds.is_hint[id]) wt *= o.hint_weight;
             // Floor keeps far neighbours sampleable when the anchor sits in a sparse region.
             wt = std::max(wt, 1e-6f);
@@ -717,10 +702,34 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             pc[k] = acc;
         }
     };
+    auto build = [&](int s, int c, const Gathered &g, Problem &p) {
+        const auto &nb = c == kD0 ? geo_nb[s] : mot_nb[s];
+        p.dims = kDims[c];
+        p.tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
+        p.anchor_tol = c == kD0 ? o.lidar_disparity_tolerance : o.lidar_match_tolerance;
+        p.anchor = g.anchor;
+        p.zero_factor = background && c != kD0 ? o.background_preference : 1.0f;
+        p.sx = sp.centroid[s].x;
+        p.sy = sp.centroid[s].y;
+        p.size = static_cast<float>(o.superpixels.region_size);
+        p.x = g.x.data(), p.y = g.y.data(), p.w = g.w.data(), p.cw = g.cw.data();
+        p.count = static_cast<int>(g.x.size());
+        p.z0.resize(nb.size());
+        const float *value = c == kD0 ? seeds.d0.data() : c == kD1 ? seeds.z1.data() : seeds.zu.data();
+        for (size_t k = 0; k < nb.size(); ++k) p.z0[k] = value[nb[k].first];
+        if (c == kFlow) {
+            p.z1.resize(nb.size());
+            for (size_t k = 0; k < nb.size(); ++k) p.z1[k] = seeds.zv[nb[k].first];
+        }
+    };
     ParallelErrors build_errors;
 #pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 8)
     for (int s = 0; s < S; ++s) build_errors.run([&] {
-        for (int c = 0; c < kNumChannels; ++c) build(s, c, problems[static_cast<size_t>(s) * kNumChannels + c]);
+        Gathered &geo = lists[2 * static_cast<size_t>(s)], &mot = lists[2 * static_cast<size_t>(s) + 1];
+        gather(geo_nb[s], anchors.geometry[s], use_lidar, geo);
+        gather(mot_nb[s], anchors.motion[s], false, mot);
+        for (int c = 0; c < kNumChannels; ++c)
+            build(s, c, c == kD0 ? geo : mot, problems[static_cast<size_t>(s) * kNumChannels + c]);
     });
     build_errors.rethrow_if_any();
     for (int it = 0; it <= o.iterations; ++it) {
@@ -771,6 +780,7 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
         std::swap(cur, next);
     }
     std::vector<Problem>().swap(problems);  // before the output's fields are allocated
+    std::vector<Gathered>().swap(lists);
     res.timings.models_s = seconds_since(t);
     return models;
 }

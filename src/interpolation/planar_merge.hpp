@@ -27,9 +27,10 @@ struct PlanarMergeOptions {
 //  - with `unseen`, neither side nor any of their neighbours holds a point (the image above
 //    the scan: no boundary for small superpixels to follow).
 // Labels are renumbered 0 .. count-1 in order of their smallest old label, with centroids,
-// anchors and adjacency recomputed, and `parts` set to the superpixels merged into each. Points outside the image or with a non-finite disparity are
-// ignored. Returns `sp` unchanged when off (tolerance 0 and not unseen, or max_area <= 0). Throws Error(InvalidArgument) on pos/disparity of
-// different lengths or options out of range.
+// anchors and adjacency recomputed, and `parts` set to the superpixels merged into each.
+// Points outside the image or with a non-finite disparity are ignored. Returns `sp` unchanged
+// when off (tolerance 0 and not unseen, or max_area <= 0). Throws Error(InvalidArgument) on
+// pos / disparity of different lengths or options out of range.
 Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv::Point> &pos,
                                      const std::vector<float> &disparity, const PlanarMergeOptions &options);
 

@@ -129,36 +129,50 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     // seed's slots are sized by its border pixel pairs (an upper bound on its distinct
     // neighbours), so the links need no allocation per seed.
     std::vector<int> cap(static_cast<size_t>(n) + 1, 0);
+    // visit(p, q, vertical) for each 4-neighbour pixel pair across a border.
     auto each_border = [&](auto &&visit) {
         for (int y = 0; y < h; ++y) {
             const int *lr = lab + static_cast<size_t>(y) * w;
             for (int x = 0; x < w; ++x) {
-                if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1);
-                if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x);
+                if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1, 0);
+                if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x, 1);
             }
         }
     };
-    each_border([&](int p, int q) {
+    each_border([&](int p, int q, int) {
         ++cap[lab[p] + 1];
         ++cap[lab[q] + 1];
     });
     for (int i = 0; i < n; ++i) cap[i + 1] += cap[i];
     std::vector<std::pair<int, float>> slots(static_cast<size_t>(cap[n]));
     std::vector<int> used(n, 0);
+    // a's link to b, with the least weight so far (slots do not move: the pointer stays valid).
     auto link = [&](int a, int b, float wgt) {
         std::pair<int, float> *first = slots.data() + cap[a], *last = first + used[a];
         for (std::pair<int, float> *e = first; e != last; ++e)
             if (e->first == b) {
                 e->second = std::min(e->second, wgt);
-                return;
+                return e;
             }
         *last = {b, wgt};
         ++used[a];
+        return last;
     };
-    each_border([&](int p, int q) {
+    // A border runs on along a row or a column: the pair of the previous pixel pair of the
+    // same direction is usually this one's, and its links need no search.
+    struct Recent {
+        int a = -1, b = -1;
+        std::pair<int, float> *ab = nullptr, *ba = nullptr;
+    } recent[2];
+    each_border([&](int p, int q, int vertical) {
         const float wgt = dist[p] + hc[p] + hc[q] + dist[q];
-        link(lab[p], lab[q], wgt);
-        link(lab[q], lab[p], wgt);
+        Recent &r = recent[vertical];
+        if (lab[p] == r.a && lab[q] == r.b) {
+            r.ab->second = std::min(r.ab->second, wgt);
+            r.ba->second = std::min(r.ba->second, wgt);
+            return;
+        }
+        r = {lab[p], lab[q], link(lab[p], lab[q], wgt), link(lab[q], lab[p], wgt)};
     });
     g.start.assign(n + 1, 0);
     for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + used[i];

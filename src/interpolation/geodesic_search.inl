@@ -64,6 +64,7 @@ void SeedSearch::nearest(const SeedGraph &g, cv::Point from, int k, Accept accep
                          std::vector<std::pair<int, float>> &out) {
     out.clear();
     if (k <= 0) return;
+    out.reserve(static_cast<size_t>(k));  // one allocation, not a doubling series per list
     traverse(g, from, [&](int s, float d) {
         if (accept(s)) out.emplace_back(s, d);
         return static_cast<int>(out.size()) >= k;
@@ -77,6 +78,8 @@ void SeedSearch::nearest_two(const SeedGraph &g, cv::Point from, int k, std::vec
     out_b.clear();
     const size_t n = static_cast<size_t>(std::max(k, 0)), n_b = static_cast<size_t>(std::max(k_b, 0));
     if (n == 0 && n_b == 0) return;
+    out.reserve(n);
+    out_b.reserve(n_b);
     traverse(g, from, [&](int s, float d) {
         if (out.size() < n) out.emplace_back(s, d);
         if (out_b.size() < n_b && accept_b(s)) out_b.emplace_back(s, d);

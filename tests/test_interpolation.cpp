@@ -160,6 +160,50 @@ void superpixels_shrink_with_dense_lidar(void **) {
     assert_true(d0_outliers(rm.dense) <= d0_outliers(rd.dense) + 0.005);
 }
 
+// A curved patch of ground (a 2.5 px bump of 14 px scale) under a dense scan: planes of 20 px
+// cut through it; the points' residuals spread over their planes' pixels
+// (lidar_residual_radius) give its shape back between the points, and change nothing where
+// the planes already fit.
+void lidar_residuals_follow_a_curved_surface(void **) {
+    test::PlanarScene s = test::make_planar_scene();
+    const int cx = 180, cy = 105;
+    const auto bump = [&](int x, int y) {
+        const float d2 = static_cast<float>((x - cx) * (x - cx) + (y - cy) * (y - cy));
+        return 2.5f * std::exp(-d2 / (2.0f * 14.0f * 14.0f));
+    };
+    for (int y = 0; y < s.truth.height(); ++y)
+        for (int x = 0; x < s.truth.width(); ++x)
+            if (s.region(y, x) == 1) s.truth.d0(y, x) += bump(x, y);
+    SceneFlowField m = test::sample_matches(s.truth, 0.05, 0.0, 14);
+    const SparseLidar lidar = lidar_grid(s.truth, m, 4);
+    interpolation::InterpolationOptions o;
+    o.superpixels.region_size = 20;
+    const interpolation::InterpolationResult planes = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
+    o.lidar_residual_radius = 3.0f;
+    const interpolation::InterpolationResult spread = interpolation::RobustInterpolator(o).run(m, lidar, s.image);
+    // Mean |d0 - truth| on the bump and on the rest of the ground, LiDAR pixels left out.
+    const auto errors = [&](const SceneFlowField &f, double &on, double &off) {
+        double e[2] = {0, 0};
+        int n[2] = {0, 0};
+        for (int y = 0; y < s.truth.height(); ++y)
+            for (int x = 0; x < s.truth.width(); ++x) {
+                if (s.region(y, x) != 1 || (x % 4 == 2 && y % 4 == 2)) continue;
+                const int k = bump(x, y) > 0.5f ? 0 : 1;
+                e[k] += std::fabs(f.d0(y, x) - s.truth.d0(y, x));
+                ++n[k];
+            }
+        on = e[0] / n[0];
+        off = e[1] / n[1];
+    };
+    double on0, off0, on1, off1;
+    errors(planes.dense, on0, off0);
+    errors(spread.dense, on1, off1);
+    std::printf("curved ground, mean |d0 error|: planes %.3f on the bump / %.3f elsewhere; with the residuals "
+                "%.3f / %.3f px\n", on0, off0, on1, off1);
+    assert_true(on1 < 0.6 * on0);
+    assert_true(off1 <= off0 + 0.01);
+}
+
 // A patch of the ground where matching failed coherently (every match there wrong the same
 // way, as in a shadow): the superpixel holding a LiDAR point there is fixed with use_lidar
 // (the wrong majority's models are rejected by the anchor) and stays wrong without.
@@ -372,6 +416,9 @@ void rejects_invalid_input(void **) {
     expect_error(with([](O &o) { o.lidar_points_per_superpixel = std::nanf(""); }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.lidar_points_per_superpixel = -1; }), ErrorCode::InvalidArgument);
     expect_error(with([](O &o) { o.min_superpixel_size = 3; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_residual_radius = std::nanf(""); }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_residual_radius = -1; }), ErrorCode::InvalidArgument);
+    expect_error(with([](O &o) { o.lidar_residual_radius = 65; }), ErrorCode::InvalidArgument);
 }
 
 // The optional SED model: a missing file is an I/O error, a file that is not a model a
@@ -438,6 +485,7 @@ int main(void) {
         cmocka_unit_test(rejects_invalid_input),
         cmocka_unit_test(sed_model_errors),
         cmocka_unit_test(superpixels_shrink_with_dense_lidar),
+        cmocka_unit_test(lidar_residuals_follow_a_curved_surface),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -287,6 +287,11 @@ typedef struct lf_options lf_options_t;
  *   "interpolation.merge_unseen" bool            ... and where no LiDAR point is in them or
  *                                                 their neighbours (default 1; "realtime"
  *                                                 and "paper" 0)
+ *   "interpolation.lidar_residual_radius" float [0, 64] each LiDAR point's d0 residual
+ *                                                 (measurement minus its pixel's plane) spread
+ *                                                 over the pixels of the same plane within
+ *                                                 this [px] of the reduced frame (default 3;
+ *                                                 "paper" 0 = off)
  *   "interpolation.num_neighbors" int [1, 4096]  geodesic nearest matches per superpixel
  *                                                 (default 256)
  *   "interpolation.iterations"  int   [0, 1000]

@@ -18,6 +18,7 @@
 #include "core/parallel_errors.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
+#include "interpolation/lidar_residuals.hpp"
 #include "interpolation/piecewise_model.hpp"
 #include "interpolation/planar_merge.hpp"
 #include "motion/ego_motion.hpp"
@@ -147,6 +148,9 @@ void validate_options(const InterpolationOptions &o) {
             ErrorCode::InvalidArgument, "interpolation: planar_merge_tolerance must be in [0, 100]");
     require(o.min_superpixel_size >= 4 && o.min_superpixel_size <= 512, ErrorCode::InvalidArgument,
             "interpolation: min_superpixel_size must be in [4, 512]");
+    require(std::isfinite(o.lidar_residual_radius) && o.lidar_residual_radius >= 0.0f &&
+                o.lidar_residual_radius <= 64.0f,
+            ErrorCode::InvalidArgument, "interpolation: lidar_residual_radius must be in [0, 64]");
     require(std::isfinite(o.superpixels.compactness) && o.superpixels.compactness > 0.0f,
             ErrorCode::InvalidArgument, "interpolation: superpixels.compactness must be > 0");
     require(o.superpixels.iterations >= 1 && o.superpixels.iterations <= 100, ErrorCode::InvalidArgument,
@@ -785,6 +789,30 @@ Models fit_models(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     return models;
 }
 
+// The LiDAR residuals of the d0 models the pixels chose, spread over the pixels of the same
+// model (InterpolationOptions::lidar_residual_radius); empty when off or without LiDAR.
+cv::Mat1f lidar_residuals(const SeedSet &set, const cv::Mat1i &pair_of, const std::vector<int> &chosen,
+                          const std::vector<Model> &cur, const InterpolationOptions &o) {
+    // The model's own weight against a point on the pixel: near a point the measurement decides.
+    constexpr float kModelWeight = 0.05f;
+    const Seeds &seeds = set.seeds;
+    if (!set.use_lidar || o.lidar_residual_radius <= 0.0f) return {};
+    cv::Mat1i model_of(pair_of.size());
+#pragma omp parallel for num_threads(o.num_threads) schedule(static)
+    for (int y = 0; y < pair_of.rows; ++y)
+        for (int x = 0; x < pair_of.cols; ++x)
+            model_of(y, x) = chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels + kD0];
+    std::vector<cv::Point> points;
+    std::vector<float> residuals;
+    for (int i = 0; i < seeds.size(); ++i)
+        if (seeds.is_lidar[i]) {
+            const Model &m = cur[static_cast<size_t>(model_of(seeds.pos[i])) * kNumChannels + kD0];
+            points.push_back(seeds.pos[i]);
+            residuals.push_back(seeds.d0[i] - m.p[0].at(seeds.x[i], seeds.y[i]));
+        }
+    return lidar_residual_correction(model_of, points, residuals, o.lidar_residual_radius, kModelWeight);
+}
+
 // Phase 5: the dense field. Each pixel takes the models of its superpixel or of an adjacent
 // one (pixel_model_selection), adds the background prediction back and, with LiDAR, keeps the
 // measured d0 (keep_lidar_values).
@@ -887,6 +915,7 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     const bool exits_follow_background =
         o.exits_follow_background && subtract_d0 && res.ego.valid && res.ego.calibrated;
     const auto inside = [w, h](float tx, float ty) { return tx >= 0 && ty >= 0 && tx <= w - 1 && ty <= h - 1; };
+    const cv::Mat1f correction = lidar_residuals(set, pair_of, chosen, cur, o);
 #pragma omp parallel for num_threads(o.num_threads) schedule(static)
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -895,7 +924,8 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             const Model &m0 = cur[static_cast<size_t>(pick[kD0]) * kNumChannels + kD0];
             const Model &m1 = cur[static_cast<size_t>(pick[kD1]) * kNumChannels + kD1];
             const Model &mf = cur[static_cast<size_t>(pick[kFlow]) * kNumChannels + kFlow];
-            res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy));
+            const float c0 = correction.empty() ? 0.0f : correction(y, x);
+            res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy) + c0);
             float d1e = 0, ue = 0, ve = 0;
             if (subtract_d0) res.ego.predict(fx, fy, res.dense.d0(y, x), d1e, ue, ve);
             float d1 = d1e + m1.p[0].at(fx, fy), u = ue + mf.p[0].at(fx, fy), v = ve + mf.p[1].at(fx, fy);

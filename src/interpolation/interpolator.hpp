@@ -169,6 +169,10 @@ struct InterpolationOptions {
     float hint_weight = 0.5f;          // weight factor against a match in the d0 cost (> 0)
     float hint_lidar_radius = 48.0f;   // LiDAR verification radius [px] (> 0)
     float hint_lidar_tolerance = 1.0f; // |hint - LiDAR| at a LiDAR pixel [px] (> 0)
+    // Each LiDAR point's d0 residual (measurement minus the model its pixel uses) spread over
+    // the pixels within this radius [px, 0-64] that use the same model (lidar_residuals.hpp;
+    // 0 = off): a dense scan's detail inside a superpixel's plane.
+    float lidar_residual_radius = 0.0f;
     // The output d0 at LiDAR pixels is the measurement itself (LiDAR is never filtered).
     bool keep_lidar_values = true;
     unsigned random_seed = 1;      // all random draws derive from it and the superpixel index

@@ -181,6 +181,7 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         // The backward field is dense: the round trip needs no search around its target.
         o.consistency.fb_search_radius = 0;
         o.interpolation.lidar_points_per_superpixel = 2;  // smaller superpixels with a dense scan
+        o.interpolation.lidar_residual_radius = 3.0f;     // and its detail inside their planes
         o.matching.stream_lidar_frames = 3;  // a stream's static points of 3 earlier frames
         if (name != "realtime") {  // denser DIS patches on a larger frame
             o.processing_scale = 0.65;

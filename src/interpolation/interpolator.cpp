@@ -371,7 +371,6 @@ uint64_t stream_seed(unsigned base, int sp, int iteration, int channel) {
     return r.next();
 }
 
-// One superpixel's neighbourhood for one channel, gathered contiguously.
 // One neighbour list gathered for a superpixel: positions, weights, their running sum (for
 // sampling) and the anchor's index (-1: none). d1 and the flow share the motion list.
 struct Gathered {
@@ -379,6 +378,7 @@ struct Gathered {
     int anchor = -1;
 };
 
+// One superpixel's robust fitting problem for one channel: its list, and the channel's values.
 struct Problem {
     int dims = 1;
     float tau = 1;

@@ -18,11 +18,12 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
             "lidar residuals: prior_weight must be > 0");
     const int w = model_of.cols, h = model_of.rows;
     cv::Mat1f sum(h, w, 0.0f), weight(h, w, 0.0f);
+    if (radius == 0.0f) return sum;
     const float r2 = radius * radius;
     const int reach = static_cast<int>(std::ceil(radius));
     // Each point spreads over its window: ~(2 * reach + 1)^2 pixels a point, serial so that
     // the sums are added in point order whatever the thread count.
-    for (size_t i = 0; i < points.size() && r2 > 0.0f; ++i) {
+    for (size_t i = 0; i < points.size(); ++i) {
         const cv::Point p = points[i];
         require(p.x >= 0 && p.y >= 0 && p.x < w && p.y < h, ErrorCode::InvalidArgument,
                 "lidar residuals: point outside the model map");

@@ -278,15 +278,19 @@ typedef struct lf_options lf_options_t;
  *                                                 superpixels: sqrt(this / LiDAR points per
  *                                                 pixel), down to min_superpixel_size (default
  *                                                 2; "paper" 0 = always superpixel_size)
- *   "interpolation.min_superpixel_size" int [4, 512] (default 10)
+ *   "interpolation.min_superpixel_size" int [4, 512] (default 10; "realtime" 14)
+ *   "interpolation.superpixel_disparity_weight" float [0, 10000] superpixels follow the
+ *                                                 stereo's depth as well as colour: weight of
+ *                                                 a squared disparity difference [1/px^2]
+ *                                                 against Lab's squared distance (default 0 =
+ *                                                 colour only; "realtime" 64)
  *   "interpolation.planar_merge" float [0, 100]  the small superpixels of that rule merged
  *                                                 back (up to superpixel_size^2 px) where
  *                                                 their LiDAR points lie on one plane within
  *                                                 this [px] (default 0.3; "realtime" and
  *                                                 "paper" 0 = never)
  *   "interpolation.merge_unseen" bool            ... and where no LiDAR point is in them or
- *                                                 their neighbours (default 1; "realtime"
- *                                                 and "paper" 0)
+ *                                                 their neighbours (default 1; "paper" 0)
  *   "interpolation.lidar_residual_radius" float [0, 64] each LiDAR point's d0 residual
  *                                                 (measurement minus its pixel's plane) spread
  *                                                 over the pixels of the same plane within

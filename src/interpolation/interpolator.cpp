@@ -572,8 +572,8 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
 
 // Phase 2: the edge map (res.edges) and the superpixels of the image; below the largest size
 // (a dense scan), those on one LiDAR plane or out of its reach merged back up to its area.
-Superpixels segment(const cv::Mat &image, const SedModel *sed, const SeedSet &set, int largest,
-                    const InterpolationOptions &o, InterpolationResult &res) {
+Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed, const SeedSet &set,
+                    int largest, const InterpolationOptions &o, InterpolationResult &res) {
     auto t = Clock::now();
     res.edges = compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
@@ -581,7 +581,7 @@ Superpixels segment(const cv::Mat &image, const SedModel *sed, const SeedSet &se
     t = Clock::now();
     SuperpixelOptions spo = o.superpixels;
     spo.num_threads = o.num_threads;
-    Superpixels sp = compute_superpixels(image, spo);
+    Superpixels sp = compute_superpixels(image, spo, geometry_hint);
     if (set.use_lidar && (o.planar_merge_tolerance > 0.0f || o.merge_unseen) && spo.region_size < largest) {
         std::vector<cv::Point> pos;
         std::vector<float> disparity;
@@ -993,7 +993,7 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     const auto t_seeds = Clock::now();
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
     res.timings.seeds_s = seconds_since(t_seeds);
-    const Superpixels sp = segment(image, sed_.get(), seed_set, largest, o, res);
+    const Superpixels sp = segment(image, geometry_hint, sed_.get(), seed_set, largest, o, res);
     const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);
     const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);
     write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);

@@ -18,6 +18,7 @@ namespace {
 
 struct Centre {
     float l, a, b, x, y;
+    float d = 0.0f, dw = 0.0f;  // mean disparity, and the disparity weight (0: the centre has none)
 };
 
 // Lab as three float planes (L in 0..100, a/b centred on 0) for a vectorisable inner loop;
@@ -91,6 +92,19 @@ LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *_
     }
 }
 
+// assign_span with the disparity term: D the pixels' disparities, V 1 where valid (else 0).
+LIDARFLOW_AVX2_CLONES void assign_span_depth(const float *__restrict L, const float *__restrict A, const float *__restrict B,
+                                             const float *__restrict D, const float *__restrict V, const Centre &c,
+                                             float spatial, float dy2, int k, int x0, int x1, float *__restrict best,
+                                             int *__restrict arow) {
+    const float cl = c.l, ca = c.a, cb = c.b, cx = c.x, cd = c.d, cw = c.dw;
+    for (int x = x0; x < x1; ++x) {
+        const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx, dd = D[x] - cd;
+        const float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2 + cw * V[x] * dd * dd;
+        keep_first_least(d, k, best[x], arow[x]);
+    }
+}
+
 }  // namespace
 
 void prepare_superpixels() {
@@ -98,7 +112,7 @@ void prepare_superpixels() {
     to_lab_planes(cv::Mat(1, 1, CV_8UC3, cv::Scalar::all(0)), planes);
 }
 
-Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o) {
+Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o, const cv::Mat1f &disparity) {
     require(!image.empty(), ErrorCode::InvalidArgument, "superpixels: empty image");
     require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),
             ErrorCode::InvalidArgument, "superpixels: image must be 8-bit gray or BGR");
@@ -109,10 +123,28 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     require(o.iterations >= 1 && o.iterations <= 100, ErrorCode::InvalidArgument,
             "superpixels: iterations must be in [1, 100]");
     require(o.num_threads >= 1, ErrorCode::InvalidArgument, "superpixels: num_threads must be >= 1");
+    require(std::isfinite(o.disparity_weight) && o.disparity_weight >= 0.0f && o.disparity_weight <= 1e4f,
+            ErrorCode::InvalidArgument, "superpixels: disparity_weight must be in [0, 1e4]");
+    require(disparity.empty() || disparity.size() == image.size(), ErrorCode::InvalidArgument,
+            "superpixels: the disparity map must be of the image's size");
 
     const int w = image.cols, h = image.rows;
     cv::Mat1f lab[3];
     to_lab_planes(image, lab);
+    // The depth planes: disparity (0 where invalid) and its validity (1 / 0).
+    const bool depth = o.disparity_weight > 0.0f && !disparity.empty();
+    cv::Mat1f dplane, vplane;
+    if (depth) {
+        dplane.create(h, w);
+        vplane.create(h, w);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const float d = disparity(y, x);
+                const bool ok = std::isfinite(d) && d >= 0.0f;
+                dplane(y, x) = ok ? d : 0.0f;
+                vplane(y, x) = ok ? 1.0f : 0.0f;
+            }
+    }
     const int gx = std::max(1, static_cast<int>(std::lround(static_cast<double>(w) / o.region_size)));
     const int gy = std::max(1, static_cast<int>(std::lround(static_cast<double>(h) / o.region_size)));
     const float step_x = static_cast<float>(w) / gx, step_y = static_cast<float>(h) / gy;
@@ -121,7 +153,12 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
         for (int i = 0; i < gx; ++i) {
             const float cx = (i + 0.5f) * step_x, cy = (j + 0.5f) * step_y;
             const int py = std::min(h - 1, static_cast<int>(cy)), px = std::min(w - 1, static_cast<int>(cx));
-            centres[static_cast<size_t>(j) * gx + i] = {lab[0](py, px), lab[1](py, px), lab[2](py, px), cx, cy};
+            Centre &c = centres[static_cast<size_t>(j) * gx + i];
+            c = {lab[0](py, px), lab[1](py, px), lab[2](py, px), cx, cy};
+            if (depth && vplane(py, px) > 0.0f) {
+                c.d = dplane(py, px);
+                c.dw = o.disparity_weight;
+            }
         }
 
     // First pixel column of each grid column (pixel x lies in column min(gx-1, x / step_x)).
@@ -131,7 +168,8 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     // Colour distances in Lab are ~0..100; SLIC's m / S balances them against pixels.
     const float spatial = (o.compactness / o.region_size) * (o.compactness / o.region_size);
     cv::Mat1i assign(h, w, 0);
-    std::vector<double> acc(centres.size() * 6);
+    constexpr int kAcc = 8;  // L, a, b, x, y, count, disparity sum, disparity count
+    std::vector<double> acc(centres.size() * kAcc);
     for (int it = 0; it < o.iterations; ++it) {
         ParallelErrors errors;
 #pragma omp parallel num_threads(o.num_threads)
@@ -143,6 +181,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                 if (errors.failed()) continue;
                 const int cy = std::min(gy - 1, static_cast<int>(y / step_y));
                 const float *L = lab[0][y], *A = lab[1][y], *B = lab[2][y];
+                const float *D = depth ? dplane[y] : nullptr, *V = depth ? vplane[y] : nullptr;
                 int *arow = assign[y];
                 std::fill(best.begin(), best.end(), std::numeric_limits<float>::max());
                 // Centre (j, i) competes for the pixels of grid columns i-1 .. i+1: one
@@ -153,7 +192,10 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                         const Centre c = centres[static_cast<size_t>(k)];
                         const int x0 = col_start[std::max(0, i - 1)], x1 = col_start[std::min(gx, i + 2)];
                         const float dy2 = spatial * (y - c.y) * (y - c.y);
-                        assign_span(L, A, B, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                        if (depth && c.dw > 0.0f)
+                            assign_span_depth(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                        else
+                            assign_span(L, A, B, c, spatial, dy2, k, x0, x1, best.data(), arow);
                     }
             }
         }
@@ -161,20 +203,28 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
         std::fill(acc.begin(), acc.end(), 0.0);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                double *a = &acc[static_cast<size_t>(assign(y, x)) * 6];
+                double *a = &acc[static_cast<size_t>(assign(y, x)) * kAcc];
                 a[0] += lab[0](y, x);
                 a[1] += lab[1](y, x);
                 a[2] += lab[2](y, x);
                 a[3] += x;
                 a[4] += y;
                 a[5] += 1.0;
+                if (depth && vplane(y, x) > 0.0f) {
+                    a[6] += dplane(y, x);
+                    a[7] += 1.0;
+                }
             }
         for (size_t k = 0; k < centres.size(); ++k) {
-            const double *a = &acc[k * 6];
+            const double *a = &acc[k * kAcc];
             if (a[5] <= 0.0) continue;  // an empty cluster keeps its old centre
             centres[k] = {static_cast<float>(a[0] / a[5]), static_cast<float>(a[1] / a[5]),
                           static_cast<float>(a[2] / a[5]), static_cast<float>(a[3] / a[5]),
                           static_cast<float>(a[4] / a[5])};
+            if (a[7] > 0.0) {
+                centres[k].d = static_cast<float>(a[6] / a[7]);
+                centres[k].dw = o.disparity_weight;
+            }
         }
     }
 

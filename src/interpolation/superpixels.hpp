@@ -15,6 +15,9 @@ struct SuperpixelOptions {
     float compactness = 20.0f;  // weight of spatial vs. Lab colour distance (SLIC's m); > 0
     int iterations = 4;       // k-means iterations; >= 1
     int num_threads = 1;      // OpenMP threads; the result does not depend on it
+    // Weight of the squared disparity difference [1 / px^2] against Lab's squared distance,
+    // where a disparity map is given and both the pixel and its centre have one; 0 = colour only.
+    float disparity_weight = 0.0f;
 };
 
 struct Superpixels {
@@ -29,9 +32,12 @@ struct Superpixels {
     std::vector<int> parts;
 };
 
-// Segments an 8-bit gray or BGR image. Throws Error(InvalidArgument) on an empty or
-// unsupported image or options out of range. Deterministic.
-Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &options);
+// Segments an 8-bit gray or BGR image; with `disparity` (same size, invalid < 0 or non-finite;
+// empty = none) and a disparity_weight > 0, also by depth, so that superpixels end at depth
+// boundaries that the colours do not show. Throws Error(InvalidArgument) on an empty or
+// unsupported image, a disparity map of another size or options out of range. Deterministic.
+Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &options,
+                                const cv::Mat1f &disparity = cv::Mat1f());
 
 // The superpixels of a label map (labels 0 .. count-1, each 4-connected, every label used):
 // centroids, anchors, pixel counts and adjacency, as compute_superpixels returns them.

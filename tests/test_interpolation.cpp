@@ -146,6 +146,19 @@ void superpixels_shrink_with_dense_lidar(void **) {
     assert_int_equal(rd.superpixel_size, interpolation::superpixel_size(a, dense.points.size(), s.image.size()));
     assert_true(rd.superpixel_size < 20 && rd.num_superpixels > rs.num_superpixels);
 
+    // The depth term (superpixels.disparity_weight, over the geometry hint) moves a dense scan's
+    // superpixels only: the sparse size keeps the colour-only segmentation.
+    interpolation::InterpolationOptions depth = a;
+    depth.superpixels.disparity_weight = 64.0f;
+    const DisparityMap hint = s.truth.d0.clone();
+    const auto same = [](const interpolation::InterpolationResult &x, const interpolation::InterpolationResult &y) {
+        return x.num_superpixels == y.num_superpixels && cv::countNonZero(x.superpixels != y.superpixels) == 0;
+    };
+    assert_true(same(interpolation::RobustInterpolator(depth).run(ms, sparse, s.image, hint),
+                     interpolation::RobustInterpolator(a).run(ms, sparse, s.image, hint)));
+    assert_false(same(interpolation::RobustInterpolator(depth).run(md, dense, s.image, hint),
+                      interpolation::RobustInterpolator(a).run(md, dense, s.image, hint)));
+
     // Merged back on the scene's planes: fewer superpixels, the same accuracy.
     interpolation::InterpolationOptions merged = a;
     merged.planar_merge_tolerance = 0.3f;

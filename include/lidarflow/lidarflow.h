@@ -279,11 +279,12 @@ typedef struct lf_options lf_options_t;
  *                                                 pixel), down to min_superpixel_size (default
  *                                                 2; "paper" 0 = always superpixel_size)
  *   "interpolation.min_superpixel_size" int [4, 512] (default 10; "realtime" 14)
- *   "interpolation.superpixel_disparity_weight" float [0, 10000] superpixels follow the
- *                                                 stereo's depth as well as colour: weight of
- *                                                 a squared disparity difference [1/px^2]
- *                                                 against Lab's squared distance (default 0 =
- *                                                 colour only; "realtime" 64)
+ *   "interpolation.superpixel_disparity_weight" float [0, 10000] a dense scan's superpixels
+ *                                                 (below superpixel_size) follow the stereo's
+ *                                                 depth as well as colour: weight of a squared
+ *                                                 disparity difference [1/px^2] against Lab's
+ *                                                 squared distance (default 0 = colour only;
+ *                                                 "realtime" 64)
  *   "interpolation.planar_merge" float [0, 100]  the small superpixels of that rule merged
  *                                                 back (up to superpixel_size^2 px) where
  *                                                 their LiDAR points lie on one plane within

@@ -309,7 +309,7 @@ const OptionKey kKeys[] = {
      OptionKeyType::Int, 4, 512, false, Extra::None,
      LF_INT_FIELD(interpolation.superpixels.region_size)},
     {"interpolation.superpixel_disparity_weight",
-     "superpixels follow the stereo's depth too: weight of a squared disparity difference against Lab's (0 = colour only)",
+     "a dense scan's superpixels follow the stereo's depth too: weight of a squared disparity difference against Lab's (0 = colour only)",
      OptionKeyType::Float, 0, 10000, false, Extra::None,
      LF_FLOAT_FIELD(interpolation.superpixels.disparity_weight)},
     {"interpolation.lidar_points_per_superpixel",

@@ -95,7 +95,7 @@ void rejects_bad_arguments(void **) {
     const cv::Mat image = texture();
     const cv::Mat1f d = step_disparity();
     test::expect_error([&] { compute_superpixels(image, options(64.0f), cv::Mat1f(kH - 1, kW, 1.0f)); },
-                 ErrorCode::InvalidArgument);
+                       ErrorCode::InvalidArgument);
     for (float bad : {-1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), 2e4f})
         test::expect_error([&] { compute_superpixels(image, options(bad), d); }, ErrorCode::InvalidArgument);
 }

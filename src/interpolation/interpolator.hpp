@@ -35,7 +35,9 @@ namespace lidarflow::interpolation {
 struct InterpolationOptions {
     bool use_lidar = true;
     EdgeMapOptions edges;          // set edges.method = StructuredForest + sed_model_path for SED
-    SuperpixelOptions superpixels; // region_size ~ sqrt(superpixel area)
+    // region_size ~ sqrt(superpixel area); disparity_weight (over run()'s geometry hint) acts
+    // only on superpixels below region_size, those a dense scan sized.
+    SuperpixelOptions superpixels;
     // A dense scan supports smaller superpixels (each still holds LiDAR points): the size is
     // sqrt(lidar_points_per_superpixel / points per pixel) of run()'s lidar0, between
     // min_superpixel_size and superpixels.region_size (which sparse LiDAR, or none, keeps).

@@ -204,8 +204,9 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
         } else {  // every stage at 0.55; stage 4 with fewer, larger superpixels and neighbours
             o.processing_scale = 0.55;
             o.interpolation.superpixels.region_size = 20;
-            // A dense scan's superpixels at 14 px, not 10: they follow the guided stereo's depth
-            // as well as colour (the movers keep their own), and the point-less ones merge.
+            // A dense scan's superpixels at 14 px, not 10, following the guided stereo's depth as
+            // well as colour (a mover before a background of its colour keeps superpixels of its
+            // own); the point-less ones merge.
             o.interpolation.min_superpixel_size = 14;
             o.interpolation.superpixels.disparity_weight = 64.0f;
             o.interpolation.merge_unseen = true;

@@ -29,6 +29,7 @@ constexpr double kMinDepthRatio = 0.05;
 // Matches per block of the refit's sums and of the parallel inlier counts: a fixed size, so
 // the sums' order does not depend on the thread count.
 constexpr size_t kBlock = 2048;
+constexpr size_t kMaxRefit = 16384;  // inliers a refit sums at most
 
 struct Rigid {
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
@@ -312,6 +313,14 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     std::vector<int> in;
     for (int round = 0; round < 3; ++round) {
         if (inliers_of(best, &in) < 4) break;
+        // The refit's sums over at most kMaxRefit inliers, every k-th: beyond that a dense
+        // scan's points add time, not precision, to six parameters.
+        if (in.size() > kMaxRefit) {
+            const size_t stride = (in.size() + kMaxRefit - 1) / kMaxRefit;
+            size_t kept = 0;
+            for (size_t k = 0; k < in.size(); k += stride) in[kept++] = in[k];
+            in.resize(kept);
+        }
         Rigid m = best;
         bool ok = true;
         for (int it = 0; it < 3 && ok; ++it) ok = data.step(m, in.data(), in.size(), threads);

@@ -581,10 +581,11 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
     t = Clock::now();
     SuperpixelOptions spo = o.superpixels;
     spo.num_threads = o.num_threads;
+    const bool scan_sized = spo.region_size < largest;
     // Depth only where a dense scan sized them: without one the stereo's depth is the images' own.
-    if (spo.region_size >= largest) spo.disparity_weight = 0.0f;
+    if (!scan_sized) spo.disparity_weight = 0.0f;
     Superpixels sp = compute_superpixels(image, spo, geometry_hint);
-    if (set.use_lidar && (o.planar_merge_tolerance > 0.0f || o.merge_unseen) && spo.region_size < largest) {
+    if (set.use_lidar && (o.planar_merge_tolerance > 0.0f || o.merge_unseen) && scan_sized) {
         std::vector<cv::Point> pos;
         std::vector<float> disparity;
         for (int i = 0; i < set.seeds.size(); ++i)

@@ -81,26 +81,20 @@ int enforce_connectivity(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
 }
 
 // Offers centre c (index k) to the pixels [x0, x1) of one row, branch-free so that it vectorises
-// (core/branchless.hpp).
-LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *__restrict A, const float *__restrict B, const Centre &c,
-                 float spatial, float dy2, int k, int x0, int x1, float *__restrict best, int *__restrict arow) {
-    const float cl = c.l, ca = c.a, cb = c.b, cx = c.x;
-    for (int x = x0; x < x1; ++x) {
-        const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx;
-        const float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2;
-        keep_first_least(d, k, best[x], arow[x]);
-    }
-}
-
-// assign_span with the disparity term: D the pixels' disparities, V 1 where valid (else 0).
-LIDARFLOW_AVX2_CLONES void assign_span_depth(const float *__restrict L, const float *__restrict A, const float *__restrict B,
-                                             const float *__restrict D, const float *__restrict V, const Centre &c,
-                                             float spatial, float dy2, int k, int x0, int x1, float *__restrict best,
-                                             int *__restrict arow) {
+// (core/branchless.hpp). With Depth, also c.dw * (D - c.d)^2 where V (1 valid, 0 not) is set.
+template <bool Depth>
+LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *__restrict A, const float *__restrict B,
+                                       const float *__restrict D, const float *__restrict V, const Centre &c,
+                                       float spatial, float dy2, int k, int x0, int x1, float *__restrict best,
+                                       int *__restrict arow) {
     const float cl = c.l, ca = c.a, cb = c.b, cx = c.x, cd = c.d, cw = c.dw;
     for (int x = x0; x < x1; ++x) {
-        const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx, dd = D[x] - cd;
-        const float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2 + cw * V[x] * dd * dd;
+        const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx;
+        float d = dl * dl + da * da + db * db + spatial * sx * sx + dy2;
+        if (Depth) {
+            const float dd = D[x] - cd;
+            d += cw * V[x] * dd * dd;
+        }
         keep_first_least(d, k, best[x], arow[x]);
     }
 }
@@ -193,9 +187,9 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                         const int x0 = col_start[std::max(0, i - 1)], x1 = col_start[std::min(gx, i + 2)];
                         const float dy2 = spatial * (y - c.y) * (y - c.y);
                         if (depth && c.dw > 0.0f)
-                            assign_span_depth(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                            assign_span<true>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
                         else
-                            assign_span(L, A, B, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                            assign_span<false>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
                     }
             }
         }

@@ -17,21 +17,16 @@ namespace {
 SparseLidar downscale_lidar(const SparseLidar &l, cv::Size size, double sx, double sy) {
     SparseLidar out{size.width, size.height, {}};
     if (l.points.empty()) return out;
-    // The nearest (largest) disparity per reduced pixel, the points in row-major order: a
+    // The nearest (largest) disparity per reduced pixel, read back in row-major order: a
     // buffer of the reduced frame (a scan's ~20k points in a tree cost ~2 ms).
-    cv::Mat1f nearest(size, -1.0f);
+    DisparityMap nearest(size, kInvalidDisparity);
     for (const LidarPoint &p : l.points) {
         const int x = std::min(size.width - 1, static_cast<int>(std::floor((p.x + 0.5) * sx)));
         const int y = std::min(size.height - 1, static_cast<int>(std::floor((p.y + 0.5) * sy)));
         float &d = nearest(y, x);
         d = std::max(d, static_cast<float>(p.disparity * sx));  // disparities are >= 0 (validated)
     }
-    for (int y = 0; y < size.height; ++y) {
-        const float *row = nearest[y];
-        for (int x = 0; x < size.width; ++x)
-            if (row[x] >= 0.0f) out.points.push_back({x, y, row[x]});
-    }
-    return out;
+    return SparseLidar::from_map(nearest);
 }
 
 }  // namespace

@@ -73,6 +73,23 @@ inline uint8_t hamming(const uint64_t *dl, const uint64_t *bl, const uint64_t *d
     return static_cast<uint8_t>((n + 1) >> 1);
 }
 
+// c[d] += round(wt * min(slope16 * |16 d - p16| / 256, cap) / 255), saturated at 255, in 16-bit
+// lanes: |16 d - p16| is clamped where the penalty reaches the cap, so the products fit 16 bits,
+// and x / 255 is (x + 1 + (x >> 8)) >> 8, exact for x < 65535.
+inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, int cap) {
+    const int reach = slope16 > 0 ? (cap * 256 + slope16 - 1) / slope16 : 0;  // smallest |.| at the cap
+    const auto p = static_cast<uint16_t>(p16), w = static_cast<uint16_t>(wt), s = static_cast<uint16_t>(slope16),
+               top = static_cast<uint16_t>(std::min(reach, 0xFFFF)), cp = static_cast<uint16_t>(cap);
+    for (int d = 0; d < D; ++d) {
+        const auto at = static_cast<uint16_t>(16 * d);
+        const uint16_t diff = std::min(static_cast<uint16_t>(at > p ? at - p : p - at), top);
+        const uint16_t pen = std::min(static_cast<uint16_t>(static_cast<uint16_t>(s * diff) >> 8), cp);
+        const auto x = static_cast<uint16_t>(w * pen + 127);
+        const auto q = static_cast<uint16_t>((x + 1 + (x >> 8)) >> 8);
+        c[d] = static_cast<uint8_t>(std::min(255, c[d] + q));
+    }
+}
+
 // One row of data costs: cost[x * D + d] = Hamming(left x, right x - d) (the right image's
 // column 0 stands in left of the image) + the LiDAR penalty. Integer only. bl, br: the bright
 // planes (Ternary only).
@@ -86,13 +103,7 @@ LIDARFLOW_V3_CLONES void row_costs(const uint64_t *dl, const uint64_t *dr, const
         for (int d = 0; d < lim; ++d) c[d] = hamming<Ternary>(dl, bl, dr, br, x, x - d);
         const uint8_t edge = hamming<Ternary>(dl, bl, dr, br, x, 0);
         for (int d = lim; d < D; ++d) c[d] = edge;
-        const int wt = weight[x];
-        if (wt == 0) continue;
-        const int p16 = prior16[x];
-        for (int d = 0; d < D; ++d) {
-            const int pen = std::min((slope16 * std::abs(16 * d - p16)) >> 8, cap);
-            c[d] = static_cast<uint8_t>(std::min(255, c[d] + (wt * pen + 127) / 255));
-        }
+        if (weight[x] != 0) add_lidar_penalty(c, D, prior16[x], weight[x], slope16, cap);
     }
 }
 

@@ -111,15 +111,25 @@ motion::EgoMotion pose_from_t0(const Tracks &tr, const DisparityMap &d0, const S
 
 // The t0 points where the motion carries them at t1 (the nearest of several on one pixel);
 // points on movers land wrong, which the capped LiDAR term lets the images outvote.
-SparseLidar carry_points(const SparseLidar &lidar0, const motion::EgoMotion &m) {
+SparseLidar carry_points(const SparseLidar &lidar0, const motion::EgoMotion &m, int threads) {
     SparseLidar carried{lidar0.width, lidar0.height, {}};
-    for (const LidarPoint &p : lidar0.points) {
+    const int n = static_cast<int>(lidar0.points.size());
+    // Predicted in parallel, kept in the points' order (x < 0: the point leaves the image).
+    std::vector<LidarPoint> moved(lidar0.points.size());
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
+    for (int i = 0; i < n; ++i) {
+        const LidarPoint &p = lidar0.points[static_cast<size_t>(i)];
         float d1 = 0, u = 0, v = 0;
         int x = 0, y = 0;
-        if (m.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v) && d1 > 0 &&
-            d1 <= kMaxLidarDisparity && lidar::nearest_pixel(p.x + u, p.y + v, {carried.width, carried.height}, x, y))
-            carried.points.push_back({x, y, d1});
+        moved[static_cast<size_t>(i)] =
+            m.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v) && d1 > 0 &&
+                    d1 <= kMaxLidarDisparity &&
+                    lidar::nearest_pixel(p.x + u, p.y + v, {carried.width, carried.height}, x, y)
+                ? LidarPoint{x, y, d1}
+                : LidarPoint{-1, -1, 0.0f};
     }
+    for (const LidarPoint &p : moved)
+        if (p.x >= 0) carried.points.push_back(p);
     return SparseLidar::from_map(carried.to_map());
 }
 
@@ -278,7 +288,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     r.guide1 = guide1;
     if (opt.carry_lidar && guide1.points.empty() && !guide0.points.empty()) {
         const motion::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
-        if (pose.valid) r.guide1 = carry_points(guide0, pose);
+        if (pose.valid) r.guide1 = carry_points(guide0, pose, opt.threads);
     }
     r.sgm1 = disparity(in.left1, in.right1, r.guide1);
     r.seconds_stereo += seconds_since(t);

@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -59,6 +60,11 @@ void equals_its_definition(void **) {
             const cv::Mat1f c = lidar_residual_correction(model_of, pts, res, radius, 0.05f);
             assert_int_equal(c.rows, size.height);
             assert_int_equal(c.cols, size.width);
+            // Row bands per thread: every pixel still adds its terms in point order.
+            for (int threads : {2, 3, 7, 64}) {
+                const cv::Mat1f ct = lidar_residual_correction(model_of, pts, res, radius, 0.05f, threads);
+                assert_int_equal(std::memcmp(c.data, ct.data, c.total() * sizeof(float)), 0);
+            }
             for (int y = 0; y < size.height; ++y)
                 for (int x = 0; x < size.width; ++x) {
                     const float want = brute(model_of, pts, res, radius, 0.05f, x, y);
@@ -98,6 +104,9 @@ void rejects_bad_arguments(void **) {
     test::expect_error(call(pts, one, 65, 0.05f), ErrorCode::InvalidArgument);
     test::expect_error(call(pts, one, std::nanf(""), 0.05f), ErrorCode::InvalidArgument);
     test::expect_error(call(pts, one, 2, 0.0f), ErrorCode::InvalidArgument);
+    for (int threads : {0, -1, 1025})
+        test::expect_error([&] { (void)lidar_residual_correction(model_of, pts, one, 2, 0.05f, threads); },
+                           ErrorCode::InvalidArgument);
     test::expect_error(call({cv::Point(8, 1)}, one, 2, 0.05f), ErrorCode::InvalidArgument);
 }
 

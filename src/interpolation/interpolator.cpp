@@ -597,6 +597,7 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
         pm.tolerance = o.planar_merge_tolerance;
         pm.unseen = o.merge_unseen;
         pm.max_area = largest * largest;
+        pm.threads = o.num_threads;
         sp = merge_planar_superpixels(sp, pos, disparity, pm);
     }
     res.superpixels = sp.labels;
@@ -813,8 +814,43 @@ cv::Mat1f lidar_residuals(const SeedSet &set, const cv::Mat1i &pair_of, const st
             points.push_back(seeds.pos[i]);
             residuals.push_back(seeds.d0[i] - m.p[0].at(seeds.x[i], seeds.y[i]));
         }
-    return lidar_residual_correction(model_of, points, residuals, o.lidar_residual_radius, kModelWeight);
+    return lidar_residual_correction(model_of, points, residuals, o.lidar_residual_radius, kModelWeight,
+                                     o.num_threads);
 }
+
+// Seeds around a pixel, as the per-pixel model choice weighs them: position, the channel's
+// value(s) and the graph edge's weight (1 for the pixel's own seed).
+struct SupportPoints {
+    std::vector<float> x, y, z, zu, zv, w;
+    void clear() {
+        for (auto *v : {&x, &y, &z, &zu, &zv, &w}) v->clear();
+    }
+    void push(float px, float py, float value, float wt) {
+        x.push_back(px);
+        y.push_back(py);
+        z.push_back(value);
+        w.push_back(wt);
+    }
+    void push_flow(float u, float v) {
+        zu.push_back(u);
+        zv.push_back(v);
+    }
+    // The summed weight of the points model m (channel c) explains within tau, in order.
+    float support(const Model &m, int c, float tau) const {
+        float sc = 0;
+        const size_t n = x.size();
+        if (kDims[c] == 1) {
+            for (size_t k = 0; k < n; ++k)
+                if (std::fabs(m.p[0].at(x[k], y[k]) - z[k]) < tau) sc += w[k];
+        } else {
+            for (size_t k = 0; k < n; ++k) {
+                const float r0 = m.p[0].at(x[k], y[k]) - zu[k], r1 = m.p[1].at(x[k], y[k]) - zv[k];
+                if (std::sqrt(r0 * r0 + r1 * r1) < tau) sc += w[k];
+            }
+        }
+        return sc;
+    }
+};
 
 // Phase 5: the dense field. Each pixel takes the models of its superpixel or of an adjacent
 // one (pixel_model_selection), adds the background prediction back and, with LiDAR, keeps the
@@ -835,17 +871,6 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     // it (its geodesically nearest seed and that seed's graph neighbours) are better explained
     // by the model of an adjacent superpixel. Superpixels coarser than thin structures (poles,
     // sign posts) would otherwise paint them with the background's model.
-    auto seed_value = [&](int id, int c, int k) {
-        if (c == kD0) return seeds.d0[id];
-        if (c == kD1) return seeds.z1[id];
-        return k == 0 ? seeds.zu[id] : seeds.zv[id];
-    };
-    auto residual = [&](const Model &m, int c, int id) {
-        const float r0 = m.p[0].at(seeds.x[id], seeds.y[id]) - seed_value(id, c, 0);
-        if (kDims[c] == 1) return std::fabs(r0);
-        const float r1 = m.p[1].at(seeds.x[id], seeds.y[id]) - seed_value(id, c, 1);
-        return std::sqrt(r0 * r0 + r1 * r1);
-    };
     // Decisions depend only on (nearest seed, superpixel): number the pairs that occur (rows
     // are mostly long runs of one pair), decide each pair once, then fill the pixels.
     cv::Mat1i pair_of(h, w);
@@ -877,39 +902,51 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     std::vector<float> edge_weight(graph.weight.size());
     for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
     std::vector<int> chosen(pairs.size() * kNumChannels);
-#pragma omp parallel for num_threads(o.num_threads) schedule(dynamic, 256)
-    for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
-        // Plain names, not a structured binding: the lambda below captures them (C++17).
-        const int seed = pairs[pi].first, s = pairs[pi].second;
-        for (int c = 0; c < kNumChannels; ++c) {
-            int pick = s;
-            // The LiDAR point's own cell keeps the anchored model: there the measurement is
-            // the nearest evidence, whatever the matches around it say.
-            const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
-            if (o.pixel_model_selection && seed != anchor_seed) {
-                const float tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
-                auto support = [&](int cand) {
-                    const Model &m = cur[static_cast<size_t>(cand) * kNumChannels + c];
-                    float sc = 0;
-                    if (c == kD0 || seeds.has_motion[seed]) sc += residual(m, c, seed) < tau ? 1.0f : 0.0f;
-                    for (int e = graph.start[seed]; e < graph.start[seed + 1]; ++e) {
-                        const int j = graph.nbr[e];
-                        if (c != kD0 && !seeds.has_motion[j]) continue;
-                        if (residual(m, c, j) < tau) sc += edge_weight[e];
+#pragma omp parallel num_threads(o.num_threads)
+    {
+        // The pair's seed and its graph neighbours, gathered once per pair (each is read by
+        // every candidate model of every channel): geometry all of them, motion those with one.
+        SupportPoints geo, mot;
+#pragma omp for schedule(dynamic, 256)
+        for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
+            // Plain names, not a structured binding: the lambdas below capture them (C++17).
+            const int seed = pairs[pi].first, s = pairs[pi].second;
+            geo.clear();
+            mot.clear();
+            if (o.pixel_model_selection) {
+                auto add = [&](int id, float wt) {
+                    geo.push(seeds.x[id], seeds.y[id], seeds.d0[id], wt);
+                    if (seeds.has_motion[id]) {
+                        mot.push(seeds.x[id], seeds.y[id], seeds.z1[id], wt);
+                        mot.push_flow(seeds.zu[id], seeds.zv[id]);
                     }
-                    return sc;
                 };
-                // The own model wins ties: switching needs clearly more local support.
-                float best = support(s) + 0.5f;
-                for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1]; ++e) {
-                    const float sc = support(sp.adj[e]);
-                    if (sc > best) {
-                        best = sc;
-                        pick = sp.adj[e];
+                add(seed, 1.0f);
+                for (int e = graph.start[seed]; e < graph.start[seed + 1]; ++e) add(graph.nbr[e], edge_weight[e]);
+            }
+            for (int c = 0; c < kNumChannels; ++c) {
+                int pick = s;
+                // The LiDAR point's own cell keeps the anchored model: there the measurement is
+                // the nearest evidence, whatever the matches around it say.
+                const int anchor_seed = c == kD0 ? anchors.geometry[s] : anchors.motion[s];
+                if (o.pixel_model_selection && seed != anchor_seed) {
+                    const float tau = c == kFlow ? o.flow_inlier : o.disparity_inlier;
+                    const SupportPoints &pts = c == kD0 ? geo : mot;
+                    auto support = [&](int cand) {
+                        return pts.support(cur[static_cast<size_t>(cand) * kNumChannels + c], c, tau);
+                    };
+                    // The own model wins ties: switching needs clearly more local support.
+                    float best = support(s) + 0.5f;
+                    for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1]; ++e) {
+                        const float sc = support(sp.adj[e]);
+                        if (sc > best) {
+                            best = sc;
+                            pick = sp.adj[e];
+                        }
                     }
                 }
+                chosen[static_cast<size_t>(pi) * kNumChannels + c] = pick;
             }
-            chosen[static_cast<size_t>(pi) * kNumChannels + c] = pick;
         }
     }
     // Only the rigid model (camera known): it predicts where a background point goes from its

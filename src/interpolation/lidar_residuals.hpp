@@ -14,8 +14,10 @@ namespace lidarflow::interpolation {
 // `radius` of pixel q whose pixel uses q's model (model_of(point) == model_of(q)), with
 // w_i = (1 - dist^2 / radius^2)^2: a point on the pixel itself weighs 1, the model
 // prior_weight. 0 where no point reaches. `points` lie inside model_of, one residual each.
-// radius in [0, 64] (0: all zero), prior_weight > 0. Pure; the same on every call.
+// radius in [0, 64] (0: all zero), prior_weight > 0, threads in [1, 1024]. Pure and thread-safe;
+// the same result on every call and for any thread count.
 cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector<cv::Point> &points,
-                                    const std::vector<float> &residuals, float radius, float prior_weight);
+                                    const std::vector<float> &residuals, float radius, float prior_weight,
+                                    int threads = 1);
 
 }  // namespace lidarflow::interpolation

@@ -43,6 +43,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     require(std::isfinite(o.tolerance) && o.tolerance >= 0.0f, ErrorCode::InvalidArgument,
             "planar merge: tolerance must be finite and >= 0");
     require(o.min_points >= 3, ErrorCode::InvalidArgument, "planar merge: min_points must be >= 3");
+    require(o.threads >= 1 && o.threads <= 1024, ErrorCode::InvalidArgument, "planar merge: threads must be in [1, 1024]");
     if ((o.tolerance <= 0.0f && !o.unseen) || o.max_area <= 0 || sp.count < 2) return sp;
     const int n = sp.count, w = sp.labels.cols, h = sp.labels.rows;
     std::vector<std::vector<Point3>> pts(n);
@@ -98,7 +99,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
         int *out = labels.ptr<int>(y);
         for (int x = 0; x < w; ++x) out[x] = label[in[x]];
     }
-    Superpixels merged = superpixels_from_labels(std::move(labels), count);
+    Superpixels merged = superpixels_from_labels(std::move(labels), count, o.threads);
     merged.parts.assign(count, 0);
     for (int s = 0; s < n; ++s) ++merged.parts[label[s]];
     return merged;

@@ -17,6 +17,7 @@ struct PlanarMergeOptions {
     bool unseen = false;     // also merge superpixels the points do not reach
     int max_area = 0;        // largest merged region [px]; <= 0 = off
     int min_points = 4;      // LiDAR points a superpixel needs to take part (>= 3)
+    int threads = 1;         // for the merged superpixels' statistics; the result does not depend on it
 };
 
 // Superpixels of `sp` merged, greedily in label order over the adjacency (deterministic), while

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -224,48 +225,104 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
 
     cv::Mat1i labels;
     const int count = enforce_connectivity(assign, std::max(1, o.region_size * o.region_size / 4), labels);
-    return superpixels_from_labels(std::move(labels), count);
+    return superpixels_from_labels(std::move(labels), count, o.num_threads);
 }
 
-Superpixels superpixels_from_labels(cv::Mat1i labels, int count) {
+Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
+    require(threads >= 1 && threads <= 1024, ErrorCode::InvalidArgument, "superpixels: threads must be in [1, 1024]");
     Superpixels sp;
     sp.labels = std::move(labels);
     sp.count = count;
     const int n = count, w = sp.labels.cols, h = sp.labels.rows;
-    std::vector<double> sx(n, 0.0), sy(n, 0.0);
+    // Row bands, one per thread, merged in band order: integer sums, the first pixel of the
+    // smallest distance and sorted, unique adjacency give what one raster pass gives.
+    const int T = std::max(1, std::min(threads, h));
+    struct Band {
+        std::vector<int64_t> sx, sy;
+        std::vector<int> count;
+        std::vector<float> best;
+        std::vector<cv::Point> anchor;
+        std::vector<std::pair<int, int>> edges;  // (label, neighbour), both ways
+    };
+    std::vector<Band> bands(static_cast<size_t>(T));
+    for (Band &b : bands) {
+        b.sx.assign(n, 0);
+        b.sy.assign(n, 0);
+        b.count.assign(n, 0);
+        b.best.assign(n, std::numeric_limits<float>::max());
+        b.anchor.assign(n, cv::Point(0, 0));
+    }
+    auto rows = [&](int t, int &y0, int &y1) {
+        y0 = static_cast<int>(static_cast<int64_t>(h) * t / T);
+        y1 = static_cast<int>(static_cast<int64_t>(h) * (t + 1) / T);
+    };
+    ParallelErrors errors;
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int t = 0; t < T; ++t) errors.run([&] {
+        Band &b = bands[static_cast<size_t>(t)];
+        int y0, y1;
+        rows(t, y0, y1);
+        for (int y = y0; y < y1; ++y) {
+            const int *row = sp.labels.ptr<int>(y), *below = y + 1 < h ? sp.labels.ptr<int>(y + 1) : nullptr;
+            for (int x = 0; x < w; ++x) {
+                const int l = row[x];
+                b.sx[l] += x;
+                b.sy[l] += y;
+                ++b.count[l];
+                // A boundary runs along many pixels: skip the pair just recorded.
+                const auto edge = [&b](int a, int c) {
+                    if (b.edges.empty() || b.edges.back() != std::make_pair(a, c)) b.edges.emplace_back(a, c);
+                };
+                if (x + 1 < w && row[x + 1] != l) edge(l, row[x + 1]);
+                if (below && below[x] != l) edge(l, below[x]);
+            }
+        }
+    });
+    errors.rethrow_if_any();
+    std::vector<int64_t> sx(n, 0), sy(n, 0);
     sp.pixel_count.assign(n, 0);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const int l = sp.labels(y, x);
-            sx[l] += x;
-            sy[l] += y;
-            ++sp.pixel_count[l];
+    for (const Band &b : bands)
+        for (int l = 0; l < n; ++l) {
+            sx[l] += b.sx[l];
+            sy[l] += b.sy[l];
+            sp.pixel_count[l] += b.count[l];
         }
     sp.centroid.resize(n);
     for (int l = 0; l < n; ++l)
-        sp.centroid[l] = cv::Point2f(static_cast<float>(sx[l] / sp.pixel_count[l]),
-                                     static_cast<float>(sy[l] / sp.pixel_count[l]));
+        sp.centroid[l] = cv::Point2f(static_cast<float>(static_cast<double>(sx[l]) / sp.pixel_count[l]),
+                                     static_cast<float>(static_cast<double>(sy[l]) / sp.pixel_count[l]));
     // A non-convex superpixel's centroid may lie outside it; the anchor must be its own pixel.
-    std::vector<float> best(n, std::numeric_limits<float>::max());
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int t = 0; t < T; ++t) {
+        Band &b = bands[static_cast<size_t>(t)];
+        int y0, y1;
+        rows(t, y0, y1);
+        for (int y = y0; y < y1; ++y) {
+            const int *row = sp.labels.ptr<int>(y);
+            for (int x = 0; x < w; ++x) {
+                const int l = row[x];
+                const float dx = x - sp.centroid[l].x, dy = y - sp.centroid[l].y;
+                const float d = dx * dx + dy * dy;
+                if (d < b.best[l]) {
+                    b.best[l] = d;
+                    b.anchor[l] = cv::Point(x, y);
+                }
+            }
+        }
+    }
     sp.anchor.assign(n, cv::Point(0, 0));
+    std::vector<float> best(n, std::numeric_limits<float>::max());
+    for (const Band &b : bands)
+        for (int l = 0; l < n; ++l)
+            if (b.best[l] < best[l]) {
+                best[l] = b.best[l];
+                sp.anchor[l] = b.anchor[l];
+            }
     std::vector<std::vector<int>> nb(n);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const int l = sp.labels(y, x);
-            const float dx = x - sp.centroid[l].x, dy = y - sp.centroid[l].y;
-            const float d = dx * dx + dy * dy;
-            if (d < best[l]) {
-                best[l] = d;
-                sp.anchor[l] = cv::Point(x, y);
-            }
-            if (x + 1 < w && sp.labels(y, x + 1) != l) {
-                nb[l].push_back(sp.labels(y, x + 1));
-                nb[sp.labels(y, x + 1)].push_back(l);
-            }
-            if (y + 1 < h && sp.labels(y + 1, x) != l) {
-                nb[l].push_back(sp.labels(y + 1, x));
-                nb[sp.labels(y + 1, x)].push_back(l);
-            }
+    for (const Band &b : bands)
+        for (const auto &[l, m] : b.edges) {
+            nb[l].push_back(m);
+            nb[m].push_back(l);
         }
     sp.adj_start.assign(n + 1, 0);
     for (int l = 0; l < n; ++l) {

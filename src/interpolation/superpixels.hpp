@@ -40,8 +40,9 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                                 const cv::Mat1f &disparity = cv::Mat1f());
 
 // The superpixels of a label map (labels 0 .. count-1, each 4-connected, every label used):
-// centroids, anchors, pixel counts and adjacency, as compute_superpixels returns them.
-Superpixels superpixels_from_labels(cv::Mat1i labels, int count);
+// centroids, anchors, pixel counts and adjacency, as compute_superpixels returns them; the same
+// for any `threads` in [1, 1024]. Pure and thread-safe.
+Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads = 1);
 
 // Makes OpenCV build its 8-bit Lab tables (~70 ms, once per process) now rather than in the
 // first compute_superpixels: a stream's first frame is then as fast as the next. Thread-safe.

@@ -188,7 +188,8 @@ void prior_equals_its_definition(void **) {
             // Few distinct disparities: equally near points often differ, sometimes not.
             lidar.points.push_back({x, y, static_cast<float>(2 + step(gen))});
         }
-        for (int r : {0, 1, 3}) {
+        // Windows of one and of several 8-pixel lane groups.
+        for (int r : {0, 1, 3, 4, 9}) {
             stereo::GuidedSgmOptions o = options(1);
             o.lidar_radius = r;
             o.lidar_intensity = 12;

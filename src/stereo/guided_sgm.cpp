@@ -233,6 +233,38 @@ void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_dif
         if (best[x] >= 0 && std::abs(static_cast<int>(keys[x - best[x]] & 511u) - best[x]) > lr_max_diff) best[x] = -1;
 }
 
+// A LiDAR point of densify_lidar: column, its pixel's intensity, disparity.
+struct SplatPoint {
+    int x, intensity;
+    float disparity;
+};
+
+// The points of one row, dy rows away, into a padded output row (pixel x at x + r): of the
+// pixels of similar intensity within the radius (and the point's own), each keeps the nearest
+// point, of equally near ones the larger disparity (the nearer surface), so the order of the
+// points does not matter. Branch-free over a whole window of `lanes` (>= 2r + 1, a multiple of
+// 8) so that it vectorises; lanes beyond the window change nothing.
+LIDARFLOW_AVX2_CLONES
+void splat_points(const SplatPoint *pts, int n, int dy, int r, int lanes, int max_step, const int *grey, int *dist,
+                  float *disp) {
+    for (int i = 0; i < n; ++i) {
+        const SplatPoint pt = pts[i];
+        int *d = dist + pt.x;
+        float *v = disp + pt.x;
+        const int *g = grey + pt.x;
+        for (int k = 0; k < lanes; ++k) {
+            // Bitwise, not short-circuit: no branch in the loop.
+            const int dd = std::max(std::abs(k - r), dy), dk = d[k];
+            const float vk = v[k];
+            const int similar = (dd == 0) | (std::abs(g[k] - pt.intensity) <= max_step);
+            const int better = (dd < dk) | ((dd == dk) & (pt.disparity > vk));
+            const int take = (k <= 2 * r) & similar & better;
+            d[k] = take ? dd : dk;
+            v[k] = take ? pt.disparity : vk;
+        }
+    }
+}
+
 void check_inputs(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
     opt.validate();
     require(!left.empty() && !right.empty(), ErrorCode::InvalidArgument, "guided SGM: empty image");
@@ -275,12 +307,8 @@ LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const 
     LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
     // The points bucketed by row (x, own intensity, disparity), so that each output row is
     // written by one thread and reads its rows' points in order.
-    struct Point {
-        int x, intensity;
-        float disparity;
-    };
     std::vector<int> first(static_cast<size_t>(h) + 1, 0);
-    std::vector<Point> by_row(lidar.points.size());
+    std::vector<SplatPoint> by_row(lidar.points.size());
     for (const LidarPoint &pt : lidar.points) ++first[static_cast<size_t>(pt.y) + 1];
     for (int y = 0; y < h; ++y) first[y + 1] += first[y];
     std::vector<int> fill(first.begin(), first.end() - 1);
@@ -288,37 +316,35 @@ LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const 
     // The weight falls with the Chebyshev distance of the point that set the pixel.
     std::vector<uint8_t> weight_at(static_cast<size_t>(r) + 1);
     for (int dd = 0; dd <= r; ++dd) weight_at[dd] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
-    std::vector<std::vector<int>> dist(T, std::vector<int>(w));  // Chebyshev distance of the point that set it
+    // Per thread, one row padded by r on the left and by the lanes' overhang on the right, so
+    // that every point's window is whole: its Chebyshev distance of the point that set each
+    // pixel, the disparity, the intensity.
+    const int lanes = (2 * r + 1 + 7) / 8 * 8, padded = w + r + lanes;
+    std::vector<std::vector<int>> dist(T, std::vector<int>(padded));
+    std::vector<std::vector<float>> disp(T, std::vector<float>(padded));
+    std::vector<std::vector<int>> grey(T, std::vector<int>(padded, 0));
     // Rows dealt out in small chunks: a scan covers only the lower part of the image.
 #pragma omp parallel for num_threads(T) schedule(static, 4)
     for (int y = 0; y < h; ++y) {
-        int *dr = dist[static_cast<size_t>(omp_get_thread_num())].data();
-        std::fill(dr, dr + w, r + 1);
-        float *disp = p.disparity.ptr<float>(y);
+        const size_t t = static_cast<size_t>(omp_get_thread_num());
+        int *dr = dist[t].data(), *gr = grey[t].data();
+        float *dp = disp[t].data();
+        const int py0 = std::max(0, y - r), py1 = std::min(h - 1, y + r);
+        if (first[py0] == first[py1 + 1]) continue;  // no point within reach
+        std::fill(dr, dr + padded, r + 1);
+        std::fill(dp, dp + padded, kInvalidDisparity);
         const uint8_t *g = gray.ptr<uint8_t>(y);
-        bool any = false;
-        for (int py = std::max(0, y - r); py <= std::min(h - 1, y + r); ++py) {
-            const int dy = std::abs(y - py);
-            for (int i = first[py]; i < first[py + 1]; ++i) {
-                const Point pt = by_row[i];
-                any = true;
-                for (int x = std::max(0, pt.x - r); x <= std::min(w - 1, pt.x + r); ++x) {
-                    const int dd = std::max(std::abs(x - pt.x), dy);
-                    // Of the pixels of similar intensity (and the point's own), the nearest
-                    // point wins; of equally near ones the larger disparity (the nearer
-                    // surface), so the order of the points does not matter.
-                    if ((dd == 0 || std::abs(g[x] - pt.intensity) <= opt.lidar_intensity) &&
-                        (dd < dr[x] || (dd == dr[x] && pt.disparity > disp[x]))) {
-                        dr[x] = dd;
-                        disp[x] = pt.disparity;
-                    }
-                }
-            }
-        }
-        if (!any) continue;
+        std::copy(g, g + w, gr + r);
+        for (int py = py0; py <= py1; ++py)
+            splat_points(by_row.data() + first[py], first[py + 1] - first[py], std::abs(y - py), r, lanes,
+                         opt.lidar_intensity, gr, dr, dp);
+        float *disparity = p.disparity.ptr<float>(y);
         uint8_t *weight = p.weight.ptr<uint8_t>(y);
         for (int x = 0; x < w; ++x)
-            if (dr[x] <= r) weight[x] = weight_at[dr[x]];
+            if (dr[x + r] <= r) {
+                disparity[x] = dp[x + r];
+                weight[x] = weight_at[dr[x + r]];
+            }
     }
     return p;
 }

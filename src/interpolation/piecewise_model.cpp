@@ -28,21 +28,6 @@ bool plane_from_3(const float x[3], const float y[3], const float z[3], Plane &o
     return true;
 }
 
-void PlaneLsq::add(float x, float y, float w, const float *z, int dims) {
-    const double dx = x - ox_, dy = y - oy_;
-    sxx_ += w * dx * dx;
-    sxy_ += w * dx * dy;
-    syy_ += w * dy * dy;
-    sx_ += w * dx;
-    sy_ += w * dy;
-    s1_ += w;
-    for (int k = 0; k < dims; ++k) {
-        sxz_[k] += w * dx * z[k];
-        syz_[k] += w * dy * z[k];
-        sz_[k] += w * z[k];
-    }
-}
-
 bool PlaneLsq::solve(int dims, Model &out) const {
     if (s1_ <= 0) return false;
     // Centre on the weighted mean: the 2x2 slope system then decouples from the offset.

@@ -28,7 +28,21 @@ class PlaneLsq {
 public:
     // Coordinates relative to (ox, oy) keep the normal equations well conditioned.
     PlaneLsq(float ox, float oy) : ox_(ox), oy_(oy) {}
-    void add(float x, float y, float w, const float *z, int dims);
+    // Inline: stage 4's refinement adds every inlier of every candidate.
+    void add(float x, float y, float w, const float *z, int dims) {
+        const double dx = x - ox_, dy = y - oy_;
+        sxx_ += w * dx * dx;
+        sxy_ += w * dx * dy;
+        syy_ += w * dy * dy;
+        sx_ += w * dx;
+        sy_ += w * dy;
+        s1_ += w;
+        for (int k = 0; k < dims; ++k) {
+            sxz_[k] += w * dx * z[k];
+            syz_[k] += w * dy * z[k];
+            sz_[k] += w * z[k];
+        }
+    }
     bool solve(int dims, Model &out) const;
 
 private:

@@ -506,10 +506,10 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
         const interpolation::InterpolationTimings &it = ir.timings;
         char line[256];
         std::snprintf(line, sizeof line,
-                      "stage 4: %d superpixels of %d px; seeds %.3f s, edges %.3f s, superpixels %.3f s, "
-                      "neighbours %.3f s, models %.3f s, output %.3f s",
-                      ir.num_superpixels, ir.superpixel_size, it.seeds_s, it.edges_s, it.superpixels_s,
-                      it.geodesic_s, it.models_s, it.output_s);
+                      "stage 4: %d superpixels of %d px; seeds %.1f ms, edges %.1f ms, superpixels %.1f ms, "
+                      "neighbours %.1f ms, models %.1f ms, output %.1f ms",
+                      ir.num_superpixels, ir.superpixel_size, 1e3 * it.seeds_s, 1e3 * it.edges_s,
+                      1e3 * it.superpixels_s, 1e3 * it.geodesic_s, 1e3 * it.models_s, 1e3 * it.output_s);
         log::write(log::Level::Debug, line);
     }
     const double k = std::min(1.0, options_.processing_scale);

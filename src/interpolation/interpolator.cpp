@@ -822,14 +822,19 @@ cv::Mat1f lidar_residuals(const SeedSet &set, const cv::Mat1i &pair_of, const st
 // value(s) and the graph edge's weight (1 for the pixel's own seed).
 struct SupportPoints {
     std::vector<float> x, y, z, zu, zv, w;
+    // The weights summed in order: no support exceeds it (a sum of a subset of non-negative
+    // terms in the same order rounds to no more than the whole).
+    float total = 0;
     void clear() {
         for (auto *v : {&x, &y, &z, &zu, &zv, &w}) v->clear();
+        total = 0;
     }
     void push(float px, float py, float value, float wt) {
         x.push_back(px);
         y.push_back(py);
         z.push_back(value);
         w.push_back(wt);
+        total += wt;
     }
     void push_flow(float u, float v) {
         zu.push_back(u);
@@ -937,7 +942,8 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
                     };
                     // The own model wins ties: switching needs clearly more local support.
                     float best = support(s) + 0.5f;
-                    for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1]; ++e) {
+                    // Where the own model explains nearly all, no other can win.
+                    for (int e = sp.adj_start[s]; e < sp.adj_start[s + 1] && best < pts.total; ++e) {
                         const float sc = support(sp.adj[e]);
                         if (sc > best) {
                             best = sc;

@@ -11,6 +11,8 @@
 #include <memory>
 #include <vector>
 
+#include <omp.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
@@ -232,24 +234,33 @@ void validate_hint(const DisparityMap &hint, const cv::Size &sz) {
 int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const InterpolationOptions &o) {
     cv::Mat1f zl(h, w, -1.0f), zr(h, w, -1.0f);
     constexpr int r = 2;  // matches are ~3 px apart after sparsification; cover the gaps
-    auto splat = [&](cv::Mat1f &z, float fx, float fy, float val) {
-        const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
-        for (int y = std::max(0, ty - r); y <= std::min(h - 1, ty + r); ++y)
-            for (int x = std::max(0, tx - r); x <= std::min(w - 1, tx + r); ++x) z(y, x) = std::max(z(y, x), val);
-    };
+    const int n = s.size(), T = std::max(1, std::min(o.num_threads, h));
+    // Each thread splats into its own band of rows (a maximum: the order does not matter).
+#pragma omp parallel num_threads(T)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const int y0 = static_cast<int>(static_cast<int64_t>(h) * t / nt),
+                  y1 = static_cast<int>(static_cast<int64_t>(h) * (t + 1) / nt);
+        auto splat = [&](cv::Mat1f &z, float fx, float fy, float val) {
+            const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
+            for (int y = std::max(y0, ty - r); y <= std::min(y1 - 1, ty + r); ++y)
+                for (int x = std::max(0, tx - r); x <= std::min(w - 1, tx + r); ++x) z(y, x) = std::max(z(y, x), val);
+        };
+        for (int i = 0; i < n; ++i) {
+            if (!s.has_motion[i]) continue;
+            const float val = std::min(s.d0[i], s.d1[i]);
+            splat(zl, s.x[i] + s.u[i], s.y[i] + s.v[i], val);
+            splat(zr, s.x[i] + s.u[i] - s.d1[i], s.y[i] + s.v[i], val);
+        }
+    }
     auto hidden = [&](const cv::Mat1f &z, float fx, float fy, float d) {
         const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
         if (tx < 0 || ty < 0 || tx >= w || ty >= h) return false;
         return z(ty, tx) >= d + std::max(o.occlusion_margin, 0.1f * d);
     };
-    for (int i = 0; i < s.size(); ++i) {
-        if (!s.has_motion[i]) continue;
-        const float val = std::min(s.d0[i], s.d1[i]);
-        splat(zl, s.x[i] + s.u[i], s.y[i] + s.v[i], val);
-        splat(zr, s.x[i] + s.u[i] - s.d1[i], s.y[i] + s.v[i], val);
-    }
     int released = 0;
-    for (int i = 0; i < s.size(); ++i) {
+#pragma omp parallel for num_threads(T) schedule(static) reduction(+ : released)
+    for (int i = 0; i < n; ++i) {
         if (!s.has_motion[i]) continue;
         float d1e, ue, ve;
         ego.predict(s.x[i], s.y[i], s.d0[i], d1e, ue, ve);
@@ -551,6 +562,7 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
     // The zero remainder (pure background) is a hypothesis of its own only with a background
     // model to fall back on.
     set.background = res.ego.valid && o.background_hypothesis;
+#pragma omp parallel for num_threads(o.num_threads) schedule(static)
     for (int i = 0; i < seeds.size(); ++i) {
         if (!seeds.has_motion[i] || !set.subtract_d0) continue;
         float d1e, ue, ve;

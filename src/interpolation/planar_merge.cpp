@@ -46,11 +46,16 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     require(o.threads >= 1 && o.threads <= 1024, ErrorCode::InvalidArgument, "planar merge: threads must be in [1, 1024]");
     if ((o.tolerance <= 0.0f && !o.unseen) || o.max_area <= 0 || sp.count < 2) return sp;
     const int n = sp.count, w = sp.labels.cols, h = sp.labels.rows;
+    // The points per superpixel; only their presence where no plane is tested.
+    const bool planes = o.tolerance > 0.0f;
     std::vector<std::vector<Point3>> pts(n);
+    std::vector<int> held(n, 0);
     for (size_t i = 0; i < pos.size(); ++i) {
         const cv::Point p = pos[i];
         if (p.x < 0 || p.y < 0 || p.x >= w || p.y >= h || !std::isfinite(disparity[i])) continue;
-        pts[sp.labels(p.y, p.x)].push_back({static_cast<float>(p.x), static_cast<float>(p.y), disparity[i]});
+        const int l = sp.labels(p.y, p.x);
+        ++held[l];
+        if (planes) pts[l].push_back({static_cast<float>(p.x), static_cast<float>(p.y), disparity[i]});
     }
     std::vector<int> parent(n), area(sp.pixel_count);
     std::iota(parent.begin(), parent.end(), 0);
@@ -58,11 +63,9 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     // image above the scan), where small superpixels have no LiDAR boundary to follow.
     std::vector<uint8_t> planar(n), unseen(n);
     for (int s = 0; s < n; ++s) {
-        planar[s] = o.tolerance > 0.0f && static_cast<int>(pts[s].size()) >= o.min_points &&
-                    on_one_plane(pts[s], o.tolerance);
-        unseen[s] = o.unseen && pts[s].empty();
-        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1] && unseen[s]; ++k)
-            unseen[s] = pts[sp.adj[k]].empty();
+        planar[s] = planes && held[s] >= o.min_points && on_one_plane(pts[s], o.tolerance);
+        unseen[s] = o.unseen && held[s] == 0;
+        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1] && unseen[s]; ++k) unseen[s] = held[sp.adj[k]] == 0;
     }
     std::vector<Point3> both;
     for (int s = 0; s < n; ++s)
@@ -94,6 +97,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     }
     if (count == n) return sp;
     cv::Mat1i labels(h, w);
+#pragma omp parallel for num_threads(o.threads) schedule(static)
     for (int y = 0; y < h; ++y) {
         const int *in = sp.labels.ptr<int>(y);
         int *out = labels.ptr<int>(y);

@@ -507,9 +507,10 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
         char line[256];
         std::snprintf(line, sizeof line,
                       "stage 4: %d superpixels of %d px; seeds %.1f ms, edges %.1f ms, superpixels %.1f ms, "
-                      "neighbours %.1f ms, models %.1f ms, output %.1f ms",
+                      "neighbours %.1f ms, models %.1f ms, output %.1f ms; all %.1f ms",
                       ir.num_superpixels, ir.superpixel_size, 1e3 * it.seeds_s, 1e3 * it.edges_s,
-                      1e3 * it.superpixels_s, 1e3 * it.geodesic_s, 1e3 * it.models_s, 1e3 * it.output_s);
+                      1e3 * it.superpixels_s, 1e3 * it.geodesic_s, 1e3 * it.models_s, 1e3 * it.output_s,
+                      1e3 * it.total_s);
         log::write(log::Level::Debug, line);
     }
     const double k = std::min(1.0, options_.processing_scale);

@@ -919,13 +919,14 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     std::vector<float> edge_weight(graph.weight.size());
     for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
     std::vector<int> chosen(pairs.size() * kNumChannels);
+    ParallelErrors choice_errors;  // the gathers allocate
 #pragma omp parallel num_threads(o.num_threads)
     {
         // The pair's seed and its graph neighbours, gathered once per pair (each is read by
         // every candidate model of every channel): geometry all of them, motion those with one.
         SupportPoints geo, mot;
 #pragma omp for schedule(dynamic, 256)
-        for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) {
+        for (int pi = 0; pi < static_cast<int>(pairs.size()); ++pi) choice_errors.run([&] {
             // Plain names, not a structured binding: the lambdas below capture them (C++17).
             const int seed = pairs[pi].first, s = pairs[pi].second;
             geo.clear();
@@ -965,8 +966,9 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
                 }
                 chosen[static_cast<size_t>(pi) * kNumChannels + c] = pick;
             }
-        }
+        });
     }
+    choice_errors.rethrow_if_any();
     // Only the rigid model (camera known): it predicts where a background point goes from its
     // depth; the calibration-free one also explains independently moving regions that leave
     // the image (worse flow on the planar test scene of four motions).

@@ -10,6 +10,7 @@
 #include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
+#include "core/threads.hpp"
 
 namespace lidarflow::consistency {
 
@@ -83,7 +84,7 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
     // Components are the same for any thread count: each thread unites within its strip of
     // rows, then the pairs across strip borders are united in order.
     const int T = std::max(1, std::min(opt.threads, h / std::max(1, 4 * s)));
-    auto strip_start = [&](int t) { return static_cast<int>(static_cast<long long>(h) * t / T); };
+    auto strip_start = [&](int t) { return band_start(h, t, T); };
 #pragma omp parallel for schedule(static) num_threads(T)
     for (int t = 0; t < T; ++t) {
         const int y_end = strip_start(t + 1);

@@ -41,4 +41,10 @@ int other_runnable_tasks(int running, int own_before, int own_after);
 // whose pause is process-wide, it does nothing. Thread-safe; never throws.
 void release_openmp_workers();
 
+// The first of n items in part `part` of `parts` near-equal consecutive parts (part == parts:
+// n), for splitting rows or columns into one band per thread. Never throws.
+inline int band_start(int n, int part, int parts) {
+    return static_cast<int>(static_cast<long long>(n) * part / parts);
+}
+
 }  // namespace lidarflow

@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/parallel_errors.hpp"
+#include "core/threads.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/lidar_residuals.hpp"
@@ -239,8 +240,7 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
 #pragma omp parallel num_threads(T)
     {
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
-        const int y0 = static_cast<int>(static_cast<int64_t>(h) * t / nt),
-                  y1 = static_cast<int>(static_cast<int64_t>(h) * (t + 1) / nt);
+        const int y0 = band_start(h, t, nt), y1 = band_start(h, t + 1, nt);
         auto splat = [&](cv::Mat1f &z, float fx, float fy, float val) {
             const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
             for (int y = std::max(y0, ty - r); y <= std::min(y1 - 1, ty + r); ++y)

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 
 #include <omp.h>
 
 #include "core/error.hpp"
+#include "core/threads.hpp"
 
 namespace lidarflow::interpolation {
 
@@ -35,8 +35,7 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
 #pragma omp parallel num_threads(threads)
     {
         const int t = omp_get_thread_num(), n = omp_get_num_threads();
-        const int y0 = static_cast<int>(static_cast<int64_t>(h) * t / n),
-                  y1 = static_cast<int>(static_cast<int64_t>(h) * (t + 1) / n);
+        const int y0 = band_start(h, t, n), y1 = band_start(h, t + 1, n);
         for (size_t i = 0; i < points.size(); ++i) {
             const cv::Point p = points[i];
             const int ya = std::max(y0, p.y - reach), yb = std::min(y1 - 1, p.y + reach);

@@ -13,6 +13,7 @@
 #include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
+#include "core/threads.hpp"
 
 namespace lidarflow::interpolation {
 namespace {
@@ -252,27 +253,21 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
         b.best.assign(n, std::numeric_limits<float>::max());
         b.anchor.assign(n, cv::Point(0, 0));
     }
-    auto rows = [&](int t, int &y0, int &y1) {
-        y0 = static_cast<int>(static_cast<int64_t>(h) * t / T);
-        y1 = static_cast<int>(static_cast<int64_t>(h) * (t + 1) / T);
-    };
     ParallelErrors errors;
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int t = 0; t < T; ++t) errors.run([&] {
         Band &b = bands[static_cast<size_t>(t)];
-        int y0, y1;
-        rows(t, y0, y1);
-        for (int y = y0; y < y1; ++y) {
+        // A boundary runs along many pixels: skip the pair just recorded.
+        const auto edge = [&b](int a, int c) {
+            if (b.edges.empty() || b.edges.back() != std::make_pair(a, c)) b.edges.emplace_back(a, c);
+        };
+        for (int y = band_start(h, t, T); y < band_start(h, t + 1, T); ++y) {
             const int *row = sp.labels.ptr<int>(y), *below = y + 1 < h ? sp.labels.ptr<int>(y + 1) : nullptr;
             for (int x = 0; x < w; ++x) {
                 const int l = row[x];
                 b.sx[l] += x;
                 b.sy[l] += y;
                 ++b.count[l];
-                // A boundary runs along many pixels: skip the pair just recorded.
-                const auto edge = [&b](int a, int c) {
-                    if (b.edges.empty() || b.edges.back() != std::make_pair(a, c)) b.edges.emplace_back(a, c);
-                };
                 if (x + 1 < w && row[x + 1] != l) edge(l, row[x + 1]);
                 if (below && below[x] != l) edge(l, below[x]);
             }
@@ -295,9 +290,7 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int t = 0; t < T; ++t) {
         Band &b = bands[static_cast<size_t>(t)];
-        int y0, y1;
-        rows(t, y0, y1);
-        for (int y = y0; y < y1; ++y) {
+        for (int y = band_start(h, t, T); y < band_start(h, t + 1, T); ++y) {
             const int *row = sp.labels.ptr<int>(y);
             for (int x = 0; x < w; ++x) {
                 const int l = row[x];

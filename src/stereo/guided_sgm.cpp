@@ -73,13 +73,17 @@ inline uint8_t hamming(const uint64_t *dl, const uint64_t *bl, const uint64_t *d
     return static_cast<uint8_t>((n + 1) >> 1);
 }
 
+// The smallest |16 d - p16| at which the penalty reaches its cap (0 when it is always 0).
+inline uint16_t penalty_reach(int slope16, int cap) {
+    return static_cast<uint16_t>(slope16 > 0 ? std::min((cap * 256 + slope16 - 1) / slope16, 0xFFFF) : 0);
+}
+
 // c[d] += round(wt * min(slope16 * |16 d - p16| / 256, cap) / 255), saturated at 255, in 16-bit
-// lanes: |16 d - p16| is clamped where the penalty reaches the cap, so the products fit 16 bits,
-// and x / 255 is (x + 1 + (x >> 8)) >> 8, exact for x < 65535.
-inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, int cap) {
-    const int reach = slope16 > 0 ? (cap * 256 + slope16 - 1) / slope16 : 0;  // smallest |.| at the cap
+// lanes: |16 d - p16| is clamped at `top` (penalty_reach: where the penalty reaches the cap), so
+// the products fit 16 bits, and x / 255 is (x + 1 + (x >> 8)) >> 8, exact for x < 65535.
+inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, uint16_t top, int cap) {
     const auto p = static_cast<uint16_t>(p16), w = static_cast<uint16_t>(wt), s = static_cast<uint16_t>(slope16),
-               top = static_cast<uint16_t>(std::min(reach, 0xFFFF)), cp = static_cast<uint16_t>(cap);
+               cp = static_cast<uint16_t>(cap);
     for (int d = 0; d < D; ++d) {
         const auto at = static_cast<uint16_t>(16 * d);
         const uint16_t diff = std::min(static_cast<uint16_t>(at > p ? at - p : p - at), top);
@@ -97,13 +101,14 @@ template <bool Ternary>
 LIDARFLOW_V3_CLONES void row_costs(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
                                    const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap,
                                    uint8_t *cost) {
+    const uint16_t top = penalty_reach(slope16, cap);
     for (int x = 0; x < w; ++x) {
         uint8_t *c = cost + static_cast<size_t>(x) * D;
         const int lim = std::min(D, x + 1);
         for (int d = 0; d < lim; ++d) c[d] = hamming<Ternary>(dl, bl, dr, br, x, x - d);
         const uint8_t edge = hamming<Ternary>(dl, bl, dr, br, x, 0);
         for (int d = lim; d < D; ++d) c[d] = edge;
-        if (weight[x] != 0) add_lidar_penalty(c, D, prior16[x], weight[x], slope16, cap);
+        if (weight[x] != 0) add_lidar_penalty(c, D, prior16[x], weight[x], slope16, top, cap);
     }
 }
 

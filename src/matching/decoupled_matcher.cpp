@@ -15,6 +15,7 @@
 #include "core/limits.hpp"
 #include "core/log.hpp"
 #include "core/pixels.hpp"
+#include "core/threads.hpp"
 #include "core/points3d.hpp"
 #include "lidar/projection.hpp"
 #include "matching/motion_prior.hpp"
@@ -193,6 +194,7 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
     dis->setPatchStride(o.patch_stride);
     dis->setGradientDescentIterations(o.descent_iterations);
     dis->setVariationalRefinementIterations(o.refine_iterations);
+    release_openmp_workers();  // DIS runs on OpenCV's threads: ours must not spin beside them
     // OpenCV's DIS refuses images under 12 px a side (and patches wider than the image): a small
     // frame is searched inside a replicated border and cropped back.
     const int side = std::max(16, 2 * o.patch_size);
@@ -280,6 +282,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     r.seconds_stereo = seconds_since(t);
 
     t = Clock::now();
+    release_openmp_workers();  // the tracks and DIS run on OpenCV's threads
     const cv::Mat g0 = gray8(in.left0), g1 = gray8(in.left1);
     const Tracks tracks = opt.flow.prior_track_step > 0 ? track_grid(g0, g1, r.sgm0, opt.flow.prior_track_step) : Tracks{};
     const double seconds_tracks = seconds_since(t);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
-#include <functional>
 
 namespace lidarflow::interpolation {
 
@@ -13,6 +12,51 @@ inline uint64_t SeedSearch::key(float d, int s) {
     uint32_t bits;
     std::memcpy(&bits, &d, sizeof bits);
     return static_cast<uint64_t>(bits) << 32 | static_cast<uint32_t>(s);
+}
+
+namespace detail {
+constexpr uint64_t kHeapEnd = ~uint64_t{0};  // above every key: a distance's bits are below NaN's
+}
+
+inline void SeedSearch::KeyHeap::clear() {
+    std::fill(a_.begin(), a_.begin() + static_cast<std::ptrdiff_t>(std::min(size_, a_.size())), detail::kHeapEnd);
+    size_ = 0;
+}
+
+inline void SeedSearch::KeyHeap::push(uint64_t k) {
+    if (a_.size() < size_ + 2) a_.resize(2 * size_ + 16, detail::kHeapEnd);
+    size_t i = size_++;
+    while (i > 0) {
+        const size_t parent = (i - 1) / 2;
+        if (a_[parent] <= k) break;
+        a_[i] = a_[parent];
+        i = parent;
+    }
+    a_[i] = k;
+}
+
+inline uint64_t SeedSearch::KeyHeap::pop() {
+    const uint64_t top = a_[0];
+    const uint64_t last = a_[--size_];
+    a_[size_] = detail::kHeapEnd;
+    if (size_ == 0) {
+        a_[0] = detail::kHeapEnd;
+        return top;
+    }
+    size_t i = 0;
+    for (size_t c = 1; c < size_; c = 2 * i + 1) {
+        c += a_[c + 1] < a_[c];  // a missing right child reads kHeapEnd
+        a_[i] = a_[c];
+        i = c;
+    }
+    while (i > 0) {
+        const size_t parent = (i - 1) / 2;
+        if (a_[parent] <= last) break;
+        a_[i] = a_[parent];
+        i = parent;
+    }
+    a_[i] = last;
+    return top;
 }
 
 // The traversal settles seeds in order of increasing distance whatever the callers collect,
@@ -29,12 +73,9 @@ void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
     heap_.clear();
     dist_[s0] = g.distance(from.y, from.x);
     stamp_[s0] = epoch_;
-    heap_.push_back(key(dist_[s0], s0));
-    const auto cmp = std::greater<uint64_t>();
+    heap_.push(key(dist_[s0], s0));
     while (!heap_.empty()) {
-        std::pop_heap(heap_.begin(), heap_.end(), cmp);
-        const uint64_t top = heap_.back();
-        heap_.pop_back();
+        const uint64_t top = heap_.pop();
         const int s = static_cast<int>(static_cast<uint32_t>(top));
         float d;
         const uint32_t bits = static_cast<uint32_t>(top >> 32);
@@ -53,8 +94,7 @@ void SeedSearch::traverse(const SeedGraph &g, cv::Point from, Visit visit) {
             } else {
                 dist_[t] = nd;
             }
-            heap_.push_back(key(nd, t));
-            std::push_heap(heap_.begin(), heap_.end(), cmp);
+            heap_.push(key(nd, t));
         }
     }
 }

@@ -88,7 +88,7 @@ void same_on_any_thread_count(void **) {
     const cv::Mat image = texture();
     const cv::Mat1f d = step_disparity();
     const Superpixels one = compute_superpixels(image, options(64.0f, 1), d);
-    for (int t : {2, 3, 7}) assert_true(same_labels(compute_superpixels(image, options(64.0f, t), d), one));
+    for (int t : {2, 3, 7, 64}) assert_true(same_labels(compute_superpixels(image, options(64.0f, t), d), one));
 }
 
 void rejects_bad_arguments(void **) {

@@ -161,6 +161,10 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     std::vector<int> col_start(gx + 1, w);
     for (int x = w - 1; x >= 0; --x) col_start[std::min(gx - 1, static_cast<int>(x / step_x))] = x;
     for (int i = gx - 1; i >= 0; --i) col_start[i] = std::min(col_start[i], col_start[i + 1]);
+    // First pixel row of each grid row, the same way (row_start[gy] = h).
+    std::vector<int> row_start(gy + 1, h);
+    for (int y = h - 1; y >= 0; --y) row_start[std::min(gy - 1, static_cast<int>(y / step_y))] = y;
+    for (int j = gy - 1; j >= 0; --j) row_start[j] = std::min(row_start[j], row_start[j + 1]);
     // Colour distances in Lab are ~0..100; SLIC's m / S balances them against pixels.
     const float spatial = (o.compactness / o.region_size) * (o.compactness / o.region_size);
     cv::Mat1i assign(h, w, 0);
@@ -197,20 +201,34 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
         }
         errors.rethrow_if_any();
         std::fill(acc.begin(), acc.end(), 0.0);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                double *a = &acc[static_cast<size_t>(assign(y, x)) * kAcc];
-                a[0] += lab[0](y, x);
-                a[1] += lab[1](y, x);
-                a[2] += lab[2](y, x);
-                a[3] += x;
-                a[4] += y;
-                a[5] += 1.0;
-                if (depth && vplane(y, x) > 0.0f) {
-                    a[6] += dplane(y, x);
-                    a[7] += 1.0;
+        // Each thread sums the centres of a band of grid rows over the pixel rows they can hold
+        // (grid rows j - 1 .. j + 1), in raster order: every centre's sums in the serial order.
+        const int parts = std::min(o.num_threads, gy);
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+        for (int part = 0; part < parts; ++part) {
+            const int j0 = band_start(gy, part, parts), j1 = band_start(gy, part + 1, parts);
+            const int k0 = j0 * gx, k1 = j1 * gx;
+            const int y0 = j0 == 0 ? 0 : row_start[static_cast<size_t>(j0 - 1)];
+            const int y1 = row_start[static_cast<size_t>(std::min(gy, j1 + 1))];
+            for (int y = y0; y < y1; ++y) {
+                const int *arow = assign[y];
+                for (int x = 0; x < w; ++x) {
+                    const int k = arow[x];
+                    if (k < k0 || k >= k1) continue;
+                    double *a = &acc[static_cast<size_t>(k) * kAcc];
+                    a[0] += lab[0](y, x);
+                    a[1] += lab[1](y, x);
+                    a[2] += lab[2](y, x);
+                    a[3] += x;
+                    a[4] += y;
+                    a[5] += 1.0;
+                    if (depth && vplane(y, x) > 0.0f) {
+                        a[6] += dplane(y, x);
+                        a[7] += 1.0;
+                    }
                 }
             }
+        }
         for (size_t k = 0; k < centres.size(); ++k) {
             const double *a = &acc[k * kAcc];
             if (a[5] <= 0.0) continue;  // an empty cluster keeps its old centre

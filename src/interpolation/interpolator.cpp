@@ -582,17 +582,13 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
     return set;
 }
 
-// Phase 2: the edge map (res.edges) and the superpixels of the image; below the largest size
-// (a dense scan), those on one LiDAR plane or out of its reach merged back up to its area.
-Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed, const SeedSet &set,
-                    int largest, const InterpolationOptions &o, InterpolationResult &res) {
-    auto t = Clock::now();
-    res.edges = compute_edge_map(image, o.edges, sed);
-    res.timings.edges_s = seconds_since(t);
-
-    t = Clock::now();
+// Phase 2a: the superpixels of the image on `threads` threads; below the largest size (a dense
+// scan), those on one LiDAR plane or out of its reach merged back up to its area.
+Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, const SeedSet &set, int largest,
+                    const InterpolationOptions &o, int threads, InterpolationResult &res) {
+    const auto t = Clock::now();
     SuperpixelOptions spo = o.superpixels;
-    spo.num_threads = o.num_threads;
+    spo.num_threads = threads;
     const bool scan_sized = spo.region_size < largest;
     // Depth only where a dense scan sized them: without one the stereo's depth is the images' own.
     if (!scan_sized) spo.disparity_weight = 0.0f;
@@ -609,12 +605,47 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
         pm.tolerance = o.planar_merge_tolerance;
         pm.unseen = o.merge_unseen;
         pm.max_area = largest * largest;
-        pm.threads = o.num_threads;
+        pm.threads = threads;
         sp = merge_planar_superpixels(sp, pos, disparity, pm);
     }
     res.superpixels = sp.labels;
     res.num_superpixels = sp.count;
     res.timings.superpixels_s = seconds_since(t);
+    return sp;
+}
+
+// Phase 2b: the edge map (res.edges) and the seed graph over it. Serial but for OpenCV's filters.
+SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds &seeds, const InterpolationOptions &o,
+                          InterpolationResult &res, double &graph_s) {
+    auto t = Clock::now();
+    res.edges = compute_edge_map(image, o.edges, sed);
+    res.timings.edges_s = seconds_since(t);
+    t = Clock::now();
+    SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
+    graph_s = seconds_since(t);
+    return graph;
+}
+
+// Phase 2: 2a beside 2b. Both are largely serial and neither reads the other's result, so with
+// two threads or more they run side by side (the superpixels' own regions, nested, then take one
+// thread unless the application enabled nesting); on OpenMP's worker, whose heap already holds
+// what stage 4's other phases freed, not on a thread of their own. The same results on any
+// thread count.
+Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed,
+                                 const SeedSet &set, int largest, const InterpolationOptions &o,
+                                 InterpolationResult &res, SeedGraph &graph, double &graph_s) {
+    Superpixels sp;
+    ParallelErrors errors;
+#pragma omp parallel num_threads(2) if (o.num_threads > 1)
+    {
+        // The edges' many full-size planes on the calling thread, whose heap the earlier stages
+        // freed; the worker's heap takes the superpixels' few.
+        const int id = omp_get_thread_num(), team = omp_get_num_threads();
+        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, res, graph_s); });
+        if (id == 1 || team == 1)
+            errors.run([&] { sp = segment(image, geometry_hint, set, largest, o, std::max(1, o.num_threads - 1), res); });
+    }
+    errors.rethrow_if_any();
     return sp;
 }
 
@@ -626,14 +657,14 @@ struct Neighbourhoods {
     std::vector<std::vector<std::pair<int, float>>> geo_nb, mot_nb;
 };
 
-// Phase 3: the seed graph over the edge map, the LiDAR anchors and the K geodesically nearest
-// seeds of each superpixel's anchors. Sets the anchor counts of res.
-Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, const InterpolationOptions &o,
-                                   InterpolationResult &res) {
+// Phase 3: the LiDAR anchors and the K geodesically nearest seeds of each superpixel's anchors
+// on the seed graph (phase 2b's, which took graph_s). Sets the anchor counts of res.
+Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, SeedGraph graph_in, double graph_s,
+                                   const InterpolationOptions &o, InterpolationResult &res) {
     const Seeds &seeds = set.seeds;
     const auto t = Clock::now();
     Neighbourhoods n;
-    n.graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
+    n.graph = std::move(graph_in);
     const SeedGraph &graph = n.graph;
     LidarAnchors &anchors = n.anchors;
     anchors = set.use_lidar
@@ -665,7 +696,7 @@ Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, co
         });
     }
     errors.rethrow_if_any();
-    res.timings.geodesic_s = seconds_since(t);
+    res.timings.geodesic_s = graph_s + seconds_since(t);
     for (int s = 0; s < sp.count; ++s) {
         res.lidar_anchored_geometry += anchors.geometry[s] >= 0;
         res.lidar_anchored_motion += anchors.motion[s] >= 0;
@@ -1053,8 +1084,10 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     const auto t_seeds = Clock::now();
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
     res.timings.seeds_s = seconds_since(t_seeds);
-    const Superpixels sp = segment(image, geometry_hint, sed_.get(), seed_set, largest, o, res);
-    const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, o, res);
+    SeedGraph graph;
+    double graph_s = 0;
+    const Superpixels sp = segment_beside_graph(image, geometry_hint, sed_.get(), seed_set, largest, o, res, graph, graph_s);
+    const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, std::move(graph), graph_s, o, res);
     const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);
     write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);
     res.timings.total_s = seconds_since(t_start);

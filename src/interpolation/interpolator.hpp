@@ -182,7 +182,9 @@ struct InterpolationOptions {
 };
 
 struct InterpolationTimings {
-    // seeds_s: the seeds and the ego-motion fit, before the edges.
+    // seeds_s: the seeds and the ego-motion fit, before the edges. With two threads or more the
+    // superpixels run beside the edges and the seed graph (part of geodesic_s): the phases then
+    // add up to more than total_s.
     double seeds_s = 0, edges_s = 0, superpixels_s = 0, geodesic_s = 0, models_s = 0, output_s = 0, total_s = 0;
 };
 

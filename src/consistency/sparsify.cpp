@@ -24,19 +24,28 @@ SceneFlowField detail::sparsify(const SceneFlowField &field, const cv::Mat1f &er
     // Neighbourhood consistency: mean error over the support window, missing matches (and
     // matches whose round trip could not be made) at the penalty. LiDAR pixels are not ranked.
     cv::Mat1f score(h, w);
-    for (int y = 0; y < h; ++y)
+    int nan_rows = 0;
+    const int threads = std::max(1, opt.threads);
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : nan_rows)
+    for (int y = 0; y < h; ++y) {
+        bool nan = false;
         for (int x = 0; x < w; ++x) {
             const float e = error(y, x);
-            require(!std::isnan(e), ErrorCode::InvalidArgument, "sparsify: NaN in the consistency error");
+            nan |= std::isnan(e);
             // Ranked by its own error, a match keeps it (+inf last); averaged, an unmeasured
             // round trip counts like a missing neighbour.
             score(y, x) = !field.valid(y, x) ? opt.sparsify_missing_error
                           : opt.sparsify_support == 1 || std::isfinite(e) ? e
                                                                           : opt.sparsify_missing_error;
         }
+        nan_rows += nan;
+    }
+    require(nan_rows == 0, ErrorCode::InvalidArgument, "sparsify: NaN in the consistency error");
     if (opt.sparsify_support > 1)
         cv::blur(score, score, {opt.sparsify_support, opt.sparsify_support}, {-1, -1}, cv::BORDER_REPLICATE);
     SceneFlowField out = detail::empty_like(field);
+    // Blocks write only their own pixels: a row of blocks per iteration.
+#pragma omp parallel for num_threads(threads) schedule(static)
     for (int by = 0; by < h; by += b)
         for (int bx = 0; bx < w; bx += b) {
             int best_x = -1, best_y = -1;

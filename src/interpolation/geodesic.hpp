@@ -61,7 +61,8 @@ private:
         uint64_t pop();
 
     private:
-        std::vector<uint64_t> a_;  // slots at and past size_ hold kEnd, so a right child always reads
+        void place(size_t i, uint64_t k);  // k into the hole at i, moved up past larger parents
+        std::vector<uint64_t> a_;  // slots at and past size_ hold kHeapEnd: a missing child reads it
         size_t size_ = 0;
     };
 

@@ -23,9 +23,7 @@ inline void SeedSearch::KeyHeap::clear() {
     size_ = 0;
 }
 
-inline void SeedSearch::KeyHeap::push(uint64_t k) {
-    if (a_.size() < size_ + 2) a_.resize(2 * size_ + 16, detail::kHeapEnd);
-    size_t i = size_++;
+inline void SeedSearch::KeyHeap::place(size_t i, uint64_t k) {
     while (i > 0) {
         const size_t parent = (i - 1) / 2;
         if (a_[parent] <= k) break;
@@ -33,6 +31,11 @@ inline void SeedSearch::KeyHeap::push(uint64_t k) {
         i = parent;
     }
     a_[i] = k;
+}
+
+inline void SeedSearch::KeyHeap::push(uint64_t k) {
+    if (a_.size() < size_ + 2) a_.resize(2 * size_ + 16, detail::kHeapEnd);
+    place(size_++, k);
 }
 
 inline uint64_t SeedSearch::KeyHeap::pop() {
@@ -49,13 +52,7 @@ inline uint64_t SeedSearch::KeyHeap::pop() {
         a_[i] = a_[c];
         i = c;
     }
-    while (i > 0) {
-        const size_t parent = (i - 1) / 2;
-        if (a_[parent] <= last) break;
-        a_[i] = a_[parent];
-        i = parent;
-    }
-    a_[i] = last;
+    place(i, last);
     return top;
 }
 

@@ -40,47 +40,6 @@ void to_lab_planes(const cv::Mat &image, cv::Mat1f planes[3]) {
     ch[2].convertTo(planes[2], CV_32F, 1.0, -128.0);
 }
 
-// Relabels 4-connected components; components smaller than min_size join the component
-// they touch first in raster order (the SLIC paper's post-processing). Returns the count.
-int enforce_connectivity(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
-    const int w = in.cols, h = in.rows;
-    out.create(h, w);
-    out.setTo(-1);
-    std::vector<int> queue;
-    queue.reserve(static_cast<size_t>(w) * h);
-    int next = 0;
-    static const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
-    for (int y0 = 0; y0 < h; ++y0) {
-        for (int x0 = 0; x0 < w; ++x0) {
-            if (out(y0, x0) >= 0) continue;
-            const int original = in(y0, x0);
-            int adjacent = -1;
-            for (int k = 0; k < 4; ++k) {
-                const int nx = x0 + dx[k], ny = y0 + dy[k];
-                if (nx >= 0 && ny >= 0 && nx < w && ny < h && out(ny, nx) >= 0) adjacent = out(ny, nx);
-            }
-            queue.clear();
-            queue.push_back(y0 * w + x0);
-            out(y0, x0) = next;
-            for (size_t q = 0; q < queue.size(); ++q) {
-                const int px = queue[q] % w, py = queue[q] / w;
-                for (int k = 0; k < 4; ++k) {
-                    const int nx = px + dx[k], ny = py + dy[k];
-                    if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                    if (out(ny, nx) >= 0 || in(ny, nx) != original) continue;
-                    out(ny, nx) = next;
-                    queue.push_back(ny * w + nx);
-                }
-            }
-            if (static_cast<int>(queue.size()) < min_size && adjacent >= 0) {
-                for (int p : queue) out(p / w, p % w) = adjacent;
-            } else {
-                ++next;
-            }
-        }
-    }
-    return next;
-}
 
 // Offers centre c (index k) to the pixels [x0, x1) of one row, branch-free so that it vectorises
 // (core/branchless.hpp). With Depth, also c.dw * (D - c.d)^2 where V (1 valid, 0 not) is set.
@@ -106,6 +65,47 @@ LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *_
 void prepare_superpixels() {
     cv::Mat1f planes[3];
     to_lab_planes(cv::Mat(1, 1, CV_8UC3, cv::Scalar::all(0)), planes);
+}
+
+// Union-find over the raster (a pixel's root is its component's first pixel): each pixel's left
+// and upper neighbours are read once, where a flood fill queued every pixel and tested four.
+int connected_labels(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
+    require(in.total() < static_cast<size_t>(std::numeric_limits<int>::max()), ErrorCode::InvalidArgument,
+            "superpixels: label map too large");
+    const int w = in.cols, h = in.rows, n = w * h;
+    const cv::Mat1i src = in.isContinuous() ? in : in.clone();
+    const int *lab = src.ptr<int>();
+    // parent[i] <= i; a root is its component's first pixel.
+    std::vector<int> parent(n);
+    auto find = [&parent](int i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];  // path halving
+        return i;
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0, i = y * w; x < w; ++x, ++i) {
+            parent[i] = x > 0 && lab[i] == lab[i - 1] ? find(i - 1) : i;
+            if (y > 0 && lab[i] == lab[i - w]) {
+                const int a = find(i), b = find(i - w);
+                parent[std::max(a, b)] = std::min(a, b);
+            }
+        }
+    // In raster order a pixel's parent, an earlier pixel, already points at its root.
+    std::vector<int> size(n, 0);
+    for (int i = 0; i < n; ++i) ++size[parent[i] = parent[parent[i]]];
+    // Each root's label, in the roots' raster order, replaces its size.
+    int next = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0, r = y * w; x < w; ++x, ++r) {
+            if (parent[r] != r) continue;
+            int adjacent = -1;
+            for (int q : {x > 0 ? r - 1 : -1, x + 1 < w ? r + 1 : -1, y > 0 ? r - w : -1, y + 1 < h ? r + w : -1})
+                if (q >= 0 && parent[q] < r) adjacent = size[parent[q]];
+            size[r] = size[r] < min_size && adjacent >= 0 ? adjacent : next++;
+        }
+    out.create(h, w);
+    int *o = out.ptr<int>();
+    for (int i = 0; i < n; ++i) o[i] = size[parent[i]];
+    return next;
 }
 
 Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o, const cv::Mat1f &disparity) {
@@ -243,7 +243,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
     }
 
     cv::Mat1i labels;
-    const int count = enforce_connectivity(assign, std::max(1, o.region_size * o.region_size / 4), labels);
+    const int count = connected_labels(assign, std::max(1, o.region_size * o.region_size / 4), labels);
     return superpixels_from_labels(std::move(labels), count, o.num_threads);
 }
 

@@ -44,6 +44,13 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
 // for any `threads` in [1, 1024]. Pure and thread-safe.
 Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads = 1);
 
+// SLIC's connectivity pass: `out` (reallocated) numbers the 4-connected components of `in` in the
+// raster order of their first pixels; a component of fewer than min_size pixels instead takes
+// the label of the last of its first pixel's left, right, upper and lower neighbours (in that
+// order) lying in an earlier component, when it has one (as a flood fill from each first pixel
+// in raster order leaves them). Returns the number of labels. Pure and thread-safe.
+int connected_labels(const cv::Mat1i &in, int min_size, cv::Mat1i &out);
+
 // Makes OpenCV build its 8-bit Lab tables (~70 ms, once per process) now rather than in the
 // first compute_superpixels: a stream's first frame is then as fast as the next. Thread-safe.
 void prepare_superpixels();

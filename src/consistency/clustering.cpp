@@ -84,15 +84,12 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
     // Components are the same for any thread count: each thread unites within its strip of
     // rows, then the pairs across strip borders are united in order.
     const int T = std::max(1, std::min(opt.threads, h / std::max(1, 4 * s)));
-    auto strip_start = [&](int t) { return band_start(h, t, T); };
-#pragma omp parallel for schedule(static) num_threads(T)
-    for (int t = 0; t < T; ++t) {
-        const int y_end = strip_start(t + 1);
-        for (int y = strip_start(t); y < y_end; ++y)
+    for_each_band(h, T, [&](int, int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y)
             for (int x = 0; x < w; ++x) link(y, x, y_end);
-    }
+    });
     for (int t = 1; t < T; ++t)
-        for (int y = std::max(0, strip_start(t) - s); y < strip_start(t); ++y)
+        for (int y = std::max(0, band_start(h, t, T) - s); y < band_start(h, t, T); ++y)
             for (int x = 0; x < w; ++x) link(y, x, h);
 
     std::vector<int> root(static_cast<size_t>(h) * w, -1);

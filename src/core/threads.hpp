@@ -47,4 +47,12 @@ inline int band_start(int n, int part, int parts) {
     return static_cast<int>(static_cast<long long>(n) * part / parts);
 }
 
+// f(part, begin, end) for each of `parts` bands of n items (band_start), in a parallel region of
+// `parts` threads (fewer when the runtime gives fewer). f must not throw (use ParallelErrors).
+template <class F>
+void for_each_band(int n, int parts, F &&f) {
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+    for (int part = 0; part < parts; ++part) f(part, band_start(n, part, parts), band_start(n, part + 1, parts));
+}
+
 }  // namespace lidarflow

@@ -237,10 +237,7 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
     constexpr int r = 2;  // matches are ~3 px apart after sparsification; cover the gaps
     const int n = s.size(), T = std::max(1, std::min(o.num_threads, h));
     // Each thread splats into its own band of rows (a maximum: the order does not matter).
-#pragma omp parallel num_threads(T)
-    {
-        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
-        const int y0 = band_start(h, t, nt), y1 = band_start(h, t + 1, nt);
+    for_each_band(h, T, [&](int, int y0, int y1) {
         auto splat = [&](cv::Mat1f &z, float fx, float fy, float val) {
             const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
             for (int y = std::max(y0, ty - r); y <= std::min(y1 - 1, ty + r); ++y)
@@ -252,7 +249,7 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
             splat(zl, s.x[i] + s.u[i], s.y[i] + s.v[i], val);
             splat(zr, s.x[i] + s.u[i] - s.d1[i], s.y[i] + s.v[i], val);
         }
-    }
+    });
     auto hidden = [&](const cv::Mat1f &z, float fx, float fy, float d) {
         const int tx = static_cast<int>(std::lround(fx)), ty = static_cast<int>(std::lround(fy));
         if (tx < 0 || ty < 0 || tx >= w || ty >= h) return false;
@@ -614,15 +611,16 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
     return sp;
 }
 
-// Phase 2b: the edge map (res.edges) and the seed graph over it. Serial but for OpenCV's filters.
+// Phase 2b: the edge map (res.edges) and the seed graph over it (its time the start of
+// res.timings.geodesic_s). Serial but for OpenCV's filters.
 SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds &seeds, const InterpolationOptions &o,
-                          InterpolationResult &res, double &graph_s) {
+                          InterpolationResult &res) {
     auto t = Clock::now();
     res.edges = compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
     t = Clock::now();
     SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
-    graph_s = seconds_since(t);
+    res.timings.geodesic_s = seconds_since(t);
     return graph;
 }
 
@@ -633,7 +631,7 @@ SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds
 // thread count.
 Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed,
                                  const SeedSet &set, int largest, const InterpolationOptions &o,
-                                 InterpolationResult &res, SeedGraph &graph, double &graph_s) {
+                                 InterpolationResult &res, SeedGraph &graph) {
     Superpixels sp;
     ParallelErrors errors;
 #pragma omp parallel num_threads(2) if (o.num_threads > 1)
@@ -641,7 +639,7 @@ Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geome
         // The edges' many full-size planes on the calling thread, whose heap the earlier stages
         // freed; the worker's heap takes the superpixels' few.
         const int id = omp_get_thread_num(), team = omp_get_num_threads();
-        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, res, graph_s); });
+        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, res); });
         if (id == 1 || team == 1)
             errors.run([&] { sp = segment(image, geometry_hint, set, largest, o, std::max(1, o.num_threads - 1), res); });
     }
@@ -658,8 +656,8 @@ struct Neighbourhoods {
 };
 
 // Phase 3: the LiDAR anchors and the K geodesically nearest seeds of each superpixel's anchors
-// on the seed graph (phase 2b's, which took graph_s). Sets the anchor counts of res.
-Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, SeedGraph graph_in, double graph_s,
+// on phase 2b's seed graph. Sets the anchor counts of res.
+Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, SeedGraph graph_in,
                                    const InterpolationOptions &o, InterpolationResult &res) {
     const Seeds &seeds = set.seeds;
     const auto t = Clock::now();
@@ -696,7 +694,7 @@ Neighbourhoods find_neighbourhoods(const SeedSet &set, const Superpixels &sp, Se
         });
     }
     errors.rethrow_if_any();
-    res.timings.geodesic_s = graph_s + seconds_since(t);
+    res.timings.geodesic_s += seconds_since(t);
     for (int s = 0; s < sp.count; ++s) {
         res.lidar_anchored_geometry += anchors.geometry[s] >= 0;
         res.lidar_anchored_motion += anchors.motion[s] >= 0;
@@ -1085,9 +1083,8 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
     res.timings.seeds_s = seconds_since(t_seeds);
     SeedGraph graph;
-    double graph_s = 0;
-    const Superpixels sp = segment_beside_graph(image, geometry_hint, sed_.get(), seed_set, largest, o, res, graph, graph_s);
-    const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, std::move(graph), graph_s, o, res);
+    const Superpixels sp = segment_beside_graph(image, geometry_hint, sed_.get(), seed_set, largest, o, res, graph);
+    const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, std::move(graph), o, res);
     const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);
     write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);
     res.timings.total_s = seconds_since(t_start);

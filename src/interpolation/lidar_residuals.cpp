@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include <omp.h>
-
 #include "core/error.hpp"
 #include "core/threads.hpp"
 
@@ -32,10 +30,7 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
     // Each point spreads over its window: ~(2 * reach + 1)^2 pixels a point. Each thread owns a
     // band of rows and walks all points in order, so every pixel adds its terms in point order
     // whatever the thread count.
-#pragma omp parallel num_threads(threads)
-    {
-        const int t = omp_get_thread_num(), n = omp_get_num_threads();
-        const int y0 = band_start(h, t, n), y1 = band_start(h, t + 1, n);
+    for_each_band(h, std::max(1, std::min(threads, h)), [&](int, int y0, int y1) {
         for (size_t i = 0; i < points.size(); ++i) {
             const cv::Point p = points[i];
             const int ya = std::max(y0, p.y - reach), yb = std::min(y1 - 1, p.y + reach);
@@ -60,7 +55,7 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
             const float *wr = weight[y];
             for (int x = 0; x < w; ++x) sr[x] = wr[x] > 0.0f ? sr[x] / (wr[x] + prior_weight) : 0.0f;
         }
-    }
+    });
     return sum;
 }
 

@@ -60,6 +60,15 @@ LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *_
     }
 }
 
+// First pixel of each of `cells` grid cells along a side of n pixels, pixel i lying in cell
+// min(cells - 1, i / step); one more entry, n, closes the last.
+std::vector<int> grid_starts(int n, int cells, float step) {
+    std::vector<int> start(static_cast<size_t>(cells) + 1, n);
+    for (int i = n - 1; i >= 0; --i) start[std::min(cells - 1, static_cast<int>(i / step))] = i;
+    for (int c = cells - 1; c >= 0; --c) start[c] = std::min(start[c], start[c + 1]);
+    return start;
+}
+
 }  // namespace
 
 void prepare_superpixels() {
@@ -157,14 +166,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
             }
         }
 
-    // First pixel column of each grid column (pixel x lies in column min(gx-1, x / step_x)).
-    std::vector<int> col_start(gx + 1, w);
-    for (int x = w - 1; x >= 0; --x) col_start[std::min(gx - 1, static_cast<int>(x / step_x))] = x;
-    for (int i = gx - 1; i >= 0; --i) col_start[i] = std::min(col_start[i], col_start[i + 1]);
-    // First pixel row of each grid row, the same way (row_start[gy] = h).
-    std::vector<int> row_start(gy + 1, h);
-    for (int y = h - 1; y >= 0; --y) row_start[std::min(gy - 1, static_cast<int>(y / step_y))] = y;
-    for (int j = gy - 1; j >= 0; --j) row_start[j] = std::min(row_start[j], row_start[j + 1]);
+    const std::vector<int> col_start = grid_starts(w, gx, step_x), row_start = grid_starts(h, gy, step_y);
     // Colour distances in Lab are ~0..100; SLIC's m / S balances them against pixels.
     const float spatial = (o.compactness / o.region_size) * (o.compactness / o.region_size);
     cv::Mat1i assign(h, w, 0);
@@ -203,10 +205,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
         std::fill(acc.begin(), acc.end(), 0.0);
         // Each thread sums the centres of a band of grid rows over the pixel rows they can hold
         // (grid rows j - 1 .. j + 1), in raster order: every centre's sums in the serial order.
-        const int parts = std::min(o.num_threads, gy);
-#pragma omp parallel for num_threads(parts) schedule(static, 1)
-        for (int part = 0; part < parts; ++part) {
-            const int j0 = band_start(gy, part, parts), j1 = band_start(gy, part + 1, parts);
+        for_each_band(gy, std::min(o.num_threads, gy), [&](int, int j0, int j1) {
             const int k0 = j0 * gx, k1 = j1 * gx;
             const int y0 = j0 == 0 ? 0 : row_start[static_cast<size_t>(j0 - 1)];
             const int y1 = row_start[static_cast<size_t>(std::min(gy, j1 + 1))];
@@ -228,7 +227,7 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                     }
                 }
             }
-        }
+        });
         for (size_t k = 0; k < centres.size(); ++k) {
             const double *a = &acc[k * kAcc];
             if (a[5] <= 0.0) continue;  // an empty cluster keeps its old centre
@@ -272,14 +271,13 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
         b.anchor.assign(n, cv::Point(0, 0));
     }
     ParallelErrors errors;
-#pragma omp parallel for num_threads(T) schedule(static)
-    for (int t = 0; t < T; ++t) errors.run([&] {
+    for_each_band(h, T, [&](int t, int y0, int y1) { errors.run([&] {
         Band &b = bands[static_cast<size_t>(t)];
         // A boundary runs along many pixels: skip the pair just recorded.
         const auto edge = [&b](int a, int c) {
             if (b.edges.empty() || b.edges.back() != std::make_pair(a, c)) b.edges.emplace_back(a, c);
         };
-        for (int y = band_start(h, t, T); y < band_start(h, t + 1, T); ++y) {
+        for (int y = y0; y < y1; ++y) {
             const int *row = sp.labels.ptr<int>(y), *below = y + 1 < h ? sp.labels.ptr<int>(y + 1) : nullptr;
             for (int x = 0; x < w; ++x) {
                 const int l = row[x];
@@ -290,7 +288,7 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
                 if (below && below[x] != l) edge(l, below[x]);
             }
         }
-    });
+    }); });
     errors.rethrow_if_any();
     std::vector<int64_t> sx(n, 0), sy(n, 0);
     sp.pixel_count.assign(n, 0);
@@ -305,10 +303,9 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
         sp.centroid[l] = cv::Point2f(static_cast<float>(static_cast<double>(sx[l]) / sp.pixel_count[l]),
                                      static_cast<float>(static_cast<double>(sy[l]) / sp.pixel_count[l]));
     // A non-convex superpixel's centroid may lie outside it; the anchor must be its own pixel.
-#pragma omp parallel for num_threads(T) schedule(static)
-    for (int t = 0; t < T; ++t) {
+    for_each_band(h, T, [&](int t, int y0, int y1) {
         Band &b = bands[static_cast<size_t>(t)];
-        for (int y = band_start(h, t, T); y < band_start(h, t + 1, T); ++y) {
+        for (int y = y0; y < y1; ++y) {
             const int *row = sp.labels.ptr<int>(y);
             for (int x = 0; x < w; ++x) {
                 const int l = row[x];
@@ -320,7 +317,7 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
                 }
             }
         }
-    }
+    });
     sp.anchor.assign(n, cv::Point(0, 0));
     std::vector<float> best(n, std::numeric_limits<float>::max());
     for (const Band &b : bands)

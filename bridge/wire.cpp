@@ -131,10 +131,15 @@ float get_le32f(const uint8_t *p) {
 
 int16_t get_le16(const uint8_t *p) { return static_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))); }
 
+// value / kInt16Scale to the nearest integer (ties to even), within +-32767; not finite: 0.
+// The scale is a power of two, so the product is exact in float, and adding and taking away
+// 1.5 * 2^23 rounds |s| < 2^22 as nearbyint does, without a libm call per value.
 int16_t to_fixed(float value) {
-    if (!std::isfinite(value)) return 0;
-    const double q = std::nearbyint(static_cast<double>(value) / kInt16Scale);
-    return static_cast<int16_t>(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+    float s = value * (1.0f / kInt16Scale);
+    s = s > 32767.0f ? 32767.0f : s;
+    s = s < -32767.0f ? -32767.0f : s;
+    const float rounded = (s + 12582912.0f) - 12582912.0f;
+    return std::isfinite(value) ? static_cast<int16_t>(rounded) : int16_t{0};
 }
 
 }  // namespace

@@ -267,6 +267,45 @@ void test_status_string(void **) {
 
 // ego_motion_t: what ego_motion_message + encode_ego_motion write decodes to the same fields;
 // the decoder refuses what is no rigid motion (the same rules as lidarflow_lcm's decoder).
+// The int16 planes: value * 64 to the nearest integer, ties to even, within +-32767; a value
+// that is not finite is 0. Stated per value here, not by the encoder's own arithmetic.
+void test_flow_int16_rule(void **) {
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    struct Case {
+        float value;
+        int expected;
+    };
+    const Case cases[] = {
+        {0.0f, 0},         {-0.0f, 0},          {0.5f / 64, 0},     {1.5f / 64, 2},      {2.5f / 64, 2},
+        {-0.5f / 64, 0},   {-1.5f / 64, -2},    {-2.5f / 64, -2},   {0.51f / 64, 1},     {-0.49f / 64, 0},
+        {1.0f, 64},        {-3.25f, -208},      {511.98f, 32767},   {511.9921875f, 32767}, {511.984375f, 32767},
+        {511.9765625f, 32766}, {-511.99f, -32767}, {512.0f, 32767}, {-512.0f, -32767},   {1e30f, 32767},
+        {-1e30f, -32767},  {std::numeric_limits<float>::max(), 32767}, {-std::numeric_limits<float>::max(), -32767},
+        {std::numeric_limits<float>::denorm_min(), 0}, {inf, 0}, {-inf, 0}, {nan, 0}, {-nan, 0},
+        {1234.5678f / 64, 1235}, {-1234.5f / 64, -1234}, {1235.5f / 64, 1236},
+    };
+    const int n = static_cast<int>(sizeof cases / sizeof cases[0]);
+    std::vector<float> values;
+    for (const Case &c : cases) values.push_back(c.value);
+    const std::vector<uint8_t> valid(values.size(), 1);
+    lf_result_views_t views;
+    lf_result_views_init(&views);
+    views.width = static_cast<uint32_t>(n);
+    views.height = 1;
+    for (lf_view_t *p : {&views.u, &views.v, &views.d0, &views.d1}) *p = {values.data(), 4u * n};
+    views.valid = {valid.data(), static_cast<uint64_t>(n)};
+    FlowMessage out;
+    std::string err;
+    assert_true(encode_flow(views, FlowEncoding::Int16, 1, out, &err));
+    for (const std::vector<uint8_t> *plane : {&out.u, &out.v, &out.d0, &out.d1}) {
+        assert_int_equal(plane->size(), 2u * n);
+        for (int i = 0; i < n; ++i) {
+            const int got = static_cast<int16_t>(static_cast<uint16_t>((*plane)[2 * i] | ((*plane)[2 * i + 1] << 8)));
+            if (got != cases[i].expected) fail_msg("value %.9g: %d, expected %d", cases[i].value, got, cases[i].expected);
+        }
+    }
+}
+
 void test_ego_motion(void **) {
     lf_ego_motion_t e;
     lf_ego_motion_init(&e);
@@ -317,7 +356,7 @@ int main(void) {
         cmocka_unit_test(test_stereo_zero_size),  cmocka_unit_test(test_oversized_message),
         cmocka_unit_test(test_flow_size_overflow), cmocka_unit_test(test_flow_consistency),
         cmocka_unit_test(test_lidar_transform_range), cmocka_unit_test(test_status_string),
-        cmocka_unit_test(test_ego_motion),
+        cmocka_unit_test(test_flow_int16_rule), cmocka_unit_test(test_ego_motion),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

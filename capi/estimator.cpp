@@ -170,6 +170,22 @@ std::shared_ptr<const lidarflow::matching::DecoupledStereo> lagged_prior(lf_esti
     return nullptr;
 }
 
+// Estimator::prepare_first for a stream's first frame into `out`; false (logged) when it threw.
+bool prepare_first_frame(const lf_estimator_t &e, const Frame &frame, lidarflow::pipeline::StreamCache &out) noexcept {
+    try {
+        e.estimator.prepare_first(frame.left, frame.right, frame.lidar, out);
+        return true;
+    } catch (const std::exception &x) {
+        try {
+            lidarflow::log::write(lidarflow::log::Level::Debug,
+                                  std::string("the first frame was not prepared ahead of its pair: ") + x.what());
+        } catch (...) {  // out of memory for the message: the pair reports what matters
+        }
+    } catch (...) {
+    }
+    return false;
+}
+
 }  // namespace
 
 extern "C" {
@@ -251,6 +267,12 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             std::chrono::duration<double>(std::chrono::steady_clock::now() - rectify_start).count();
         frame->lidar = convert_lidar(lidar, size, estimator->calibration);
 
+        // A stream's first frame: what its pair will need of it alone is computed now, while the
+        // second frame is still to come. Failing here costs only that: the pair meets and reports
+        // the same fault.
+        lidarflow::pipeline::StreamCache first;
+        const bool prepared = !prev && !estimator->pool && prepare_first_frame(*estimator, *frame, first);
+
         std::unique_ptr<Result> result;
         std::exception_ptr failed;   // frames in flight: the pair handed over failed
         if (prev && estimator->pool) {
@@ -271,6 +293,7 @@ LF_API int32_t lf_push_frame(lf_estimator_t *estimator, int64_t timestamp_us, co
             estimator->result = std::move(result);
             estimator->pair_error = failed;
         }
+        if (prepared) estimator->stream = std::move(first);
         estimator->previous = std::move(frame);
         estimator->rectifier = std::move(rectifier);
         estimator->size_warned = estimator->size_warned || warn_size;

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// Streaming reuse of stage 1 and the estimator presets: descriptors of a frame's t1 pair are
-// reused by the next frame only when its t0 pair is pixel-identical, and reuse never changes
-// a result; presets are named, distinct and validated.
+// Streaming reuse of stage 1 and the estimator presets: descriptors of a frame's t1 pair (or a
+// first frame's, prepared ahead) are reused by the next frame only when its t0 pair is
+// pixel-identical, and reuse never changes a result; presets are named, distinct and validated.
 #include "test_support.hpp"
 
 #include <string>
@@ -173,6 +173,46 @@ void estimator_stream_cache_keeps_results(void **) {
     assert_false(cache.last_reused());
 }
 
+// A stream's first frame prepared ahead of its pair: the pair reuses it and its result is the
+// lone pair's, bit for bit, for both designs; a frame that is not the pair's t0 (another point)
+// is not reused by the decoupled design and changes nothing; bad input throws and leaves the cache as it was.
+void estimator_first_frame_prepared(void **) {
+    const auto &s = scene();
+    for (const char *name : {"realtime", "paper"}) {
+        pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset(name);
+        o.matching.min_coarsest_height = 20;
+        o.threads = 2;
+        o.keep_stage_fields = true;
+        const pipeline::Estimator est(o);
+        const pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}, {}};
+        const pipeline::EstimatorResult alone = est.run(in);
+        pipeline::StreamCache cache;
+        est.prepare_first(s.left0, s.right0, s.lidar0, cache);
+        const pipeline::EstimatorResult prepared = est.run(in, &cache);
+        assert_true(cache.last_reused());
+        assert_true(same_field(prepared.forward, alone.forward));
+        assert_true(same_field(prepared.backward, alone.backward));
+        assert_true(same_field(prepared.dense, alone.dense));
+
+        SparseLidar moved = s.lidar0;
+        assert_true(!moved.points.empty());
+        moved.points[0].x = (moved.points[0].x + 7) % s.left0.cols;
+        pipeline::StreamCache other;
+        est.prepare_first(s.left0, s.right0, moved, other);
+        assert_true(same_field(est.run(in, &other).dense, alone.dense));
+        // The decoupled design's t0 disparity depends on the points; the descriptors do not.
+        assert_true(other.last_reused() == (o.matching.method == MatchMethod::PatchMatch));
+
+        pipeline::StreamCache kept;
+        est.prepare_first(s.left0, s.right0, s.lidar0, kept);
+        const cv::Mat narrow = s.right0.colRange(0, s.right0.cols - 1);
+        assert_true(test::throws_code(ErrorCode::SizeMismatch,
+                                      [&] { est.prepare_first(s.left0, narrow, s.lidar0, kept); }));
+        est.run(in, &kept);
+        assert_true(kept.last_reused());
+    }
+}
+
 void presets(void **) {
     // "paper" is the field defaults (the paper's design); the others are measured from it.
     const pipeline::EstimatorOptions d = pipeline::EstimatorOptions::preset("paper");
@@ -206,6 +246,7 @@ int main() {
         cmocka_unit_test(matcher_recycles_released_storage),
         cmocka_unit_test(run_both_equals_single_runs),
         cmocka_unit_test(estimator_stream_cache_keeps_results),
+        cmocka_unit_test(estimator_first_frame_prepared),
         cmocka_unit_test(presets),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

@@ -254,7 +254,31 @@ bool similar_steps(int64_t a, int64_t b) {
     return r >= 0.8 && r <= 1.25;
 }
 
+// One stereo pair's disparity, with `guide` its guiding points (stereo_guide).
+DisparityMap pair_disparity(const cv::Mat &l, const cv::Mat &r, const SparseLidar &guide, const MatchingOptions &opt,
+                            const consistency::SgmOptions &sgm) {
+    if (!opt.guided_stereo) return consistency::compute_sgm_disparity(l, r, sgm);
+    stereo::GuidedSgmOptions g = opt.stereo;
+    g.num_disparities = sgm.num_disparities;
+    g.threads = opt.threads;
+    return stereo::guided_sgm(l, r, guide, g);
+}
+
 }  // namespace
+
+std::shared_ptr<DecoupledStereo> first_frame_stereo(const cv::Mat &left, const cv::Mat &right,
+                                                    const SparseLidar &lidar, const MatchingOptions &opt,
+                                                    const consistency::SgmOptions &sgm) {
+    opt.validate();
+    require(!left.empty() && left.size() == right.size(), ErrorCode::SizeMismatch,
+            "decoupled matcher: a frame's two images must be non-empty and of one size");
+    auto s = std::make_shared<DecoupledStereo>();
+    s->lidar = stereo_guide(lidar, opt);
+    s->disparity = pair_disparity(left, right, s->lidar, opt, sgm);
+    s->left = left.clone();
+    s->right = right.clone();
+    return s;
+}
 
 bool DecoupledStereo::matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &guide) const {
     return !disparity.empty() && pixel_identical(left, l) && pixel_identical(right, r) && lidar.points == guide.points;
@@ -271,11 +295,8 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     DecoupledResult r;
     auto t = Clock::now();
     const SparseLidar guide0 = stereo_guide(in.lidar0, opt), guide1 = stereo_guide(in.lidar1, opt);
-    stereo::GuidedSgmOptions g = opt.stereo;
-    g.num_disparities = sgm.num_disparities;
-    g.threads = opt.threads;
     auto disparity = [&](const cv::Mat &l, const cv::Mat &rt, const SparseLidar &guide) {
-        return opt.guided_stereo ? stereo::guided_sgm(l, rt, guide, g) : consistency::compute_sgm_disparity(l, rt, sgm);
+        return pair_disparity(l, rt, guide, opt, sgm);
     };
     r.reused_t0 = t0_reuse && t0_reuse->matches(in.left0, in.right0, guide0);
     r.sgm0 = r.reused_t0 ? t0_reuse->disparity : disparity(in.left0, in.right0, guide0);

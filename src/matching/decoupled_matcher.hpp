@@ -63,6 +63,15 @@ struct DecoupledStereo {
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };
 
+// A stream's first frame (left, right, its t0 points `lidar`) before its pair exists: the
+// disparity match_decoupled would compute for it as the pair's t0, to pass as that pair's
+// t0_reuse (no motion prior, no carried points: the pair's result is that of a lone pair).
+// Why: a frame arrives one frame period before its pair can start. Throws lidarflow::Error for
+// bad inputs or options. Deterministic.
+std::shared_ptr<DecoupledStereo> first_frame_stereo(const cv::Mat &left, const cv::Mat &right,
+                                                    const SparseLidar &lidar, const MatchingOptions &opt,
+                                                    const consistency::SgmOptions &sgm);
+
 // Runs the decoupled stage 1 on the images of `in` (all one size, 8-bit gray or BGR). `sgm` are
 // stage 2's SGBM settings (one disparity for both stages). `t0_reuse`, when not null and
 // pixel-identical to (left0, right0) and made with the same guiding points (lidar0 when the

@@ -300,6 +300,36 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
     return r;
 }
 
+void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
+                              StreamCache &cache) const {
+    // The frame as both halves of a pair: the pair's own checks and downscale then apply to it.
+    FrameInput f{left, right, left, right, lidar, lidar, StereoCamera{}, {}, 0};
+    check_frame(f);
+    struct ReleaseWorkers {
+        ~ReleaseWorkers() { release_openmp_workers(); }
+    } release_at_end;
+    const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
+    f.lidar0 = f.lidar1 = lidar_in_use(options_, lidar);
+    const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
+    if (options_.processing_scale < 1.0 && (size.width < left.cols || size.height < left.rows))
+        f = downscale_frame(f, size);
+    const SparseLidar none{f.left0.cols, f.left0.rows, {}};
+    const SparseLidar &points = options_.use_lidar ? f.lidar0 : none;
+    const matching::MatchingOptions mo = matching_options(stage_options_, threads);
+    if (options_.matching.method == matching::MatchMethod::Decoupled) {
+        std::shared_ptr<matching::DecoupledStereo> s =
+            matching::first_frame_stereo(f.left0, f.right0, points, mo, stage_options_.consistency.sgm);
+        cache.clear();
+        cache.stereo_t1_ = std::move(s);
+        return;
+    }
+    const matching::MatchInput mi{f.left0, f.right0, f.left0, f.right0, points, points};
+    matching::SceneFlowMatcher matcher(mi, mo);
+    std::shared_ptr<const matching::StereoFeatures> t1 = matcher.features_t1();
+    cache.clear();
+    cache.t1_ = std::move(t1);
+}
+
 quality::Report Estimator::assess_inputs(const FrameInput &frame) const {
     quality::Input q{frame.left0, frame.right0, frame.left1, frame.right1,
                      options_.use_lidar ? &frame.lidar0 : nullptr, frame.calibration_size};

@@ -221,6 +221,16 @@ public:
     // Same, for a sequence: reuses and then updates *cache (see StreamCache); cache may be null.
     EstimatorResult run(const FrameInput &frame, StreamCache *cache) const;
 
+    // A stream's first frame (after a new cache or clear()), before its pair exists: computes
+    // into *cache what the pair's run(frame, cache) would compute of that frame as its t0 (the
+    // decoupled design's t0 disparity, the paper design's t0 descriptors), which that run then
+    // takes as a previous frame's: the pair's result stays bit for bit that of run() alone, and
+    // a later frame's inputs that differ only cost the reuse. Why: a frame arrives one frame
+    // period before its pair can start, so a lone pair's latency loses that part.
+    // Throws what run() would for these images and points (the cache is then left unchanged).
+    // Not thread-safe on one cache; distinct caches may be prepared concurrently.
+    void prepare_first(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, StreamCache &cache) const;
+
     const EstimatorOptions &options() const { return options_; }
 
 private:

@@ -140,6 +140,7 @@ struct EstimatorResult {
     SceneFlowField dense;     // stage 4 (the final result)
     // The output of last_stage: one of the fields above.
     const SceneFlowField &output() const;
+    SceneFlowField &output() { return const_cast<SceneFlowField &>(static_cast<const EstimatorResult &>(*this).output()); }
     // Stage 4's background model (motion::EgoMotion), kept as fitted: the rigid motion
     // of the static scene t0 -> t1 when the camera was known (calibrated = true), its R, t in
     // metres and so the same at any processing_scale. valid = false: stage 4 did not run, the

@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: MIT
+// The decoupled stage 1's flow search as it runs: OpenCV's DISOpticalFlow at a preset's settings
+// on the reduced KITTI frames (gray, both directions as the matcher searches them), and how its
+// time splits: the full search, the same with one descent step and no spatial propagation (what
+// every call pays whatever the steps: pyramids, gradients, the patches' sums, densification),
+// and the steps' share (the difference). A flow search of the project's own could only win back
+// what it does better than OpenCV's in each part; this says how large the parts are.
+//
+//   bench_flow --root DIR [--ids 000002,000003] [--preset realtime|fast|default] [--runs 9]
+//              [--threads 2]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/utility.hpp>
+#include <opencv2/video.hpp>
+
+#include "bench_util.hpp"
+#include "core/gray.hpp"
+#include "eval/kitti_runner.hpp"
+#include "pipeline/estimator.hpp"
+#include "pipeline/resolution.hpp"
+
+using namespace lidarflow;
+
+namespace {
+
+[[noreturn]] void usage(const char *msg) {
+    std::fprintf(stderr,
+                 "%s\nusage: bench_flow --root DIR [--ids A,B] [--preset realtime|fast|default] [--runs N] "
+                 "[--threads N]\n",
+                 msg);
+    std::exit(2);
+}
+
+std::vector<std::string> split(const std::string &s) {
+    std::vector<std::string> out;
+    size_t a = 0;
+    while (a <= s.size()) {
+        const size_t b = std::min(s.find(',', a), s.size());
+        if (b > a) out.push_back(s.substr(a, b - a));
+        a = b + 1;
+    }
+    return out;
+}
+
+// Median seconds of both directions (from -> to, then to -> from), each a fresh DIS as the
+// matcher creates one per call, started from zero flow.
+double both_directions(const cv::Mat &a, const cv::Mat &b, const matching::FlowSearchOptions &o, int steps,
+                       bool propagation, int runs) {
+    std::vector<double> t;
+    for (int r = 0; r < runs; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int dir = 0; dir < 2; ++dir) {
+            cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+            dis->setFinestScale(o.finest_scale);
+            dis->setPatchSize(o.patch_size);
+            dis->setPatchStride(o.patch_stride);
+            dis->setGradientDescentIterations(steps);
+            dis->setVariationalRefinementIterations(o.refine_iterations);
+            dis->setUseSpatialPropagation(propagation);
+            cv::Mat2f flow(a.size(), cv::Vec2f(0, 0));
+            dis->calc(dir == 0 ? a : b, dir == 0 ? b : a, flow);
+        }
+        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return bench::median(t);
+}
+
+}  // namespace
+
+int main(int argc, char **argv) try {
+    std::string root, preset = "realtime";
+    std::vector<std::string> ids{"000002", "000003"};
+    int runs = 9, threads = 2;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) usage(("missing value after " + a).c_str());
+            return argv[++i];
+        };
+        if (a == "--root") root = next();
+        else if (a == "--ids") ids = split(next());
+        else if (a == "--preset") preset = next();
+        else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
+        else if (a == "--threads") threads = std::max(1, std::atoi(next().c_str()));
+        else usage(("unknown argument " + a).c_str());
+    }
+    if (root.empty()) usage("--root is required");
+    const pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(preset);
+    if (opt.matching.method != matching::MatchMethod::Decoupled) usage("--preset: a decoupled preset (DIS)");
+    const matching::FlowSearchOptions &o = opt.matching.flow;
+    cv::setNumThreads(threads);
+    std::printf("bench_flow: preset %s (scale %.2f, patch %d, stride %d, %d steps, finest level %d), %d thread(s), "
+                "median of %d, both directions\n",
+                preset.c_str(), opt.processing_scale, o.patch_size, o.patch_stride, o.descent_iterations,
+                o.finest_scale, threads, runs);
+    std::printf("%-7s %-9s %9s %12s %9s\n", "frame", "size", "search", "fixed part", "steps");
+    for (const std::string &id : ids) {
+        const eval::KittiFrame f = eval::load_kitti_frame(root, id, eval::LidarInputOptions{});
+        const cv::Size size = pipeline::scaled_size(f.input.left0.cols, f.input.left0.rows, opt.processing_scale);
+        const pipeline::FrameInput small =
+            size == f.input.left0.size() ? f.input : pipeline::downscale_frame(f.input, size);
+        const cv::Mat g0 = gray8(small.left0), g1 = gray8(small.left1);
+        const double full = both_directions(g0, g1, o, o.descent_iterations, true, runs);
+        const double fixed = both_directions(g0, g1, o, 1, false, runs);
+        std::printf("%-7s %4dx%-4d %7.4f s %10.4f s %7.4f s\n", id.c_str(), size.width, size.height, full, fixed,
+                    full - fixed);
+    }
+    return 0;
+} catch (const std::exception &e) {
+    std::fprintf(stderr, "bench_flow: %s\n", e.what());
+    return 1;
+}

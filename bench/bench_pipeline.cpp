@@ -251,12 +251,14 @@ int run_bench(int argc, char **argv) {
         // time left once the second frame is there, and the part done ahead.
         cache.clear();
         std::vector<double> after_first, ahead;
+        int prepared_reused = 0;
         for (int r = 0; r < a.runs; ++r) {
             pipeline::StreamCache first;
             const auto t0 = Clock::now();
             estimator.prepare_first(c.input.left0, c.input.right0, c.input.lidar0, first);
             ahead.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
             after_first.push_back(estimator.run(c.input, &first).total_seconds);
+            prepared_reused += first.last_reused() ? 1 : 0;
         }
         for (int r = 0; r < a.runs; ++r) {
             const auto t0 = Clock::now();
@@ -270,8 +272,9 @@ int run_bench(int argc, char **argv) {
                     bench::median(total), rss_pipeline, rss_before);
         std::printf("  %-22s %7.3f s   peak RSS %s (%d of %d frames reused the previous t1)\n",
                     "streaming, per frame", bench::median(stream_total), rss_stream.c_str(), reused, a.runs);
-        std::printf("  %-22s %7.3f s   once the second frame is there (%.3f s ahead, at the first)\n",
-                    "pair, t0 ahead", bench::median(after_first), bench::median(ahead));
+        std::printf("  %-22s %7.3f s   once the second frame is there (%.3f s ahead, at the first; %d of %d "
+                    "reused it)\n",
+                    "pair, t0 ahead", bench::median(after_first), bench::median(ahead), prepared_reused, a.runs);
         if (fewer > 0)
             std::printf("  %d of %d frames ran on fewer than %d threads: other processes kept CPUs busy "
                         "(adaptive_threads; --set adaptive_threads=0 for a fixed count)\n",

@@ -2,6 +2,7 @@
 #include "wire.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -133,13 +134,20 @@ int16_t get_le16(const uint8_t *p) { return static_cast<int16_t>(static_cast<uin
 
 // value / kInt16Scale to the nearest integer (ties to even), within +-32767; not finite: 0.
 // The scale is a power of two, so the product is exact in float, and adding and taking away
-// 1.5 * 2^23 rounds |s| < 2^22 as nearbyint does, without a libm call per value.
+// 1.5 * 2^23 rounds |s| < 2^22 as nearbyint does, without a libm call per value. It needs
+// IEEE single-precision arithmetic (no -ffast-math); test_flow_int16_rule checks the rule.
 int16_t to_fixed(float value) {
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
     float s = value * (1.0f / kInt16Scale);
     s = s > 32767.0f ? 32767.0f : s;
     s = s < -32767.0f ? -32767.0f : s;
     const float rounded = (s + 12582912.0f) - 12582912.0f;
     return std::isfinite(value) ? static_cast<int16_t>(rounded) : int16_t{0};
+#else  // wider intermediates (x87) would round the sum elsewhere: the library's rounding
+    if (!std::isfinite(value)) return 0;
+    const double q = std::nearbyint(static_cast<double>(value) / kInt16Scale);
+    return static_cast<int16_t>(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+#endif
 }
 
 }  // namespace

@@ -57,7 +57,7 @@ int64_t elapsed_us(int64_t from, int64_t to) {
 // The result the C ABI serves: the last stage's field, continuous, with a confidence plane; u,
 // v, d0, d1 are NaN and confidence 0 wherever the field is not valid (docs/CONVENTIONS.md).
 // Planes the result takes over from the run's: r is consumed. A plane whose buffer nothing else
-// shares (and that is continuous) is kept, not copied: ~2 ms of a KITTI pair.
+// shares (and that is continuous) is kept: copying five full-size planes a pair is avoidable.
 std::unique_ptr<Result> make_result(lidarflow::pipeline::EstimatorResult &&r, int64_t t0, int64_t t1) {
     auto out = std::make_unique<Result>();
     lidarflow::SceneFlowField &f = r.output();

@@ -174,8 +174,9 @@ void estimator_stream_cache_keeps_results(void **) {
 }
 
 // A stream's first frame prepared ahead of its pair: the pair reuses it and its result is the
-// lone pair's, bit for bit, for both designs; a frame that is not the pair's t0 (another point)
-// is not reused by the decoupled design and changes nothing; bad input throws and leaves the cache as it was.
+// lone pair's, bit for bit, for both designs (every stage's field, the ego-motion, the next
+// pair); a frame that is not the pair's t0 (another point) is not reused by the decoupled design
+// and changes nothing; bad input throws and leaves the cache as it was.
 void estimator_first_frame_prepared(void **) {
     const auto &s = scene();
     for (const char *name : {"realtime", "paper"}) {
@@ -184,22 +185,37 @@ void estimator_first_frame_prepared(void **) {
         o.threads = 2;
         o.keep_stage_fields = true;
         const pipeline::Estimator est(o);
-        const pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, StereoCamera{}, {}};
+        // A calibrated rig and a known step: the stream's prior and carried points could apply.
+        const pipeline::FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0,
+                                      s.lidar1, s.camera,  {},      100000};
         const pipeline::EstimatorResult alone = est.run(in);
         pipeline::StreamCache cache;
         est.prepare_first(s.left0, s.right0, s.lidar0, cache);
         const pipeline::EstimatorResult prepared = est.run(in, &cache);
         assert_true(cache.last_reused());
-        assert_true(same_field(prepared.forward, alone.forward));
-        assert_true(same_field(prepared.backward, alone.backward));
-        assert_true(same_field(prepared.dense, alone.dense));
+        for (auto f : {&pipeline::EstimatorResult::forward, &pipeline::EstimatorResult::backward,
+                       &pipeline::EstimatorResult::after_sgm, &pipeline::EstimatorResult::after_fb,
+                       &pipeline::EstimatorResult::sparse, &pipeline::EstimatorResult::dense})
+            assert_true(same_field(prepared.*f, alone.*f));
+        assert_true(alone.ego.valid && alone.ego.calibrated);
+        assert_true(prepared.ego_state == alone.ego_state && prepared.ego.inliers == alone.ego.inliers);
+        for (int i = 0; i < 9; ++i) assert_true(prepared.ego.R[i] == alone.ego.R[i]);
+        for (int i = 0; i < 3; ++i) assert_true(prepared.ego.t[i] == alone.ego.t[i]);
+        // The next pair of the stream continues from the prepared one as from any first pair.
+        const pipeline::FrameInput back{s.left1, s.right1, s.left0, s.right0, s.lidar1,
+                                        s.lidar0, s.camera,  {},      100000};
+        pipeline::StreamCache plain;
+        est.run(in, &plain);
+        assert_true(same_field(est.run(back, &cache).dense, est.run(back, &plain).dense));
 
         SparseLidar moved = s.lidar0;
         assert_true(!moved.points.empty());
         moved.points[0].x = (moved.points[0].x + 7) % s.left0.cols;
         pipeline::StreamCache other;
         est.prepare_first(s.left0, s.right0, moved, other);
-        assert_true(same_field(est.run(in, &other).dense, alone.dense));
+        const pipeline::EstimatorResult with_other = est.run(in, &other);
+        assert_true(same_field(with_other.forward, alone.forward));
+        assert_true(same_field(with_other.dense, alone.dense));
         // The decoupled design's t0 disparity depends on the points; the descriptors do not.
         assert_true(other.last_reused() == (o.matching.method == MatchMethod::PatchMatch));
 

@@ -265,8 +265,6 @@ void test_status_string(void **) {
 
 }  // namespace
 
-// ego_motion_t: what ego_motion_message + encode_ego_motion write decodes to the same fields;
-// the decoder refuses what is no rigid motion (the same rules as lidarflow_lcm's decoder).
 // The int16 planes: value * 64 to the nearest integer, ties to even, within +-32767; a value
 // that is not finite is 0. Stated per value here, not by the encoder's own arithmetic.
 void test_flow_int16_rule(void **) {
@@ -306,6 +304,8 @@ void test_flow_int16_rule(void **) {
     }
 }
 
+// ego_motion_t: what ego_motion_message + encode_ego_motion write decodes to the same fields;
+// the decoder refuses what is no rigid motion (the same rules as lidarflow_lcm's decoder).
 void test_ego_motion(void **) {
     lf_ego_motion_t e;
     lf_ego_motion_init(&e);

@@ -144,17 +144,23 @@ void DescriptorPyramid::describe_full() {
     if (!pending[0] && !pending[1]) return;
     if (pending[1] && coarse_lent()) release_coarse();  // their memory is overwritten now
     const auto t0 = Clock::now();
-    std::vector<std::function<void(int)>> jobs;
-    for (int t = 0; t < 2; ++t)
-        for (int k = 0; k < 2 && pending[t]; ++k)
-            jobs.emplace_back([this, t, k](int inner) {
-                StereoFeatures &p = *pending[t];
-                features::compute_dense_sift(features::to_gray_float(k == 0 ? p.left : p.right), opt.sift, inner,
-                                             p.desc[k]);
-            });
-    run_image_jobs(jobs, opt.threads);
+    std::vector<StereoFeatures *> todo;
+    for (StereoFeatures *p : pending)
+        if (p) todo.push_back(p);
+    describe_pairs(todo, opt);
     pending[0] = pending[1] = nullptr;
     seconds_features += seconds_since(t0);
+}
+
+void describe_pairs(const std::vector<StereoFeatures *> &pairs, const MatchingOptions &opt) {
+    std::vector<std::function<void(int)>> jobs;
+    for (StereoFeatures *p : pairs)
+        for (int k = 0; k < 2; ++k)
+            jobs.emplace_back([p, k, &opt](int inner) {
+                features::compute_dense_sift(features::to_gray_float(k == 0 ? p->left : p->right), opt.sift, inner,
+                                             p->desc[k]);
+            });
+    run_image_jobs(jobs, opt.threads);
 }
 
 bool StereoFeatures::matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const {

@@ -15,6 +15,10 @@
 
 namespace lidarflow::matching {
 
+// The full-resolution descriptors of each pair (both images, their images and sift set), the
+// images in parallel.
+void describe_pairs(const std::vector<StereoFeatures *> &pairs, const MatchingOptions &opt);
+
 // Pyramid levels: factor 0.5 while the coarser image stays min_coarsest_height high.
 int pyramid_levels(const MatchingOptions &o, int width, int height);
 

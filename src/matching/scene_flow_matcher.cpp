@@ -843,10 +843,10 @@ MatchPair SceneFlowMatcher::run_both() {
     return r;
 }
 
-SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
-                                   std::shared_ptr<const StereoFeatures> reuse_t0,
-                                   std::shared_ptr<StereoFeatures> storage)
-    : impl_(std::make_unique<Impl>()) {
+namespace {
+
+// The matcher's checks of its input: options, the four images, the points.
+void check_match_input(const MatchInput &in, const MatchingOptions &options) {
     options.validate();
     const cv::Mat *imgs[4] = {&in.left0, &in.right0, &in.left1, &in.right1};
     const char *names[4] = {"left0", "right0", "left1", "right1"};
@@ -859,13 +859,35 @@ SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &
         require(imgs[i]->size() == in.left0.size(), ErrorCode::SizeMismatch,
                 std::string("MatchInput: ") + names[i] + " differs in size from left0");
     }
+    require(in.left0.cols >= 2 && in.left0.rows >= 2, ErrorCode::InvalidArgument,
+            "MatchInput: images must be at least 2x2");
+    in.lidar0.validate(in.left0.cols, in.left0.rows, "MatchInput: lidar0");
+    in.lidar1.validate(in.left0.cols, in.left0.rows, "MatchInput: lidar1");
+}
+
+}  // namespace
+
+std::shared_ptr<const StereoFeatures> stereo_features(const cv::Mat &left, const cv::Mat &right,
+                                                      const MatchingOptions &options) {
+    const SparseLidar none{left.cols, left.rows, {}};
+    check_match_input(MatchInput{left, right, left, right, none, none}, options);
+    auto p = std::make_shared<StereoFeatures>();
+    p->left = left.clone();
+    p->right = right.clone();
+    p->sift = options.sift;
+    describe_pairs({p.get()}, options);
+    return p;
+}
+
+SceneFlowMatcher::SceneFlowMatcher(const MatchInput &in, const MatchingOptions &options,
+                                   std::shared_ptr<const StereoFeatures> reuse_t0,
+                                   std::shared_ptr<StereoFeatures> storage)
+    : impl_(std::make_unique<Impl>()) {
+    check_match_input(in, options);
     Impl &m = *impl_;
     m.opt = options;
     m.width = in.left0.cols;
     m.height = in.left0.rows;
-    require(m.width >= 2 && m.height >= 2, ErrorCode::InvalidArgument, "MatchInput: images must be at least 2x2");
-    in.lidar0.validate(m.width, m.height, "MatchInput: lidar0");
-    in.lidar1.validate(m.width, m.height, "MatchInput: lidar1");
     if (options.use_lidar) {
         m.lidar[0] = dedupe(in.lidar0);
         m.lidar[1] = dedupe(in.lidar1);

@@ -80,6 +80,12 @@ struct StereoFeatures {
     bool matches(const cv::Mat &l, const cv::Mat &r, const MatchingOptions &o) const;
 };
 
+// The full-resolution descriptors of one stereo pair, as a matcher computes a pair's, to pass as
+// a later matcher's reuse_t0 (a stream's first frame, before its pair exists). Throws
+// lidarflow::Error for empty, unequal or non-8-bit images and bad options.
+std::shared_ptr<const StereoFeatures> stereo_features(const cv::Mat &left, const cv::Mat &right,
+                                                      const MatchingOptions &options);
+
 // Both directions of one matcher (SceneFlowMatcher::run_both).
 struct MatchPair {
     MatchResult forward, backward;

@@ -323,9 +323,7 @@ void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const S
         cache.stereo_t1_ = std::move(s);
         return;
     }
-    const matching::MatchInput mi{f.left0, f.right0, f.left0, f.right0, points, points};
-    matching::SceneFlowMatcher matcher(mi, mo);
-    std::shared_ptr<const matching::StereoFeatures> t1 = matcher.features_t1();
+    std::shared_ptr<const matching::StereoFeatures> t1 = matching::stereo_features(f.left0, f.right0, mo);
     cache.clear();
     cache.t1_ = std::move(t1);
 }

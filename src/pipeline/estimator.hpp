@@ -228,7 +228,7 @@ public:
     // takes as a previous frame's: the pair's result stays bit for bit that of run() alone, and
     // a later frame's inputs that differ only cost the reuse. Why: a frame arrives one frame
     // period before its pair can start, so a lone pair's latency loses that part.
-    // Throws what run() would for these images and points (the cache is then left unchanged).
+    // Throws lidarflow::Error for bad images or points (the cache is then left unchanged).
     // Not thread-safe on one cache; distinct caches may be prepared concurrently.
     void prepare_first(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, StreamCache &cache) const;
 

@@ -36,17 +36,6 @@ namespace {
     std::exit(2);
 }
 
-std::vector<std::string> split(const std::string &s) {
-    std::vector<std::string> out;
-    size_t a = 0;
-    while (a <= s.size()) {
-        const size_t b = std::min(s.find(',', a), s.size());
-        if (b > a) out.push_back(s.substr(a, b - a));
-        a = b + 1;
-    }
-    return out;
-}
-
 // Median seconds of both directions (from -> to, then to -> from), each a fresh DIS as the
 // matcher creates one per call, started from zero flow.
 double both_directions(const cv::Mat &a, const cv::Mat &b, const matching::FlowSearchOptions &o, int steps,
@@ -76,19 +65,14 @@ int main(int argc, char **argv) try {
     std::string root, preset = "realtime";
     std::vector<std::string> ids{"000002", "000003"};
     int runs = 9, threads = 2;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) usage(("missing value after " + a).c_str());
-            return argv[++i];
-        };
+    bench::for_each_flag(argc, argv, usage, [&](const std::string &a, const auto &next) {
         if (a == "--root") root = next();
-        else if (a == "--ids") ids = split(next());
+        else if (a == "--ids") ids = bench::split_commas(next());
         else if (a == "--preset") preset = next();
         else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
         else if (a == "--threads") threads = std::max(1, std::atoi(next().c_str()));
         else usage(("unknown argument " + a).c_str());
-    }
+    });
     if (root.empty()) usage("--root is required");
     const pipeline::EstimatorOptions opt = pipeline::EstimatorOptions::preset(preset);
     if (opt.matching.method != matching::MatchMethod::Decoupled) usage("--preset: a decoupled preset (DIS)");

@@ -21,6 +21,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "bench_util.hpp"
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
 #include "eval/kitti_runner.hpp"
@@ -40,17 +41,6 @@ namespace {
                  "  [--slope F] [--cap N] [--radius N] [--intensity N] [--ternary] [--census-threshold N]\n",
                  msg);
     std::exit(2);
-}
-
-std::vector<std::string> split(const std::string &s) {
-    std::vector<std::string> out;
-    size_t a = 0;
-    while (a <= s.size()) {
-        const size_t b = std::min(s.find(',', a), s.size());
-        if (b > a) out.push_back(s.substr(a, b - a));
-        a = b + 1;
-    }
-    return out;
 }
 
 template <class F>
@@ -94,14 +84,9 @@ int main(int argc, char **argv) try {
     eval::LidarInputOptions lidar;
     stereo::GuidedSgmOptions g;
     g.threads = 2;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) usage(("missing value after " + a).c_str());
-            return argv[++i];
-        };
+    bench::for_each_flag(argc, argv, usage, [&](const std::string &a, const auto &next) {
         if (a == "--root") root = next();
-        else if (a == "--ids") ids = split(next());
+        else if (a == "--ids") ids = bench::split_commas(next());
         else if (a == "--scale") scale = std::atof(next().c_str());
         else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
         else if (a == "--threads") g.threads = std::max(1, std::atoi(next().c_str()));
@@ -118,7 +103,7 @@ int main(int argc, char **argv) try {
         else if (a == "--ternary") g.ternary_census = true;
         else if (a == "--census-threshold") g.census_threshold = std::atoi(next().c_str());
         else usage(("unknown argument " + a).c_str());
-    }
+    });
     if (root.empty()) usage("--root is required");
     if (lidar.protocol == eval::LidarProtocol::Velodyne) lidar.points = 0;
     cv::setNumThreads(g.threads);

@@ -41,6 +41,32 @@ inline double peak_rss_mib() {
     return r.ru_maxrss / 1024.0;
 }
 
+// Calls on(flag, next) for each argument after the program's name; next() reads the value after
+// the flag, or calls usage("missing value after FLAG") (which must not return).
+template <class Usage, class On>
+void for_each_flag(int argc, char **argv, Usage &&usage, On &&on) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) usage(("missing value after " + a).c_str());
+            return argv[++i];
+        };
+        on(a, next);
+    }
+}
+
+// "a,b,,c" -> {a, b, c} (--ids lists).
+inline std::vector<std::string> split_commas(const std::string &s) {
+    std::vector<std::string> out;
+    size_t a = 0;
+    while (a <= s.size()) {
+        const size_t b = std::min(s.find(',', a), s.size());
+        if (b > a) out.push_back(s.substr(a, b - a));
+        a = b + 1;
+    }
+    return out;
+}
+
 inline double median(std::vector<double> v) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());

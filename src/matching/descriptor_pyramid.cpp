@@ -144,10 +144,10 @@ void DescriptorPyramid::describe_full() {
     if (!pending[0] && !pending[1]) return;
     if (pending[1] && coarse_lent()) release_coarse();  // their memory is overwritten now
     const auto t0 = Clock::now();
-    std::vector<StereoFeatures *> todo;
+    std::vector<StereoFeatures *> to_describe;
     for (StereoFeatures *p : pending)
-        if (p) todo.push_back(p);
-    describe_pairs(todo, opt);
+        if (p) to_describe.push_back(p);
+    describe_pairs(to_describe, opt);
     pending[0] = pending[1] = nullptr;
     seconds_features += seconds_since(t0);
 }

@@ -112,6 +112,18 @@ void check_frame(const FrameInput &f) {
     f.lidar1.validate(f.left0.cols, f.left0.rows, "FrameInput: lidar1");
 }
 
+// Idle OpenMP workers must not spin while OpenCV's threads (stage 1, the next frame) or other
+// processes need the CPUs, however a call ends.
+struct ReleaseWorkersAtEnd {
+    ~ReleaseWorkersAtEnd() { release_openmp_workers(); }
+};
+
+// A frame's OpenMP threads: options.threads, or fewer where adaptive_threads finds busy CPUs.
+int frame_threads(const EstimatorOptions &o) { return o.adaptive_threads ? threads_for_now(o.threads) : o.threads; }
+
+// Whether processing at `size` reduces a frame of `full` (processing_scale rounds to the input).
+bool reduces(cv::Size size, cv::Size full) { return size.width < full.width || size.height < full.height; }
+
 }  // namespace
 
 const char *stage_name(Stage s) {
@@ -255,12 +267,8 @@ SparseLidar lidar_in_use(const EstimatorOptions &o, const SparseLidar &lidar) {
 
 EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) const {
     check_frame(input);
-    // Idle OpenMP workers must not spin while OpenCV's threads (stage 1, the next frame) or other
-    // processes need the CPUs, however run() ends.
-    struct ReleaseWorkers {
-        ~ReleaseWorkers() { release_openmp_workers(); }
-    } release_at_end;
-    const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
+    ReleaseWorkersAtEnd release_at_end;
+    const int threads = frame_threads(options_);
     if (threads < options_.threads && log::enabled(log::Level::Debug))
         log::write(log::Level::Debug, "this frame runs on " + std::to_string(threads) + " of " +
                                           std::to_string(options_.threads) +
@@ -302,28 +310,24 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
 
 void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
                               StreamCache &cache) const {
-    // The frame as both halves of a pair: the pair's own checks and downscale then apply to it.
-    FrameInput f{left, right, left, right, lidar, lidar, StereoCamera{}, {}, 0};
-    check_frame(f);
-    struct ReleaseWorkers {
-        ~ReleaseWorkers() { release_openmp_workers(); }
-    } release_at_end;
-    const int threads = options_.adaptive_threads ? threads_for_now(options_.threads) : options_.threads;
-    f.lidar0 = f.lidar1 = lidar_in_use(options_, lidar);
+    // The frame as both halves of a pair: the pair's own checks apply to it.
+    check_frame(FrameInput{left, right, left, right, lidar, lidar, StereoCamera{}, {}, 0});
+    ReleaseWorkersAtEnd release_at_end;
+    const int threads = frame_threads(options_);
+    StereoFrame f{left, right, lidar_in_use(options_, lidar)};
     const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
-    if (options_.processing_scale < 1.0 && (size.width < left.cols || size.height < left.rows))
-        f = downscale_frame(f, size);
-    const SparseLidar none{f.left0.cols, f.left0.rows, {}};
-    const SparseLidar &points = options_.use_lidar ? f.lidar0 : none;
+    if (reduces(size, left.size())) f = downscale_stereo(f.left, f.right, f.lidar, size);
+    const SparseLidar none{f.left.cols, f.left.rows, {}};
+    const SparseLidar &points = options_.use_lidar ? f.lidar : none;
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         std::shared_ptr<matching::DecoupledStereo> s =
-            matching::first_frame_stereo(f.left0, f.right0, points, mo, stage_options_.consistency.sgm);
+            matching::first_frame_stereo(f.left, f.right, points, mo, stage_options_.consistency.sgm);
         cache.clear();
         cache.stereo_t1_ = std::move(s);
         return;
     }
-    std::shared_ptr<const matching::StereoFeatures> t1 = matching::stereo_features(f.left0, f.right0, mo);
+    std::shared_ptr<const matching::StereoFeatures> t1 = matching::stereo_features(f.left, f.right, mo);
     cache.clear();
     cache.t1_ = std::move(t1);
 }
@@ -341,7 +345,7 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
-    if (size.width >= W && size.height >= H) {
+    if (!reduces(size, cv::Size(W, H))) {
         log::write(log::Level::Info, "processing_scale " + std::to_string(options_.processing_scale) + " leaves " +
                                          std::to_string(W) + "x" + std::to_string(H) +
                                          " at its size: the frame runs at full resolution");

@@ -35,6 +35,15 @@ cv::Size scaled_size(int w, int h, double scale) {
     return {std::max(2, static_cast<int>(std::lround(w * scale))), std::max(2, static_cast<int>(std::lround(h * scale)))};
 }
 
+StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size) {
+    const double sx = double(size.width) / left.cols, sy = double(size.height) / left.rows;
+    StereoFrame out;
+    cv::resize(left, out.left, size, 0, 0, cv::INTER_AREA);
+    cv::resize(right, out.right, size, 0, 0, cv::INTER_AREA);
+    out.lidar = downscale_lidar(lidar, size, sx, sy);
+    return out;
+}
+
 FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     const cv::Mat *imgs[4] = {&f.left0, &f.right0, &f.left1, &f.right1};
     const char *names[4] = {"left0", "right0", "left1", "right1"};
@@ -50,10 +59,14 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     f.lidar1.validate(W, H, "FrameInput: lidar1");
     const double sx = double(size.width) / W, sy = double(size.height) / H;
     FrameInput out;
-    cv::Mat *dst[4] = {&out.left0, &out.right0, &out.left1, &out.right1};
-    for (int i = 0; i < 4; ++i) cv::resize(*imgs[i], *dst[i], size, 0, 0, cv::INTER_AREA);
-    out.lidar0 = downscale_lidar(f.lidar0, size, sx, sy);
-    out.lidar1 = downscale_lidar(f.lidar1, size, sx, sy);
+    StereoFrame t0 = downscale_stereo(f.left0, f.right0, f.lidar0, size);
+    StereoFrame t1 = downscale_stereo(f.left1, f.right1, f.lidar1, size);
+    out.left0 = std::move(t0.left);
+    out.right0 = std::move(t0.right);
+    out.lidar0 = std::move(t0.lidar);
+    out.left1 = std::move(t1.left);
+    out.right1 = std::move(t1.right);
+    out.lidar1 = std::move(t1.lidar);
     out.camera = f.camera;
     out.step_us = f.step_us;
     if (f.camera.valid()) {

@@ -22,6 +22,14 @@ cv::Size scaled_size(int w, int h, double scale);
 // its images.
 FrameInput downscale_frame(const FrameInput &frame, cv::Size size);
 
+// One stereo pair and its points at `size`, by downscale_frame's rule; unchecked (the caller has
+// checked them as downscale_frame does).
+struct StereoFrame {
+    cv::Mat left, right;
+    SparseLidar lidar;
+};
+StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size);
+
 // `small` brought to width x height: a pixel takes the bilinear blend of the four small pixels
 // around it when all four are valid, else the value of the nearest small pixel when that one is
 // valid, else stays invalid; flow and disparities are multiplied by the size ratio. An empty

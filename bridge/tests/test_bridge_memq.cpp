@@ -1543,6 +1543,11 @@ void test_option_errors(void **) {
     assert_non_null(strstr(refusal("no.such.key", "1").c_str(), "no.such.key"));
     // Each frame's pair is published as the frame arrives: no results N - 1 frames late.
     assert_non_null(strstr(refusal("frames_in_flight", "2").c_str(), "frames_in_flight must be 1"));
+    // What only an estimator can judge (here an edge model that cannot be read) fails at start-up
+    // without --calib too: the bridge builds one from its options before it subscribes.
+    const std::string model = refusal("interpolation.sed_model", "/nonexistent/edges.yml.gz");
+    assert_non_null(strstr(model.c_str(), "estimator: "));
+    assert_non_null(strstr(model.c_str(), "edges.yml.gz"));
     BridgeConfig ok;
     ok.options = {{"threads", "1"}, {"last_stage", "matching"}, {"matching.stop_ratio", "0.01"},
                   {"frames_in_flight", "1"}};

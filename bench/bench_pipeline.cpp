@@ -258,7 +258,7 @@ int run_bench(int argc, char **argv) {
             estimator.prepare_first(c.input.left0, c.input.right0, c.input.lidar0, first);
             ahead.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
             after_first.push_back(estimator.run(c.input, &first).total_seconds);
-            prepared_reused += first.last_reused() ? 1 : 0;
+            prepared_reused += first.last_reused() && first.last_prepared() ? 1 : 0;
         }
         for (int r = 0; r < a.runs; ++r) {
             const auto t0 = Clock::now();

@@ -113,6 +113,50 @@ void lidar_anchors_are_honoured(void **) {
     assert_int_equal(off.lidar_anchored_geometry, 0);
 }
 
+// Stage 4's work on its image computed ahead (prepare_image) gives run()'s results bit for bit
+// and is taken as it is: with sparse points its superpixels and edges, with a dense scan (whose
+// superpixels follow the scan) its edges only. Another image's or another size's is not used.
+void image_work_computed_ahead(void **) {
+    const test::PlanarScene s = test::make_planar_scene();
+    SceneFlowField ms = test::sample_matches(s.truth, 0.05, 0.05, 12), md = test::sample_matches(s.truth, 0.05, 0.05, 12);
+    interpolation::InterpolationOptions a;
+    a.superpixels.region_size = 20;
+    a.lidar_points_per_superpixel = 2;
+    a.num_threads = 2;
+    const SparseLidar sparse = lidar_grid(s.truth, ms, 40), dense = lidar_grid(s.truth, md, 4);
+    const interpolation::RobustInterpolator ip(a);
+    const auto same = [](const interpolation::InterpolationResult &x, const interpolation::InterpolationResult &y) {
+        const cv::Mat1f *fx[] = {&x.dense.u, &x.dense.v, &x.dense.d0, &x.dense.d1, &x.dense.confidence, &x.edges};
+        const cv::Mat1f *fy[] = {&y.dense.u, &y.dense.v, &y.dense.d0, &y.dense.d1, &y.dense.confidence, &y.edges};
+        for (int i = 0; i < 6; ++i)
+            if (cv::norm(*fx[i], *fy[i], cv::NORM_INF) != 0) return false;
+        return x.num_superpixels == y.num_superpixels && cv::countNonZero(x.superpixels != y.superpixels) == 0;
+    };
+    for (const bool scan : {false, true}) {
+        const SceneFlowField &m = scan ? md : ms;
+        const SparseLidar &lidar = scan ? dense : sparse;
+        const interpolation::InterpolationResult plain = ip.run(m, lidar, s.image);
+        const interpolation::ImageWork w = ip.prepare_image(s.image, lidar.points.size());
+        assert_int_equal(w.region_size, plain.superpixel_size);
+        assert_true((w.superpixels == nullptr) == scan);
+        const interpolation::InterpolationResult ahead = ip.run(m, lidar, s.image, {}, {}, {}, 0, &w);
+        assert_true(same(ahead, plain));
+        assert_true(ahead.edges.data == w.edges.data);  // taken, not computed again
+        if (!scan) assert_true(ahead.superpixels.data == w.superpixels->labels.data);
+    }
+    cv::Mat other = s.image.clone();
+    other.ptr<uint8_t>(80)[100] ^= 0x40;
+    const interpolation::ImageWork of_other = ip.prepare_image(other, sparse.points.size());
+    const interpolation::ImageWork of_scan = ip.prepare_image(s.image, dense.points.size());
+    const interpolation::InterpolationResult plain = ip.run(ms, sparse, s.image);
+    for (const interpolation::ImageWork *w : {&of_other, &of_scan}) {
+        const interpolation::InterpolationResult r = ip.run(ms, sparse, s.image, {}, {}, {}, 0, w);
+        assert_true(same(r, plain));
+        assert_true(r.edges.data != w->edges.data);
+    }
+    assert_true(test::throws_code(ErrorCode::InvalidArgument, [&] { ip.prepare_image(cv::Mat(), 0); }));
+}
+
 // The superpixel size follows the LiDAR's density between min_superpixel_size and region_size:
 // sparse points (or none, or the rule off) keep region_size; run() reports the size it used.
 void superpixels_shrink_with_dense_lidar(void **) {
@@ -498,6 +542,7 @@ int main(void) {
         cmocka_unit_test(rejects_invalid_input),
         cmocka_unit_test(sed_model_errors),
         cmocka_unit_test(superpixels_shrink_with_dense_lidar),
+        cmocka_unit_test(image_work_computed_ahead),
         cmocka_unit_test(lidar_residuals_follow_a_curved_surface),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

@@ -193,6 +193,7 @@ void estimator_first_frame_prepared(void **) {
         est.prepare_first(s.left0, s.right0, s.lidar0, cache);
         const pipeline::EstimatorResult prepared = est.run(in, &cache);
         assert_true(cache.last_reused());
+        assert_true(cache.last_prepared());
         for (auto f : {&pipeline::EstimatorResult::forward, &pipeline::EstimatorResult::backward,
                        &pipeline::EstimatorResult::after_sgm, &pipeline::EstimatorResult::after_fb,
                        &pipeline::EstimatorResult::sparse, &pipeline::EstimatorResult::dense})
@@ -216,8 +217,10 @@ void estimator_first_frame_prepared(void **) {
         const pipeline::EstimatorResult with_other = est.run(in, &other);
         assert_true(same_field(with_other.forward, alone.forward));
         assert_true(same_field(with_other.dense, alone.dense));
-        // The decoupled design's t0 disparity depends on the points; the descriptors do not.
+        // The decoupled design's t0 disparity depends on the points; the descriptors do not. The
+        // rest of the frame's preparation (its checks, stage 4's superpixels) is the points' too.
         assert_true(other.last_reused() == (o.matching.method == MatchMethod::PatchMatch));
+        assert_false(other.last_prepared());
 
         pipeline::StreamCache kept;
         est.prepare_first(s.left0, s.right0, s.lidar0, kept);
@@ -226,6 +229,9 @@ void estimator_first_frame_prepared(void **) {
                                       [&] { est.prepare_first(s.left0, narrow, s.lidar0, kept); }));
         est.run(in, &kept);
         assert_true(kept.last_reused());
+        assert_true(kept.last_prepared());
+        est.run(in, &kept);  // spent by its pair
+        assert_false(kept.last_prepared());
     }
 }
 

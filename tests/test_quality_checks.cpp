@@ -101,6 +101,44 @@ void estimator_calibration_size(void **) {
     assert_true(cv::norm(flagged.forward.confidence, good.forward.confidence * 0.25f, cv::NORM_INF) < 1e-6);
 }
 
+// A stream's first frame prepared ahead (Estimator::prepare_first) gives its pair the input
+// checks of the pair alone, flagged or not; a frame prepared that is not the pair's t0 lends it
+// nothing.
+void prepared_first_frame(void **) {
+    synth::SynthConfig c;
+    c.width = 640;
+    c.height = 192;
+    c.seed = 3;
+    c.threads = 2;
+    const synth::SynthScene s = synth::render(c);
+    pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset("realtime");
+    o.threads = 2;
+    const pipeline::Estimator e(o);
+    const pipeline::FrameInput good{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, s.left0.size()};
+    const pipeline::FrameInput swapped{s.right0, s.left0, s.right1, s.left1, s.lidar0, s.lidar1, s.camera, {}};
+    pipeline::FrameInput resized = good;
+    resized.calibration_size = {s.left0.cols + 2, s.left0.rows};
+    const pipeline::FrameInput *cases[] = {&good, &swapped, &resized};
+    for (const pipeline::FrameInput *in : cases) {
+        const pipeline::EstimatorResult alone = e.run(*in);
+        pipeline::StreamCache cache;
+        e.prepare_first(in->left0, in->right0, in->lidar0, cache);
+        const pipeline::EstimatorResult prepared = e.run(*in, &cache);
+        assert_true(cache.last_prepared());
+        assert_int_equal(prepared.quality.flags, alone.quality.flags);
+        assert_string_equal(prepared.quality.reason.c_str(), alone.quality.reason.c_str());
+        assert_true(cv::norm(prepared.dense.d0, alone.dense.d0, cv::NORM_INF) == 0);
+        assert_true(cv::norm(prepared.dense.confidence, alone.dense.confidence, cv::NORM_INF) == 0);
+    }
+    assert_true(e.run(good).quality.ok());
+    assert_true(e.run(swapped).quality.flags & LeftRightSwapped);
+    // The swapped frame prepared, the good pair run: nothing of it is taken, the pair is ok.
+    pipeline::StreamCache cache;
+    e.prepare_first(swapped.left0, swapped.right0, swapped.lidar0, cache);
+    assert_true(e.run(good, &cache).quality.ok());
+    assert_false(cache.last_prepared());
+}
+
 }  // namespace
 
 int main() {
@@ -109,6 +147,7 @@ int main() {
         cmocka_unit_test(blank_and_frozen),
         cmocka_unit_test(summary_and_tally),
         cmocka_unit_test(estimator_calibration_size),
+        cmocka_unit_test(prepared_first_frame),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/parallel_errors.hpp"
+#include "core/pixels.hpp"
 #include "core/threads.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
@@ -611,12 +612,12 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
     return sp;
 }
 
-// Phase 2b: the edge map (res.edges) and the seed graph over it (its time the start of
-// res.timings.geodesic_s). Serial but for OpenCV's filters.
+// Phase 2b: the edge map (res.edges; `edges` when computed ahead, else null) and the seed graph
+// over it (its time the start of res.timings.geodesic_s). Serial but for OpenCV's filters.
 SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds &seeds, const InterpolationOptions &o,
-                          InterpolationResult &res) {
+                          const cv::Mat1f *edges, InterpolationResult &res) {
     auto t = Clock::now();
-    res.edges = compute_edge_map(image, o.edges, sed);
+    res.edges = edges ? *edges : compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
     t = Clock::now();
     SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
@@ -629,17 +630,25 @@ SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds
 // thread unless the application enabled nesting); on OpenMP's worker, whose heap already holds
 // what stage 4's other phases freed, not on a thread of their own. The same results on any
 // thread count.
+// With `work` (the image's, for this superpixel size) its edges and superpixels are taken as they are.
 Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed,
-                                 const SeedSet &set, int largest, const InterpolationOptions &o,
+                                 const SeedSet &set, int largest, const InterpolationOptions &o, const ImageWork *work,
                                  InterpolationResult &res, SeedGraph &graph) {
     Superpixels sp;
+    if (work && work->superpixels) {
+        sp = *work->superpixels;
+        res.superpixels = sp.labels;
+        res.num_superpixels = sp.count;
+        graph = edges_and_graph(image, sed, set.seeds, o, &work->edges, res);
+        return sp;
+    }
     ParallelErrors errors;
 #pragma omp parallel num_threads(2) if (o.num_threads > 1)
     {
         // The edges' many full-size planes on the calling thread, whose heap the earlier stages
         // freed; the worker's heap takes the superpixels' few.
         const int id = omp_get_thread_num(), team = omp_get_num_threads();
-        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, res); });
+        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, work ? &work->edges : nullptr, res); });
         if (id == 1 || team == 1)
             errors.run([&] { sp = segment(image, geometry_hint, set, largest, o, std::max(1, o.num_threads - 1), res); });
     }
@@ -1060,10 +1069,37 @@ RobustInterpolator::RobustInterpolator(const InterpolationOptions &options) : op
         sed_ = std::make_shared<const SedModel>(options_.edges.sed_model_path);
 }
 
+ImageWork RobustInterpolator::prepare_image(const cv::Mat &image, size_t lidar_points, int threads) const {
+    require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
+    require(!image.empty(), ErrorCode::InvalidArgument, "interpolation: empty image");
+    ImageWork w;
+    w.image = image.clone();
+    const int largest = options_.superpixels.region_size;
+    w.region_size = superpixel_size(options_, options_.use_lidar ? lidar_points : 0, image.size());
+    // Superpixels beside the edges, as run() computes them without a dense scan (no depth).
+    const bool segments = w.region_size >= largest;
+    const int n = threads > 0 ? threads : options_.num_threads;
+    ParallelErrors errors;
+#pragma omp parallel num_threads(2) if (n > 1 && segments)
+    {
+        const int id = omp_get_thread_num(), team = omp_get_num_threads();
+        if (id == 0) errors.run([&] { w.edges = compute_edge_map(image, options_.edges, sed_.get()); });
+        if (segments && (id == 1 || team == 1))
+            errors.run([&] {
+                SuperpixelOptions spo = options_.superpixels;
+                spo.num_threads = std::max(1, n - 1);
+                spo.disparity_weight = 0.0f;
+                w.superpixels = std::make_shared<const Superpixels>(compute_superpixels(image, spo, DisparityMap()));
+            });
+    }
+    errors.rethrow_if_any();
+    return w;
+}
+
 InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const SparseLidar &lidar0,
                                             const cv::Mat &image, const DisparityMap &geometry_hint,
                                             const StereoCamera &camera, const SparseLidar &lidar1,
-                                            int threads) const {
+                                            int threads, const ImageWork *work) const {
     require(threads >= 0 && threads <= 1024, ErrorCode::InvalidArgument, "interpolation: threads must be in [0, 1024]");
     InterpolationOptions this_call = options_;
     if (threads > 0) this_call.num_threads = threads;
@@ -1082,8 +1118,11 @@ InterpolationResult RobustInterpolator::run(const SceneFlowField &matches, const
     const auto t_seeds = Clock::now();
     const SeedSet seed_set = prepare_seeds(matches, lidar0, lidar1, geometry_hint, camera, w, h, o, res);
     res.timings.seeds_s = seconds_since(t_seeds);
+    if (work && (work->region_size != o.superpixels.region_size || !pixel_identical(work->image, image)))
+        work = nullptr;  // another image's, or another size's
     SeedGraph graph;
-    const Superpixels sp = segment_beside_graph(image, geometry_hint, sed_.get(), seed_set, largest, o, res, graph);
+    const Superpixels sp =
+        segment_beside_graph(image, geometry_hint, sed_.get(), seed_set, largest, o, work, res, graph);
     const Neighbourhoods neighbourhoods = find_neighbourhoods(seed_set, sp, std::move(graph), o, res);
     const Models models = fit_models(seed_set, sp, neighbourhoods, o, options_.initial_hypotheses, res);
     write_output(seed_set, sp, neighbourhoods, models, lidar0, w, h, o, res);

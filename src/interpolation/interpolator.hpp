@@ -217,6 +217,17 @@ struct InterpolationResult {
     InterpolationTimings timings;
 };
 
+// What run() computes of its image alone, computed ahead (a stream's first frame, before its
+// pair exists): the edge map, and the superpixels where no dense scan sizes them (they then
+// depend on the image alone). run() uses it for an image pixel-identical to `image` and a
+// superpixel size equal to `region_size`, and computes afresh otherwise: the same results.
+struct ImageWork {
+    cv::Mat image;                          // a copy of the image it was computed from
+    int region_size = 0;                    // the superpixel size it was computed for
+    cv::Mat1f edges;
+    std::shared_ptr<const Superpixels> superpixels;  // null when a dense scan sizes them
+};
+
 class RobustInterpolator {
 public:
     // Validates the options and loads the SED model when edges.method is StructuredForest.
@@ -237,10 +248,17 @@ public:
     // lidar1: D_l^1 points (may be empty; otherwise checked as lidar0), used only with LiDAR on
     // and a rigid background model (lidar1_from_background).
     // threads: OpenMP threads of this call, 0 = options().num_threads (results do not depend on it).
+    // work: prepare_image's for this image, or null (see ImageWork); only read.
     InterpolationResult run(const SceneFlowField &matches, const SparseLidar &lidar0, const cv::Mat &image,
                             const DisparityMap &geometry_hint = DisparityMap(),
                             const StereoCamera &camera = StereoCamera(),
-                            const SparseLidar &lidar1 = SparseLidar(), int threads = 0) const;
+                            const SparseLidar &lidar1 = SparseLidar(), int threads = 0,
+                            const ImageWork *work = nullptr) const;
+
+    // The ImageWork of `image` for a run whose lidar0 will have `lidar_points` points (the
+    // superpixel size depends on their number). Throws as run() does for a bad image or threads.
+    // Safe to call from several threads.
+    ImageWork prepare_image(const cv::Mat &image, size_t lidar_points, int threads = 0) const;
 
     const InterpolationOptions &options() const { return options_; }
 

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
+#include "core/pixels.hpp"
 #include "core/threads.hpp"
 #include "lidar/binning.hpp"
 #include "matching/motion_prior.hpp"
@@ -285,12 +286,19 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
                            input.step_us};
     report_hidden(input.lidar0, frame.lidar0, "t0");
     report_hidden(input.lidar1, frame.lidar1, "t1");
+    // The prepared first frame serves only the pair whose t0 it is (and is spent either way).
+    std::shared_ptr<const PreparedFrame> first;
+    if (cache) {
+        if (cache->first_ && cache->first_->is_t0_of(frame)) first = cache->first_;
+        cache->first_.reset();
+        cache->last_prepared_ = first != nullptr;
+    }
     const auto t_quality = Clock::now();
-    quality::Report verdict = assess_inputs(frame);
+    quality::Report verdict = assess_inputs(frame, first ? &first->check : nullptr);
     const double quality_seconds = seconds_since(t_quality);
     EstimatorResult r;
     try {
-        r = run_scaled(frame, cache, threads);
+        r = run_scaled(frame, cache, threads, first.get());
     } catch (const Error &e) {
         if (verdict.ok()) throw;
         // The inputs' fault is the likelier explanation of a stage that found nothing to work with.
@@ -314,34 +322,58 @@ void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const S
     check_frame(FrameInput{left, right, left, right, lidar, lidar, StereoCamera{}, {}, 0});
     ReleaseWorkersAtEnd release_at_end;
     const int threads = frame_threads(options_);
-    StereoFrame f{left, right, lidar_in_use(options_, lidar)};
+    auto first = std::make_shared<PreparedFrame>();
+    first->left = left.clone();
+    first->right = right.clone();
+    first->lidar = lidar_in_use(options_, lidar);
+    first->check = quality::check_stereo(left, right, options_.use_lidar ? &first->lidar : nullptr);
+    StereoFrame f{left, right, first->lidar};
     const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
-    if (reduces(size, left.size())) f = downscale_stereo(f.left, f.right, f.lidar, size);
+    if (options_.processing_scale < 1.0 && reduces(size, left.size())) {
+        f = downscale_stereo(f.left, f.right, f.lidar, size);
+        first->small_left = f.left;
+        first->small_right = f.right;
+        first->small_lidar = f.lidar;
+    }
     const SparseLidar none{f.left.cols, f.left.rows, {}};
     const SparseLidar &points = options_.use_lidar ? f.lidar : none;
+    // Stage 4 sees the pair's own points (a first pair carries none of earlier frames), thinned
+    // as run_stages_2_to_4 thins them.
+    if (options_.last_stage == Stage::Interpolation)
+        first->stage4 = std::make_shared<const interpolation::ImageWork>(interpolator_.prepare_image(
+            f.left, lidar::bin_points(points, options_.lidar_cell).points.size(), threads));
     const matching::MatchingOptions mo = matching_options(stage_options_, threads);
     if (options_.matching.method == matching::MatchMethod::Decoupled) {
         std::shared_ptr<matching::DecoupledStereo> s =
             matching::first_frame_stereo(f.left, f.right, points, mo, stage_options_.consistency.sgm);
         cache.clear();
         cache.stereo_t1_ = std::move(s);
-        return;
+    } else {
+        std::shared_ptr<const matching::StereoFeatures> t1 = matching::stereo_features(f.left, f.right, mo);
+        cache.clear();
+        cache.t1_ = std::move(t1);
     }
-    std::shared_ptr<const matching::StereoFeatures> t1 = matching::stereo_features(f.left, f.right, mo);
-    cache.clear();
-    cache.t1_ = std::move(t1);
+    cache.first_ = std::move(first);
 }
 
-quality::Report Estimator::assess_inputs(const FrameInput &frame) const {
+bool PreparedFrame::is_t0_of(const FrameInput &frame) const {
+    return lidar.width == frame.lidar0.width && lidar.height == frame.lidar0.height &&
+           lidar.points == frame.lidar0.points && pixel_identical(left, frame.left0) &&
+           pixel_identical(right, frame.right0);
+}
+
+quality::Report Estimator::assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0) const {
     quality::Input q{frame.left0, frame.right0, frame.left1, frame.right1,
                      options_.use_lidar ? &frame.lidar0 : nullptr, frame.calibration_size};
-    quality::Report r = quality::assess(q);
+    quality::Report r = quality::assess(q, t0);
     if (!r.ok()) log::write(log::Level::Warning, "input quality: " + r.summary());
     return r;
 }
 
-EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cache, int threads) const {
-    if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache, threads));
+EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cache, int threads,
+                                      const PreparedFrame *first) const {
+    const interpolation::ImageWork *work = first ? first->stage4.get() : nullptr;
+    if (options_.processing_scale >= 1.0) return drop_stage_fields(run_native(frame, cache, threads, work));
     const auto t_total = Clock::now();
     const int W = frame.left0.cols, H = frame.left0.rows;
     const cv::Size size = scaled_size(W, H, options_.processing_scale);
@@ -349,12 +381,14 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
         log::write(log::Level::Info, "processing_scale " + std::to_string(options_.processing_scale) + " leaves " +
                                          std::to_string(W) + "x" + std::to_string(H) +
                                          " at its size: the frame runs at full resolution");
-        return drop_stage_fields(run_native(frame, cache, threads));
+        return drop_stage_fields(run_native(frame, cache, threads, work));
     }
     auto t = Clock::now();
-    const FrameInput small = downscale_frame(frame, size);
+    const StereoFrame t0{first ? first->small_left : cv::Mat(), first ? first->small_right : cv::Mat(),
+                         first ? first->small_lidar : SparseLidar()};
+    const FrameInput small = downscale_frame(frame, size, first && first->small_left.size() == size ? &t0 : nullptr);
     const double t_down = seconds_since(t);
-    EstimatorResult r = drop_stage_fields(run_native(small, cache, threads));
+    EstimatorResult r = drop_stage_fields(run_native(small, cache, threads, work));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
     const EdgeGuide edges0(small.left0, frame.left0, options_.upscale_edge_step);
@@ -368,7 +402,8 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
     return r;
 }
 
-EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cache, int threads) const {
+EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cache, int threads,
+                                      const interpolation::ImageWork *work) const {
     const auto t_total = Clock::now();
     EstimatorResult r;
     r.last_stage = options_.last_stage;
@@ -391,7 +426,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                                               std::to_string(carried.points.points.size()) +
                                               " LiDAR points of earlier frames added to this pair's " +
                                               std::to_string(lidar0.points.size()));
-        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r);
+        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r, work);
         if (cache && cache->lag_ > 0) {
             // Frames in flight: this pair's movers for the pair lag_ pairs later, under the
             // conditions of the stream's own prior below.
@@ -462,7 +497,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
     }
     release_openmp_workers();  // stage 2 starts with OpenCV's SGBM
 
-    run_stages_2_to_4(frame, lidar0, lidar1, DisparityMap(), threads, r);
+    run_stages_2_to_4(frame, lidar0, lidar1, DisparityMap(), threads, r, work);
     r.total_seconds = seconds_since(t_total);
     return r;
 }
@@ -502,7 +537,8 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
 }
 
 void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &all0, const SparseLidar &all1,
-                                  const DisparityMap &sgm, int threads, EstimatorResult &r) const {
+                                  const DisparityMap &sgm, int threads, EstimatorResult &r,
+                                  const interpolation::ImageWork *work) const {
     // Stages 2-4 see the points thinned to lidar_cell (every point when it is off).
     const SparseLidar lidar0 = lidar::bin_points(all0, options_.lidar_cell);
     const SparseLidar lidar1 = lidar::bin_points(all1, options_.lidar_cell);
@@ -532,7 +568,7 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
     // Stage 4.
     t = Clock::now();
     interpolation::InterpolationResult ir =
-        interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads);
+        interpolator_.run(r.sparse, lidar0, frame.left0, c.sgm, frame.camera, lidar1, threads, work);
     r.dense = std::move(ir.dense);
     if (log::enabled(log::Level::Debug)) {
         const interpolation::InterpolationTimings &it = ir.timings;

@@ -172,9 +172,24 @@ struct EstimatorResult {
 // pace within 25 %, as the prior's carry over lag steps assumes (a dropped frame breaks it).
 bool lagged_prior_in_pace(double t0, double t1, double later_t0, int lag);
 
+// What Estimator::prepare_first keeps of a stream's first frame for its pair besides stage 1's
+// part: the frame itself (copies, to know it again as the pair's t0), its stereo checks, its
+// images and points at the processing size, and stage 4's work on its left image.
+struct PreparedFrame {
+    cv::Mat left, right;
+    SparseLidar lidar;  // the points in use (lidar_in_use)
+    quality::StereoCheck check;
+    cv::Mat small_left, small_right;  // at the processing size; empty when the frame runs at its own
+    SparseLidar small_lidar;
+    std::shared_ptr<const interpolation::ImageWork> stage4;  // null when the run stops before stage 4
+    // Whether `frame`'s t0 images and points (those in use) are this frame's.
+    bool is_t0_of(const FrameInput &frame) const;
+};
+
 class StreamCache {
 public:
     void clear() {
+        first_.reset();
         t1_.reset();
         spare_.reset();
         stereo_t1_.reset();
@@ -184,6 +199,8 @@ public:
     }
     // Whether the last run through this cache reused the previous frame's descriptors.
     bool last_reused() const { return last_reused_; }
+    // Whether the last run through this cache took prepare_first's frame as its t0.
+    bool last_prepared() const { return last_prepared_; }
 
     // Frames in flight (docs/ARCHITECTURE.md): a pool computes pair k while pairs k-lag+1 ..
     // k-1 are still running, so pair k's motion prior comes from pair k-lag, carried lag steps.
@@ -204,7 +221,9 @@ private:
     std::shared_ptr<const matching::StereoFeatures> t1_;
     std::shared_ptr<matching::StereoFeatures> spare_;  // storage for the next t1 pair
     std::shared_ptr<const matching::DecoupledStereo> stereo_t1_;  // decoupled design: t1 disparity
+    std::shared_ptr<const PreparedFrame> first_;  // prepare_first's, until the next run
     bool last_reused_ = false;
+    bool last_prepared_ = false;
 };
 
 class Estimator {
@@ -224,8 +243,10 @@ public:
 
     // A stream's first frame (after a new cache or clear()), before its pair exists: computes
     // into *cache what the pair's run(frame, cache) would compute of that frame as its t0 (the
-    // decoupled design's t0 disparity, the paper design's t0 descriptors), which that run then
-    // takes as a previous frame's: the pair's result stays bit for bit that of run() alone, and
+    // decoupled design's t0 disparity, the paper design's t0 descriptors; the input checks of
+    // the frame's stereo pair, its images at the processing size and stage 4's edges and
+    // superpixels of its left image), which that run then takes as a previous frame's when its
+    // t0 is this frame: the pair's result stays bit for bit that of run() alone, and
     // a later frame's inputs that differ only cost the reuse. Why: a frame arrives one frame
     // period before its pair can start, so a lone pair's latency loses that part.
     // Throws lidarflow::Error for bad images or points (the cache is then left unchanged).
@@ -236,15 +257,21 @@ public:
 
 private:
     // The input checks of quality/input_quality.hpp, logged as a warning when one fails.
-    quality::Report assess_inputs(const FrameInput &frame) const;
+    // t0: the checks of the frame's t0 pair computed ahead, or null.
+    quality::Report assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0 = nullptr) const;
     // run() after the input checks: at processing_scale, results brought back to the input size.
-    EstimatorResult run_scaled(const FrameInput &frame, StreamCache *cache, int threads) const;
-    // threads: this frame's OpenMP threads (core/threads.hpp).
-    EstimatorResult run_native(const FrameInput &frame, StreamCache *cache, int threads) const;
+    // first: the prepared frame that is this pair's t0, or null.
+    EstimatorResult run_scaled(const FrameInput &frame, StreamCache *cache, int threads,
+                               const PreparedFrame *first) const;
+    // threads: this frame's OpenMP threads (core/threads.hpp). work: stage 4's work on
+    // frame.left0 computed ahead, or null.
+    EstimatorResult run_native(const FrameInput &frame, StreamCache *cache, int threads,
+                               const interpolation::ImageWork *work = nullptr) const;
     // Stages 2-4 on stage 1's fields (r.forward, r.backward); `sgm` is stage 2's reference
     // disparity, or empty to compute it here.
     void run_stages_2_to_4(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,
-                           const DisparityMap &sgm, int threads, EstimatorResult &r) const;
+                           const DisparityMap &sgm, int threads, EstimatorResult &r,
+                           const interpolation::ImageWork *work) const;
     // Stage 1 of the decoupled design (matching/decoupled_matcher.hpp); returns stage 2's SGM.
     // With a cache, `next` is the t1 pair's stereo, which the caller stores in the cache once
     // the pair's result is complete; `tracked_motion` says whether the pair's tracks fit a

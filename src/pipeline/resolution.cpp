@@ -44,7 +44,7 @@ StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const Sp
     return out;
 }
 
-FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
+FrameInput downscale_frame(const FrameInput &f, cv::Size size, const StereoFrame *t0_small) {
     const cv::Mat *imgs[4] = {&f.left0, &f.right0, &f.left1, &f.right1};
     const char *names[4] = {"left0", "right0", "left1", "right1"};
     for (int i = 0; i < 4; ++i) {
@@ -59,7 +59,7 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size) {
     f.lidar1.validate(W, H, "FrameInput: lidar1");
     const double sx = double(size.width) / W, sy = double(size.height) / H;
     FrameInput out;
-    StereoFrame t0 = downscale_stereo(f.left0, f.right0, f.lidar0, size);
+    StereoFrame t0 = t0_small ? *t0_small : downscale_stereo(f.left0, f.right0, f.lidar0, size);
     StereoFrame t1 = downscale_stereo(f.left1, f.right1, f.lidar1, size);
     out.left0 = std::move(t0.left);
     out.right0 = std::move(t0.right);

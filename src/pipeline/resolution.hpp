@@ -20,7 +20,10 @@ cv::Size scaled_size(int w, int h, double scale);
 // shared pixel); the camera's intrinsics scaled. Throws InvalidArgument / SizeMismatch for
 // empty or unequal images and bad LiDAR (as the matcher would at full size). The result owns
 // its images.
-FrameInput downscale_frame(const FrameInput &frame, cv::Size size);
+// t0: the frame's t0 images and points already at `size` (downscale_stereo's, e.g. a prepared
+// first frame's), taken as they are; null: downscaled here.
+struct StereoFrame;
+FrameInput downscale_frame(const FrameInput &frame, cv::Size size, const StereoFrame *t0 = nullptr);
 
 // One stereo pair and its points at `size`, by downscale_frame's rule; unchecked (the caller has
 // checked them as downscale_frame does).

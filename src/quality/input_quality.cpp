@@ -266,34 +266,41 @@ std::string lidar_disagrees(const LidarAgreement &a) {
                   a.decided, a.residual_p75);
 }
 
-Report assess(const Input &in) {
+StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0) {
+    StereoCheck c;
+    const double scale = work_scale(left0.size());
+    // Too small a frame for corners, a pyramid and patches (such frames are refused later on).
+    if (left0.cols * scale < kMinSide || left0.rows * scale < kMinSide) return c;
+    const cv::Mat1b left = work_gray(left0, scale), right = work_gray(right0, scale);
+    c.matches = match_stereo_features(left, right, 1.0 / scale);
+    c.swapped = left_right_swapped(c.matches);
+    c.skewed = not_rectified(c.matches);
+    if (c.swapped.empty() && c.skewed.empty() && lidar0 && !lidar0->points.empty()) {
+        c.lidar = lidar_agreement(left, right, *lidar0, scale);
+        c.lidar_disagrees = lidar_disagrees(c.lidar);
+    }
+    return c;
+}
+
+Report assess(const Input &in, const StereoCheck *t0) {
     Report r;
-    const cv::Size size = in.left0.size();
-    if (const std::string w = calibration_size_mismatch(in.calibration_size, size); !w.empty())
+    if (const std::string w = calibration_size_mismatch(in.calibration_size, in.left0.size()); !w.empty())
         r.add(CalibrationSizeMismatch, w);
     if (const std::string w = blank_frame(in); !w.empty()) {
         r.add(BlankFrame, w);
         return r;  // nothing else is measurable on a blank frame
     }
-    const double scale = work_scale(size);
-    // Too small a frame for corners, a pyramid and patches (such frames are refused later on).
-    if (size.width * scale < kMinSide || size.height * scale < kMinSide) return r;
-    const cv::Mat1b left = work_gray(in.left0, scale), right = work_gray(in.right0, scale);
-    const StereoMatches m = match_stereo_features(left, right, 1.0 / scale);
-    const std::string swapped = left_right_swapped(m), skewed = not_rectified(m);
-    if (!swapped.empty()) r.add(LeftRightSwapped, swapped);
-    if (!skewed.empty()) r.add(NotRectified, skewed);
-    LidarAgreement a;
-    if (!(r.flags & (LeftRightSwapped | NotRectified)) && in.lidar0 && !in.lidar0->points.empty()) {
-        a = lidar_agreement(left, right, *in.lidar0, scale);
-        if (const std::string w = lidar_disagrees(a); !w.empty()) r.add(LidarDisagrees, w);
-    }
+    const StereoCheck c = t0 ? *t0 : check_stereo(in.left0, in.right0, in.lidar0);
+    if (!c.swapped.empty()) r.add(LeftRightSwapped, c.swapped);
+    if (!c.skewed.empty()) r.add(NotRectified, c.skewed);
+    if (!c.lidar_disagrees.empty()) r.add(LidarDisagrees, c.lidar_disagrees);
     if (log::enabled(log::Level::Debug))
         log::write(log::Level::Debug,
-                   "input quality: " + std::to_string(m.count) + " stereo matches (" + std::to_string(m.positive) +
-                       " positive, " + std::to_string(m.negative) + " negative disparity), median |dy| " +
-                       format("%.2f px", m.median_abs_dy) + "; LiDAR residual p75 " + format("%.2f px", a.residual_p75) + " of " +
-                       std::to_string(a.decided) + " points; " + r.summary());
+                   "input quality: " + std::to_string(c.matches.count) + " stereo matches (" +
+                       std::to_string(c.matches.positive) + " positive, " + std::to_string(c.matches.negative) +
+                       " negative disparity), median |dy| " + format("%.2f px", c.matches.median_abs_dy) +
+                       "; LiDAR residual p75 " + format("%.2f px", c.lidar.residual_p75) + " of " +
+                       std::to_string(c.lidar.decided) + " points; " + r.summary());
     return r;
 }
 

@@ -82,8 +82,18 @@ LidarAgreement lidar_agreement(const cv::Mat1b &left, const cv::Mat1b &right, co
                                double scale);
 std::string lidar_disagrees(const LidarAgreement &a);
 
+// The checks of one stereo pair and its points (a frame alone): the order and rectification
+// of its images, then, when both hold, its LiDAR. Nothing is measured on a frame too small.
+struct StereoCheck {
+    StereoMatches matches;
+    LidarAgreement lidar;
+    std::string swapped, skewed, lidar_disagrees;  // each check's reason, "" when it finds nothing
+};
+StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0);
 // Every check on one frame. The LiDAR check is skipped when the images themselves are wrong
-// (it would only repeat that). Never throws for well-formed inputs.
-Report assess(const Input &in);
+// (it would only repeat that). t0: check_stereo of in's t0 images and lidar0 when already
+// computed (a stream's first frame, ahead of its pair), else null. Never throws for
+// well-formed inputs.
+Report assess(const Input &in, const StereoCheck *t0 = nullptr);
 
 }  // namespace lidarflow::quality

@@ -521,9 +521,10 @@ LF_API void lf_destroy(lf_estimator_t *estimator);
  * this frame's is D_l^1. The new result replaces the previous one. The first frame (after
  * lf_create or lf_reset; with "frames_in_flight" 1) is not idle either: its push computes what
  * the pair needs of that frame alone (its stereo disparity, or the PatchMatch presets'
- * descriptors: "paper", "balanced"): the first push takes that long (~0.02 s at "realtime",
- * ~0.06 s at "paper" on KITTI, two cores) and the second that much less. Results are the same
- * bit for bit. In a stream the result also
+ * descriptors: "paper", "balanced"; its input checks, its images at the processing size, the
+ * interpolation's edges and superpixels): the first push takes that long (~0.03 s at
+ * "realtime", ~0.1 s at "paper" on KITTI, two cores) and the second that much less. Results are
+ * the same bit for bit. In a stream the result also
  * depends on the frames before: the decoupled presets start each pair's flow from what moved
  * in the previous pair ("matching.stream_prior") and add the static LiDAR points of the last 3
  * frames to the pair's own ("matching.stream_lidar_frames"), so a stream that starts later

@@ -10,6 +10,16 @@
 
 namespace lidarflow::test {
 
+// The synthetic scene of `seed` at width x height, rendered on two threads.
+inline synth::SynthScene render_scene(int width, int height, unsigned seed) {
+    synth::SynthConfig c;
+    c.width = width;
+    c.height = height;
+    c.seed = seed;
+    c.threads = 2;
+    return synth::render(c);
+}
+
 // Bit-for-bit equality of two images (core/pixels.hpp).
 inline bool same_mat(const cv::Mat &a, const cv::Mat &b) { return pixel_identical(a, b); }
 

@@ -27,13 +27,8 @@ using namespace lidarflow::pipeline;
 
 namespace {
 
-synth::SynthScene scene(int width = 320, int height = 96, uint64_t seed = 5) {
-    synth::SynthConfig c;
-    c.width = width;
-    c.height = height;
-    c.seed = seed;
-    c.threads = 2;
-    return synth::render(c);
+synth::SynthScene scene(int width = 320, int height = 96, unsigned seed = 5) {
+    return test::render_scene(width, height, seed);
 }
 
 FrameInput frame_of(const synth::SynthScene &s) {

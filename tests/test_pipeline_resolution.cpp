@@ -138,12 +138,7 @@ void upscale_keeps_edges_the_image_shows(void **) {
 }
 
 void half_resolution_estimator(void **) {
-    synth::SynthConfig c;
-    c.width = 320;
-    c.height = 96;
-    c.seed = 3;
-    c.threads = 2;
-    const synth::SynthScene s = synth::render(c);
+    const synth::SynthScene s = test::render_scene(320, 96, 3);
     FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     EstimatorOptions o;
     o.processing_scale = 0.5;
@@ -196,11 +191,7 @@ void half_resolution_estimator(void **) {
 // whose points surround it) is removed before every stage: a scaled run restores the LiDAR d0
 // of the points it ran with, so the pixel keeps the estimate instead of the hidden value.
 void hidden_lidar_point_is_not_used(void **) {
-    synth::SynthConfig c;
-    c.width = 320;
-    c.height = 96;
-    c.seed = 3;
-    const synth::SynthScene s = synth::render(c);
+    const synth::SynthScene s = test::render_scene(320, 96, 3);
     FrameInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}};
     const int hx = 160, hy = 70;
     const float near = s.disp0_occ(hy, hx) > 0 ? s.disp0_occ(hy, hx) : 20.0f;

@@ -16,12 +16,7 @@ using namespace lidarflow::pipeline;
 namespace {
 
 synth::SynthScene scene() {
-    synth::SynthConfig c;
-    c.width = 320;
-    c.height = 96;
-    c.seed = 5;
-    c.threads = 2;
-    return synth::render(c);
+    return test::render_scene(320, 96, 5);
 }
 
 FrameInput frame_of(const synth::SynthScene &s) {

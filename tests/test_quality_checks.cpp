@@ -17,6 +17,7 @@
 extern "C" {
 #include <cmocka.h>
 }
+#include "synth_fields.hpp"
 #include "test_support.hpp"
 
 using namespace lidarflow;
@@ -76,12 +77,7 @@ void summary_and_tally(void **) {
 
 // The estimator reports the calibration's size when it knows it, and only then.
 void estimator_calibration_size(void **) {
-    synth::SynthConfig c;
-    c.width = 320;
-    c.height = 96;
-    c.seed = 5;
-    c.threads = 2;
-    const synth::SynthScene s = synth::render(c);
+    const synth::SynthScene s = test::render_scene(320, 96, 5);
     pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset("realtime");
     o.last_stage = pipeline::Stage::Matching;
     const pipeline::Estimator e(o);
@@ -105,12 +101,7 @@ void estimator_calibration_size(void **) {
 // checks of the pair alone, flagged or not; a frame prepared that is not the pair's t0 lends it
 // nothing.
 void prepared_first_frame(void **) {
-    synth::SynthConfig c;
-    c.width = 640;
-    c.height = 192;
-    c.seed = 3;
-    c.threads = 2;
-    const synth::SynthScene s = synth::render(c);
+    const synth::SynthScene s = test::render_scene(640, 192, 3);
     pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset("realtime");
     o.threads = 2;
     const pipeline::Estimator e(o);

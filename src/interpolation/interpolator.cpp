@@ -630,7 +630,8 @@ SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds
 // thread unless the application enabled nesting); on OpenMP's worker, whose heap already holds
 // what stage 4's other phases freed, not on a thread of their own. The same results on any
 // thread count.
-// With `work` (the image's, for this superpixel size) its edges and superpixels are taken as they are.
+// With `work` (the image's, for this superpixel size) its edges and superpixels are taken as
+// they are.
 Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geometry_hint, const SedModel *sed,
                                  const SeedSet &set, int largest, const InterpolationOptions &o, const ImageWork *work,
                                  InterpolationResult &res, SeedGraph &graph) {

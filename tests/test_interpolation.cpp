@@ -118,7 +118,8 @@ void lidar_anchors_are_honoured(void **) {
 // superpixels follow the scan) its edges only. Another image's or another size's is not used.
 void image_work_computed_ahead(void **) {
     const test::PlanarScene s = test::make_planar_scene();
-    SceneFlowField ms = test::sample_matches(s.truth, 0.05, 0.05, 12), md = test::sample_matches(s.truth, 0.05, 0.05, 12);
+    SceneFlowField ms = test::sample_matches(s.truth, 0.05, 0.05, 12);
+    SceneFlowField md = test::sample_matches(s.truth, 0.05, 0.05, 12);
     interpolation::InterpolationOptions a;
     a.superpixels.region_size = 20;
     a.lidar_points_per_superpixel = 2;

@@ -649,7 +649,8 @@ Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geome
         // The edges' many full-size planes on the calling thread, whose heap the earlier stages
         // freed; the worker's heap takes the superpixels' few.
         const int id = omp_get_thread_num(), team = omp_get_num_threads();
-        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, work ? &work->edges : nullptr, res); });
+        const cv::Mat1f *edges = work ? &work->edges : nullptr;
+        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, edges, res); });
         if (id == 1 || team == 1)
             errors.run([&] { sp = segment(image, geometry_hint, set, largest, o, std::max(1, o.num_threads - 1), res); });
     }

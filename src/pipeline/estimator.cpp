@@ -426,7 +426,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                                               std::to_string(carried.points.points.size()) +
                                               " LiDAR points of earlier frames added to this pair's " +
                                               std::to_string(lidar0.points.size()));
-        if (options_.last_stage != Stage::Matching) run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r, work);
+        if (options_.last_stage != Stage::Matching)
+            run_stages_2_to_4(frame, stage_lidar0, lidar1, sgm, threads, r, work);
         if (cache && cache->lag_ > 0) {
             // Frames in flight: this pair's movers for the pair lag_ pairs later, under the
             // conditions of the stream's own prior below.

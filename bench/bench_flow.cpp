@@ -18,6 +18,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/video.hpp>
 
+#include "args.hpp"
 #include "bench_util.hpp"
 #include "core/gray.hpp"
 #include "eval/kitti_runner.hpp"
@@ -67,7 +68,7 @@ int main(int argc, char **argv) try {
     int runs = 9, threads = 2;
     bench::for_each_flag(argc, argv, usage, [&](const std::string &a, const auto &next) {
         if (a == "--root") root = next();
-        else if (a == "--ids") ids = bench::split_commas(next());
+        else if (a == "--ids") ids = cli::split_list(next());
         else if (a == "--preset") preset = next();
         else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
         else if (a == "--threads") threads = std::max(1, std::atoi(next().c_str()));

@@ -21,6 +21,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "args.hpp"
 #include "bench_util.hpp"
 #include "consistency/sgm_check.hpp"
 #include "core/error.hpp"
@@ -86,7 +87,7 @@ int main(int argc, char **argv) try {
     g.threads = 2;
     bench::for_each_flag(argc, argv, usage, [&](const std::string &a, const auto &next) {
         if (a == "--root") root = next();
-        else if (a == "--ids") ids = bench::split_commas(next());
+        else if (a == "--ids") ids = cli::split_list(next());
         else if (a == "--scale") scale = std::atof(next().c_str());
         else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
         else if (a == "--threads") g.threads = std::max(1, std::atoi(next().c_str()));

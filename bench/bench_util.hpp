@@ -55,18 +55,6 @@ void for_each_flag(int argc, char **argv, Usage &&usage, On &&on) {
     }
 }
 
-// "a,b,,c" -> {a, b, c} (--ids lists).
-inline std::vector<std::string> split_commas(const std::string &s) {
-    std::vector<std::string> out;
-    size_t a = 0;
-    while (a <= s.size()) {
-        const size_t b = std::min(s.find(',', a), s.size());
-        if (b > a) out.push_back(s.substr(a, b - a));
-        a = b + 1;
-    }
-    return out;
-}
-
 inline double median(std::vector<double> v) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());

@@ -327,14 +327,9 @@ void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const S
     first->right = right.clone();
     first->lidar = lidar_in_use(options_, lidar);
     first->check = quality::check_stereo(left, right, options_.use_lidar ? &first->lidar : nullptr);
-    StereoFrame f{left, right, first->lidar};
     const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
-    if (options_.processing_scale < 1.0 && reduces(size, left.size())) {
-        f = downscale_stereo(f.left, f.right, f.lidar, size);
-        first->small_left = f.left;
-        first->small_right = f.right;
-        first->small_lidar = f.lidar;
-    }
+    if (reduces(size, left.size())) first->small = downscale_stereo(left, right, first->lidar, size);
+    const StereoFrame f = first->small.left.empty() ? StereoFrame{left, right, first->lidar} : first->small;
     const SparseLidar none{f.left.cols, f.left.rows, {}};
     const SparseLidar &points = options_.use_lidar ? f.lidar : none;
     // Stage 4 sees the pair's own points (a first pair carries none of earlier frames), thinned
@@ -384,9 +379,8 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
         return drop_stage_fields(run_native(frame, cache, threads, work));
     }
     auto t = Clock::now();
-    const StereoFrame t0{first ? first->small_left : cv::Mat(), first ? first->small_right : cv::Mat(),
-                         first ? first->small_lidar : SparseLidar()};
-    const FrameInput small = downscale_frame(frame, size, first && first->small_left.size() == size ? &t0 : nullptr);
+    const StereoFrame *t0 = first && first->small.left.size() == size ? &first->small : nullptr;
+    const FrameInput small = downscale_frame(frame, size, t0);
     const double t_down = seconds_since(t);
     EstimatorResult r = drop_stage_fields(run_native(small, cache, threads, work));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});

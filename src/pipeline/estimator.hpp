@@ -120,6 +120,12 @@ struct FrameInput {
     int64_t step_us = 0;
 };
 
+// One stereo pair (a frame) and its points.
+struct StereoFrame {
+    cv::Mat left, right;
+    SparseLidar lidar;
+};
+
 // Why EstimatorResult::ego is or is not the metric ego-motion (values of the C ABI's
 // lf_ego_state_t).
 enum class EgoState { Ok = 0, NotRun = 1, NoCalibration = 2, TooFewInliers = 3, Disabled = 4 };
@@ -179,8 +185,7 @@ struct PreparedFrame {
     cv::Mat left, right;
     SparseLidar lidar;  // the points in use (lidar_in_use)
     quality::StereoCheck check;
-    cv::Mat small_left, small_right;  // at the processing size; empty when the frame runs at its own
-    SparseLidar small_lidar;
+    StereoFrame small;  // at the processing size; empty images when the frame runs at its own
     std::shared_ptr<const interpolation::ImageWork> stage4;  // null when the run stops before stage 4
     // Whether `frame`'s t0 images and points (those in use) are this frame's.
     bool is_t0_of(const FrameInput &frame) const;
@@ -258,7 +263,7 @@ public:
 private:
     // The input checks of quality/input_quality.hpp, logged as a warning when one fails.
     // t0: the checks of the frame's t0 pair computed ahead, or null.
-    quality::Report assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0 = nullptr) const;
+    quality::Report assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0) const;
     // run() after the input checks: at processing_scale, results brought back to the input size.
     // first: the prepared frame that is this pair's t0, or null.
     EstimatorResult run_scaled(const FrameInput &frame, StreamCache *cache, int threads,
@@ -266,7 +271,7 @@ private:
     // threads: this frame's OpenMP threads (core/threads.hpp). work: stage 4's work on
     // frame.left0 computed ahead, or null.
     EstimatorResult run_native(const FrameInput &frame, StreamCache *cache, int threads,
-                               const interpolation::ImageWork *work = nullptr) const;
+                               const interpolation::ImageWork *work) const;
     // Stages 2-4 on stage 1's fields (r.forward, r.backward); `sgm` is stage 2's reference
     // disparity, or empty to compute it here.
     void run_stages_2_to_4(const FrameInput &frame, const SparseLidar &lidar0, const SparseLidar &lidar1,

@@ -22,15 +22,10 @@ cv::Size scaled_size(int w, int h, double scale);
 // its images.
 // t0: the frame's t0 images and points already at `size` (downscale_stereo's, e.g. a prepared
 // first frame's), taken as they are; null: downscaled here.
-struct StereoFrame;
 FrameInput downscale_frame(const FrameInput &frame, cv::Size size, const StereoFrame *t0 = nullptr);
 
 // One stereo pair and its points at `size`, by downscale_frame's rule; unchecked (the caller has
 // checked them as downscale_frame does).
-struct StereoFrame {
-    cv::Mat left, right;
-    SparseLidar lidar;
-};
 StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size);
 
 // `small` brought to width x height: a pixel takes the bilinear blend of the four small pixels

@@ -22,6 +22,7 @@
 #include "bench_util.hpp"
 #include "core/gray.hpp"
 #include "eval/kitti_runner.hpp"
+#include "matching/decoupled_matcher.hpp"
 #include "pipeline/estimator.hpp"
 #include "pipeline/resolution.hpp"
 
@@ -45,12 +46,8 @@ double both_directions(const cv::Mat &a, const cv::Mat &b, const matching::FlowS
     for (int r = 0; r < runs; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
         for (int dir = 0; dir < 2; ++dir) {
-            cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
-            dis->setFinestScale(o.finest_scale);
-            dis->setPatchSize(o.patch_size);
-            dis->setPatchStride(o.patch_stride);
+            cv::Ptr<cv::DISOpticalFlow> dis = matching::flow_search(o);
             dis->setGradientDescentIterations(steps);
-            dis->setVariationalRefinementIterations(o.refine_iterations);
             dis->setUseSpatialPropagation(propagation);
             cv::Mat2f flow(a.size(), cv::Vec2f(0, 0));
             dis->calc(dir == 0 ? a : b, dir == 0 ? b : a, flow);

@@ -23,6 +23,17 @@
 #include "stereo/guided_sgm.hpp"
 
 namespace lidarflow::matching {
+
+cv::Ptr<cv::DISOpticalFlow> flow_search(const FlowSearchOptions &o) {
+    cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+    dis->setFinestScale(o.finest_scale);
+    dis->setPatchSize(o.patch_size);
+    dis->setPatchStride(o.patch_stride);
+    dis->setGradientDescentIterations(o.descent_iterations);
+    dis->setVariationalRefinementIterations(o.refine_iterations);
+    return dis;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -188,12 +199,7 @@ cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, co
 
 cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o,
                                cv::Mat2f initial = cv::Mat2f()) {
-    cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
-    dis->setFinestScale(o.finest_scale);
-    dis->setPatchSize(o.patch_size);
-    dis->setPatchStride(o.patch_stride);
-    dis->setGradientDescentIterations(o.descent_iterations);
-    dis->setVariationalRefinementIterations(o.refine_iterations);
+    cv::Ptr<cv::DISOpticalFlow> dis = flow_search(o);
     release_openmp_workers();  // DIS runs on OpenCV's threads: ours must not spin beside them
     // OpenCV's DIS refuses images under 12 px a side (and patches wider than the image): a small
     // frame is searched inside a replicated border and cropped back.

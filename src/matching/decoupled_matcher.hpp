@@ -15,6 +15,7 @@
 #include <memory>
 
 #include <opencv2/core.hpp>
+#include <opencv2/video/tracking.hpp>
 
 #include "consistency/options.hpp"
 #include "core/camera.hpp"
@@ -62,6 +63,10 @@ struct DecoupledStereo {
     // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };
+
+// OpenCV's DIS as the matcher runs it for each direction: PRESET_MEDIUM with `o`'s finest level,
+// patch size and stride, descent steps and refinement (bench_flow measures the same object).
+cv::Ptr<cv::DISOpticalFlow> flow_search(const FlowSearchOptions &o);
 
 // A stream's first frame (left, right, its t0 points `lidar`) before its pair exists: the
 // disparity match_decoupled would compute for it as the pair's t0, to pass as that pair's

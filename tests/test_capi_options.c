@@ -302,6 +302,7 @@ static void test_named_presets(void **state) {
     assert_true(get_number(o, "matching.flow_patch_size") == 6.0);
     assert_true(get_number(o, "matching.flow_patch_stride") == 3.0); /* default's is 2 */
     assert_true(get_number(fresh, "matching.flow_patch_stride") == 2.0);
+    assert_true(get_number(o, "matching.flow_backward_patch_stride") == 0.0); /* the forward's */
     assert_true(get_number(o, "stereo.ternary_census") == 1.0); /* default's is binary */
     assert_true(get_number(o, "stereo.census_threshold") == 1.0);
     assert_true(get_number(fresh, "stereo.ternary_census") == 0.0);
@@ -338,6 +339,7 @@ static void test_named_presets(void **state) {
     assert_int_equal(lf_options_get_string(o, "matching.method", &method), LF_OK);
     assert_string_equal(method, "decoupled");
     assert_true(get_number(o, "processing_scale") < 1.0);
+    assert_true(get_number(o, "matching.flow_backward_patch_stride") == 4.0); /* coarser than the forward's 3 */
     assert_int_equal(lf_options_set_string(o, "matching.method", "patchmatch"), LF_OK);
     assert_int_equal(lf_options_get_string(o, "matching.method", &method), LF_OK);
     assert_string_equal(method, "patchmatch");

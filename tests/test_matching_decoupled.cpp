@@ -176,6 +176,12 @@ void bad_inputs_are_refused(void **) {
     const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
     assert_true(test::throws_code(ErrorCode::InvalidArgument,
                                   [&] { matching::match_decoupled(in, bad, sgm, s.camera, true); }));
+    for (int stride : {-1, decoupled_options().flow.patch_size}) {
+        bad = decoupled_options();
+        bad.flow.backward_patch_stride = stride;
+        assert_true(test::throws_code(ErrorCode::InvalidArgument,
+                                      [&] { matching::match_decoupled(in, bad, sgm, s.camera, true); }));
+    }
     assert_true(test::throws_code(ErrorCode::InvalidArgument, [] { matching::parse_match_method("sgm"); }));
     assert_int_equal(static_cast<int>(matching::parse_match_method("decoupled")),
                      static_cast<int>(matching::MatchMethod::Decoupled));
@@ -198,6 +204,26 @@ void realtime_is_accurate(void **) {
     }
     assert_true(lidar < image);
     assert_true(lidar < 12.0);
+}
+
+// The backward search's own stride changes the backward flow only (the forward-backward check's
+// input), never the forward one or the disparities; 0 is the forward's stride.
+void backward_stride_acts_on_the_backward_flow(void **) {
+    const synth::SynthScene s = scene();
+    const matching::MatchInput in{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1};
+    const consistency::SgmOptions sgm;
+    matching::MatchingOptions o = decoupled_options();
+    assert_int_equal(o.flow.backward_patch_stride, 4);  // realtime's
+    o.flow.backward_patch_stride = 0;
+    const matching::DecoupledResult same = matching::match_decoupled(in, o, sgm, s.camera, true);
+    o.flow.backward_patch_stride = o.flow.patch_stride;
+    const matching::DecoupledResult explicit_same = matching::match_decoupled(in, o, sgm, s.camera, true);
+    assert_true(same_field(same.backward, explicit_same.backward));
+    o.flow.backward_patch_stride = o.flow.patch_stride + 2;
+    const matching::DecoupledResult coarse = matching::match_decoupled(in, o, sgm, s.camera, true);
+    assert_true(same_field(same.forward, coarse.forward));
+    assert_true(same_mat(same.sgm0, coarse.sgm0) && same_mat(same.sgm1, coarse.sgm1));
+    assert_false(same_field(same.backward, coarse.backward));
 }
 
 // Every preset gives the same fields with 1, 2 and 3 threads.
@@ -337,6 +363,7 @@ int main() {
         cmocka_unit_test(fields_hold_stereo_and_flow),   cmocka_unit_test(rigid_prior_acts),
         cmocka_unit_test(bad_inputs_are_refused),        cmocka_unit_test(realtime_is_accurate),
         cmocka_unit_test(presets_do_not_depend_on_threads), cmocka_unit_test(stream_reuses_the_newer_disparity),
+        cmocka_unit_test(backward_stride_acts_on_the_backward_flow),
         cmocka_unit_test(threads_follow_the_idle_cpus),  cmocka_unit_test(paper_preset_is_the_papers_design),
         cmocka_unit_test(rigid_choice_picks_one_of_two_flows), cmocka_unit_test(t0_points_carried_to_t1),
     };

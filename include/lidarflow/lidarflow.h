@@ -175,6 +175,10 @@ typedef struct lf_options lf_options_t;
  *   "matching.flow_finest_scale"      int [0, 8]    (decoupled) DIS's finest pyramid level
  *   "matching.flow_patch_size"        int [2, 32]   (decoupled) DIS patch side [px]
  *   "matching.flow_patch_stride"      int [1, 31]   (decoupled) < flow_patch_size
+ *   "matching.flow_backward_patch_stride" int [0, 31] (decoupled) the backward flow's stride,
+ *                                                   < flow_patch_size; only the
+ *                                                   forward-backward check reads that flow
+ *                                                   (0 = flow_patch_stride; "realtime" 4)
  *   "matching.flow_descent_iterations" int [1, 200] (decoupled) per patch and level
  *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement
  *   "matching.flow_prior_track_step"  int [0, 256]  (decoupled) grid step [px] of the tracks

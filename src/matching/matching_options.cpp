@@ -77,6 +77,8 @@ void MatchingOptions::validate() const {
     check(flow.patch_size >= 2 && flow.patch_size <= 32, "flow.patch_size must be in [2, 32]");
     check(flow.patch_stride >= 1 && flow.patch_stride < flow.patch_size,
           "flow.patch_stride must be in [1, flow.patch_size)");
+    check(flow.backward_patch_stride >= 0 && flow.backward_patch_stride < flow.patch_size,
+          "flow.backward_patch_stride must be 0 or in [1, flow.patch_size)");
     check(flow.descent_iterations >= 1 && flow.descent_iterations <= 200,
           "flow.descent_iterations must be in [1, 200]");
     check(flow.refine_iterations >= 0 && flow.refine_iterations <= 100,

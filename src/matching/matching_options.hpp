@@ -63,6 +63,9 @@ struct FlowSearchOptions {
     int finest_scale = 1;        // pyramid level where the search stops (0 = full resolution)
     int patch_size = 8;          // [px]
     int patch_stride = 3;        // [px], < patch_size
+    // The backward search's stride [px], < patch_size (0 = patch_stride): only the
+    // forward-backward check reads that flow, so it may be coarser than the result's.
+    int backward_patch_stride = 0;
     int descent_iterations = 25; // inverse-compositional steps per patch and level
     int refine_iterations = 5;   // variational refinement per level (0 = off)
     // Start the search from the rigid motion of the dominant (static) scene, fitted to sparse

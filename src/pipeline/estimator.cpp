@@ -232,6 +232,8 @@ EstimatorOptions EstimatorOptions::preset(const std::string &name) {
             o.matching.stereo.paths = 4;
             o.matching.flow.descent_iterations = 16;
             o.interpolation.iterations = 2;
+            // The backward flow, which only the forward-backward check reads, on a coarser grid.
+            o.matching.flow.backward_patch_stride = 4;
         }
         return o;
     }

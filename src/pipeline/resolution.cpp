@@ -2,6 +2,7 @@
 #include "pipeline/resolution.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -84,8 +85,14 @@ EdgeGuide::EdgeGuide(const cv::Mat &small_image, const cv::Mat &full_image, floa
 
 namespace {
 
-// The corner (0..3: (y0,x0), (y0,x1), (y1,x0), (y1,x1)) a pixel at an edge takes, or -1 to blend.
-int edge_corner(const SceneFlowField &s, const EdgeGuide &g, int x, int y, int x0, int x1, int y0, int y1) {
+// What the pixels between small pixels (x0, y0) and (x0 + 1, y0 + 1) do, the same for each of them.
+enum CellKind : uint8_t { kNearest = 0, kBlend = 1, kAtEdge = 2 };
+
+// kNearest where a corner has no value; kAtEdge where d0, u or v spread over more than the edge
+// guide's step across the four corners (with a guide); else kBlend.
+CellKind cell_kind(const SceneFlowField &s, const EdgeGuide *g, int x0, int x1, int y0, int y1) {
+    if (!(s.valid(y0, x0) && s.valid(y0, x1) && s.valid(y1, x0) && s.valid(y1, x1))) return kNearest;
+    if (!g) return kBlend;
     const int cy[4] = {y0, y0, y1, y1}, cx[4] = {x0, x1, x0, x1};
     float spread = 0;
     for (const cv::Mat1f *m : {&s.d0, &s.u, &s.v}) {
@@ -96,7 +103,13 @@ int edge_corner(const SceneFlowField &s, const EdgeGuide &g, int x, int y, int x
         }
         spread = std::max(spread, hi - lo);
     }
-    if (spread <= g.step) return -1;
+    return spread <= g->step ? kBlend : kAtEdge;
+}
+
+// The corner (0..3: (y0,x0), (y0,x1), (y1,x0), (y1,x1)) whose small gray value is nearest the
+// pixel's own (the first on ties).
+int edge_corner(const EdgeGuide &g, int x, int y, int x0, int x1, int y0, int y1) {
+    const int cy[4] = {y0, y0, y1, y1}, cx[4] = {x0, x1, x0, x1};
     const int own = g.full(y, x);
     int best = 0, nearest = std::abs(g.small(y0, x0) - own);
     for (int c = 1; c < 4; ++c) {
@@ -133,6 +146,15 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
         colw[x] = fx - col0[x];
         coln[x] = std::min(w - 1, static_cast<int>(x / rx));
     }
+    // Each cell's kind once: target pixels share their four source corners with ~1 / scale^2
+    // others.
+    cv::Mat_<uint8_t> kind(h, w);
+    const EdgeGuide *guide = edge ? edges : nullptr;
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
+    for (int y0 = 0; y0 < h; ++y0) {
+        const int y1 = std::min(h - 1, y0 + 1);
+        for (int x0 = 0; x0 < w; ++x0) kind(y0, x0) = cell_kind(small, guide, x0, std::min(w - 1, x0 + 1), y0, y1);
+    }
 #pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < height; ++y) {
         const float fy = std::clamp((y + 0.5f) / ry - 0.5f, 0.0f, float(h - 1));
@@ -142,14 +164,15 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
         for (int x = 0; x < width; ++x) {
             const int x0 = col0[x], x1 = col1[x];
             const float ax = colw[x];
-            if (small.valid(y0, x0) && small.valid(y0, x1) && small.valid(y1, x0) && small.valid(y1, x1)) {
-                const int c = edge ? edge_corner(small, *edges, x, y, x0, x1, y0, y1) : -1;
-                if (c >= 0) {
-                    const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;
-                    for (int k = 0; k < 5; ++k) (*res[k])(y, x) = gain[k] * (*in[k])(ys, xs);
-                    out.valid(y, x) = 1;
-                    continue;
-                }
+            const uint8_t k = kind(y0, x0);  // col1 and y1 are the next source pixel, as there
+            if (k == kAtEdge) {
+                const int c = edge_corner(*edges, x, y, x0, x1, y0, y1);
+                const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;
+                for (int i = 0; i < 5; ++i) (*res[i])(y, x) = gain[i] * (*in[i])(ys, xs);
+                out.valid(y, x) = 1;
+                continue;
+            }
+            if (k == kBlend) {
                 for (int c = 0; c < 5; ++c) {
                     const cv::Mat1f &m = *in[c];
                     const float top = m(y0, x0) + ax * (m(y0, x1) - m(y0, x0));

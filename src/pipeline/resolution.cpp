@@ -2,8 +2,8 @@
 #include "pipeline/resolution.hpp"
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -164,7 +164,7 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
         for (int x = 0; x < width; ++x) {
             const int x0 = col0[x], x1 = col1[x];
             const float ax = colw[x];
-            const uint8_t k = kind(y0, x0);  // col1 and y1 are the next source pixel, as there
+            const uint8_t k = kind(y0, x0);  // x1, y1: the next source pixel, as `kind` took them
             if (k == kAtEdge) {
                 const int c = edge_corner(*edges, x, y, x0, x1, y0, y1);
                 const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;

@@ -352,9 +352,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
         add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
-        FlowSearchOptions back_search = opt.flow;
-        if (back_search.backward_patch_stride > 0) back_search.patch_stride = back_search.backward_patch_stride;
-        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, back_search, prior1.clone()), prior1,
+        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow.backward(), prior1.clone()), prior1,
                                            r.sgm1, rc, opt.threads),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none, opt.threads);
     }

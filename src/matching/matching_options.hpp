@@ -76,6 +76,13 @@ struct FlowSearchOptions {
     // a (2r + 1)^2 box is lower and the stereo (or LiDAR) disparity it comes from exists: the
     // static scene's exact motion from its measured depth (0 = off; needs prior_track_step).
     int rigid_choice_radius = 0;
+
+    // The options of the backward (t1 -> t0) search: these, with backward_patch_stride's stride.
+    FlowSearchOptions backward() const {
+        FlowSearchOptions b = *this;
+        if (backward_patch_stride > 0) b.patch_stride = backward_patch_stride;
+        return b;
+    }
 };
 
 enum class MatchVariant { ImageOnly, ImLidar, ImLidarWin, ImLidarWinConst1, Full };

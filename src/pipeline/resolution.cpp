@@ -132,8 +132,8 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
     const cv::Mat1f *in[5] = {&small.u, &small.v, &small.d0, &small.d1, &small.confidence};
     cv::Mat1f *res[5] = {&out.u, &out.v, &out.d0, &out.d1, &out.confidence};
     const float gain[5] = {rx, ry, rx, rx, 1.0f};
-    const bool edge = edges && edges->step > 0;
-    if (edge)
+    const EdgeGuide *guide = edges && edges->step > 0 ? edges : nullptr;
+    if (guide)
         require(edges->small.size() == small.d0.size() && edges->full.size() == cv::Size(width, height),
                 ErrorCode::SizeMismatch, "upscale_field: the edge guide's images differ in size from the fields");
     // The source columns and weight of each target column, the same for every row.
@@ -149,7 +149,6 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
     // Each cell's kind once: target pixels share their four source corners with ~1 / scale^2
     // others.
     cv::Mat_<uint8_t> kind(h, w);
-    const EdgeGuide *guide = edge ? edges : nullptr;
 #pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y0 = 0; y0 < h; ++y0) {
         const int y1 = std::min(h - 1, y0 + 1);
@@ -166,7 +165,7 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
             const float ax = colw[x];
             const uint8_t k = kind(y0, x0);  // x1, y1: the next source pixel, as `kind` took them
             if (k == kAtEdge) {
-                const int c = edge_corner(*edges, x, y, x0, x1, y0, y1);
+                const int c = edge_corner(*guide, x, y, x0, x1, y0, y1);
                 const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;
                 for (int i = 0; i < 5; ++i) (*res[i])(y, x) = gain[i] * (*in[i])(ys, xs);
                 out.valid(y, x) = 1;

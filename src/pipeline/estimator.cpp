@@ -330,7 +330,7 @@ void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const S
     first->lidar = lidar_in_use(options_, lidar);
     first->check = quality::check_stereo(left, right, options_.use_lidar ? &first->lidar : nullptr);
     const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
-    if (reduces(size, left.size())) first->small = downscale_stereo(left, right, first->lidar, size);
+    if (reduces(size, left.size())) first->small = downscale_stereo(left, right, first->lidar, size, threads);
     const StereoFrame f = first->small.left.empty() ? StereoFrame{left, right, first->lidar} : first->small;
     const SparseLidar none{f.left.cols, f.left.rows, {}};
     const SparseLidar &points = options_.use_lidar ? f.lidar : none;
@@ -382,7 +382,7 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
     }
     auto t = Clock::now();
     const StereoFrame *t0 = first && first->small.left.size() == size ? &first->small : nullptr;
-    const FrameInput small = downscale_frame(frame, size, t0);
+    const FrameInput small = downscale_frame(frame, size, t0, threads);
     const double t_down = seconds_since(t);
     EstimatorResult r = drop_stage_fields(run_native(small, cache, threads, work));
     r.timings.insert(r.timings.begin(), {"downscale", t_down});

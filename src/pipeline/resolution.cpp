@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgproc.hpp>
 
+#include "core/area_downscale.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"
 
@@ -36,16 +36,17 @@ cv::Size scaled_size(int w, int h, double scale) {
     return {std::max(2, static_cast<int>(std::lround(w * scale))), std::max(2, static_cast<int>(std::lround(h * scale)))};
 }
 
-StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size) {
+StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size,
+                             int threads) {
     const double sx = double(size.width) / left.cols, sy = double(size.height) / left.rows;
     StereoFrame out;
-    cv::resize(left, out.left, size, 0, 0, cv::INTER_AREA);
-    cv::resize(right, out.right, size, 0, 0, cv::INTER_AREA);
+    area_downscale(left, out.left, size, threads);
+    area_downscale(right, out.right, size, threads);
     out.lidar = downscale_lidar(lidar, size, sx, sy);
     return out;
 }
 
-FrameInput downscale_frame(const FrameInput &f, cv::Size size, const StereoFrame *t0_small) {
+FrameInput downscale_frame(const FrameInput &f, cv::Size size, const StereoFrame *t0_small, int threads) {
     const cv::Mat *imgs[4] = {&f.left0, &f.right0, &f.left1, &f.right1};
     const char *names[4] = {"left0", "right0", "left1", "right1"};
     for (int i = 0; i < 4; ++i) {
@@ -60,8 +61,8 @@ FrameInput downscale_frame(const FrameInput &f, cv::Size size, const StereoFrame
     f.lidar1.validate(W, H, "FrameInput: lidar1");
     const double sx = double(size.width) / W, sy = double(size.height) / H;
     FrameInput out;
-    StereoFrame t0 = t0_small ? *t0_small : downscale_stereo(f.left0, f.right0, f.lidar0, size);
-    StereoFrame t1 = downscale_stereo(f.left1, f.right1, f.lidar1, size);
+    StereoFrame t0 = t0_small ? *t0_small : downscale_stereo(f.left0, f.right0, f.lidar0, size, threads);
+    StereoFrame t1 = downscale_stereo(f.left1, f.right1, f.lidar1, size, threads);
     out.left0 = std::move(t0.left);
     out.right0 = std::move(t0.right);
     out.lidar0 = std::move(t0.lidar);

@@ -15,18 +15,21 @@ namespace lidarflow::pipeline {
 // Size of an image of w x h at `scale`: round(w * scale) x round(h * scale), at least 2x2.
 cv::Size scaled_size(int w, int h, double scale);
 
-// The frame at `size` (smaller than the input): images area-averaged; each LiDAR point moves to
+// The frame at `size` (smaller than the input): images area-averaged (core/area_downscale, on
+// `threads` OpenMP threads); each LiDAR point moves to
 // the small pixel whose area holds it, with its disparity scaled (the larger, nearer one wins a
 // shared pixel); the camera's intrinsics scaled. Throws InvalidArgument / SizeMismatch for
 // empty or unequal images and bad LiDAR (as the matcher would at full size). The result owns
 // its images.
 // t0: the frame's t0 images and points already at `size` (downscale_stereo's, e.g. a prepared
 // first frame's), taken as they are; null: downscaled here.
-FrameInput downscale_frame(const FrameInput &frame, cv::Size size, const StereoFrame *t0 = nullptr);
+FrameInput downscale_frame(const FrameInput &frame, cv::Size size, const StereoFrame *t0 = nullptr,
+                           int threads = 1);
 
 // One stereo pair and its points at `size`, by downscale_frame's rule; unchecked (the caller has
 // checked them as downscale_frame does).
-StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size);
+StereoFrame downscale_stereo(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar, cv::Size size,
+                             int threads = 1);
 
 // `small` brought to width x height: a pixel takes the bilinear blend of the four small pixels
 // around it when all four are valid, else the value of the nearest small pixel when that one is

@@ -3,6 +3,7 @@
 // "LiDAR pixels survive every filter" on a field where every match is wrong.
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "consistency/consistency.hpp"
 #include "consistency_fixtures.hpp"  // last: brings cmocka
@@ -135,6 +136,79 @@ void clusters_do_not_depend_on_threads(void **) {
                 assert_int_equal(cv::countNonZero(many.field.valid != one.field.valid), 0);
             }
         }
+}
+
+// The clusters are the field's connected components: a breadth-first search over the same
+// neighbours and steps gives the same kept matches and counts, on noisy fields with holes.
+void clusters_are_the_components_of_the_field(void **) {
+    const int w = 151, h = 118;
+    for (int seed = 1; seed <= 3; ++seed) {
+        SceneFlowField f = SceneFlowField::zeros(w, h);
+        cv::RNG rng(static_cast<uint64_t>(seed));
+        // Rectangles of random size and level (levels 2 apart: only equal ones join), noise
+        // that sometimes breaks a link, holes.
+        cv::Mat1f level(h, w, 0.0f);
+        for (int k = 0; k < 300; ++k) {
+            const cv::Rect r(rng.uniform(0, w), rng.uniform(0, h), 1 + rng.uniform(0, 30), 1 + rng.uniform(0, 20));
+            level(r & cv::Rect(0, 0, w, h)).setTo(2.0f * rng.uniform(0, 12));
+        }
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (rng.uniform(0, 12) == 0) continue;
+                const float c = level(y, x);
+                set_match(f, x, y, c + rng.uniform(-0.5f, 0.5f), c, 10 + c, 10 + c + rng.uniform(0.0f, 1.05f));
+            }
+        for (int step : {1, 2, 3})
+            for (bool eight : {true, false}) {
+                ConsistencyOptions opt = cluster_opt(25);
+                opt.grid_step = step;
+                opt.cluster_8_neighbours = eight;
+                // Reference: breadth-first search from each unvisited match.
+                cv::Mat1i comp(h, w, -1);
+                std::vector<int> sizes;
+                const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+                for (int y = 0; y < h; ++y)
+                    for (int x = 0; x < w; ++x) {
+                        if (!f.valid(y, x) || comp(y, x) >= 0) continue;
+                        const int id = static_cast<int>(sizes.size());
+                        sizes.push_back(0);
+                        std::vector<cv::Point> queue{{x, y}};
+                        comp(y, x) = id;
+                        for (size_t q = 0; q < queue.size(); ++q) {
+                            const cv::Point p = queue[q];
+                            ++sizes.back();
+                            for (int k = 0; k < (eight ? 8 : 4); ++k) {
+                                const int nx = p.x + dx[k] * step, ny = p.y + dy[k] * step;
+                                if (nx < 0 || ny < 0 || nx >= w || ny >= h || !f.valid(ny, nx) || comp(ny, nx) >= 0)
+                                    continue;
+                                if (std::fabs(f.u(p.y, p.x) - f.u(ny, nx)) > opt.cluster_max_flow_step ||
+                                    std::fabs(f.v(p.y, p.x) - f.v(ny, nx)) > opt.cluster_max_flow_step ||
+                                    std::fabs(f.d0(p.y, p.x) - f.d0(ny, nx)) > opt.cluster_max_disp_step ||
+                                    std::fabs(f.d1(p.y, p.x) - f.d1(ny, nx)) > opt.cluster_max_disp_step)
+                                    continue;
+                                comp(ny, nx) = id;
+                                queue.emplace_back(nx, ny);
+                            }
+                        }
+                    }
+                int small = 0;
+                for (int n : sizes) small += n < opt.cluster_min_size;
+                assert_true(small > 0 && small < static_cast<int>(sizes.size()));
+                for (int threads : {1, 2, 4}) {
+                    opt.threads = threads;
+                    const ClusterResult r = remove_small_clusters(f, no_lidar(w, h), cv::Mat1b(), opt);
+                    assert_int_equal(r.clusters, static_cast<int>(sizes.size()));
+                    assert_int_equal(r.removed_clusters, small);
+                    for (int y = 0; y < h; ++y)
+                        for (int x = 0; x < w; ++x) {
+                            const bool kept = f.valid(y, x) && sizes[static_cast<size_t>(comp(y, x))] >= 25;
+                            if ((r.field.valid(y, x) != 0) != kept)
+                                fail_msg("seed %d, step %d, %s neighbours, %d threads: (%d, %d) %s", seed, step,
+                                         eight ? "8" : "4", threads, x, y, kept ? "removed" : "kept");
+                        }
+                }
+            }
+    }
 }
 
 void sparsify_keeps_most_consistent_per_block(void **) {
@@ -310,6 +384,7 @@ int main() {
         cmocka_unit_test(neighbourhood_and_grid_step),
         cmocka_unit_test(lidar_references_keep_their_cluster),
         cmocka_unit_test(clusters_do_not_depend_on_threads),
+        cmocka_unit_test(clusters_are_the_components_of_the_field),
         cmocka_unit_test(sparsify_keeps_most_consistent_per_block),
         cmocka_unit_test(sparsify_prefers_matches_inside_consistent_regions),
         cmocka_unit_test(lidar_pixels_survive_every_filter),

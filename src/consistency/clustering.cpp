@@ -2,6 +2,7 @@
 #include "consistency/clustering.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <numeric>
 #include <utility>
@@ -9,43 +10,56 @@
 
 #include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
 #include "core/threads.hpp"
 
 namespace lidarflow::consistency {
 
 namespace {
 
-// Union-find over pixel indices with path halving and union by size. Unions of disjoint index
-// ranges may run on different threads at once (they touch only their own range).
-class DisjointSets {
-public:
-    explicit DisjointSets(size_t n) : parent_(n), size_(n, 1) { std::iota(parent_.begin(), parent_.end(), 0); }
-    int find(int i) {
-        while (parent_[i] != i) {
-            parent_[i] = parent_[parent_[i]];
-            i = parent_[i];
-        }
-        return i;
-    }
-    // find() without path halving: safe beside other readers once every union is done.
-    int root_of(int i) const {
-        while (parent_[i] != i) i = parent_[i];
-        return i;
-    }
-    void unite(int a, int b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (size_[a] < size_[b]) std::swap(a, b);
-        parent_[b] = a;
-        size_[a] += size_[b];
-    }
-    int size_of_root(int root) const { return size_[root]; }
+// Union-find over pixel indices whose root is the smallest index of its set, with path halving.
+// A pixel is linked only to earlier ones, so a set made inside one band of rows keeps every
+// parent inside that band: bands may link at the same time.
+int find(std::vector<int> &parent, int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+void unite(std::vector<int> &parent, int a, int b) {
+    a = find(parent, a);
+    b = find(parent, b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+}
 
-private:
-    std::vector<int> parent_, size_;
+// The links of row y to its earlier neighbours (left, and up-left, up, up-right with 8
+// neighbours; left and up with 4), one bit each per pixel, computed for a whole row at a time
+// without branches on the values so that the comparisons vectorise.
+enum Link : uint8_t { kLeft = 1, kUpLeft = 2, kUp = 4, kUpRight = 8 };
+
+struct Planes {
+    const float *u, *v, *d0, *d1;
+    const uint8_t *valid;
 };
+
+Planes row_of(const SceneFlowField &f, int y) {
+    return {f.u[y], f.v[y], f.d0[y], f.d1[y], f.valid[y]};
+}
+
+// bit |= joined(a[x], b[x + db]) for x in [x0, x1).
+LIDARFLOW_AVX2_CLONES void add_links(const Planes &a, const Planes &b, int db, int x0, int x1, float flow_step,
+                                     float disp_step, uint8_t bit, uint8_t *__restrict links) {
+    const float *__restrict au = a.u, *__restrict av = a.v, *__restrict ad0 = a.d0, *__restrict ad1 = a.d1;
+    const float *__restrict bu = b.u + db, *__restrict bv = b.v + db, *__restrict bd0 = b.d0 + db,
+                            *__restrict bd1 = b.d1 + db;
+    const uint8_t *__restrict avalid = a.valid, *__restrict bvalid = b.valid + db;
+    for (int x = x0; x < x1; ++x) {
+        const bool j = (avalid[x] != 0) & (bvalid[x] != 0) & (std::fabs(au[x] - bu[x]) <= flow_step) &
+                       (std::fabs(av[x] - bv[x]) <= flow_step) & (std::fabs(ad0[x] - bd0[x]) <= disp_step) &
+                       (std::fabs(ad1[x] - bd1[x]) <= disp_step);
+        links[x] = static_cast<uint8_t>(links[x] | (j ? bit : 0));
+    }
+}
 
 }  // namespace
 
@@ -60,43 +74,72 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
     require(static_cast<long long>(h) * w < (1LL << 31), ErrorCode::InvalidArgument,
             "clustering: image too large");
     const int s = opt.grid_step;
-    auto similar = [&](int y0, int x0, int y1, int x1) {
-        return std::fabs(field.u(y0, x0) - field.u(y1, x1)) <= opt.cluster_max_flow_step &&
-               std::fabs(field.v(y0, x0) - field.v(y1, x1)) <= opt.cluster_max_flow_step &&
-               std::fabs(field.d0(y0, x0) - field.d0(y1, x1)) <= opt.cluster_max_disp_step &&
-               std::fabs(field.d1(y0, x0) - field.d1(y1, x1)) <= opt.cluster_max_disp_step;
-    };
-    DisjointSets sets(static_cast<size_t>(h) * w);
-    // Forward half of the neighbourhood: each pair is looked at once.
-    const int dxs8[] = {s, -s, 0, s}, dys8[] = {0, s, s, s};
-    const int n_dirs = opt.cluster_8_neighbours ? 4 : 2;
-    const int dxs4[] = {s, 0}, dys4[] = {0, s};
-    const int *dxs = opt.cluster_8_neighbours ? dxs8 : dxs4, *dys = opt.cluster_8_neighbours ? dys8 : dys4;
-    // Unites (y, x) with its forward neighbours in rows [y, y_end).
-    auto link = [&](int y, int x, int y_end) {
-        if (!field.valid(y, x)) return;
-        for (int k = 0; k < n_dirs; ++k) {
-            const int nx = x + dxs[k], ny = y + dys[k];
-            if (nx < 0 || nx >= w || ny >= y_end || !field.valid(ny, nx)) continue;
-            if (similar(y, x, ny, nx)) sets.unite(y * w + x, ny * w + nx);
+    const bool eight = opt.cluster_8_neighbours;
+    const float tf = opt.cluster_max_flow_step, td = opt.cluster_max_disp_step;
+    std::vector<int> parent(static_cast<size_t>(h) * w);
+    // Row y's links: to its left neighbour (with `left`) and to row y - s (with `up`).
+    auto row_links = [&](int y, bool left, bool up, std::vector<uint8_t> &links) {
+        std::fill(links.begin(), links.end(), 0);
+        const Planes row = row_of(field, y);
+        if (left && s < w) add_links(row, row, -s, s, w, tf, td, kLeft, links.data());
+        if (!up) return;
+        const Planes above = row_of(field, y - s);
+        add_links(row, above, 0, 0, w, tf, td, kUp, links.data());
+        if (eight && s < w) {
+            add_links(row, above, -s, s, w, tf, td, kUpLeft, links.data());
+            add_links(row, above, s, 0, w - s, tf, td, kUpRight, links.data());
         }
     };
-    // Components are the same for any thread count: each thread unites within its strip of
-    // rows, then the pairs across strip borders are united in order.
+    // Unites each pixel of row y with the neighbours its links name; a pixel still on its own
+    // takes its first neighbour's root as parent (an earlier pixel: parents stay below their index).
+    auto unite_row = [&](int y, const std::vector<uint8_t> &links) {
+        for (int x = 0, i = y * w; x < w; ++x, ++i) {
+            const uint8_t l = links[static_cast<size_t>(x)];
+            const int nb[4] = {i - s, i - s * w - s, i - s * w, i - s * w + s};  // kLeft .. kUpRight
+            for (int k = 0; k < 4; ++k) {
+                if (!(l & (1 << k))) continue;
+                if (parent[static_cast<size_t>(i)] == i)
+                    parent[static_cast<size_t>(i)] = find(parent, nb[k]);
+                else
+                    unite(parent, i, nb[k]);
+            }
+        }
+    };
+    // Components are the same for any thread count (they are the field's): each thread links
+    // the rows of its strip within it, then the first rows of each strip link to the strip before.
     const int T = std::max(1, std::min(opt.threads, h / std::max(1, 4 * s)));
+    ParallelErrors errors;
     for_each_band(h, T, [&](int, int y_begin, int y_end) {
-        for (int y = y_begin; y < y_end; ++y)
-            for (int x = 0; x < w; ++x) link(y, x, y_end);
+        errors.run([&] {
+            std::vector<uint8_t> links(static_cast<size_t>(w));
+            for (int y = y_begin; y < y_end; ++y) {
+                std::iota(parent.begin() + static_cast<std::ptrdiff_t>(y) * w,
+                          parent.begin() + static_cast<std::ptrdiff_t>(y + 1) * w, y * w);
+                row_links(y, true, y - s >= y_begin, links);
+                unite_row(y, links);
+            }
+        });
     });
+    errors.rethrow_if_any();
+    std::vector<uint8_t> links(static_cast<size_t>(w));
     for (int t = 1; t < T; ++t)
-        for (int y = std::max(0, band_start(h, t, T) - s); y < band_start(h, t, T); ++y)
-            for (int x = 0; x < w; ++x) link(y, x, h);
+        for (int y = band_start(h, t, T); y < std::min(h, band_start(h, t, T) + s); ++y) {
+            row_links(y, false, true, links);
+            unite_row(y, links);
+        }
 
-    std::vector<int> root(static_cast<size_t>(h) * w, -1);
-#pragma omp parallel for schedule(static) num_threads(T)
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            if (field.valid(y, x)) root[static_cast<size_t>(y) * w + x] = sets.root_of(y * w + x);
+    // Each pixel's root, then each root's count: a pixel's parent is an earlier (valid) pixel
+    // whose root this raster pass already knows.
+    std::vector<int> root(static_cast<size_t>(h) * w, -1), size(static_cast<size_t>(h) * w, 0);
+    for (int y = 0; y < h; ++y) {
+        const uint8_t *valid = field.valid[y];
+        for (int x = 0, i = y * w; x < w; ++x, ++i) {
+            if (!valid[x]) continue;
+            const int p = parent[static_cast<size_t>(i)];
+            root[static_cast<size_t>(i)] = p == i ? i : root[static_cast<size_t>(p)];
+            ++size[static_cast<size_t>(root[static_cast<size_t>(i)])];
+        }
+    }
 
     std::vector<unsigned char> has_reference(static_cast<size_t>(h) * w, 0);
     for (int y = 0; y < h; ++y)
@@ -114,7 +157,7 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
         for (int x = 0; x < w; ++x) {
             if (!field.valid(y, x)) continue;
             const int i = y * w + x, ri = root[static_cast<size_t>(i)];
-            const bool big = sets.size_of_root(ri) >= opt.cluster_min_size;
+            const bool big = size[static_cast<size_t>(ri)] >= opt.cluster_min_size;
             const bool keep = big || lidar.is_lidar(y, x) || (opt.keep_lidar_clusters && has_reference[ri]);
             if (i == ri) {
                 ++clusters;

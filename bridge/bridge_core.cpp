@@ -123,23 +123,6 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
                  ": the bridge computes one pair at a time (frames_in_flight must be 1)";
         return nullptr;
     }
-    {
-        // Fail at start-up, not at the first frame, when the C ABI rejects the options or the
-        // fixed camera. The library's one-time set-up (~0.1 s) is paid here too, rather than by
-        // the receiving thread at the first calibration message, which held up the first frames.
-        lf_calibration_t nominal;  // stands in for the camera that comes on the channel
-        lf_calibration_init(&nominal);
-        nominal.fx = nominal.fy = 700.0;
-        nominal.cx = 600.0;
-        nominal.cy = 180.0;
-        nominal.baseline = 0.5;
-        lf_estimator_t *probe = nullptr;
-        if (lf_create(b->options_, config.fixed_calibration ? &config.calibration : &nominal, &probe) != LF_OK) {
-            *error = std::string("estimator: ") + lf_last_error(nullptr);
-            return nullptr;
-        }
-        lf_destroy(probe);
-    }
     b->wake_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     if (b->wake_fd_ < 0) {
         *error = std::string("eventfd: ") + std::strerror(errno);
@@ -172,6 +155,25 @@ std::unique_ptr<Bridge> Bridge::create(const BridgeConfig &config, lcm_t *lcm, s
             return nullptr;
         }
         b->subscriptions_.push_back(s);
+    }
+    {
+        // Fail at start-up, not at the first frame, when the C ABI rejects the options or the
+        // fixed camera. The library's one-time set-up (~0.1 s) is paid here too, rather than by
+        // the receiving thread at the first calibration message, which held up the first frames;
+        // after subscribing, so that what the publishers send meanwhile waits in LCM's buffers
+        // instead of being missed (a calibration sent once, at a publisher's start).
+        lf_calibration_t nominal;  // stands in for the camera that comes on the channel
+        lf_calibration_init(&nominal);
+        nominal.fx = nominal.fy = 700.0;
+        nominal.cx = 600.0;
+        nominal.cy = 180.0;
+        nominal.baseline = 0.5;
+        lf_estimator_t *probe = nullptr;
+        if (lf_create(b->options_, config.fixed_calibration ? &config.calibration : &nominal, &probe) != LF_OK) {
+            *error = std::string("estimator: ") + lf_last_error(nullptr);
+            return nullptr;
+        }
+        lf_destroy(probe);
     }
     b->counters_.queue_capacity = config.queue_capacity;
     b->start_seconds_ = monotonic_seconds();

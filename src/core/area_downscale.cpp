@@ -117,16 +117,15 @@ void round_to_bytes(const float *in, int n, uint8_t *out) {
 // two output rows is summed along x once.
 void downscale_rows(const cv::Mat &src, cv::Mat &dst, const RowTaps &x, const AreaTaps &y, int y0, int y1) {
     const int n = x.n, in_n = src.cols * src.channels();
-    std::vector<float> rows(static_cast<size_t>(n) * 2), sum(static_cast<size_t>(n)), in(static_cast<size_t>(in_n));
-    float *current = rows.data(), *spare = rows.data() + n;
+    // An output row's input rows follow the previous one's: only the last x sum can serve again.
+    std::vector<float> current(static_cast<size_t>(n)), sum(static_cast<size_t>(n)), in(static_cast<size_t>(in_n));
     int current_row = -1;
     for (int oy = y0; oy < y1; ++oy) {
         for (int k = y.start[oy]; k < y.start[oy + 1]; ++k) {
             const int iy = y.index[k];
             if (iy != current_row) {
-                std::swap(current, spare);
                 to_float(src.ptr<uint8_t>(iy), in_n, in.data());
-                sum_row(in.data(), x.at.data(), x.weight.data(), x.taps, n, current);
+                sum_row(in.data(), x.at.data(), x.weight.data(), x.taps, n, current.data());
                 current_row = iy;
             }
             const float beta = y.weight[k];

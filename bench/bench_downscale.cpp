@@ -4,7 +4,6 @@
 // KITTI frames (--root) or, without them, a 1242x375 noise image; and whether the bytes agree.
 //
 //   bench_downscale [--root DIR] [--ids 000002,000003] [--runs 31] [--threads 2]
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -26,17 +25,6 @@ namespace {
 [[noreturn]] void usage(const char *msg) {
     std::fprintf(stderr, "%s\nusage: bench_downscale [--root DIR] [--ids A,B] [--runs N] [--threads N]\n", msg);
     std::exit(2);
-}
-
-template <class F>
-double median_seconds(int runs, F &&f) {
-    std::vector<double> t;
-    for (int r = 0; r < runs; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    return bench::median(t);
 }
 
 }  // namespace
@@ -71,8 +59,8 @@ int main(int argc, char **argv) try {
         for (double scale : {0.55, 0.65}) {
             const cv::Size size = pipeline::scaled_size(image.cols, image.rows, scale);
             cv::Mat a, b;
-            const double theirs = median_seconds(runs, [&] { cv::resize(image, a, size, 0, 0, cv::INTER_AREA); });
-            const double ours = median_seconds(runs, [&] { area_downscale(image, b, size, threads); });
+            const double theirs = bench::median_seconds(runs, [&] { cv::resize(image, a, size, 0, 0, cv::INTER_AREA); });
+            const double ours = bench::median_seconds(runs, [&] { area_downscale(image, b, size, threads); });
             std::printf("%-7s %4dx%-5d %4dx%-4d %9.2f ms %11.2f ms %6.2fx  %s\n", name.c_str(), image.cols, image.rows,
                         size.width, size.height, 1e3 * theirs, 1e3 * ours, theirs / ours,
                         cv::norm(a, b, cv::NORM_INF) == 0 ? "identical" : "DIFFER");

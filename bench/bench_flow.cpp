@@ -9,7 +9,6 @@
 //   bench_flow --root DIR [--ids 000002,000003] [--preset realtime|fast|default] [--runs 9]
 //              [--threads 2]
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -42,9 +41,7 @@ namespace {
 // a fresh DIS as the matcher creates one per call, started from zero flow.
 double both_directions(const cv::Mat &a, const cv::Mat &b, const matching::FlowSearchOptions &o, int steps,
                        bool propagation, int runs) {
-    std::vector<double> t;
-    for (int r = 0; r < runs; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
+    return bench::median_seconds(runs, [&] {
         for (int dir = 0; dir < 2; ++dir) {
             cv::Ptr<cv::DISOpticalFlow> dis = matching::flow_search(dir == 0 ? o : o.backward());
             dis->setGradientDescentIterations(steps);
@@ -52,9 +49,7 @@ double both_directions(const cv::Mat &a, const cv::Mat &b, const matching::FlowS
             cv::Mat2f flow(a.size(), cv::Vec2f(0, 0));
             dis->calc(dir == 0 ? a : b, dir == 0 ? b : a, flow);
         }
-        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    return bench::median(t);
+    });
 }
 
 }  // namespace

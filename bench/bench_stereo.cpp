@@ -10,7 +10,6 @@
 //                [--p1 N] [--p2 N] [--paths 4|8] [--slope F] [--cap N] [--radius N] [--intensity N]
 //                [--ternary] [--census-threshold N]
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -42,18 +41,6 @@ namespace {
                  "  [--slope F] [--cap N] [--radius N] [--intensity N] [--ternary] [--census-threshold N]\n",
                  msg);
     std::exit(2);
-}
-
-template <class F>
-double median_seconds(int runs, F &&f) {
-    std::vector<double> t;
-    for (int i = 0; i < runs; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
 }
 
 // Density and D0 outliers [%] of a disparity of the scaled frame against the full-resolution
@@ -131,7 +118,7 @@ int main(int argc, char **argv) try {
         };
         for (const Case &c : cases) {
             DisparityMap d;
-            const double s = median_seconds(runs, [&] { d = c.run(); });
+            const double s = bench::median_seconds(runs, [&] { d = c.run(); });
             double density = 0, out = 0;
             score(d, gt, sx, sy, density, out);
             std::printf("%-7s %-14s %9.4f %7.1f%% %8.2f%%\n", id.c_str(), c.name, s, density, out);

@@ -95,6 +95,7 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
     auto unite_row = [&](int y, const std::vector<uint8_t> &links) {
         for (int x = 0, i = y * w; x < w; ++x, ++i) {
             const uint8_t l = links[static_cast<size_t>(x)];
+            if (!l) continue;
             const int nb[4] = {i - s, i - s * w - s, i - s * w, i - s * w + s};  // kLeft .. kUpRight
             for (int k = 0; k < 4; ++k) {
                 if (!(l & (1 << k))) continue;

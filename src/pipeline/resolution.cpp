@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-
 #include "core/area_downscale.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"

@@ -16,9 +16,8 @@ namespace lidarflow::pipeline {
 cv::Size scaled_size(int w, int h, double scale);
 
 // The frame at `size` (smaller than the input): images area-averaged (core/area_downscale, on
-// `threads` OpenMP threads); each LiDAR point moves to
-// the small pixel whose area holds it, with its disparity scaled (the larger, nearer one wins a
-// shared pixel); the camera's intrinsics scaled. Throws InvalidArgument / SizeMismatch for
+// `threads` OpenMP threads); each LiDAR point moves to the small pixel whose area holds it, with
+// its disparity scaled (the larger, nearer one wins a shared pixel); the camera's intrinsics scaled. Throws InvalidArgument / SizeMismatch for
 // empty or unequal images and bad LiDAR (as the matcher would at full size). The result owns
 // its images.
 // t0: the frame's t0 images and points already at `size` (downscale_stereo's, e.g. a prepared

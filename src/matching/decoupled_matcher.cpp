@@ -17,6 +17,7 @@
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
 #include "core/threads.hpp"
+#include "flow/dis.hpp"
 #include "lidar/projection.hpp"
 #include "matching/motion_prior.hpp"
 #include "motion/ego_motion.hpp"
@@ -197,17 +198,34 @@ cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, co
     return dis;
 }
 
-cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o,
+// The flow from `from` to `to` at o's settings, started from `initial` (empty: from zero). The
+// project's own dense inverse search (flow/dis.hpp: OpenCV's flow bit for bit, in less time)
+// unless o asks for variational refinement, which only OpenCV's has.
+cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o, int threads,
                                cv::Mat2f initial = cv::Mat2f()) {
-    cv::Ptr<cv::DISOpticalFlow> dis = flow_search(o);
-    release_openmp_workers();  // DIS runs on OpenCV's threads: ours must not spin beside them
-    // OpenCV's DIS refuses images under 12 px a side (and patches wider than the image): a small
-    // frame is searched inside a replicated border and cropped back.
+    const bool own = o.refine_iterations == 0;
+    const flow::DisOptions d{o.finest_scale, o.patch_size, o.patch_stride, o.descent_iterations, std::max(1, threads)};
+    cv::Ptr<cv::DISOpticalFlow> dis;
+    if (!own) {
+        dis = flow_search(o);
+        release_openmp_workers();  // OpenCV's DIS runs on OpenCV's threads: ours must not spin beside them
+    }
+    auto calc = [&](const cv::Mat &a, const cv::Mat &b, cv::Mat2f &flow) {
+        if (own)
+            flow = flow::dis_flow(a, b, d, flow);
+        else
+            dis->calc(a, b, flow);
+    };
+    // A small frame is searched inside a replicated border and cropped back: OpenCV's DIS refuses
+    // images under 12 px a side (and patches wider than the image); ours needs a pyramid level at
+    // finest_scale.
     const int side = std::max(16, 2 * o.patch_size);
-    const int px = std::max(0, side - from.cols), py = std::max(0, side - from.rows);
+    int px = std::max(0, side - from.cols), py = std::max(0, side - from.rows);
+    while (own && flow::dis_coarsest_scale({from.cols + px, from.rows + py}, o.patch_size) < o.finest_scale)
+        px = 2 * (from.cols + px) - from.cols, py = 2 * (from.rows + py) - from.rows;
     if (px == 0 && py == 0) {
-        cv::Mat2f flow = std::move(initial);  // DIS starts from a given flow of the right size
-        dis->calc(from, to, flow);
+        cv::Mat2f flow = std::move(initial);  // the search starts from a given flow of the right size
+        calc(from, to, flow);
         return flow;
     }
     cv::Mat a, b;
@@ -215,7 +233,7 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
     cv::copyMakeBorder(from, a, 0, py, 0, px, cv::BORDER_REPLICATE);
     cv::copyMakeBorder(to, b, 0, py, 0, px, cv::BORDER_REPLICATE);
     if (!initial.empty()) cv::copyMakeBorder(initial, flow, 0, py, 0, px, cv::BORDER_REPLICATE);
-    dis->calc(a, b, flow);
+    calc(a, b, flow);
     return flow(cv::Rect(0, 0, from.cols, from.rows)).clone();
 }
 
@@ -309,7 +327,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     r.seconds_stereo = seconds_since(t);
 
     t = Clock::now();
-    release_openmp_workers();  // the tracks and DIS run on OpenCV's threads
+    release_openmp_workers();  // the tracks run on OpenCV's threads
     const cv::Mat g0 = gray8(in.left0), g1 = gray8(in.left1);
     const Tracks tracks = opt.flow.prior_track_step > 0 ? track_grid(g0, g1, r.sgm0, opt.flow.prior_track_step) : Tracks{};
     const double seconds_tracks = seconds_since(t);
@@ -346,13 +364,13 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0, opt.threads);
     add_object_motion(motion, r.sgm0, objects, prior0);
     const cv::Mat2f flow0 =
-        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, prior0.clone()), prior0, r.sgm0, rc, opt.threads);
+        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, opt.threads, prior0.clone()), prior0, r.sgm0, rc, opt.threads);
     r.forward = assemble(flow0, r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none, opt.threads);
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
         add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
-        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow.backward(), prior1.clone()), prior1,
+        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow.backward(), opt.threads, prior1.clone()), prior1,
                                            r.sgm1, rc, opt.threads),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none, opt.threads);
     }

@@ -28,15 +28,14 @@ constexpr int kBorder = 16;
 constexpr int kPad = 32;
 constexpr int kStripes = 8;  // fixed, so that the propagation (inside a stripe) is thread-independent
 
-// One pyramid level: the images as the search and the densification read them.
+// One search's view of a level: the image searched from (I0) and in (I1), and the initial flow.
 struct Level {
-    cv::Mat1b i0, i1;        // 8-bit (the next level is reduced from these)
-    cv::Mat1f f0;            // I0 as float
-    cv::Mat1f gx, gy;        // I0's Sobel gradients (cv::spatialGradient) as float
-    cv::Mat1f f1;            // I1 with a replicated border of kPad, as float
+    cv::Mat1f f0;              // I0 as float (a view into its padded plane)
+    cv::Mat1f gx, gy;          // I0's Sobel gradients (cv::spatialGradient) as float, f0's row step
+    cv::Mat1f f1;              // I1 with a replicated border of kPad, as float
     cv::Mat1f init_u, init_v;  // the initial flow at this level (empty without one)
-    int w() const { return i0.cols; }
-    int h() const { return i0.rows; }
+    int w() const { return f0.cols; }
+    int h() const { return f0.rows; }
     const float *f1_at(int y, int x) const { return f1.ptr<float>(y + kPad) + x + kPad; }
     // In OpenCV's bordered coordinates (pixel (0, 0) at (kBorder, kBorder)).
     const float *f1_bordered(int y, int x) const { return f1.ptr<float>(y + kPad - kBorder) + x + kPad - kBorder; }
@@ -413,10 +412,6 @@ void check(const cv::Mat &from, const cv::Mat &to, const DisOptions &o, const cv
     require(from.size() == to.size(), ErrorCode::SizeMismatch, "dense inverse search: the images differ in size");
     require(initial.empty() || initial.size() == from.size(), ErrorCode::SizeMismatch,
             "dense inverse search: the initial flow must be empty or of the images' size");
-    require(dis_coarsest_scale(from.size(), o.patch_size) >= o.finest_scale, ErrorCode::InvalidArgument,
-            "dense inverse search: a " + std::to_string(from.cols) + "x" + std::to_string(from.rows) +
-                " image is too small for patches of " + std::to_string(o.patch_size) + " px at level " +
-                std::to_string(o.finest_scale));
 }
 
 }  // namespace
@@ -441,55 +436,94 @@ int dis_coarsest_scale(cv::Size size, int patch_size) {
                     static_cast<int>(std::log(static_cast<double>(shorter / patch_size)) / std::log(2.0)));
 }
 
+// One level of one image: what a search reads of it as I0 or as I1.
+struct DisPyramid::Planes {
+    cv::Mat1b image;          // 8-bit (the next level is reduced from it)
+    cv::Mat1f padded;         // as float, with a replicated border of kPad
+    cv::Mat1s ix, iy;         // Sobel gradients (the patches' structure tensors)
+    cv::Mat1f gx, gy;         // the same as float, in planes of `padded`'s size
+    cv::Mat1f interior(const cv::Mat1f &m) const { return m(cv::Rect(kPad, kPad, image.cols, image.rows)); }
+};
+
+DisPyramid::DisPyramid(const cv::Mat &gray, int finest_scale, int patch_size)
+    : size_(gray.size()), finest_(finest_scale), patch_(patch_size) {
+    require(!gray.empty() && gray.type() == CV_8UC1, ErrorCode::InvalidArgument,
+            "dense inverse search: the image must be non-empty 8-bit gray");
+    require(patch_size >= 2 && patch_size <= 32 && finest_scale >= 0 && finest_scale <= 10, ErrorCode::InvalidArgument,
+            "dense inverse search: patch_size must be in [2, 32] and finest_scale in [0, 10]");
+    coarsest_ = dis_coarsest_scale(gray.size(), patch_size);
+    require(coarsest_ >= finest_scale, ErrorCode::InvalidArgument,
+            "dense inverse search: a " + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
+                " image is too small for patches of " + std::to_string(patch_size) + " px at level " +
+                std::to_string(finest_scale));
+    // OpenCV's pyramid: INTER_AREA reductions to 1 / 2^finest, then halvings.
+    auto levels = std::make_shared<std::vector<Planes>>(static_cast<size_t>(coarsest_) + 1);
+    for (int i = finest_scale; i <= coarsest_; ++i) {
+        Planes &l = (*levels)[static_cast<size_t>(i)];
+        if (i == finest_scale) {
+            const int fraction = 1 << finest_scale;
+            cv::resize(gray, l.image, cv::Size(gray.cols / fraction, gray.rows / fraction), 0.0, 0.0, cv::INTER_AREA);
+        } else {
+            const cv::Mat1b &p = (*levels)[static_cast<size_t>(i) - 1].image;
+            cv::resize(p, l.image, cv::Size(p.cols / 2, p.rows / 2), 0.0, 0.0, cv::INTER_AREA);
+        }
+        cv::Mat ext;
+        cv::copyMakeBorder(l.image, ext, kPad, kPad, kPad, kPad, cv::BORDER_REPLICATE);
+        l.padded = as_float(ext);
+        cv::spatialGradient(l.image, l.ix, l.iy);
+        l.gx.create(l.padded.size());
+        l.gy.create(l.padded.size());
+        l.ix.convertTo(l.interior(l.gx), CV_32F);
+        l.iy.convertTo(l.interior(l.gy), CV_32F);
+    }
+    levels_ = std::move(levels);
+}
+
+const DisPyramid::Planes &DisPyramid::level(int i) const { return (*levels_)[static_cast<size_t>(i)]; }
+
 cv::Mat2f dis_flow(const cv::Mat &from, const cv::Mat &to, const DisOptions &o, const cv::Mat2f &initial) {
     check(from, to, o, initial);
+    return dis_flow(DisPyramid(from, o.finest_scale, o.patch_size), DisPyramid(to, o.finest_scale, o.patch_size), o,
+                    initial);
+}
+
+cv::Mat2f dis_flow(const DisPyramid &from, const DisPyramid &to, const DisOptions &o, const cv::Mat2f &initial) {
+    o.validate();
+    require(from.size() == to.size(), ErrorCode::SizeMismatch, "dense inverse search: the images differ in size");
+    require(from.finest_scale() == o.finest_scale && to.finest_scale() == o.finest_scale &&
+                from.patch_size() == o.patch_size && to.patch_size() == o.patch_size,
+            ErrorCode::InvalidArgument, "dense inverse search: the pyramids were built for another patch size or level");
+    require(initial.empty() || initial.size() == from.size(), ErrorCode::SizeMismatch,
+            "dense inverse search: the initial flow must be empty or of the images' size");
     const int psz = o.patch_size, pstr = o.patch_stride, finest = o.finest_scale;
-    const int coarsest = dis_coarsest_scale(from.size(), psz);
+    const int coarsest = from.coarsest_scale();
     cv::Mat flow_uv[2];
     if (!initial.empty()) cv::split(initial, flow_uv);
-    // The pyramid (OpenCV's: INTER_AREA halvings from the finest level) and each level's planes.
     std::vector<Level> levels(static_cast<size_t>(coarsest) + 1);
-    int fraction = 1;
-    for (int i = 0; i <= coarsest; ++i, fraction *= 2) {
-        if (i < finest) continue;
+    std::vector<cv::Mat1f> U(levels.size()), V(levels.size());
+    for (int i = finest, fraction = 1 << finest; i <= coarsest; ++i, fraction *= 2) {
+        const DisPyramid::Planes &a = from.level(i), &b = to.level(i);
         Level &l = levels[static_cast<size_t>(i)];
-        if (i == finest) {
-            const cv::Size s(from.cols / fraction, from.rows / fraction);
-            cv::resize(from, l.i0, s, 0.0, 0.0, cv::INTER_AREA);
-            cv::resize(to, l.i1, s, 0.0, 0.0, cv::INTER_AREA);
-        } else {
-            const Level &p = levels[static_cast<size_t>(i) - 1];
-            const cv::Size s(p.i0.cols / 2, p.i0.rows / 2);
-            cv::resize(p.i0, l.i0, s, 0.0, 0.0, cv::INTER_AREA);
-            cv::resize(p.i1, l.i1, s, 0.0, 0.0, cv::INTER_AREA);
-        }
+        l.f0 = a.interior(a.padded);
+        l.gx = a.interior(a.gx);
+        l.gy = a.interior(a.gy);
+        l.f1 = b.padded;
         if (!initial.empty()) {
-            cv::resize(flow_uv[0], l.init_u, l.i0.size());
+            cv::resize(flow_uv[0], l.init_u, a.image.size());
             l.init_u /= fraction;
-            cv::resize(flow_uv[1], l.init_v, l.i0.size());
+            cv::resize(flow_uv[1], l.init_v, a.image.size());
             l.init_v /= fraction;
         }
-    }
-    std::vector<cv::Mat1f> U(levels.size()), V(levels.size());
-    for (int i = finest; i <= coarsest; ++i) {
-        U[static_cast<size_t>(i)].create(levels[static_cast<size_t>(i)].i0.size());
-        V[static_cast<size_t>(i)].create(levels[static_cast<size_t>(i)].i0.size());
+        U[static_cast<size_t>(i)].create(a.image.size());
+        V[static_cast<size_t>(i)].create(a.image.size());
     }
     U[static_cast<size_t>(coarsest)].setTo(0.0f);
     V[static_cast<size_t>(coarsest)].setTo(0.0f);
     std::vector<float> Sx, Sy;
     for (int i = coarsest; i >= finest; --i) {
-        Level &l = levels[static_cast<size_t>(i)];
-        cv::Mat ext;
-        cv::copyMakeBorder(l.i1, ext, kPad, kPad, kPad, kPad, cv::BORDER_REPLICATE);
-        l.f1 = as_float(ext);
-        l.f0 = as_float(l.i0);
-        cv::Mat1s ix, iy;
-        cv::spatialGradient(l.i0, ix, iy);
-        l.gx = as_float(ix);
-        l.gy = as_float(iy);
+        const Level &l = levels[static_cast<size_t>(i)];
         const int ws = 1 + (l.w() - psz) / pstr, hs = 1 + (l.h() - psz) / pstr;
-        const Tensor t = structure_tensor(l, psz, pstr, ws, hs, ix, iy);
+        const Tensor t = structure_tensor(l, psz, pstr, ws, hs, from.level(i).ix, from.level(i).iy);
         Sx.assign(static_cast<size_t>(ws) * hs, 0.0f);
         Sy.assign(Sx.size(), 0.0f);
         cv::Mat1f &u = U[static_cast<size_t>(i)], &v = V[static_cast<size_t>(i)];

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -201,10 +202,13 @@ cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, co
 // The flow from `from` to `to` at o's settings, started from `initial` (empty: from zero). The
 // project's own dense inverse search (flow/dis.hpp: OpenCV's flow bit for bit, in less time)
 // unless o asks for variational refinement, which only OpenCV's has.
+// `pyramids`: both images prepared (prepared_for_search), or null.
 cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const FlowSearchOptions &o, int threads,
-                               cv::Mat2f initial = cv::Mat2f()) {
+                               cv::Mat2f initial = cv::Mat2f(),
+                               const std::pair<const flow::DisPyramid *, const flow::DisPyramid *> &pyramids = {}) {
     const bool own = o.refine_iterations == 0;
     const flow::DisOptions d{o.finest_scale, o.patch_size, o.patch_stride, o.descent_iterations, std::max(1, threads)};
+    if (own && pyramids.first && pyramids.second) return flow::dis_flow(*pyramids.first, *pyramids.second, d, initial);
     cv::Ptr<cv::DISOpticalFlow> dis;
     if (!own) {
         dis = flow_search(o);
@@ -235,6 +239,15 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
     if (!initial.empty()) cv::copyMakeBorder(initial, flow, 0, py, 0, px, cv::BORDER_REPLICATE);
     calc(a, b, flow);
     return flow(cv::Rect(0, 0, from.cols, from.rows)).clone();
+}
+
+// A gray image prepared for our flow search at o's settings; null where the search pads it or
+// OpenCV's runs (dense_inverse_search).
+std::shared_ptr<const flow::DisPyramid> prepared_for_search(const cv::Mat &gray, const FlowSearchOptions &o) {
+    if (o.refine_iterations != 0 || gray.cols < std::max(16, 2 * o.patch_size) ||
+        gray.rows < std::max(16, 2 * o.patch_size) || flow::dis_coarsest_scale(gray.size(), o.patch_size) < o.finest_scale)
+        return nullptr;
+    return std::make_shared<const flow::DisPyramid>(gray, o.finest_scale, o.patch_size);
 }
 
 // The points that guide the stereo of a pair: `lidar` when the stereo is guided and the LiDAR
@@ -301,6 +314,7 @@ std::shared_ptr<DecoupledStereo> first_frame_stereo(const cv::Mat &left, const c
     s->disparity = pair_disparity(left, right, s->lidar, opt, sgm);
     s->left = left.clone();
     s->right = right.clone();
+    s->pyramid = prepared_for_search(gray8(left), opt.flow);
     return s;
 }
 
@@ -363,15 +377,26 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     const cv::Mat3f objects = prior && same_step ? source->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0, opt.threads);
     add_object_motion(motion, r.sgm0, objects, prior0);
-    const cv::Mat2f flow0 =
-        choose_rigid(g0, g1, dense_inverse_search(g0, g1, opt.flow, opt.threads, prior0.clone()), prior0, r.sgm0, rc, opt.threads);
+    // Each image is prepared for the flow search once: both directions read it, and a stream's
+    // t0 image is the previous pair's t1.
+    const bool same_settings = r.reused_t0 && t0_reuse->pyramid && t0_reuse->pyramid->size() == g0.size() &&
+                               t0_reuse->pyramid->finest_scale() == opt.flow.finest_scale &&
+                               t0_reuse->pyramid->patch_size() == opt.flow.patch_size;
+    const std::shared_ptr<const flow::DisPyramid> pyr0 =
+        same_settings ? t0_reuse->pyramid : prepared_for_search(g0, opt.flow);
+    r.pyramid1 = prepared_for_search(g1, opt.flow);
+    const cv::Mat2f flow0 = choose_rigid(
+        g0, g1, dense_inverse_search(g0, g1, opt.flow, opt.threads, prior0.clone(), {pyr0.get(), r.pyramid1.get()}),
+        prior0, r.sgm0, rc, opt.threads);
     r.forward = assemble(flow0, r.sgm0, r.sgm1, opt.use_lidar ? in.lidar0 : none, opt.threads);
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
         add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
-        r.backward = assemble(choose_rigid(g1, g0, dense_inverse_search(g1, g0, opt.flow.backward(), opt.threads, prior1.clone()), prior1,
-                                           r.sgm1, rc, opt.threads),
+        r.backward = assemble(choose_rigid(g1, g0,
+                                           dense_inverse_search(g1, g0, opt.flow.backward(), opt.threads,
+                                                                prior1.clone(), {r.pyramid1.get(), pyr0.get()}),
+                                           prior1, r.sgm1, rc, opt.threads),
                               r.sgm1, r.sgm0, opt.use_lidar ? in.lidar1 : none, opt.threads);
     }
     r.seconds_flow = seconds_tracks + seconds_since(t);

@@ -21,6 +21,7 @@
 #include "core/camera.hpp"
 #include "core/lidar.hpp"
 #include "core/maps.hpp"
+#include "flow/dis.hpp"
 #include "matching/matching_options.hpp"
 #include "matching/motion_prior.hpp"
 #include "matching/scene_flow_matcher.hpp"
@@ -43,6 +44,8 @@ struct DecoupledResult {
     // The points that guided sgm1: the t1 scan's, or where there is none (and carry_lidar), the
     // t0 points carried by the camera's motion.
     SparseLidar guide1;
+    // I_l^1 prepared for the flow search (null where OpenCV's DIS searched): the next pair's t0.
+    std::shared_ptr<const flow::DisPyramid> pyramid1;
     double seconds_stereo = 0;  // both pairs' stereo
     double seconds_flow = 0;    // rigid prior, then both directions' DIS
 };
@@ -60,6 +63,8 @@ struct DecoupledStereo {
     // extra t0 points, MatchingOptions::stream_lidar_frames); empty when off or not made.
     CarriedLidar carried;
     int64_t step_us = 0;  // t1 - t0 of the pair that made it (FrameInput::step_us); 0 = unknown
+    // `left` prepared for the flow search (gray, its pyramid), or null: the next pair's t0 image's.
+    std::shared_ptr<const flow::DisPyramid> pyramid;
     // True when (l, r, lidar) are the pair and points it was computed from, bit for bit.
     bool matches(const cv::Mat &l, const cv::Mat &r, const SparseLidar &lidar) const;
 };

@@ -523,6 +523,7 @@ DisparityMap Estimator::run_decoupled(const FrameInput &frame, const SparseLidar
         next->right = frame.right1.clone();
         next->lidar = m.guide1;
         next->disparity = m.sgm1;
+        next->pyramid = m.pyramid1;
         next->step_us = frame.step_us;
     }
     tracked_motion = m.tracked_motion;

@@ -188,8 +188,8 @@ inline __attribute__((always_inline)) PatchSums patch8(const float *i0, size_t s
 }
 
 template <bool Grad>
-inline __attribute__((always_inline)) PatchSums patch_any(const float *i0, size_t s0, const float *gx, const float *gy, const Bilinear &b, size_t s1,
-                           int psz) {
+inline __attribute__((always_inline)) PatchSums patch_any(const float *i0, size_t s0, const float *gx, const float *gy,
+                                                         const Bilinear &b, size_t s1, int psz) {
     PatchSums p;
     for (int i = 0; i < psz; ++i) {
         const float *r1 = b.at + i * s1, *n1 = r1 + s1, *a0 = i0 + i * s0;
@@ -202,6 +202,38 @@ inline __attribute__((always_inline)) PatchSums patch_any(const float *i0, size_
                 p.gy += d * gy[i * s0 + j];
             }
         }
+    }
+    return p;
+}
+
+// patch_any for patches of at most 8 px: a row's differences and products in one 8-lane step
+// (the planes' borders hold the lanes past the patch), then added pixel by pixel in its order.
+template <bool Grad>
+inline __attribute__((always_inline)) PatchSums patch_small(const float *i0, size_t s0, const float *gx,
+                                                           const float *gy, const Bilinear &b, size_t s1, int psz) {
+    const V8 w00 = splat8(b.w00), w01 = splat8(b.w01), w10 = splat8(b.w10), w11 = splat8(b.w11);
+    PatchSums p;
+    const float *r1 = b.at;
+    V8 top = load8(r1), tops = load8(r1 + 1);
+    for (int i = 0; i < psz; ++i, i0 += s0) {
+        r1 += s1;
+        const V8 bot = load8(r1), bots = load8(r1 + 1);
+        const V8 d = w00 * top + w01 * tops + w10 * bot + w11 * bots - load8(i0);
+        const V8 q = d * d;
+        V8 px{}, py{};
+        if (Grad) {
+            px = d * load8(gx), py = d * load8(gy);
+            gx += s0, gy += s0;
+        }
+        for (int j = 0; j < psz; ++j) {
+            p.diff += d[j];
+            p.sq += q[j];
+            if (Grad) {
+                p.gx += px[j];
+                p.gy += py[j];
+            }
+        }
+        top = bot, tops = bots;
     }
     return p;
 }
@@ -226,11 +258,13 @@ void search_stripe(const Search &c, int first, int last) {
     const size_t s0 = l.f0.step1(), s1 = l.f1.step1();
     const bool temporal = !l.init_u.empty();
     const float n = static_cast<float>(psz * psz);
-    auto ssd = [&](int i, int j, float fu, float fv) {
+    // Inlined (a lambda would be compiled once, for the baseline ISA, outside the clones).
+    auto ssd = [&](int i, int j, float fu, float fv) __attribute__((always_inline)) {
         const Bilinear b = bilinear(l, i, j, fu, fv, psz);
         const float *i0 = l.f0.ptr<float>(i) + j;
-        const PatchSums p = psz == 8 ? patch8<false>(i0, s0, nullptr, nullptr, b, s1)
-                                     : patch_any<false>(i0, s0, nullptr, nullptr, b, s1, psz);
+        const PatchSums p = psz == 8  ? patch8<false>(i0, s0, nullptr, nullptr, b, s1)
+                            : psz < 8 ? patch_small<false>(i0, s0, nullptr, nullptr, b, s1, psz)
+                                      : patch_any<false>(i0, s0, nullptr, nullptr, b, s1, psz);
         return p.sq - p.diff * p.diff / n;
     };
     for (int iter = 0; iter < 2; ++iter) {
@@ -271,8 +305,9 @@ void search_stripe(const Search &c, int first, int last) {
                 float prev = kInf;
                 for (int s = 0; s < c.inner; ++s) {
                     const Bilinear b = bilinear(l, i, j, cu, cv_, psz);
-                    const PatchSums p = psz == 8 ? patch8<true>(i0, s0, gx, gy, b, s1)
-                                                 : patch_any<true>(i0, s0, gx, gy, b, s1, psz);
+                    const PatchSums p = psz == 8  ? patch8<true>(i0, s0, gx, gy, b, s1)
+                                        : psz < 8 ? patch_small<true>(i0, s0, gx, gy, b, s1, psz)
+                                                  : patch_any<true>(i0, s0, gx, gy, b, s1, psz);
                     const float du = p.gx - p.diff * xs / n, dv = p.gy - p.diff * ys / n;
                     const float sq = p.sq - p.diff * p.diff / n;
                     cu -= h11 * du + h12 * dv;
@@ -322,13 +357,15 @@ inline __attribute__((always_inline)) void add_patch(const Level &l, int i, floa
     const V8 zero = splat8(0.0f), one8 = splat8(1.0f), top = splat8(xmax), u8 = splat8(su), v8 = splat8(sv);
     const V8 fy8 = splat8(fy), gy8 = splat8(gy);
     const I8 iota{0, 1, 2, 3, 4, 5, 6, 7};
-    for (; j + 8 <= j1; j += 8) {
+    // Eight lanes at a time; past j1 a lane computes but adds nothing (the rows are padded by 8).
+    for (; j < j1; j += 8) {
+        const I8 active = iota < (j1 - j);
         // std::min(std::max(x, 0), top) and the truncation, lane by lane.
         const V8 x = __builtin_convertvector(iota + j, V8) + u8;
         const V8 lo_x = select(x < zero, zero, x);
         const V8 jm = select(top < lo_x, top, lo_x);
         const I8 jl = __builtin_convertvector(jm, I8);
-        if (!all_equal(jl, iota + jl[0])) break;  // a clamped or rounded sample: the rest one by one
+        if (!all_equal(jl | ~active, (iota + jl[0]) | ~active)) break;  // clamped or rounded: one by one
         const V8 jlf = __builtin_convertvector(jl, V8);
         const V8 fx = jm - jlf, gx = (jlf + one8) - jm;
         const float *b1 = up + jl[0], *b0 = lo + jl[0];
@@ -336,9 +373,10 @@ inline __attribute__((always_inline)) void add_patch(const Level &l, int i, floa
                         gx * gy8 * load8(b0) - load8(i0 + j);
         const V8 mag = abs8(diff);
         const V8 coef = one8 / select(one8 < mag, mag, one8);
-        store8(acc_u + j, load8(acc_u + j) + coef * u8);
-        store8(acc_v + j, load8(acc_v + j) + coef * v8);
-        store8(acc_w + j, load8(acc_w + j) + coef);
+        const V8 au = load8(acc_u + j), av = load8(acc_v + j), aw = load8(acc_w + j);
+        store8(acc_u + j, select(active, au + coef * u8, au));
+        store8(acc_v + j, select(active, av + coef * v8, av));
+        store8(acc_w + j, select(active, aw + coef, aw));
     }
     for (; j < j1; ++j) {
         const float jm = std::min(std::max(static_cast<float>(j) + su, 0.0f), xmax);
@@ -381,7 +419,7 @@ void densify(const Level &l, const std::vector<float> &Sx, const std::vector<flo
         for (int js = js0[j]; js <= js1[j]; ++js) c0[js] = std::min(c0[js], j), c1[js] = std::max(c1[js], j + 1);
 #pragma omp parallel num_threads(std::max(1, threads))
     {
-        std::vector<float> au(w), av(w), aw(w);
+        std::vector<float> au(w + 8), av(w + 8), aw(w + 8);
 #pragma omp for schedule(static)
         for (int i = 0; i < h; ++i) {
             std::fill(au.begin(), au.end(), 0.0f);

@@ -25,23 +25,49 @@ namespace {
 constexpr int kCensusHalfW = 4, kCensusHalfH = 3;  // 9x7 window: 62 bits
 constexpr uint16_t kBig = 0x3FFF;                  // path sentinel: + P1 still fits 16 bits
 
-// Census signatures of one row: bit k of `dark` set when neighbour k of the 9x7 window is
-// darker than the centre by more than `t` grey levels; of `bright` (when not null) when it is
-// brighter by more than `t`. `rows` are the window's 7 rows of the padded image (kCensusHalfW
-// replicated pixels each side), so the loops over x have no border case and vectorise.
+// Census signatures of one row: bit 61 - q of `dark` set when neighbour q of the 9x7 window (in
+// raster order, the centre left out) is darker than the centre by more than `t` grey levels; of
+// `bright` (when not null) when it is brighter by more than `t`. `rows` are the window's 7 rows of
+// the padded image (kCensusHalfW replicated pixels each side), so the loops over x have no border
+// case. The bits are collected a byte at a time in 8-bit lanes (32 pixels an AVX2 step) and the
+// eight bytes joined at the end: the 64-bit lanes of one pass per neighbour were 8x the work.
+// `scratch`: 16 * w bytes.
 LIDARFLOW_V3_CLONES
-void census_row(const uint8_t *const *rows, int w, int t, uint64_t *dark, uint64_t *bright) {
+void census_row(const uint8_t *const *rows, int w, int t, uint64_t *dark, uint64_t *bright, uint8_t *scratch) {
     const uint8_t *centre = rows[kCensusHalfH] + kCensusHalfW;
-    std::fill(dark, dark + w, 0);
-    if (bright) std::fill(bright, bright + w, 0);
+    uint8_t *below = scratch, *above = scratch + w;  // centre - t and centre + t, saturated
+    uint8_t *dark_bytes = scratch + 2 * static_cast<size_t>(w);
+    uint8_t *bright_bytes = dark_bytes + 8 * static_cast<size_t>(w);
+    // n + t < c  <=>  n < max(c - t, 0);  n > c + t  <=>  n > min(c + t, 255) (no n exceeds 255).
+    for (int x = 0; x < w; ++x) {
+        below[x] = static_cast<uint8_t>(std::max(centre[x] - t, 0));
+        above[x] = static_cast<uint8_t>(std::min(centre[x] + t, 255));
+    }
+    std::fill(dark_bytes, dark_bytes + 8 * static_cast<size_t>(w), 0);
+    if (bright) std::fill(bright_bytes, bright_bytes + 8 * static_cast<size_t>(w), 0);
+    int q = 0;
     for (int k = 0; k < 2 * kCensusHalfH + 1; ++k)
         for (int j = 0; j < 2 * kCensusHalfW + 1; ++j) {
             if (k == kCensusHalfH && j == kCensusHalfW) continue;
             const uint8_t *n = rows[k] + j;
-            for (int x = 0; x < w; ++x) dark[x] = (dark[x] << 1) | static_cast<uint64_t>(n[x] + t < centre[x]);
-            if (bright)
-                for (int x = 0; x < w; ++x) bright[x] = (bright[x] << 1) | static_cast<uint64_t>(n[x] > centre[x] + t);
+            const size_t byte = static_cast<size_t>((61 - q) / 8) * w;  // the byte holding bit 61 - q
+            ++q;
+            uint8_t *d = dark_bytes + byte;
+            for (int x = 0; x < w; ++x) d[x] = static_cast<uint8_t>((d[x] << 1) | (n[x] < below[x]));
+            if (bright) {
+                uint8_t *b = bright_bytes + byte;
+                for (int x = 0; x < w; ++x) b[x] = static_cast<uint8_t>((b[x] << 1) | (n[x] > above[x]));
+            }
         }
+    auto join = [w](const uint8_t *bytes, uint64_t *out) {
+        for (int x = 0; x < w; ++x) {
+            uint64_t v = 0;
+            for (int m = 0; m < 8; ++m) v |= static_cast<uint64_t>(bytes[static_cast<size_t>(m) * w + x]) << (8 * m);
+            out[x] = v;
+        }
+    };
+    join(dark_bytes, dark);
+    if (bright) join(bright_bytes, bright);
 }
 
 // Census signatures of an image (8 bytes per pixel and plane, read as uint64), the window
@@ -54,11 +80,13 @@ Census census(const cv::Mat1b &g, int t, bool ternary, int threads) {
     cv::Mat1b padded;
     cv::copyMakeBorder(g, padded, kCensusHalfH, kCensusHalfH, kCensusHalfW, kCensusHalfW, cv::BORDER_REPLICATE);
     Census c{cv::Mat(h, w, CV_64F), ternary ? cv::Mat(h, w, CV_64F) : cv::Mat()};
+    std::vector<std::vector<uint8_t>> scratch(threads, std::vector<uint8_t>(16 * static_cast<size_t>(w) + 2 * w));
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int y = 0; y < h; ++y) {
+        uint8_t *work = scratch[static_cast<size_t>(omp_get_thread_num())].data();
         const uint8_t *rows[2 * kCensusHalfH + 1];
         for (int k = 0; k < 2 * kCensusHalfH + 1; ++k) rows[k] = padded.ptr<uint8_t>(y + k);
-        census_row(rows, w, t, c.dark.ptr<uint64_t>(y), ternary ? c.bright.ptr<uint64_t>(y) : nullptr);
+        census_row(rows, w, t, c.dark.ptr<uint64_t>(y), ternary ? c.bright.ptr<uint64_t>(y) : nullptr, work);
     }
     return c;
 }

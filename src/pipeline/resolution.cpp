@@ -160,31 +160,38 @@ SceneFlowField upscale_field(const SceneFlowField &small, int width, int height,
         const int y0 = std::min(std::max(0, h - 2), static_cast<int>(fy)), y1 = std::min(h - 1, y0 + 1);
         const float ay = fy - y0;
         const int yn = std::min(h - 1, static_cast<int>(y / ry));
+        // Row pointers: the planes' rows y0, y1 and yn, and the output row.
+        const float *a[5], *b[5], *n[5];
+        float *o[5];
+        for (int c = 0; c < 5; ++c) {
+            a[c] = in[c]->ptr<float>(y0), b[c] = in[c]->ptr<float>(y1), n[c] = in[c]->ptr<float>(yn);
+            o[c] = res[c]->ptr<float>(y);
+        }
+        const uint8_t *kinds = kind.ptr<uint8_t>(y0), *valid_n = small.valid.ptr<uint8_t>(yn);
+        uint8_t *valid = out.valid.ptr<uint8_t>(y);
         for (int x = 0; x < width; ++x) {
             const int x0 = col0[x], x1 = col1[x];
             const float ax = colw[x];
-            const uint8_t k = kind(y0, x0);  // x1, y1: the next source pixel, as `kind` took them
-            if (k == kAtEdge) {
-                const int c = edge_corner(*guide, x, y, x0, x1, y0, y1);
-                const int ys = c < 2 ? y0 : y1, xs = c % 2 ? x1 : x0;
-                for (int i = 0; i < 5; ++i) (*res[i])(y, x) = gain[i] * (*in[i])(ys, xs);
-                out.valid(y, x) = 1;
-                continue;
-            }
+            const uint8_t k = kinds[x0];  // x1, y1: the next source pixel, as `kind` took them
             if (k == kBlend) {
                 for (int c = 0; c < 5; ++c) {
-                    const cv::Mat1f &m = *in[c];
-                    const float top = m(y0, x0) + ax * (m(y0, x1) - m(y0, x0));
-                    const float bot = m(y1, x0) + ax * (m(y1, x1) - m(y1, x0));
-                    (*res[c])(y, x) = gain[c] * (top + ay * (bot - top));
+                    const float top = a[c][x0] + ax * (a[c][x1] - a[c][x0]);
+                    const float bot = b[c][x0] + ax * (b[c][x1] - b[c][x0]);
+                    o[c][x] = gain[c] * (top + ay * (bot - top));
                 }
-                out.valid(y, x) = 1;
-                continue;
+                valid[x] = 1;
+            } else if (k == kAtEdge) {
+                const int corner = edge_corner(*guide, x, y, x0, x1, y0, y1);
+                const float *const *src = corner < 2 ? a : b;
+                const int xs = corner % 2 ? x1 : x0;
+                for (int c = 0; c < 5; ++c) o[c][x] = gain[c] * src[c][xs];
+                valid[x] = 1;
+            } else {
+                const int xn = coln[x];
+                const bool near = valid_n[xn] != 0;
+                for (int c = 0; c < 5; ++c) o[c][x] = near ? gain[c] * n[c][xn] : 0.0f;
+                valid[x] = near ? 1 : 0;
             }
-            const int xn = coln[x];
-            const bool near = small.valid(yn, xn) != 0;
-            for (int c = 0; c < 5; ++c) (*res[c])(y, x) = near ? gain[c] * (*in[c])(yn, xn) : 0.0f;
-            out.valid(y, x) = near ? 1 : 0;
         }
     }
     return out;

@@ -7,6 +7,7 @@
 //   x' = fx n0 / n2 + cx,  y' = fy n1 / n2 + cy,  d1 = d0 / n2,
 // which stays finite for d0 -> 0 (points at infinity move by the rotation only).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -30,6 +31,7 @@ constexpr double kMinDepthRatio = 0.05;
 // the sums' order does not depend on the thread count.
 constexpr size_t kBlock = 2048;
 constexpr size_t kMaxRefit = 16384;  // inliers a refit sums at most
+constexpr size_t kProbeBlock = 256;  // probes a hypothesis scores between checks whether it can still win
 
 struct Rigid {
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0};
@@ -294,6 +296,11 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     std::vector<int> counts(samples.size() / 3, -1);
     const Probes probes(data, probe);
     std::vector<std::vector<uint8_t>> scratch(threads, std::vector<uint8_t>(probe.size()));
+    // The best count so far of any finished hypothesis: one whose count cannot reach it even if
+    // every probe left fits cannot win (the winner's count is at least as high), so its scoring
+    // stops there. Which ones stop depends on the threads' timing; the winner does not.
+    std::atomic<int> best_known{-1};
+    const size_t probe_count = probe.size();
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
     for (int h = 0; h < hypotheses; ++h) {
         Rigid m;
@@ -301,8 +308,20 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
         for (int it = 0; it < 6 && ok; ++it) ok = data.step(m, &samples[3 * static_cast<size_t>(h)], 3);
         if (!ok) continue;
         models[h] = m;
-        counts[h] = count_fits(m, camera, probes, 0, probe.size(), o.disparity_inlier, o.flow_inlier,
-                               scratch[static_cast<size_t>(omp_get_thread_num())].data());
+        uint8_t *fit = scratch[static_cast<size_t>(omp_get_thread_num())].data();
+        int count = 0;
+        for (size_t first = 0; first < probe_count; first += kProbeBlock) {
+            const size_t last = std::min(probe_count, first + kProbeBlock);
+            count += count_fits(m, camera, probes, first, last, o.disparity_inlier, o.flow_inlier, fit);
+            if (count + static_cast<int>(probe_count - last) < best_known.load(std::memory_order_relaxed)) {
+                count = -1;  // cannot win
+                break;
+            }
+        }
+        counts[h] = count;
+        for (int known = best_known.load(std::memory_order_relaxed);
+             count > known && !best_known.compare_exchange_weak(known, count, std::memory_order_relaxed);) {
+        }
     }
     Rigid best;
     int best_count = -1;

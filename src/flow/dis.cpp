@@ -9,7 +9,6 @@
 
 #include <opencv2/imgproc.hpp>
 
-
 #include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 
@@ -132,8 +131,8 @@ inline __attribute__((always_inline)) Bilinear bilinear(const Level &l, int i, i
 // Sums of one patch comparison with mean normalisation: the SSD (always) and, with Grad, the
 // gradient products for a descent step. The 8 px kernel keeps OpenCV's 4-lane order (a row's
 // left and right half added lane by lane, lanes summed (0 + 2) + (1 + 3) at the end) in vectors
-// of 8 (a whole row: one AVX operation where the clone has AVX); other sizes go pixel by pixel
-// as OpenCV's scalar code.
+// of 8 (a whole row: one AVX operation where the clone has AVX); other sizes sum pixel by pixel
+// in the order of OpenCV's scalar code (under 8 px with each row's products in one 8-lane step).
 struct PatchSums {
     float diff = 0.0f, sq = 0.0f, gx = 0.0f, gy = 0.0f;
 };

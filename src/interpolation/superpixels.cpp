@@ -40,14 +40,14 @@ void to_lab_planes(const cv::Mat &image, cv::Mat1f planes[3]) {
     ch[2].convertTo(planes[2], CV_32F, 1.0, -128.0);
 }
 
-
 // Offers centre c (index k) to the pixels [x0, x1) of one row, branch-free so that it vectorises
 // (core/branchless.hpp). With Depth, also c.dw * (D - c.d)^2 where V (1 valid, 0 not) is set.
 template <bool Depth>
-LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *__restrict A, const float *__restrict B,
-                                       const float *__restrict D, const float *__restrict V, const Centre &c,
-                                       float spatial, float dy2, int k, int x0, int x1, float *__restrict best,
-                                       int *__restrict arow) {
+inline __attribute__((always_inline)) void assign_span_of(const float *__restrict L, const float *__restrict A,
+                                                         const float *__restrict B, const float *__restrict D,
+                                                         const float *__restrict V, const Centre &c, float spatial,
+                                                         float dy2, int k, int x0, int x1, float *__restrict best,
+                                                         int *__restrict arow) {
     const float cl = c.l, ca = c.a, cb = c.b, cx = c.x, cd = c.d, cw = c.dw;
     for (int x = x0; x < x1; ++x) {
         const float dl = L[x] - cl, da = A[x] - ca, db = B[x] - cb, sx = static_cast<float>(x) - cx;
@@ -58,6 +58,17 @@ LIDARFLOW_AVX2_CLONES void assign_span(const float *__restrict L, const float *_
         }
         keep_first_least(d, k, best[x], arow[x]);
     }
+}
+
+// assign_span_of, cloned per ISA (clang clones no templates; each clone inlines both kinds).
+LIDARFLOW_AVX2_CLONES void assign_span(bool depth, const float *__restrict L, const float *__restrict A,
+                                       const float *__restrict B, const float *__restrict D,
+                                       const float *__restrict V, const Centre &c, float spatial, float dy2, int k,
+                                       int x0, int x1, float *__restrict best, int *__restrict arow) {
+    if (depth)
+        assign_span_of<true>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best, arow);
+    else
+        assign_span_of<false>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best, arow);
 }
 
 // First pixel of each of `cells` grid cells along a side of n pixels, pixel i lying in cell
@@ -195,9 +206,9 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
                         const int x0 = col_start[std::max(0, i - 1)], x1 = col_start[std::min(gx, i + 2)];
                         const float dy2 = spatial * (y - c.y) * (y - c.y);
                         if (depth && c.dw > 0.0f)
-                            assign_span<true>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                            assign_span(true, L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
                         else
-                            assign_span<false>(L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
+                            assign_span(false, L, A, B, D, V, c, spatial, dy2, k, x0, x1, best.data(), arow);
                     }
             }
         }

@@ -126,9 +126,10 @@ inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, u
 // column 0 stands in left of the image) + the LiDAR penalty. Integer only. bl, br: the bright
 // planes (Ternary only).
 template <bool Ternary>
-LIDARFLOW_V3_CLONES void row_costs(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
-                                   const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap,
-                                   uint8_t *cost) {
+inline __attribute__((always_inline)) void row_costs_of(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
+                                                       const uint64_t *br, const int16_t *prior16,
+                                                       const uint8_t *weight, int w, int D, int slope16, int cap,
+                                                       uint8_t *cost) {
     const uint16_t top = penalty_reach(slope16, cap);
     for (int x = 0; x < w; ++x) {
         uint8_t *c = cost + static_cast<size_t>(x) * D;
@@ -138,6 +139,16 @@ LIDARFLOW_V3_CLONES void row_costs(const uint64_t *dl, const uint64_t *dr, const
         for (int d = lim; d < D; ++d) c[d] = edge;
         if (weight[x] != 0) add_lidar_penalty(c, D, prior16[x], weight[x], slope16, top, cap);
     }
+}
+
+// row_costs_of, cloned per ISA (clang clones no templates; each clone inlines both kinds).
+LIDARFLOW_V3_CLONES void row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
+                                   const uint64_t *br, const int16_t *prior16, const uint8_t *weight, int w, int D,
+                                   int slope16, int cap, uint8_t *cost) {
+    if (ternary)
+        row_costs_of<true>(dl, dr, bl, br, prior16, weight, w, D, slope16, cap, cost);
+    else
+        row_costs_of<false>(dl, dr, bl, br, prior16, weight, w, D, slope16, cap, cost);
 }
 
 // One step along a path: cur = cost + min(prev, prev(d +- 1) + P1, min(prev) + P2) - min(prev),
@@ -407,10 +418,10 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
         uint8_t *out = cost.get() + plane * y;
         if (ternary)
-            row_costs<true>(dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
+            row_costs(true, dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
                             prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, out);
         else
-            row_costs<false>(dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
+            row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
                              out);
     }
 

@@ -180,7 +180,8 @@ typedef struct lf_options lf_options_t;
  *                                                   forward-backward check reads that flow
  *                                                   (0 = flow_patch_stride; "realtime" 4)
  *   "matching.flow_descent_iterations" int [1, 200] (decoupled) per patch and level
- *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement
+ *   "matching.flow_refine_iterations" int [0, 100]  (decoupled) variational refinement (0 = off,
+ *                                                   every preset; more runs OpenCV's DIS, slower)
  *   "matching.flow_prior_track_step"  int [0, 256]  (decoupled) grid step [px] of the tracks
  *                                                   the rigid start flow is fitted to (0 = off)
  *   "matching.flow_rigid_choice_radius" int [0, 16] (decoupled) per pixel, the rigid start

@@ -118,7 +118,7 @@ const OptionKey kKeys[] = {
      OptionKeyType::Int, 1, 200, false, Extra::None,
      LF_INT_FIELD(matching.flow.descent_iterations)},
     {"matching.flow_refine_iterations",
-     "(decoupled) DIS variational refinement iterations per level (0 = off)",
+     "(decoupled) DIS variational refinement iterations per level (0 = off; more runs OpenCV's DIS, the only one with it)",
      OptionKeyType::Int, 0, 100, false, Extra::None,
      LF_INT_FIELD(matching.flow.refine_iterations)},
     {"matching.flow_prior_track_step",

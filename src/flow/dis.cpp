@@ -237,6 +237,15 @@ inline __attribute__((always_inline)) PatchSums patch_small(const float *i0, siz
     return p;
 }
 
+// The sums of the patch at i0 against I1 at b: the kernel for the patch size.
+template <bool Grad>
+inline __attribute__((always_inline)) PatchSums patch_sums(const float *i0, size_t s0, const float *gx,
+                                                          const float *gy, const Bilinear &b, size_t s1, int psz) {
+    return psz == 8  ? patch8<Grad>(i0, s0, gx, gy, b, s1)
+           : psz < 8 ? patch_small<Grad>(i0, s0, gx, gy, b, s1, psz)
+                     : patch_any<Grad>(i0, s0, gx, gy, b, s1, psz);
+}
+
 // The patch search of one level: a stripe of patch rows per task, two sweeps (down and right,
 // then up and left), each trying the patch's own, the initial and the neighbours' flow and
 // descending from the best. S: (ws x hs) flows, read from the dense flow (u, v) at the first sweep.
@@ -261,9 +270,7 @@ void search_stripe(const Search &c, int first, int last) {
     auto ssd = [&](int i, int j, float fu, float fv) __attribute__((always_inline)) {
         const Bilinear b = bilinear(l, i, j, fu, fv, psz);
         const float *i0 = l.f0.ptr<float>(i) + j;
-        const PatchSums p = psz == 8  ? patch8<false>(i0, s0, nullptr, nullptr, b, s1)
-                            : psz < 8 ? patch_small<false>(i0, s0, nullptr, nullptr, b, s1, psz)
-                                      : patch_any<false>(i0, s0, nullptr, nullptr, b, s1, psz);
+        const PatchSums p = patch_sums<false>(i0, s0, nullptr, nullptr, b, s1, psz);
         return p.sq - p.diff * p.diff / n;
     };
     for (int iter = 0; iter < 2; ++iter) {
@@ -304,9 +311,7 @@ void search_stripe(const Search &c, int first, int last) {
                 float prev = kInf;
                 for (int s = 0; s < c.inner; ++s) {
                     const Bilinear b = bilinear(l, i, j, cu, cv_, psz);
-                    const PatchSums p = psz == 8  ? patch8<true>(i0, s0, gx, gy, b, s1)
-                                        : psz < 8 ? patch_small<true>(i0, s0, gx, gy, b, s1, psz)
-                                                  : patch_any<true>(i0, s0, gx, gy, b, s1, psz);
+                    const PatchSums p = patch_sums<true>(i0, s0, gx, gy, b, s1, psz);
                     const float du = p.gx - p.diff * xs / n, dv = p.gy - p.diff * ys / n;
                     const float sq = p.sq - p.diff * p.diff / n;
                     cu -= h11 * du + h12 * dv;
@@ -441,16 +446,6 @@ cv::Mat1f as_float(const cv::Mat &m) {
     return f;
 }
 
-void check(const cv::Mat &from, const cv::Mat &to, const DisOptions &o, const cv::Mat2f &initial) {
-    o.validate();
-    require(!from.empty() && !to.empty(), ErrorCode::InvalidArgument, "dense inverse search: empty image");
-    require(from.type() == CV_8UC1 && to.type() == CV_8UC1, ErrorCode::InvalidArgument,
-            "dense inverse search: images must be 8-bit gray");
-    require(from.size() == to.size(), ErrorCode::SizeMismatch, "dense inverse search: the images differ in size");
-    require(initial.empty() || initial.size() == from.size(), ErrorCode::SizeMismatch,
-            "dense inverse search: the initial flow must be empty or of the images' size");
-}
-
 }  // namespace
 
 void DisOptions::validate() const {
@@ -519,7 +514,7 @@ DisPyramid::DisPyramid(const cv::Mat &gray, int finest_scale, int patch_size)
 const DisPyramid::Planes &DisPyramid::level(int i) const { return (*levels_)[static_cast<size_t>(i)]; }
 
 cv::Mat2f dis_flow(const cv::Mat &from, const cv::Mat &to, const DisOptions &o, const cv::Mat2f &initial) {
-    check(from, to, o, initial);
+    o.validate();  // the pyramids check the images; the overload below, sizes and the initial flow
     return dis_flow(DisPyramid(from, o.finest_scale, o.patch_size), DisPyramid(to, o.finest_scale, o.patch_size), o,
                     initial);
 }

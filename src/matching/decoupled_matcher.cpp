@@ -199,6 +199,16 @@ cv::Mat2f choose_rigid(const cv::Mat &from, const cv::Mat &to, cv::Mat2f dis, co
     return dis;
 }
 
+// The size a frame of `size` is searched at: itself, or padded where OpenCV's DIS refuses images
+// under 12 px a side (and patches wider than the image) and where ours (`own`) has no pyramid
+// level at finest_scale.
+cv::Size search_size(cv::Size size, const FlowSearchOptions &o, bool own) {
+    const int side = std::max(16, 2 * o.patch_size);
+    cv::Size s(std::max(size.width, side), std::max(size.height, side));
+    while (own && flow::dis_coarsest_scale(s, o.patch_size) < o.finest_scale) s = {2 * s.width, 2 * s.height};
+    return s;
+}
+
 // The flow from `from` to `to` at o's settings, started from `initial` (empty: from zero). The
 // project's own dense inverse search (flow/dis.hpp: OpenCV's flow bit for bit, in less time)
 // unless o asks for variational refinement, which only OpenCV's has.
@@ -220,13 +230,9 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
         else
             dis->calc(a, b, flow);
     };
-    // A small frame is searched inside a replicated border and cropped back: OpenCV's DIS refuses
-    // images under 12 px a side (and patches wider than the image); ours needs a pyramid level at
-    // finest_scale.
-    const int side = std::max(16, 2 * o.patch_size);
-    int px = std::max(0, side - from.cols), py = std::max(0, side - from.rows);
-    while (own && flow::dis_coarsest_scale({from.cols + px, from.rows + py}, o.patch_size) < o.finest_scale)
-        px = 2 * (from.cols + px) - from.cols, py = 2 * (from.rows + py) - from.rows;
+    // A small frame is searched inside a replicated border and cropped back.
+    const cv::Size padded = search_size(from.size(), o, own);
+    const int px = padded.width - from.cols, py = padded.height - from.rows;
     if (px == 0 && py == 0) {
         cv::Mat2f flow = std::move(initial);  // the search starts from a given flow of the right size
         calc(from, to, flow);
@@ -244,9 +250,7 @@ cv::Mat2f dense_inverse_search(const cv::Mat &from, const cv::Mat &to, const Flo
 // A gray image prepared for our flow search at o's settings; null where the search pads it or
 // OpenCV's runs (dense_inverse_search).
 std::shared_ptr<const flow::DisPyramid> prepared_for_search(const cv::Mat &gray, const FlowSearchOptions &o) {
-    if (o.refine_iterations != 0 || gray.cols < std::max(16, 2 * o.patch_size) ||
-        gray.rows < std::max(16, 2 * o.patch_size) || flow::dis_coarsest_scale(gray.size(), o.patch_size) < o.finest_scale)
-        return nullptr;
+    if (o.refine_iterations != 0 || search_size(gray.size(), o, true) != gray.size()) return nullptr;
     return std::make_shared<const flow::DisPyramid>(gray, o.finest_scale, o.patch_size);
 }
 

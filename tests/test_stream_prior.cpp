@@ -6,6 +6,7 @@
 //  - on the same scene, the static LiDAR points are carried to where they land at t1 with their
 //    t1 disparity, the box's points and points past their age stay behind, and the next pair
 //    takes a carried point only on a free pixel its stereo confirms;
+//  - the carried motion, the next pair's prior and the way back are the same on any thread count;
 //  - on a synthetic drive whose cars overtake and approach, `lidarflow sequence` with the prior
 //    scores better than the same pairs without it (the pairs one by one).
 // Runs the built binary ($LIDARFLOW_CLI, set by CTest).
@@ -153,6 +154,30 @@ void object_motion_is_carried_and_predicted(void **) {
     cv::Mat2f after = before.clone();
     matching::add_object_motion(none, d1, objects, after);
     assert_true(cv::norm(before, after, cv::NORM_INF) == 0);
+}
+
+// The same bits on any thread count (NaN included: the maps are compared as bytes).
+bool same_bits(const cv::Mat &a, const cv::Mat &b) {
+    return a.size() == b.size() && a.type() == b.type() && a.isContinuous() && b.isContinuous() &&
+           std::equal(a.datastart, a.dataend, b.datastart);
+}
+
+void object_motion_is_the_same_on_any_thread_count(void **) {
+    const SceneFlowField f = exact_field();
+    const cv::Mat3f one = matching::carry_object_motion(f, ego(), kCam, 1, 1);
+    assert_true(same_bits(one, matching::carry_object_motion(f, ego(), kCam, 1, 3)));
+    assert_true(same_bits(matching::carry_object_motion(f, ego(), kCam, 2, 1),
+                          matching::carry_object_motion(f, ego(), kCam, 2, 3)));
+    DisparityMap d1(H, W, static_cast<float>(kCam.disparity_from_depth(7.0)));
+    cv::Mat2f a(H, W, cv::Vec2f(0, 0)), b = a.clone();
+    matching::add_object_motion(ego(), d1, one, a, 1);
+    matching::add_object_motion(ego(), d1, one, b, 3);
+    assert_true(same_bits(a, b));
+    cv::Mat2f flow(H, W);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) flow(y, x) = cv::Vec2f(f.u(y, x), f.v(y, x));
+    assert_true(same_bits(matching::reverse_object_motion(one, flow, ego(), 1),
+                          matching::reverse_object_motion(one, flow, ego(), 3)));
 }
 
 // Frames in flight: carried two steps at constant velocity, the box lands where t0 + 2 (camera
@@ -362,6 +387,7 @@ void stream_beats_pairs_on_a_drive(void **) {
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(object_motion_is_carried_and_predicted),
+        cmocka_unit_test(object_motion_is_the_same_on_any_thread_count),
         cmocka_unit_test(object_motion_is_carried_two_steps),
         cmocka_unit_test(object_motion_turns_with_the_camera),
         cmocka_unit_test(static_points_are_carried),

@@ -380,7 +380,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
                                          " us (a dropped frame?)");
     const cv::Mat3f objects = prior && same_step ? source->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0, opt.threads);
-    add_object_motion(motion, r.sgm0, objects, prior0);
+    add_object_motion(motion, r.sgm0, objects, prior0, opt.threads);
     // Each image is prepared for the flow search once: both directions read it, and a stream's
     // t0 image is the previous pair's t1.
     const bool same_settings = r.reused_t0 && t0_reuse->pyramid && t0_reuse->pyramid->size() == g0.size() &&
@@ -396,7 +396,7 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
-        add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion), prior1);
+        add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion, opt.threads), prior1, opt.threads);
         r.backward = assemble(choose_rigid(g1, g0,
                                            dense_inverse_search(g1, g0, opt.flow.backward(), opt.threads,
                                                                 prior1.clone(), {r.pyramid1.get(), pyr0.get()}),

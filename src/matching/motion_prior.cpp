@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "matching/motion_prior.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -40,8 +41,9 @@ cv::Vec3f next_step(const double R[9], const cv::Vec3f &o) {
 
 // Empty pixels take a 3x3 neighbour's value: a point that comes closer covers more pixels at t1
 // than it had at t0, and the splat leaves single-pixel gaps inside it.
-cv::Mat3f close_gaps(const cv::Mat3f &m) {
+cv::Mat3f close_gaps(const cv::Mat3f &m, int threads) {
     cv::Mat3f out = m.clone();
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < m.rows; ++y)
         for (int x = 0; x < m.cols; ++x) {
             if (finite3(m(y, x))) continue;
@@ -86,34 +88,52 @@ void advance_one_step(cv::Mat3f &objects, cv::Mat1f &d, const motion::EgoMotion 
 }  // namespace
 
 cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &ego, const StereoCamera &camera,
-                              int steps) {
+                              int steps, int threads) {
     if (!ego.valid || !ego.calibrated || !camera.valid() || f.u.empty()) return {};
-    cv::Mat3f objects(f.height(), f.width(), cv::Vec3f(kNaN, kNaN, kNaN));
-    cv::Mat1f nearest(f.height(), f.width(), 0.0f);  // d1 of the point written at each t1 pixel
-    for (int y = 0; y < f.height(); ++y)
-        for (int x = 0; x < f.width(); ++x) {
+    const int w = f.width(), h = f.height();
+    // Each point's landing pixel (y * w + x; -1: none) and object motion, in parallel; then the
+    // landings in raster order, so that the nearest point wins and the first of equally near ones.
+    cv::Mat1i lands(h, w);
+    cv::Mat3f motions(h, w);
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            lands(y, x) = -1;
             if (!f.valid(y, x)) continue;
             const float u = f.u(y, x), v = f.v(y, x), d1 = f.d1(y, x);
             ScenePoint3 q;
             if (!triangulate_scene_flow(camera, x, y, u, v, f.d0(y, x), d1, &q)) continue;
             const int tx = static_cast<int>(std::lround(x + u)), ty = static_cast<int>(std::lround(y + v));
-            if (tx < 0 || ty < 0 || tx >= f.width() || ty >= f.height() || d1 <= nearest(ty, tx)) continue;
-            nearest(ty, tx) = d1;
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h) continue;
             double obj[3], p0[3] = {q.x, q.y, q.z}, bg[3], xb, yb;
             object_motion(q, ego.R, ego.t, obj);
             rigid(ego.R, ego.t, p0, bg);
             const bool moved = !project(camera, bg, xb, yb) || std::hypot(x + u - xb, y + v - yb) > kMinImageMotion;
-            objects(ty, tx) = moved ? cv::Vec3f(static_cast<float>(obj[0]), static_cast<float>(obj[1]),
-                                                static_cast<float>(obj[2]))
-                                    : cv::Vec3f(kNaN, kNaN, kNaN);
+            motions(y, x) = moved ? cv::Vec3f(static_cast<float>(obj[0]), static_cast<float>(obj[1]),
+                                              static_cast<float>(obj[2]))
+                                  : cv::Vec3f(kNaN, kNaN, kNaN);
+            lands(y, x) = ty * w + tx;
+        }
+    cv::Mat3f objects(h, w, cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat1f nearest(h, w, 0.0f);  // d1 of the point written at each t1 pixel
+    float *near = nearest.ptr<float>();
+    cv::Vec3f *obj = objects.ptr<cv::Vec3f>();
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int t = lands(y, x);
+            if (t < 0 || f.d1(y, x) <= near[t]) continue;
+            near[t] = f.d1(y, x);
+            obj[t] = motions(y, x);
         }
     for (int s = 1; s < steps; ++s) advance_one_step(objects, nearest, ego, camera);
-    return close_gaps(objects);
+    return close_gaps(objects, threads);
 }
 
-void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const cv::Mat3f &objects, cv::Mat2f &prior) {
+void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const cv::Mat3f &objects, cv::Mat2f &prior,
+                       int threads) {
     if (!m.valid || !m.calibrated || objects.size() != d.size() || prior.size() != d.size()) return;
     const StereoCamera &c = m.camera;
+#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
     for (int y = 0; y < d.rows; ++y)
         for (int x = 0; x < d.cols; ++x) {
             if (!finite3(objects(y, x)) || !disparity_valid(d(y, x)) || !(d(y, x) > 0.0f)) continue;
@@ -126,7 +146,8 @@ void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const 
         }
 }
 
-cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m) {
+cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m,
+                                int threads) {
     if (objects.empty() || objects.size() != flow.size() || !m.valid || !m.calibrated) return {};
     cv::Mat3f back(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
     for (int y = 0; y < objects.rows; ++y)
@@ -140,7 +161,7 @@ cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow,
             // back's is -o.
             back(ty, tx) = -o;
         }
-    return close_gaps(back);
+    return close_gaps(back, threads);
 }
 
 CarriedLidar carry_static_points(const SparseLidar &points, const std::vector<uint8_t> &age,

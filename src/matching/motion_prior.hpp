@@ -22,20 +22,23 @@ namespace lidarflow::matching {
 // With steps > 1 the points go on (steps - 1) more frame steps at constant velocity (ego and
 // their own object motion, turned by ego's rotation each step), to the pixels of the pair that
 // many frames later.
+// On `threads` threads (the same result on any count).
 cv::Mat3f carry_object_motion(const SceneFlowField &field, const motion::EgoMotion &ego, const StereoCamera &camera,
-                              int steps = 1);
+                              int steps = 1, int threads = 1);
 
 // `prior` (the background motion's flow at each pixel of the disparity map `d`) with the
 // flow of background motion + object motion where `objects` (carry_object_motion of the previous
 // pair, at d's pixels) holds one; pixels without a disparity keep the background's flow. The
 // object motion is turned by m's rotation: constant velocity in the world.
 // `m` must be valid and calibrated.
-void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const cv::Mat3f &objects, cv::Mat2f &prior);
+void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const cv::Mat3f &objects, cv::Mat2f &prior,
+                       int threads = 1);
 
 // `objects` at t0 carried along `flow` to the t1 pixels they land on, turned into the motion
 // t1 -> t0 under the background motion `m` (for the backward direction's prior): the forward
 // object motion being m's rotation of it (add_object_motion), the way back's is its negative.
-cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m);
+cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m,
+                                int threads = 1);
 
 // LiDAR points of earlier frames, at the pixels of the images a stream's next pair starts from.
 struct CarriedLidar {

@@ -11,7 +11,8 @@ namespace lidarflow::pipeline {
 // the share of pixels in the (2 radius + 1)^2 box around the pixel where `measured` (stage 1's
 // forward field: u, v, d0, valid read) is valid and agrees with `dense` within `tolerance` px
 // in u, v and d0. Values stay in [0, 1] when the shares are. Sizes must match (else unchanged).
+// On `threads` threads (the same result on any count).
 void add_measured_support(SceneFlowField &dense, const SceneFlowField &measured, int radius, float tolerance,
-                          float weight);
+                          float weight, int threads = 1);
 
 }  // namespace lidarflow::pipeline

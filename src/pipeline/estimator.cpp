@@ -430,7 +430,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
             cache->lagged_out_.reset();
             if (tracked_motion && options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
                 auto later = std::make_shared<matching::DecoupledStereo>();
-                later->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, cache->lag_);
+                later->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, cache->lag_, threads);
                 later->step_us = frame.step_us;
                 if (!later->object_motion.empty()) cache->lagged_out_ = std::move(later);
             }
@@ -443,7 +443,7 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                 next->carried = matching::carry_static_points(stage_lidar0, age, r.dense, r.ego,
                                                               options_.matching.stream_lidar_frames);
             if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
-                if (tracked_motion) next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera);
+                if (tracked_motion) next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, 1, threads);
                 if (next->object_motion.empty())
                     log::write(log::Level::Info, tracked_motion
                                                      ? "no motion prior for the next frame: this pair has no "
@@ -581,7 +581,7 @@ void Estimator::run_stages_2_to_4(const FrameInput &frame, const SparseLidar &al
     }
     const double k = std::min(1.0, options_.processing_scale);
     add_measured_support(r.dense, measured, std::max(1, static_cast<int>(std::lround(kSupportRadius * k))),
-                         static_cast<float>(kSupportTolerance * k), kSupportWeight);
+                         static_cast<float>(kSupportTolerance * k), kSupportWeight, threads);
     r.ego = ir.ego;
     const interpolation::InterpolationOptions &io = interpolator_.options();
     r.ego_state = r.ego.valid && r.ego.calibrated      ? EgoState::Ok

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The input-quality checks' own rules: the calibration size check (0 = unknown), blank and
-// frozen frames, the one-line summary and the tally of a stream; and that the core estimator
-// flags a calibration of another size than its images (FrameInput::calibration_size).
+// frozen frames, the one-line summary and the tally of a stream; that the core estimator
+// flags a calibration of another size than its images (FrameInput::calibration_size); and that
+// the LiDAR check measures the same on any thread count.
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -130,6 +131,18 @@ void prepared_first_frame(void **) {
     assert_false(cache.last_prepared());
 }
 
+// The LiDAR check's measurement is the same on any thread count, and on a rendered scene with its
+// exact LiDAR it decides points and finds them in agreement.
+void lidar_agreement_on_threads(void **) {
+    const synth::SynthScene s = test::render_scene(640, 192, 5);
+    const StereoCheck one = check_stereo(s.left0, s.right0, &s.lidar0, 1);
+    const StereoCheck three = check_stereo(s.left0, s.right0, &s.lidar0, 3);
+    assert_true(one.lidar.decided > 0);
+    assert_int_equal(three.lidar.decided, one.lidar.decided);
+    assert_true(three.lidar.residual_p75 == one.lidar.residual_p75);
+    assert_true(one.lidar_disagrees.empty());
+}
+
 }  // namespace
 
 int main() {
@@ -139,6 +152,7 @@ int main() {
         cmocka_unit_test(summary_and_tally),
         cmocka_unit_test(estimator_calibration_size),
         cmocka_unit_test(prepared_first_frame),
+        cmocka_unit_test(lidar_agreement_on_threads),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

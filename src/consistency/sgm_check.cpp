@@ -122,11 +122,14 @@ SceneFlowField detail::sgm_check(const SceneFlowField &forward, const DisparityM
     detail::check_size(lidar.is_lidar, h, w, "LiDAR mask");
     detail::check_size(lidar.in_window, h, w, "support-window mask");
 
+    for (int y = 0; y < h; ++y)
+        require(std::all_of(sgm[y], sgm[y] + w, [](float s) { return std::isfinite(s); }), ErrorCode::InvalidArgument,
+                "consistency: non-finite SGM disparity");
     SceneFlowField out = detail::empty_like(forward);
+#pragma omp parallel for schedule(static) num_threads(std::max(1, opt.threads))
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const float s = sgm(y, x);
-            require(std::isfinite(s), ErrorCode::InvalidArgument, "consistency: non-finite SGM disparity");
             if (!forward.valid(y, x)) continue;
             bool keep;
             if (lidar.in_window(y, x))  // LiDAR pixels lie in their own window

@@ -37,7 +37,8 @@ struct VisibilityFilterOptions {
 
 constexpr int kMaxAutoHalfHeight = 16;
 
-// The half height half_height = 0 stands for on these points (see above).
+// The half height half_height = 0 stands for on these points (see above); points outside their
+// width x height are not counted.
 int auto_half_height(const SparseLidar &points);
 
 // The points of `in` that no point of their window hides, in their input order; width and

@@ -296,7 +296,7 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
         cache->last_prepared_ = first != nullptr;
     }
     const auto t_quality = Clock::now();
-    quality::Report verdict = assess_inputs(frame, first ? &first->check : nullptr);
+    quality::Report verdict = assess_inputs(frame, first ? &first->check : nullptr, threads);
     const double quality_seconds = seconds_since(t_quality);
     EstimatorResult r;
     try {
@@ -328,7 +328,7 @@ void Estimator::prepare_first(const cv::Mat &left, const cv::Mat &right, const S
     first->left = left.clone();
     first->right = right.clone();
     first->lidar = lidar_in_use(options_, lidar);
-    first->check = quality::check_stereo(left, right, options_.use_lidar ? &first->lidar : nullptr);
+    first->check = quality::check_stereo(left, right, options_.use_lidar ? &first->lidar : nullptr, threads);
     const cv::Size size = scaled_size(left.cols, left.rows, options_.processing_scale);
     if (reduces(size, left.size())) first->small = downscale_stereo(left, right, first->lidar, size, threads);
     const StereoFrame f = first->small.left.empty() ? StereoFrame{left, right, first->lidar} : first->small;
@@ -359,9 +359,9 @@ bool PreparedFrame::is_t0_of(const FrameInput &frame) const {
            pixel_identical(right, frame.right0);
 }
 
-quality::Report Estimator::assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0) const {
+quality::Report Estimator::assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0, int threads) const {
     quality::Input q{frame.left0, frame.right0, frame.left1, frame.right1,
-                     options_.use_lidar ? &frame.lidar0 : nullptr, frame.calibration_size};
+                     options_.use_lidar ? &frame.lidar0 : nullptr, frame.calibration_size, threads};
     quality::Report r = quality::assess(q, t0);
     if (!r.ok()) log::write(log::Level::Warning, "input quality: " + r.summary());
     return r;

@@ -263,7 +263,7 @@ public:
 private:
     // The input checks of quality/input_quality.hpp, logged as a warning when one fails.
     // t0: the checks of the frame's t0 pair computed ahead, or null.
-    quality::Report assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0) const;
+    quality::Report assess_inputs(const FrameInput &frame, const quality::StereoCheck *t0, int threads) const;
     // run() after the input checks: at processing_scale, results brought back to the input size.
     // first: the prepared frame that is this pair's t0, or null.
     EstimatorResult run_scaled(const FrameInput &frame, StreamCache *cache, int threads,

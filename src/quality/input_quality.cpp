@@ -5,7 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <vector>
+
+#include <omp.h>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -210,49 +213,62 @@ std::string not_rectified(const StereoMatches &m) {
 }
 
 LidarAgreement lidar_agreement(const cv::Mat1b &left, const cv::Mat1b &right, const SparseLidar &lidar,
-                               double scale) {
+                               double scale, int threads) {
     LidarAgreement a;
     const int rad = 3, n = (2 * rad + 1) * (2 * rad + 1);
     const int W = left.cols, H = left.rows;
     const int max_d = W / 4;
     const size_t budget = 240;  // points examined, evenly spread over the list
     const size_t stride = std::max<size_t>(1, lidar.points.size() / budget);
-    std::vector<double> score, residuals;
-    for (size_t i = 0; i < lidar.points.size(); i += stride) {
-        const LidarPoint &p = lidar.points[i];
-        const int x = static_cast<int>(std::lround(p.x * scale)), y = static_cast<int>(std::lround(p.y * scale));
-        const double d = p.disparity * scale;
-        if (y < rad || y >= H - rad || x < rad || x >= W - rad || x - d < rad) continue;
-        double s = 0, s2 = 0;
-        for (int dy = -rad; dy <= rad; ++dy)
-            for (int dx = -rad; dx <= rad; ++dx) {
-                const double v = left(y + dy, x + dx);
-                s += v;
-                s2 += v * v;
+    const int examined = static_cast<int>((lidar.points.size() + stride - 1) / stride);
+    // Each examined point's residual (NaN: undecided), in parallel, then kept in the list's order.
+    // Buffers allocated before the parallel region (its body cannot throw).
+    std::vector<double> residual(static_cast<size_t>(examined), std::numeric_limits<double>::quiet_NaN());
+    const int T = std::max(1, threads);
+    std::vector<std::vector<double>> scores(static_cast<size_t>(T), std::vector<double>(std::max(max_d, 0) + 1));
+#pragma omp parallel num_threads(T)
+    {
+        std::vector<double> &score = scores[static_cast<size_t>(omp_get_thread_num())];
+#pragma omp for schedule(dynamic, 8)
+        for (int j = 0; j < examined; ++j) {
+            const LidarPoint &p = lidar.points[static_cast<size_t>(j) * stride];
+            const int x = static_cast<int>(std::lround(p.x * scale)), y = static_cast<int>(std::lround(p.y * scale));
+            const double d = p.disparity * scale;
+            if (y < rad || y >= H - rad || x < rad || x >= W - rad || x - d < rad) continue;
+            double s = 0, s2 = 0;
+            for (int dy = -rad; dy <= rad; ++dy)
+                for (int dx = -rad; dx <= rad; ++dx) {
+                    const double v = left(y + dy, x + dx);
+                    s += v;
+                    s2 += v * v;
+                }
+            const double ml = s / n, sl = std::sqrt(std::max(0.0, s2 / n - ml * ml));
+            if (sl < 6.0) continue;  // too little texture to judge
+            const int hi = std::min(max_d, x - rad);
+            std::fill(score.begin(), score.begin() + hi + 1, -1.0);
+            int best = 0;
+            for (int k = 0; k <= hi; ++k) {
+                score[k] = zncc(left, right, x, x - k, y, rad, ml, sl);
+                if (score[k] > score[best]) best = k;
             }
-        const double ml = s / n, sl = std::sqrt(std::max(0.0, s2 / n - ml * ml));
-        if (sl < 6.0) continue;  // too little texture to judge
-        const int hi = std::min(max_d, x - rad);
-        score.assign(static_cast<size_t>(hi) + 1, -1.0);
-        int best = 0;
-        for (int k = 0; k <= hi; ++k) {
-            score[k] = zncc(left, right, x, x - k, y, rad, ml, sl);
-            if (score[k] > score[best]) best = k;
+            if (score[best] < 0.7) continue;
+            double rival = -1;
+            for (int k = 0; k <= hi; ++k)
+                if (std::abs(k - best) > 2) rival = std::max(rival, score[k]);
+            if (rival > score[best] - 0.05) continue;  // ambiguous (repetitive texture)
+            // Sub-pixel: the parabola through the best score and its neighbours.
+            double sub = best;
+            if (best > 0 && best < hi) {
+                const double c0 = score[best - 1], c1 = score[best], c2 = score[best + 1];
+                const double den = c0 - 2 * c1 + c2;
+                if (den < 0) sub = best + 0.5 * (c0 - c2) / den;
+            }
+            residual[static_cast<size_t>(j)] = std::abs(sub - d) / scale;
         }
-        if (score[best] < 0.7) continue;
-        double rival = -1;
-        for (int k = 0; k <= hi; ++k)
-            if (std::abs(k - best) > 2) rival = std::max(rival, score[k]);
-        if (rival > score[best] - 0.05) continue;  // ambiguous (repetitive texture)
-        // Sub-pixel: the parabola through the best score and its neighbours.
-        double sub = best;
-        if (best > 0 && best < hi) {
-            const double c0 = score[best - 1], c1 = score[best], c2 = score[best + 1];
-            const double den = c0 - 2 * c1 + c2;
-            if (den < 0) sub = best + 0.5 * (c0 - c2) / den;
-        }
-        residuals.push_back(std::abs(sub - d) / scale);
     }
+    std::vector<double> residuals;
+    for (const double r : residual)
+        if (!std::isnan(r)) residuals.push_back(r);
     a.decided = static_cast<int>(residuals.size());
     a.residual_p75 = quantile(std::move(residuals), 0.75);
     return a;
@@ -266,7 +282,7 @@ std::string lidar_disagrees(const LidarAgreement &a) {
                   a.decided, a.residual_p75);
 }
 
-StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0) {
+StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0, int threads) {
     StereoCheck c;
     const double scale = work_scale(left0.size());
     // Too small a frame for corners, a pyramid and patches (such frames are refused later on).
@@ -276,7 +292,7 @@ StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const Spar
     c.swapped = left_right_swapped(c.matches);
     c.skewed = not_rectified(c.matches);
     if (c.swapped.empty() && c.skewed.empty() && lidar0 && !lidar0->points.empty()) {
-        c.lidar = lidar_agreement(left, right, *lidar0, scale);
+        c.lidar = lidar_agreement(left, right, *lidar0, scale, threads);
         c.lidar_disagrees = lidar_disagrees(c.lidar);
     }
     return c;
@@ -290,7 +306,7 @@ Report assess(const Input &in, const StereoCheck *t0) {
         r.add(BlankFrame, w);
         return r;  // nothing else is measurable on a blank frame
     }
-    const StereoCheck c = t0 ? *t0 : check_stereo(in.left0, in.right0, in.lidar0);
+    const StereoCheck c = t0 ? *t0 : check_stereo(in.left0, in.right0, in.lidar0, in.threads);
     if (!c.swapped.empty()) r.add(LeftRightSwapped, c.swapped);
     if (!c.skewed.empty()) r.add(NotRectified, c.skewed);
     if (!c.lidar_disagrees.empty()) r.add(LidarDisagrees, c.lidar_disagrees);

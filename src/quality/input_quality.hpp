@@ -51,6 +51,7 @@ struct Input {
     cv::Mat left0, right0, left1, right1;
     const SparseLidar *lidar0 = nullptr;  // may be null or empty
     cv::Size calibration_size;            // the size the calibration describes; 0 = unknown
+    int threads = 1;                      // OpenMP threads of the LiDAR check (same result on any count)
 };
 
 // Each check returns its reason, or "" when it finds nothing wrong.
@@ -79,7 +80,7 @@ struct LidarAgreement {
     double residual_p75 = 0;  // 3rd quartile of their |LiDAR - image| disparity [full-resolution px]
 };
 LidarAgreement lidar_agreement(const cv::Mat1b &left, const cv::Mat1b &right, const SparseLidar &lidar,
-                               double scale);
+                               double scale, int threads = 1);
 std::string lidar_disagrees(const LidarAgreement &a);
 
 // The checks of one stereo pair and its points (a frame alone): the order and rectification
@@ -89,7 +90,7 @@ struct StereoCheck {
     LidarAgreement lidar;
     std::string swapped, skewed, lidar_disagrees;  // each check's reason, "" when it finds nothing
 };
-StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0);
+StereoCheck check_stereo(const cv::Mat &left0, const cv::Mat &right0, const SparseLidar *lidar0, int threads = 1);
 // Every check on one frame. The LiDAR check is skipped when the images themselves are wrong
 // (it would only repeat that). t0: check_stereo of in's t0 images and lidar0 when already
 // computed (a stream's first frame, ahead of its pair), else null. Never throws for

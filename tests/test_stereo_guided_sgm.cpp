@@ -2,7 +2,9 @@
 // The project's SGM with a LiDAR term (stereo/guided_sgm.hpp) and the thinning of dense scans
 // for stages 2-4 (lidar/binning.hpp): a textured pair at a known disparity, a textureless
 // square that only the LiDAR can place, a dithered flat square that only ternary census lets the
-// LiDAR place, determinism over threads, refused inputs.
+// LiDAR place, determinism over threads, the data costs' vector loop against the scalar one and
+// the definition, refused inputs.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -220,6 +222,43 @@ void prior_equals_its_definition(void **) {
 
 // A featureless pair ties at every disparity: no pixel gets one (not disparity 0), while one
 // LiDAR point still places the pixels its prior reaches.
+// The data costs' vector loop gives the scalar loop's bytes, and both are the definition: the
+// popcount of the signatures' XOR (ternary: both planes, halved, rounded up), the right image's
+// column 0 left of the image, plus the LiDAR penalty on weighted pixels.
+void data_costs_vector_equals_scalar(void **) {
+    std::mt19937_64 rng(7);
+    const int w = 203;
+    for (const int D : {16, 64, 96})
+        for (const bool ternary : {false, true}) {
+            std::vector<uint64_t> dl(w), dr(w), bl(w), br(w);
+            std::vector<int16_t> prior(w);
+            std::vector<uint8_t> weight(w);
+            for (int x = 0; x < w; ++x) {
+                // 62 census bits; every fourth pixel a sparse or a dense signature.
+                const uint64_t mask = x % 4 == 1 ? 0x0101010101010101ull : (1ull << 62) - 1;
+                dl[x] = rng() & mask, dr[x] = rng() & mask, bl[x] = rng() & mask & ~dl[x], br[x] = rng() & mask & ~dr[x];
+                prior[x] = static_cast<int16_t>(rng() % (16 * D));
+                weight[x] = x % 7 == 0 ? static_cast<uint8_t>(rng() % 256) : 0;
+            }
+            std::vector<uint8_t> vec(static_cast<size_t>(w) * D), sca(vec.size());
+            const uint64_t *b0 = ternary ? bl.data() : nullptr, *b1 = ternary ? br.data() : nullptr;
+            stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D, 64, 40,
+                                      true, vec.data());
+            stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D, 64, 40,
+                                      false, sca.data());
+            assert_true(vec == sca);
+            for (int x = 0; x < w; ++x) {
+                if (weight[x] != 0) continue;
+                for (int d = 0; d < D; ++d) {
+                    const int xr = std::max(0, x - d);
+                    int n = __builtin_popcountll(dl[x] ^ dr[xr]);
+                    if (ternary) n = (n + __builtin_popcountll(bl[x] ^ br[xr]) + 1) / 2;
+                    assert_int_equal(vec[static_cast<size_t>(x) * D + d], n);
+                }
+            }
+        }
+}
+
 void featureless_pair_has_no_disparity(void **) {
     const cv::Mat1b flat(kH, kW, uchar(90));
     const DisparityMap d = stereo::guided_sgm(flat, flat, SparseLidar{kW, kH, {}}, options());
@@ -288,6 +327,7 @@ int main() {
         cmocka_unit_test(prior_equals_its_definition),
         cmocka_unit_test(bad_inputs_are_refused),
         cmocka_unit_test(featureless_pair_has_no_disparity),
+        cmocka_unit_test(data_costs_vector_equals_scalar),
         cmocka_unit_test(binning_bounds_the_points),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

@@ -11,6 +11,10 @@
 
 #include <omp.h>
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -122,34 +126,103 @@ inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, u
     }
 }
 
-// One row of data costs: cost[x * D + d] = Hamming(left x, right x - d) (the right image's
-// column 0 stands in left of the image) + the LiDAR penalty. Integer only. bl, br: the bright
-// planes (Ternary only).
+// The Hamming costs of pixels [x0, x1) of one row: cost[x * D + d] = Hamming(left x, right x - d),
+// the right image's column 0 standing in left of the image. bl, br: the bright planes (Ternary
+// only). Integer only.
 template <bool Ternary>
-inline __attribute__((always_inline)) void row_costs_of(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
-                                                       const uint64_t *br, const int16_t *prior16,
-                                                       const uint8_t *weight, int w, int D, int slope16, int cap,
-                                                       uint8_t *cost) {
-    const uint16_t top = penalty_reach(slope16, cap);
-    for (int x = 0; x < w; ++x) {
+inline __attribute__((always_inline)) void hamming_costs_of(const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
+                                                           const uint64_t *br, int x0, int x1, int D, uint8_t *cost) {
+    for (int x = x0; x < x1; ++x) {
         uint8_t *c = cost + static_cast<size_t>(x) * D;
         const int lim = std::min(D, x + 1);
         for (int d = 0; d < lim; ++d) c[d] = hamming<Ternary>(dl, bl, dr, br, x, x - d);
         const uint8_t edge = hamming<Ternary>(dl, bl, dr, br, x, 0);
         for (int d = lim; d < D; ++d) c[d] = edge;
-        if (weight[x] != 0) add_lidar_penalty(c, D, prior16[x], weight[x], slope16, top, cap);
     }
 }
 
-// row_costs_of, cloned per ISA (clang clones no templates; each clone inlines both kinds).
-LIDARFLOW_V3_CLONES void row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
-                                   const uint64_t *br, const int16_t *prior16, const uint8_t *weight, int w, int D,
-                                   int slope16, int cap, uint8_t *cost) {
-    if (ternary)
-        row_costs_of<true>(dl, dr, bl, br, prior16, weight, w, D, slope16, cap, cost);
-    else
-        row_costs_of<false>(dl, dr, bl, br, prior16, weight, w, D, slope16, cap, cost);
+#if defined(__x86_64__) || defined(__i386__)
+// Bit counts of each byte of v (nibble table lookups).
+__attribute__((target("avx2"))) inline __m256i byte_popcounts(__m256i v) {
+    const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3, 1,
+                                           2, 2, 3, 2, 3, 3, 4);
+    const __m256i nibble = _mm256_set1_epi8(0x0F);
+    return _mm256_add_epi8(_mm256_shuffle_epi8(table, _mm256_and_si256(v, nibble)),
+                           _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), nibble)));
 }
+
+// hamming_costs_of for x >= D - 1 (every disparity has its own right pixel), 16 disparities a
+// step: group g's four right pixels x - d - 4g - 3 .. x - d - 4g are one load (lane k holds
+// disparity d + 4g + 3 - k), their counts summed per 64-bit lane, and the 16 counts put in order
+// by one byte shuffle. The same integers as the scalar loop.
+template <bool Ternary>
+__attribute__((target("avx2"))) inline void hamming_costs_avx2(const uint64_t *dl, const uint64_t *dr,
+                                                              const uint64_t *bl, const uint64_t *br, int x0, int x1,
+                                                              int D, uint8_t *cost) {
+    const __m256i zero = _mm256_setzero_si256();
+    const __m256i dwords = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+    // Byte 4k + g of the gathered dwords is disparity d + 4g + 3 - k; out byte 4g + k' takes it
+    // with k = 3 - k'.
+    const __m128i order = _mm_setr_epi8(12, 8, 4, 0, 13, 9, 5, 1, 14, 10, 6, 2, 15, 11, 7, 3);
+    for (int x = x0; x < x1; ++x) {
+        const __m256i l = _mm256_set1_epi64x(static_cast<long long>(dl[x]));
+        const __m256i lb = Ternary ? _mm256_set1_epi64x(static_cast<long long>(bl[x])) : zero;
+        uint8_t *c = cost + static_cast<size_t>(x) * D;
+        for (int d = 0; d < D; d += 16) {
+            __m256i packed = zero;
+            for (int g = 0; g < 4; ++g) {
+                const size_t at = static_cast<size_t>(x - d - 4 * g - 3);
+                __m256i bits = byte_popcounts(
+                    _mm256_xor_si256(l, _mm256_loadu_si256(reinterpret_cast<const __m256i *>(dr + at))));
+                if (Ternary)
+                    bits = _mm256_add_epi8(bits, byte_popcounts(_mm256_xor_si256(
+                                                     lb, _mm256_loadu_si256(reinterpret_cast<const __m256i *>(br + at)))));
+                packed = _mm256_or_si256(packed, _mm256_slli_epi64(_mm256_sad_epu8(bits, zero), 8 * g));
+            }
+            __m128i out = _mm_shuffle_epi8(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(packed, dwords)), order);
+            if (Ternary) out = _mm_avg_epu8(out, _mm_setzero_si128());  // (n + 1) >> 1
+            _mm_storeu_si128(reinterpret_cast<__m128i *>(c + d), out);
+        }
+    }
+}
+#endif
+
+bool have_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+#else
+    return false;
+#endif
+}
+
+}  // namespace
+
+// The Hamming costs on the vector path where `simd` and the CPU has AVX2, from pixel D - 1 on (the
+// pixels before it read column 0 for some disparities), then the LiDAR penalty.
+LIDARFLOW_V3_CLONES void detail::row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
+                                           const uint64_t *br, const int16_t *prior16, const uint8_t *weight, int w,
+                                           int D, int slope16, int cap, bool simd, uint8_t *cost) {
+    const int scalar_end = simd && have_avx2() ? std::min(w, D - 1) : w;
+    if (ternary)
+        hamming_costs_of<true>(dl, dr, bl, br, 0, scalar_end, D, cost);
+    else
+        hamming_costs_of<false>(dl, dr, bl, br, 0, scalar_end, D, cost);
+#if defined(__x86_64__) || defined(__i386__)
+    if (scalar_end < w) {
+        if (ternary)
+            hamming_costs_avx2<true>(dl, dr, bl, br, scalar_end, w, D, cost);
+        else
+            hamming_costs_avx2<false>(dl, dr, bl, br, scalar_end, w, D, cost);
+    }
+#endif
+    const uint16_t top = penalty_reach(slope16, cap);
+    for (int x = 0; x < w; ++x)
+        if (weight[x] != 0)
+            add_lidar_penalty(cost + static_cast<size_t>(x) * D, D, prior16[x], weight[x], slope16, top, cap);
+}
+
+namespace {
 
 // One step along a path: cur = cost + min(prev, prev(d +- 1) + P1, min(prev) + P2) - min(prev),
 // added into sum (or stored there when `first`). prev has a sentinel at [-1] and [D]. Returns
@@ -418,11 +491,11 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
         uint8_t *out = cost.get() + plane * y;
         if (ternary)
-            row_costs(true, dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
-                            prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, out);
+            detail::row_costs(true, dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
+                      prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, true, out);
         else
-            row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
-                             out);
+            detail::row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
+                      true, out);
     }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};

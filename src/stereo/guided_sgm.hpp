@@ -2,8 +2,9 @@
 #pragma once
 // Semi-global stereo matching with a LiDAR term in its data cost (the decoupled stage 1's
 // stereo). OpenCV's StereoSGBM takes no prior, so the project has its own SGM:
-//  - data cost: Hamming distance of 9x7 census signatures (0..62, one popcount per candidate),
-//    or of ternary ones (darker / brighter by more than a threshold: two popcounts, halved);
+//  - data cost: Hamming distance of 9x7 census signatures (0..62, one popcount per candidate,
+//    16 candidates a step with AVX2), or of ternary ones (darker / brighter by more than a
+//    threshold: two popcounts, halved);
 //  - LiDAR term: at and around each LiDAR pixel, + weight * min(slope * |d - d_lidar|, cap),
 //    on a map densified within `lidar_radius` px over pixels of similar intensity, the weight
 //    falling with the distance to the point (guided stereo matching in its additive form);
@@ -16,6 +17,8 @@
 //    filter.
 // Integer throughout: results do not depend on the thread count or the ISA. Cost model and
 // floor: docs/ARCHITECTURE.md, "Guided SGM".
+#include <cstdint>
+
 #include <opencv2/core.hpp>
 
 #include "core/lidar.hpp"
@@ -67,5 +70,16 @@ LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const 
 // disparity. Thread-safe (no shared state).
 DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseLidar &lidar,
                         const GuidedSgmOptions &opt);
+
+namespace detail {
+// One row of guided_sgm's data costs, exposed for its test: cost[x * D + d] = the Hamming distance
+// of left pixel x's census signature (dl; with `ternary` also the bright plane bl, the sum of both
+// halved, rounded up) and right pixel x - d's (dr, br; column 0 stands in left of the image), plus
+// the LiDAR penalty where weight[x] > 0 (prior16: the prior in 1/16 px). `simd` takes the AVX2
+// loop where the CPU has it, else the scalar one: the same bytes. w pixels, D a multiple of 16.
+void row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
+               const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap, bool simd,
+               uint8_t *cost);
+}  // namespace detail
 
 }  // namespace lidarflow::stereo

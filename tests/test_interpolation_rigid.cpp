@@ -5,11 +5,12 @@
 // matches hidden at t1 (d1 matched on a near object) the background's d1, and matches that
 // its flow shows static too, unless they may move along the optical axis; t1 LiDAR points moved
 // back to t0 measure d0 unless the matches where they land contradict them; new options are
-// validated.
+// validated; the vectorised prediction of many points equals the one-point prediction bit for bit.
 #include "test_support.hpp"
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "core/error.hpp"
@@ -94,6 +95,30 @@ void rigid_fit_exact(void **) {
     float d1, u, v;
     assert_false(away.predict(610, 175, 720 * 0.54 / 50, d1, u, v));
     assert_false(motion::EgoMotion{}.inverse().valid);
+}
+
+// predict_many gives predict()'s floats bit for bit: a rigid motion (its vector loop), one that
+// puts points behind the camera, no motion, and an odd count (the loop's tail).
+void predict_many_equals_predict(void **) {
+    const StereoCamera cam = kitti_camera();
+    motion::EgoMotion away = true_motion(cam);
+    away.t[2] = -100;
+    test::TestRng rng(5);
+    std::vector<float> x(1001), y(x.size()), d0(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        x[i] = static_cast<float>(1300 * rng.uniform() - 30), y[i] = static_cast<float>(400 * rng.uniform() - 10);
+        d0[i] = i % 50 == 0 ? -1.0f : static_cast<float>(120 * rng.uniform());  // negatives count as 0
+    }
+    for (const motion::EgoMotion &m : {true_motion(cam), away, motion::EgoMotion{}}) {
+        std::vector<float> d1(x.size()), u(x.size()), v(x.size());
+        m.predict_many(x.data(), y.data(), d0.data(), static_cast<int>(x.size()), d1.data(), u.data(), v.data());
+        for (size_t i = 0; i < x.size(); ++i) {
+            float e1, eu, ev;
+            m.predict(x[i], y[i], d0[i], e1, eu, ev);
+            assert_true(std::memcmp(&e1, &d1[i], 4) == 0 && std::memcmp(&eu, &u[i], 4) == 0 &&
+                        std::memcmp(&ev, &v[i], 4) == 0);
+        }
+    }
 }
 
 // n matches, a third of them wrong: the fit finds the rest, predicts held-out points within
@@ -479,6 +504,7 @@ void rejects_bad_rigid_options(void **) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(rigid_fit_exact),
+        cmocka_unit_test(predict_many_equals_predict),
         cmocka_unit_test(rigid_fit_robust_and_deterministic),
         cmocka_unit_test(rigid_fit_of_a_dense_scan),
         cmocka_unit_test(rigid_fit_refuses),

@@ -222,6 +222,22 @@ void validate_hint(const DisparityMap &hint, const cv::Size &sz) {
                     "interpolation: non-finite value in the geometry hint");
 }
 
+// The background model's prediction (EgoMotion::predict) for every seed from its disparity `d0`,
+// in bands on `threads` threads.
+struct Background {
+    std::vector<float> d1, u, v;
+};
+Background predict_background(const Seeds &s, const std::vector<float> &d0, const EgoMotion &ego, int threads) {
+    const int n = s.size();
+    Background b{std::vector<float>(static_cast<size_t>(n)), std::vector<float>(static_cast<size_t>(n)),
+                 std::vector<float>(static_cast<size_t>(n))};
+    for_each_band(n, std::max(1, threads), [&](int, int i0, int i1) {
+        ego.predict_many(s.x.data() + i0, s.y.data() + i0, d0.data() + i0, i1 - i0, b.d1.data() + i0,
+                         b.u.data() + i0, b.v.data() + i0);
+    });
+    return b;
+}
+
 // Matches of points hidden at t1 (InterpolationOptions::occlusion_reasoning). Every match is
 // splatted into two t1 depth buffers, the left image at its measured landing pixel
 // (x + u, y + v) and the right image at (x + u - d1, y + v), with min(d0, d1): a hidden
@@ -256,13 +272,12 @@ int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const Interpo
         if (tx < 0 || ty < 0 || tx >= w || ty >= h) return false;
         return z(ty, tx) >= d + std::max(o.occlusion_margin, 0.1f * d);
     };
+    const Background bg = predict_background(s, s.d0, ego, T);
     int released = 0;
 #pragma omp parallel for num_threads(T) schedule(static) reduction(+ : released)
     for (int i = 0; i < n; ++i) {
         if (!s.has_motion[i]) continue;
-        float d1e, ue, ve;
-        ego.predict(s.x[i], s.y[i], s.d0[i], d1e, ue, ve);
-        const float tx = s.x[i] + ue, ty = s.y[i] + ve;
+        const float d1e = bg.d1[i], tx = s.x[i] + bg.u[i], ty = s.y[i] + bg.v[i];
         if (ego.calibrated && hidden(zl, tx, ty, d1e)) {
             s.z1[i] = s.zu[i] = s.zv[i] = 0.0f;
             ++released;
@@ -560,14 +575,15 @@ SeedSet prepare_seeds(const SceneFlowField &matches, const SparseLidar &lidar0, 
     // The zero remainder (pure background) is a hypothesis of its own only with a background
     // model to fall back on.
     set.background = res.ego.valid && o.background_hypothesis;
+    if (set.subtract_d0) {
+        const Background bg = predict_background(seeds, seeds.d0_match, res.ego, o.num_threads);
 #pragma omp parallel for num_threads(o.num_threads) schedule(static)
-    for (int i = 0; i < seeds.size(); ++i) {
-        if (!seeds.has_motion[i] || !set.subtract_d0) continue;
-        float d1e, ue, ve;
-        res.ego.predict(seeds.x[i], seeds.y[i], seeds.d0_match[i], d1e, ue, ve);
-        seeds.z1[i] = seeds.d1[i] - d1e;
-        seeds.zu[i] = seeds.u[i] - ue;
-        seeds.zv[i] = seeds.v[i] - ve;
+        for (int i = 0; i < seeds.size(); ++i) {
+            if (!seeds.has_motion[i]) continue;
+            seeds.z1[i] = seeds.d1[i] - bg.d1[i];
+            seeds.zu[i] = seeds.u[i] - bg.u[i];
+            seeds.zv[i] = seeds.v[i] - bg.v[i];
+        }
     }
     if (res.ego.valid && o.occlusion_reasoning) res.occluded_seeds = release_occluded(seeds, res.ego, w, h, o);
     if (res.ego.valid && res.ego.calibrated && o.static_d1_from_background)
@@ -1016,25 +1032,40 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
         o.exits_follow_background && subtract_d0 && res.ego.valid && res.ego.calibrated;
     const auto inside = [w, h](float tx, float ty) { return tx >= 0 && ty >= 0 && tx <= w - 1 && ty <= h - 1; };
     const cv::Mat1f correction = lidar_residuals(set, pair_of, chosen, cur, o);
-#pragma omp parallel for num_threads(o.num_threads) schedule(static)
-    for (int y = 0; y < h; ++y)
+    // The background's prediction a row at a time (EgoMotion::predict_many): columns, the row's
+    // y, and per thread its d1, u and v, allocated before the region.
+    std::vector<float> columns(static_cast<size_t>(w));
+    for (int x = 0; x < w; ++x) columns[static_cast<size_t>(x)] = static_cast<float>(x);
+    const int T = std::max(1, o.num_threads);
+    std::vector<std::vector<float>> background(static_cast<size_t>(T), std::vector<float>(4 * static_cast<size_t>(w), 0.0f));
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        float *row_y = background[static_cast<size_t>(omp_get_thread_num())].data(), *d1e = row_y + w, *ue = d1e + w,
+              *ve = ue + w;
+        for (int x = 0; x < w; ++x) {
+            const Model &m0 = cur[static_cast<size_t>(chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels + kD0]) *
+                                      kNumChannels +
+                                  kD0];
+            const float c0 = correction.empty() ? 0.0f : correction(y, x);
+            res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(static_cast<float>(x), static_cast<float>(y)) + c0);
+        }
+        if (subtract_d0) {
+            std::fill(row_y, row_y + w, static_cast<float>(y));
+            res.ego.predict_many(columns.data(), row_y, res.dense.d0[y], w, d1e, ue, ve);
+        }
         for (int x = 0; x < w; ++x) {
             const int *pick = &chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels];
             const float fx = static_cast<float>(x), fy = static_cast<float>(y);
-            const Model &m0 = cur[static_cast<size_t>(pick[kD0]) * kNumChannels + kD0];
             const Model &m1 = cur[static_cast<size_t>(pick[kD1]) * kNumChannels + kD1];
             const Model &mf = cur[static_cast<size_t>(pick[kFlow]) * kNumChannels + kFlow];
-            const float c0 = correction.empty() ? 0.0f : correction(y, x);
-            res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(fx, fy) + c0);
-            float d1e = 0, ue = 0, ve = 0;
-            if (subtract_d0) res.ego.predict(fx, fy, res.dense.d0(y, x), d1e, ue, ve);
-            float d1 = d1e + m1.p[0].at(fx, fy), u = ue + mf.p[0].at(fx, fy), v = ve + mf.p[1].at(fx, fy);
+            const float d1b = d1e[x], ub = ue[x], vb = ve[x];
+            float d1 = d1b + m1.p[0].at(fx, fy), u = ub + mf.p[0].at(fx, fy), v = vb + mf.p[1].at(fx, fy);
             // Leaving the image: no match can exist there, so the superpixel's model is an
             // extrapolation; when the background agrees that the point leaves, it decides.
-            if (exits_follow_background && !inside(fx + ue, fy + ve) && !inside(fx + u, fy + v)) {
-                d1 = d1e;
-                u = ue;
-                v = ve;
+            if (exits_follow_background && !inside(fx + ub, fy + vb) && !inside(fx + u, fy + v)) {
+                d1 = d1b;
+                u = ub;
+                v = vb;
             }
             res.dense.d1(y, x) = std::max(0.0f, d1);
             res.dense.u(y, x) = u;
@@ -1042,6 +1073,7 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
             const size_t base = static_cast<size_t>(sp.labels(y, x)) * kNumChannels;
             res.dense.confidence(y, x) = (share[base] + share[base + 1] + share[base + 2]) / 3.0f;
         }
+    }
     if (use_lidar && o.keep_lidar_values)
         for (const LidarPoint &lp : lidar0.points) res.dense.d0(lp.y, lp.x) = seeds.d0[seed_at(lp.y, lp.x)];
     res.timings.output_s = seconds_since(t);

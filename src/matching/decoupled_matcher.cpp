@@ -5,6 +5,9 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
+
+#include <omp.h>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -154,17 +157,30 @@ cv::Mat2f rigid_flow(const motion::EgoMotion &m, const DisparityMap &d, int thre
     if (!m.valid) return {};
     constexpr int kStep = 2;
     cv::Mat2f coarse((d.rows + kStep - 1) / kStep, (d.cols + kStep - 1) / kStep);
-#pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
+    // Per thread, one coarse row's grid columns with a disparity (x, y, d) and their prediction
+    // (EgoMotion::predict_many), allocated before the region.
+    const int T = std::max(1, threads), n = coarse.cols;
+    std::vector<std::vector<float>> rows(static_cast<size_t>(T), std::vector<float>(6 * static_cast<size_t>(n)));
+#pragma omp parallel for schedule(static) num_threads(T)
     for (int cy = 0; cy < coarse.rows; ++cy) {
         const int y = cy * kStep;
+        float *xs = rows[static_cast<size_t>(omp_get_thread_num())].data(), *ys = xs + n, *ds = ys + n, *d1 = ds + n,
+              *us = d1 + n, *vs = us + n;
+        int k = 0;  // grid columns with a disparity so far
         float last = -1.0f;
+        cv::Vec2f *out = coarse[cy];
         for (int x = 0; x < d.cols; ++x) {
             if (disparity_valid(d(y, x))) last = d(y, x);
             if (x % kStep) continue;
-            float d1 = 0, u = 0, v = 0;
-            if (last >= 0) m.predict(static_cast<float>(x), static_cast<float>(y), last, d1, u, v);
-            coarse(y / kStep, x / kStep) = cv::Vec2f(std::isfinite(u) ? u : 0.0f, std::isfinite(v) ? v : 0.0f);
+            out[x / kStep] = cv::Vec2f(0.0f, 0.0f);
+            if (last < 0) continue;
+            xs[k] = static_cast<float>(x), ys[k] = static_cast<float>(y), ds[k] = last;
+            ++k;
         }
+        m.predict_many(xs, ys, ds, k, d1, us, vs);
+        for (int j = 0; j < k; ++j)
+            out[static_cast<int>(xs[j]) / kStep] =
+                cv::Vec2f(std::isfinite(us[j]) ? us[j] : 0.0f, std::isfinite(vs[j]) ? vs[j] : 0.0f);
     }
     cv::Mat2f prior;
     cv::resize(coarse, prior, d.size(), 0, 0, cv::INTER_LINEAR);

@@ -70,6 +70,15 @@ bool EgoMotion::predict(float x, float y, float d0, float &d1_out, float &u_out,
     return true;
 }
 
+void EgoMotion::predict_many(const float *x, const float *y, const float *d0, int n, float *d1, float *u,
+                             float *v) const {
+    if (valid && calibrated) {
+        detail::predict_rigid_many(*this, x, y, d0, n, d1, u, v);
+        return;
+    }
+    for (int i = 0; i < n; ++i) predict(x[i], y[i], d0[i], d1[i], u[i], v[i]);
+}
+
 EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &y, const std::vector<float> &d0,
                          const std::vector<float> &d1, const std::vector<float> &u, const std::vector<float> &v,
                          const EgoMotionOptions &o) {

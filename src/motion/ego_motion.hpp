@@ -41,6 +41,9 @@ struct EgoMotion {
     // Without a valid model: d1 = d0, (u, v) = 0. Returns false when a rigid model moves the
     // point behind the camera (its prediction is then only kept finite).
     bool predict(float x, float y, float d0, float &d1, float &u, float &v) const;
+    // predict() of n points (arrays of n; the outputs may not overlap the inputs): the same
+    // values as n calls, without the behind-the-camera flag. A rigid model's is vectorised.
+    void predict_many(const float *x, const float *y, const float *d0, int n, float *d1, float *u, float *v) const;
     // The motion from t1 back to t0 (R^T, -R^T t), so that predict() maps a t1 pixel and
     // disparity to the t0 ones. Rigid models only; any other gives an invalid model.
     EgoMotion inverse() const;
@@ -67,6 +70,8 @@ EgoMotion fit_ego_motion(const std::vector<float> &x, const std::vector<float> &
 namespace detail {
 // EgoMotion::predict for calibrated models (ego_motion_rigid.cpp).
 bool predict_rigid(const EgoMotion &m, float x, float y, float d0, float &d1, float &u, float &v);
+void predict_rigid_many(const EgoMotion &m, const float *x, const float *y, const float *d0, int n, float *d1, float *u,
+                        float *v);
 }  // namespace detail
 
 // The rigid model for a known camera (camera.valid() with finite values required, else

@@ -223,6 +223,30 @@ bool detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, floa
     return p.n[2] >= kMinDepthRatio;
 }
 
+// predict_rigid for n points: project()'s operations in its order per point (the same doubles),
+// on plain arrays so that the loop vectorises (its divisions dominate one point at a time).
+LIDARFLOW_AVX2_CLONES
+void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
+                                float *u, float *v) {
+    const double *R = em.R, *t = em.t;
+    const double r00 = R[0], r01 = R[1], r02 = R[2], r10 = R[3], r11 = R[4], r12 = R[5], r20 = R[6], r21 = R[7],
+                 r22 = R[8], t0 = t[0], t1 = t[1], t2 = t[2];
+    const StereoCamera &c = em.camera;
+    const double cx = c.cx, cy = c.cy, fx = c.fx, fy = c.fy, fxb = c.fx * c.baseline;
+    for (int i = 0; i < n; ++i) {
+        const double px = x[i], py = y[i], dd = std::max(0.0f, d0[i]);
+        const double ray0 = (px - cx) / fx, ray1 = (py - cy) / fy, ray2 = 1.0;
+        const double w = dd / fxb;
+        const double n0 = r00 * ray0 + r01 * ray1 + r02 * ray2 + t0 * w;
+        const double n1 = r10 * ray0 + r11 * ray1 + r12 * ray2 + t1 * w;
+        const double nz = r20 * ray0 + r21 * ray1 + r22 * ray2 + t2 * w;
+        const double n2 = std::max(nz, kMinDepthRatio);
+        d1[i] = static_cast<float>(dd / n2);
+        u[i] = static_cast<float>(fx * n0 / n2 + cx - px);
+        v[i] = static_cast<float>(fy * n1 / n2 + cy - py);
+    }
+}
+
 EgoMotion EgoMotion::inverse() const {
     EgoMotion inv;
     if (!valid || !calibrated) return inv;

@@ -553,6 +553,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     }
     if (opt.speckle_window > 0) cv::filterSpeckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range);
     DisparityMap d(h, w, kInvalidDisparity);
+#pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             if (disp16(y, x) >= 0) d(y, x) = disp16(y, x) / 16.0f;

@@ -236,7 +236,8 @@ void data_costs_vector_equals_scalar(void **) {
             for (int x = 0; x < w; ++x) {
                 // 62 census bits; every fourth pixel a sparse or a dense signature.
                 const uint64_t mask = x % 4 == 1 ? 0x0101010101010101ull : (1ull << 62) - 1;
-                dl[x] = rng() & mask, dr[x] = rng() & mask, bl[x] = rng() & mask & ~dl[x], br[x] = rng() & mask & ~dr[x];
+                dl[x] = rng() & mask, dr[x] = rng() & mask;
+                bl[x] = rng() & mask & ~dl[x], br[x] = rng() & mask & ~dr[x];
                 prior[x] = static_cast<int16_t>(rng() % (16 * D));
                 weight[x] = x % 7 == 0 ? static_cast<uint8_t>(rng() % 256) : 0;
             }

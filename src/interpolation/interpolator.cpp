@@ -1037,15 +1037,15 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     std::vector<float> columns(static_cast<size_t>(w));
     for (int x = 0; x < w; ++x) columns[static_cast<size_t>(x)] = static_cast<float>(x);
     const int T = std::max(1, o.num_threads);
-    std::vector<std::vector<float>> background(static_cast<size_t>(T), std::vector<float>(4 * static_cast<size_t>(w), 0.0f));
+    std::vector<std::vector<float>> background(static_cast<size_t>(T),
+                                               std::vector<float>(4 * static_cast<size_t>(w), 0.0f));
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
         float *row_y = background[static_cast<size_t>(omp_get_thread_num())].data(), *d1e = row_y + w, *ue = d1e + w,
               *ve = ue + w;
         for (int x = 0; x < w; ++x) {
-            const Model &m0 = cur[static_cast<size_t>(chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels + kD0]) *
-                                      kNumChannels +
-                                  kD0];
+            const int pick = chosen[static_cast<size_t>(pair_of(y, x)) * kNumChannels + kD0];
+            const Model &m0 = cur[static_cast<size_t>(pick) * kNumChannels + kD0];
             const float c0 = correction.empty() ? 0.0f : correction(y, x);
             res.dense.d0(y, x) = std::max(0.0f, m0.p[0].at(static_cast<float>(x), static_cast<float>(y)) + c0);
         }

@@ -412,7 +412,8 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     if (backward) {
         const motion::EgoMotion back = motion.valid ? motion.inverse() : motion;
         cv::Mat2f prior1 = rigid_flow(back, r.sgm1, opt.threads);
-        add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion, opt.threads), prior1, opt.threads);
+        add_object_motion(back, r.sgm1, reverse_object_motion(objects, flow0, motion, opt.threads), prior1,
+                          opt.threads);
         r.backward = assemble(choose_rigid(g1, g0,
                                            dense_inverse_search(g1, g0, opt.flow.backward(), opt.threads,
                                                                 prior1.clone(), {r.pyramid1.get(), pyr0.get()}),

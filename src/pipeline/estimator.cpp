@@ -430,7 +430,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
             cache->lagged_out_.reset();
             if (tracked_motion && options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
                 auto later = std::make_shared<matching::DecoupledStereo>();
-                later->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, cache->lag_, threads);
+                later->object_motion =
+                    matching::carry_object_motion(r.dense, r.ego, frame.camera, cache->lag_, threads);
                 later->step_us = frame.step_us;
                 if (!later->object_motion.empty()) cache->lagged_out_ = std::move(later);
             }
@@ -443,7 +444,8 @@ EstimatorResult Estimator::run_native(const FrameInput &frame, StreamCache *cach
                 next->carried = matching::carry_static_points(stage_lidar0, age, r.dense, r.ego,
                                                               options_.matching.stream_lidar_frames);
             if (options_.matching.stream_prior && options_.last_stage == Stage::Interpolation) {
-                if (tracked_motion) next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, 1, threads);
+                if (tracked_motion)
+                    next->object_motion = matching::carry_object_motion(r.dense, r.ego, frame.camera, 1, threads);
                 if (next->object_motion.empty())
                     log::write(log::Level::Info, tracked_motion
                                                      ? "no motion prior for the next frame: this pair has no "

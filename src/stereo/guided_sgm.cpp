@@ -174,9 +174,10 @@ __attribute__((target("avx2"))) inline void hamming_costs_avx2(const uint64_t *d
                 const size_t at = static_cast<size_t>(x - d - 4 * g - 3);
                 __m256i bits = byte_popcounts(
                     _mm256_xor_si256(l, _mm256_loadu_si256(reinterpret_cast<const __m256i *>(dr + at))));
-                if (Ternary)
-                    bits = _mm256_add_epi8(bits, byte_popcounts(_mm256_xor_si256(
-                                                     lb, _mm256_loadu_si256(reinterpret_cast<const __m256i *>(br + at)))));
+                if (Ternary) {
+                    const __m256i right = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(br + at));
+                    bits = _mm256_add_epi8(bits, byte_popcounts(_mm256_xor_si256(lb, right)));
+                }
                 packed = _mm256_or_si256(packed, _mm256_slli_epi64(_mm256_sad_epu8(bits, zero), 8 * g));
             }
             __m128i out = _mm_shuffle_epi8(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(packed, dwords)), order);
@@ -492,10 +493,10 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         uint8_t *out = cost.get() + plane * y;
         if (ternary)
             detail::row_costs(true, dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
-                      prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, true, out);
+                              prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, true, out);
         else
-            detail::row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap,
-                      true, out);
+            detail::row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16,
+                              opt.lidar_cap, true, out);
     }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};

@@ -28,8 +28,12 @@ int auto_half_height(const SparseLidar &points) {
     // are visited row by row (bucketed by y), each gap taken from its column's last row; a
     // quantile does not depend on the gaps' order.
     std::vector<int> gaps;
-    const int w = std::max(points.width, 0), h = std::max(points.height, 0);
-    const auto inside = [&](const LidarPoint &p) { return p.x >= 0 && p.y >= 0 && p.x < w && p.y < h; };
+    const auto inside = [&](const LidarPoint &p) {
+        return p.x >= 0 && p.y >= 0 && p.x < points.width && p.y < points.height;
+    };
+    int w = 0, h = 0;  // the points' own extent: the buffers below never exceed what they cover
+    for (const LidarPoint &p : points.points)
+        if (inside(p)) w = std::max(w, p.x + 1), h = std::max(h, p.y + 1);
     std::vector<int> first(static_cast<size_t>(h) + 1, 0);
     for (const LidarPoint &p : points.points)
         if (inside(p)) ++first[static_cast<size_t>(p.y) + 1];

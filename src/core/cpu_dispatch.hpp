@@ -31,3 +31,19 @@
 #ifndef LIDARFLOW_V3_CLONES
 #define LIDARFLOW_V3_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
+
+namespace lidarflow {
+
+// Whether the CPU runs AVX2: the pick between a kernel written with its intrinsics (in a
+// target("avx2") function) and the portable loop beside it; false off x86. Thread-safe (asked
+// once).
+inline bool cpu_has_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+#else
+    return false;
+#endif
+}
+
+}  // namespace lidarflow

@@ -8,6 +8,8 @@
 #include <immintrin.h>
 #endif
 
+#include "core/cpu_dispatch.hpp"
+
 namespace lidarflow::interpolation {
 
 bool plane_from_3(const float x[3], const float y[3], const float z[3], Plane &out) {
@@ -124,7 +126,6 @@ __attribute__((target("avx2"))) void lanes_avx2(const Model &m, bool two, const 
     _mm256_storeu_ps(acc, s);
 }
 
-const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
 #endif
 
 }  // namespace
@@ -137,7 +138,7 @@ bool lane_isa_available(LaneIsa isa) {
     case LaneIsa::Sse2: return true;
 #endif
 #if defined(__x86_64__) && defined(__SSE2__)
-    case LaneIsa::Avx2: return kHaveAvx2;
+    case LaneIsa::Avx2: return cpu_has_avx2();
 #endif
     default: return false;
     }
@@ -147,7 +148,7 @@ void robust_lanes(const Model &m, int dims, const float *x, const float *y, cons
                   const float *w, int n, float tau, float acc[8], LaneIsa isa) {
     const bool two = dims == 2;
 #if defined(__x86_64__) && defined(__SSE2__)
-    if ((isa == LaneIsa::Best || isa == LaneIsa::Avx2) && kHaveAvx2)
+    if ((isa == LaneIsa::Best || isa == LaneIsa::Avx2) && cpu_has_avx2())
         return lanes_avx2(m, two, x, y, z0, z1, w, n, tau, acc);
 #endif
 #if defined(__SSE2__)

@@ -7,6 +7,7 @@
 
 #include <immintrin.h>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 
 namespace lidarflow::matching {
@@ -351,7 +352,6 @@ __attribute__((target("avx2"), flatten)) float patch_cost_avx2(const features::D
     return patch_cost_impl<K>(a, b, ax, ay, bx, by, shape, norm, penalty, bound);
 }
 
-const bool kUseAvx2 = __builtin_cpu_supports("avx2");
 #endif
 
 template <class K>
@@ -370,7 +370,7 @@ PatchCostFn patch_cost_baseline_kernel(int bits) {
 
 PatchCostFn patch_cost_kernel(int bits) {
 #ifdef LIDARFLOW_HAVE_AVX2_PATH
-    if (kUseAvx2)
+    if (cpu_has_avx2())
         return bits == 4 ? patch_cost_avx2<PackedKernel<l2sq_packed_avx2, l1_packed_avx2>>
                          : patch_cost_avx2<ByteKernelAvx2>;
 #endif

@@ -188,15 +188,6 @@ __attribute__((target("avx2"))) inline void hamming_costs_avx2(const uint64_t *d
 }
 #endif
 
-bool have_avx2() {
-#if defined(__x86_64__) || defined(__i386__)
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
-#else
-    return false;
-#endif
-}
-
 }  // namespace
 
 // The Hamming costs on the vector path where `simd` and the CPU has AVX2, from pixel D - 1 on (the
@@ -204,7 +195,7 @@ bool have_avx2() {
 LIDARFLOW_V3_CLONES void detail::row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl,
                                            const uint64_t *br, const int16_t *prior16, const uint8_t *weight, int w,
                                            int D, int slope16, int cap, bool simd, uint8_t *cost) {
-    const int scalar_end = simd && have_avx2() ? std::min(w, D - 1) : w;
+    const int scalar_end = simd && cpu_has_avx2() ? std::min(w, D - 1) : w;
     if (ternary)
         hamming_costs_of<true>(dl, dr, bl, br, 0, scalar_end, D, cost);
     else
@@ -491,12 +482,9 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
             p16[x] = static_cast<int16_t>(std::lround(std::clamp(pd[x], 0.0f, 2047.0f) * 16));
         const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
         uint8_t *out = cost.get() + plane * y;
-        if (ternary)
-            detail::row_costs(true, dl, dr, cl.bright.ptr<uint64_t>(y), cr.bright.ptr<uint64_t>(y), p16,
-                              prior.weight.ptr<uint8_t>(y), w, D, slope16, opt.lidar_cap, true, out);
-        else
-            detail::row_costs(false, dl, dr, nullptr, nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D, slope16,
-                              opt.lidar_cap, true, out);
+        detail::row_costs(ternary, dl, dr, ternary ? cl.bright.ptr<uint64_t>(y) : nullptr,
+                          ternary ? cr.bright.ptr<uint64_t>(y) : nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D,
+                          slope16, opt.lidar_cap, true, out);
     }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};

@@ -925,6 +925,72 @@ struct SupportPoints {
     }
 };
 
+// The pairs' index of (seed, superpixel) pairs: each in the first-seen order of `pairs`, which
+// (find) looks up and (append) extends. Each seed's pairs are a list threaded through next (no
+// allocation per seed).
+class PairIndex {
+public:
+    explicit PairIndex(int seeds) : first_(static_cast<size_t>(seeds), -1) {}
+    int find_or_add(int seed, int s, std::vector<std::pair<int, int>> &pairs) {
+        int i = first_[static_cast<size_t>(seed)];
+        while (i >= 0 && pairs[static_cast<size_t>(i)].second != s) i = next_[static_cast<size_t>(i)];
+        if (i >= 0) return i;
+        i = static_cast<int>(pairs.size());
+        pairs.emplace_back(seed, s);
+        next_.push_back(first_[static_cast<size_t>(seed)]);
+        first_[static_cast<size_t>(seed)] = i;
+        return i;
+    }
+
+private:
+    std::vector<int> first_, next_;
+};
+
+// The distinct (nearest seed, superpixel) pairs in raster order of their first pixels, and each
+// pixel's pair in `pair_of`. Each band of rows numbers its own pairs (rows are mostly long runs
+// of one pair), then the bands' lists are merged in band order: the numbers a single raster scan
+// gives, on any thread count.
+std::vector<std::pair<int, int>> number_pairs(const cv::Mat1i &labels, const cv::Mat1i &nearest, int num_seeds,
+                                              int threads, cv::Mat1i &pair_of) {
+    const int h = labels.rows, w = labels.cols, T = std::max(1, std::min(threads, h));
+    std::vector<std::vector<std::pair<int, int>>> local(static_cast<size_t>(T));
+    std::vector<PairIndex> index(static_cast<size_t>(T), PairIndex(num_seeds));
+    ParallelErrors errors;  // the bands' lists grow inside the region
+    for_each_band(h, T, [&](int b, int y0, int y1) {
+        errors.run([&] {
+            std::vector<std::pair<int, int>> &mine = local[static_cast<size_t>(b)];
+            for (int y = y0; y < y1; ++y) {
+                int last_seed = -1, last_sp = -1, last_pair = -1;
+                for (int x = 0; x < w; ++x) {
+                    const int s = labels(y, x), seed = nearest(y, x);
+                    if (seed != last_seed || s != last_sp) {
+                        last_seed = seed;
+                        last_sp = s;
+                        last_pair = index[static_cast<size_t>(b)].find_or_add(seed, s, mine);
+                    }
+                    pair_of(y, x) = last_pair;
+                }
+            }
+        });
+    });
+    errors.rethrow_if_any();
+    if (T == 1) return std::move(local[0]);
+    std::vector<std::pair<int, int>> pairs;
+    std::vector<std::vector<int>> global(static_cast<size_t>(T));
+    PairIndex merged(num_seeds);
+    for (int b = 0; b < T; ++b)
+        for (const auto &[seed, s] : local[static_cast<size_t>(b)])
+            global[static_cast<size_t>(b)].push_back(merged.find_or_add(seed, s, pairs));
+    for_each_band(h, T, [&](int b, int y0, int y1) {
+        const std::vector<int> &to = global[static_cast<size_t>(b)];
+        for (int y = y0; y < y1; ++y) {
+            int *row = pair_of[y];
+            for (int x = 0; x < w; ++x) row[x] = to[static_cast<size_t>(row[x])];
+        }
+    });
+    return pairs;
+}
+
 // Phase 5: the dense field. Each pixel takes the models of its superpixel or of an adjacent
 // one (pixel_model_selection), adds the background prediction back and, with LiDAR, keeps the
 // measured d0 (keep_lidar_values).
@@ -947,30 +1013,7 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     // Decisions depend only on (nearest seed, superpixel): number the pairs that occur (rows
     // are mostly long runs of one pair), decide each pair once, then fill the pixels.
     cv::Mat1i pair_of(h, w);
-    std::vector<std::pair<int, int>> pairs;  // (seed, superpixel)
-    {
-        // Each seed's pairs as a list threaded through next_pair (no allocation per seed).
-        std::vector<int> first_pair(seeds.size(), -1), next_pair;
-        for (int y = 0; y < h; ++y) {
-            int last_seed = -1, last_sp = -1, last_pair = -1;
-            for (int x = 0; x < w; ++x) {
-                const int s = sp.labels(y, x), seed = graph.nearest(y, x);
-                if (seed != last_seed || s != last_sp) {
-                    last_seed = seed;
-                    last_sp = s;
-                    last_pair = first_pair[seed];
-                    while (last_pair >= 0 && pairs[last_pair].second != s) last_pair = next_pair[last_pair];
-                    if (last_pair < 0) {
-                        last_pair = static_cast<int>(pairs.size());
-                        pairs.emplace_back(seed, s);
-                        next_pair.push_back(first_pair[seed]);
-                        first_pair[seed] = last_pair;
-                    }
-                }
-                pair_of(y, x) = last_pair;
-            }
-        }
-    }
+    std::vector<std::pair<int, int>> pairs = number_pairs(sp.labels, graph.nearest, seeds.size(), o.num_threads, pair_of);
     // A graph neighbour's weight depends only on the edge: once per edge, not per candidate.
     std::vector<float> edge_weight(graph.weight.size());
     for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);

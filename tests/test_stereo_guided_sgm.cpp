@@ -260,6 +260,28 @@ void data_costs_vector_equals_scalar(void **) {
         }
 }
 
+// The horizontal paths' register kernel gives the scalar loop's sums for every vector count
+// (D = 16 .. 128) and past it (D = 144 takes the scalar loop either way), with fixed and adaptive
+// P2, on costs up to the LiDAR penalty's 255 and an image with flat runs and steps.
+void horizontal_paths_vector_equals_scalar(void **) {
+    std::mt19937_64 rng(11);
+    const int w = 157;
+    std::vector<uint8_t> img(w);
+    for (int x = 0; x < w; ++x) img[x] = x % 9 < 4 ? 100 : static_cast<uint8_t>(rng() % 256);
+    for (const int D : {16, 32, 48, 64, 80, 96, 112, 128, 144})
+        for (const bool adaptive : {false, true}) {
+            std::vector<uint8_t> cost(static_cast<size_t>(w) * D);
+            for (uint8_t &c : cost) c = rng() % 5 == 0 ? static_cast<uint8_t>(rng() % 256) : static_cast<uint8_t>(rng() % 40);
+            std::vector<uint16_t> vec(cost.size(), 1), sca(cost.size(), 2);
+            stereo::detail::horizontal_paths(cost.data(), img.data(), w, D, 10, 120, adaptive, true, vec.data());
+            stereo::detail::horizontal_paths(cost.data(), img.data(), w, D, 10, 120, adaptive, false, sca.data());
+            assert_true(vec == sca);
+            // The first pixel of each direction takes its data cost alone: pixel 0's sum is its
+            // cost plus the right-to-left path's value there.
+            for (int d = 0; d < D; ++d) assert_true(vec[static_cast<size_t>(d)] >= cost[static_cast<size_t>(d)]);
+        }
+}
+
 void featureless_pair_has_no_disparity(void **) {
     const cv::Mat1b flat(kH, kW, uchar(90));
     const DisparityMap d = stereo::guided_sgm(flat, flat, SparseLidar{kW, kH, {}}, options());
@@ -329,6 +351,7 @@ int main() {
         cmocka_unit_test(bad_inputs_are_refused),
         cmocka_unit_test(featureless_pair_has_no_disparity),
         cmocka_unit_test(data_costs_vector_equals_scalar),
+        cmocka_unit_test(horizontal_paths_vector_equals_scalar),
         cmocka_unit_test(binning_bounds_the_points),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

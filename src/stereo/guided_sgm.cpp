@@ -285,6 +285,79 @@ void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, con
     }
 }
 
+#if defined(__x86_64__) || defined(__i386__)
+// horizontal_paths with the path in registers, NV vectors of 16 disparities (D = 16 NV): the
+// scalar loop reloads the path it has just stored one disparity off, a load the CPU cannot
+// forward from the store, so every step waited on memory; here d - 1 and d + 1 are shuffled out
+// of the registers (two instructions each). The same integers as the scalar loop.
+template <int NV>
+__attribute__((target("avx2"))) void horizontal_paths_avx2(const uint8_t *cost, const uint8_t *img, int w,
+                                                           const Penalties &pen, uint16_t *sum) {
+    constexpr int D = 16 * NV;
+    const __m256i big = _mm256_set1_epi16(static_cast<short>(kBig)), p1 = _mm256_set1_epi16(static_cast<short>(pen.p1));
+    for (int dir = 0; dir < 2; ++dir) {
+        __m256i P[NV];
+        for (__m256i &v : P) v = _mm256_setzero_si256();
+        uint16_t prev_min = 0;
+        for (int i = 0; i < w; ++i) {
+            const int x = dir == 0 ? i : w - 1 - i;
+            const uint16_t p2 = pen.p2_at(i ? std::abs(img[x] - img[dir == 0 ? x - 1 : x + 1]) : 0);
+            const __m256i jump = _mm256_set1_epi16(static_cast<short>(static_cast<uint16_t>(prev_min + p2)));
+            const __m256i pm = _mm256_set1_epi16(static_cast<short>(prev_min));
+            const uint8_t *c = cost + static_cast<size_t>(x) * D;
+            uint16_t *s = sum + static_cast<size_t>(x) * D;
+            __m256i out[NV], m = big;
+            for (int k = 0; k < NV; ++k) {
+                // Lane j of `left` holds d - 1, of `right` d + 1 (kBig past either end).
+                const __m256i before = k > 0 ? P[k - 1] : big, after = k + 1 < NV ? P[k + 1] : big;
+                const __m256i left = _mm256_alignr_epi8(P[k], _mm256_permute2x128_si256(before, P[k], 0x21), 14);
+                const __m256i right = _mm256_alignr_epi8(_mm256_permute2x128_si256(P[k], after, 0x21), P[k], 2);
+                __m256i v = _mm256_min_epu16(P[k], _mm256_add_epi16(_mm256_min_epu16(left, right), p1));
+                v = _mm256_min_epu16(v, jump);
+                const __m256i ck = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i *>(c + 16 * k)));
+                out[k] = _mm256_sub_epi16(_mm256_add_epi16(ck, v), pm);
+                m = _mm256_min_epu16(m, out[k]);
+                auto *sk = reinterpret_cast<__m256i *>(s + 16 * k);
+                _mm256_storeu_si256(sk, dir == 0 ? out[k] : _mm256_add_epi16(_mm256_loadu_si256(sk), out[k]));
+            }
+            for (int k = 0; k < NV; ++k) P[k] = out[k];
+            const __m128i m8 = _mm_min_epu16(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
+            prev_min = static_cast<uint16_t>(_mm_cvtsi128_si32(_mm_minpos_epu16(m8)));
+        }
+    }
+}
+#endif
+
+// Both horizontal paths of one row: the register kernel where the CPU has AVX2 and D <= 128, else
+// the scalar loop (a, b: its two path buffers).
+void horizontal_paths_of(const uint8_t *cost, const uint8_t *img, int w, int D, const Penalties &pen, bool simd,
+                         uint16_t *sum, uint16_t *a, uint16_t *b) {
+#if defined(__x86_64__) || defined(__i386__)
+    if (simd && D <= 128 && cpu_has_avx2()) switch (D / 16) {
+        case 1: return horizontal_paths_avx2<1>(cost, img, w, pen, sum);
+        case 2: return horizontal_paths_avx2<2>(cost, img, w, pen, sum);
+        case 3: return horizontal_paths_avx2<3>(cost, img, w, pen, sum);
+        case 4: return horizontal_paths_avx2<4>(cost, img, w, pen, sum);
+        case 5: return horizontal_paths_avx2<5>(cost, img, w, pen, sum);
+        case 6: return horizontal_paths_avx2<6>(cost, img, w, pen, sum);
+        case 7: return horizontal_paths_avx2<7>(cost, img, w, pen, sum);
+        default: return horizontal_paths_avx2<8>(cost, img, w, pen, sum);
+        }
+#endif
+    horizontal_paths(cost, img, w, D, pen, sum, a, b);
+}
+
+}  // namespace
+
+void detail::horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, int p1, int p2, bool adaptive_p2,
+                              bool simd, uint16_t *sum) {
+    PathRow scratch(2, D);
+    horizontal_paths_of(cost, img, w, D, Penalties{static_cast<uint16_t>(p1), static_cast<uint16_t>(p2), adaptive_p2},
+                        simd, sum, scratch.at(0), scratch.at(1));
+}
+
+namespace {
+
 // The vertical and (with 8 paths) diagonal paths entering row y from row y - dir, for columns
 // [x0, x1). prev*: row y - dir's paths; cur*: row y's. A path that starts here (the first row,
 // a diagonal from outside the image) continues from `zero`, which gives it its data cost alone.
@@ -492,7 +565,8 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
         PathRow &s = scratch[static_cast<size_t>(omp_get_thread_num())];
-        horizontal_paths(cost.get() + plane * y, gl.ptr<uint8_t>(y), w, D, pen, sum.get() + plane * y, s.at(0), s.at(1));
+        horizontal_paths_of(cost.get() + plane * y, gl.ptr<uint8_t>(y), w, D, pen, true, sum.get() + plane * y, s.at(0),
+                            s.at(1));
     }
 
     const bool diag = opt.paths == 8;

@@ -80,6 +80,12 @@ namespace detail {
 void row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
                const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap, bool simd,
                uint8_t *cost);
+// One row's two horizontal path costs summed into sum[x * D + d] (w * D values), from the row's
+// data costs (row_costs) and gray pixels `img`, with penalties p1 < p2 (adaptive_p2: p2 falls with
+// the step in intensity, GuidedSgmOptions). `simd` takes the AVX2 kernel where the CPU has it and
+// D <= 128, else the scalar loop: the same sums.
+void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, int p1, int p2, bool adaptive_p2,
+                      bool simd, uint16_t *sum);
 }  // namespace detail
 
 }  // namespace lidarflow::stereo

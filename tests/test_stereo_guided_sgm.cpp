@@ -282,6 +282,47 @@ void horizontal_paths_vector_equals_scalar(void **) {
         }
 }
 
+// The winners' vector kernel gives the scalar loop's winners, and both the definition: the least
+// sum's smallest d, unless a sum more than 1 px away is within the uniqueness margin or the right
+// image's winner (least sum, then smallest d, over the left pixels that reach it) is more than
+// lr_max_diff away. Sums with planted ties and the largest value; images narrower than D too.
+void winners_vector_equals_scalar(void **) {
+    std::mt19937_64 rng(5);
+    for (const int w : {157, 40})
+        for (const int D : {16, 48, 80, 128, 144}) {
+            std::vector<uint16_t> S(static_cast<size_t>(w) * D);
+            for (uint16_t &v : S) {
+                const uint64_t r = rng() % 16;
+                v = r == 0 ? UINT16_MAX : r < 4 ? static_cast<uint16_t>(300 + rng() % 4) : static_cast<uint16_t>(rng() % 3000);
+            }
+            for (const int uniqueness : {0, 10, 60})
+                for (const int lr : {-1, 0, 2}) {
+                    std::vector<uint16_t> scratch(2 * static_cast<size_t>(w));
+                    std::vector<int16_t> vec(w), sca(w);
+                    stereo::detail::row_winners(S.data(), w, D, uniqueness, lr, true, scratch.data(), vec.data());
+                    stereo::detail::row_winners(S.data(), w, D, uniqueness, lr, false, scratch.data(), sca.data());
+                    assert_true(vec == sca);
+                    const auto sum = [&](int x, int d) { return S[static_cast<size_t>(x) * D + d]; };
+                    for (int x = 0; x < w; ++x) {
+                        const int lim = std::min(D, x + 1);
+                        int b = 0;
+                        for (int d = 1; d < lim; ++d) b = sum(x, d) < sum(x, b) ? d : b;
+                        int other = -1;
+                        for (int d = 0; d < lim; ++d)
+                            if (std::abs(d - b) > 1 && (other < 0 || sum(x, d) < other)) other = sum(x, d);
+                        int want = other < 0 || int64_t{other} * (100 - uniqueness) <= int64_t{100} * sum(x, b) ? -1 : b;
+                        if (want >= 0 && lr >= 0) {
+                            const int p = x - want;  // the right pixel: its least (sum, d) over x' = p + d
+                            int rb = 0;
+                            for (int d = 1; d < D && p + d < w; ++d) rb = sum(p + d, d) < sum(p + rb, rb) ? d : rb;
+                            if (std::abs(rb - want) > lr) want = -1;
+                        }
+                        assert_int_equal(vec[static_cast<size_t>(x)], want);
+                    }
+                }
+        }
+}
+
 void featureless_pair_has_no_disparity(void **) {
     const cv::Mat1b flat(kH, kW, uchar(90));
     const DisparityMap d = stereo::guided_sgm(flat, flat, SparseLidar{kW, kH, {}}, options());
@@ -352,6 +393,7 @@ int main() {
         cmocka_unit_test(featureless_pair_has_no_disparity),
         cmocka_unit_test(data_costs_vector_equals_scalar),
         cmocka_unit_test(horizontal_paths_vector_equals_scalar),
+        cmocka_unit_test(winners_vector_equals_scalar),
         cmocka_unit_test(binning_bounds_the_points),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

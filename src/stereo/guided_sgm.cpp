@@ -286,6 +286,12 @@ void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, con
 }
 
 #if defined(__x86_64__) || defined(__i386__)
+// The least of 16 unsigned 16-bit lanes.
+__attribute__((target("avx2"))) inline uint16_t least_u16(__m256i v) {
+    const __m128i m8 = _mm_min_epu16(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
+    return static_cast<uint16_t>(_mm_cvtsi128_si32(_mm_minpos_epu16(m8)));
+}
+
 // horizontal_paths with the path in registers, NV vectors of 16 disparities (D = 16 NV): the
 // scalar loop reloads the path it has just stored one disparity off, a load the CPU cannot
 // forward from the store, so every step waited on memory; here d - 1 and d + 1 are shuffled out
@@ -321,8 +327,7 @@ __attribute__((target("avx2"))) void horizontal_paths_avx2(const uint8_t *cost, 
                 _mm256_storeu_si256(sk, dir == 0 ? out[k] : _mm256_add_epi16(_mm256_loadu_si256(sk), out[k]));
             }
             for (int k = 0; k < NV; ++k) P[k] = out[k];
-            const __m128i m8 = _mm_min_epu16(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
-            prev_min = static_cast<uint16_t>(_mm_cvtsi128_si32(_mm_minpos_epu16(m8)));
+            prev_min = least_u16(m);
         }
     }
 }
@@ -383,37 +388,111 @@ void column_paths(const uint8_t *cost, const uint8_t *img, const uint8_t *img_pr
     }
 }
 
-// Per pixel of one row: the disparity of the smallest sum (the smallest d on ties), or -1 when
-// a sum more than 1 px away is within the uniqueness margin or the right image's winner at
-// x - d (read from the same sums) differs by more than lr_max_diff. Keys pack sum << 9 | d, so
-// one integer minimum gives both. `keys`: w values of scratch.
-LIDARFLOW_V3_CLONES
-void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_diff, uint32_t *keys, int16_t *best) {
-    std::fill(keys, keys + w, UINT32_MAX);
-    for (int x = 0; x < w; ++x) {
-        const uint16_t *s = S + static_cast<size_t>(x) * D;
-        const int lim = std::min(D, x + 1);
-        uint32_t k = UINT32_MAX;
-        uint32_t *r = keys + x - (lim - 1);  // r[e]: the right image's pixel x - d, d = lim - 1 - e
-        for (int e = 0; e < lim; ++e) {      // (in this order the loop vectorises)
-            const int d = lim - 1 - e;
-            const uint32_t key = (static_cast<uint32_t>(s[d]) << 9) | static_cast<uint32_t>(d);
-            k = std::min(k, key);
-            r[e] = std::min(r[e], key);
-        }
-        const int b = static_cast<int>(k & 511u), bs = static_cast<int>(k >> 9);
-        uint32_t other = UINT32_MAX;
-        for (int d = 0; d < b - 1; ++d) other = std::min<uint32_t>(other, s[d]);
-        for (int d = b + 2; d < lim; ++d) other = std::min<uint32_t>(other, s[d]);
-        // A tie is not unique (a featureless image ties everywhere), nor is a winner with no rival
-        // to compare (the first columns).
-        best[x] = static_cast<int16_t>(
-            other == UINT32_MAX || uint64_t{other} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
+// Pixel x's winner (-1 when not unique: a sum more than 1 px away within the uniqueness margin,
+// or no such rival, as in the first columns) from its sums s over lim disparities, and its offers
+// to the right image's pixels x - d: (sum, d) replaces (rsum, rd) there when the sum is smaller.
+// The pixels come in order of x, so of equal sums a right pixel keeps the smallest d.
+inline void pixel_winner(const uint16_t *s, int x, int lim, int uniqueness, uint16_t *rsum, uint16_t *rd,
+                         int16_t *best) {
+    int b = 0;
+    for (int d = 1; d < lim; ++d)
+        if (s[d] < s[b]) b = d;
+    uint32_t other = UINT32_MAX;
+    for (int d = 0; d < lim; ++d) {
+        if (d < b - 1 || d > b + 1) other = std::min<uint32_t>(other, s[d]);
+        if (s[d] < rsum[x - d]) rsum[x - d] = s[d], rd[x - d] = static_cast<uint16_t>(d);
     }
+    best[x] = static_cast<int16_t>(
+        other == UINT32_MAX || uint64_t{other} * (100 - uniqueness) <= uint64_t{100} * s[b] ? -1 : b);
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// pixel_winner for x in [x0, w), x0 >= D - 1 (every disparity exists, so a rival always does),
+// NV vectors of 16 disparities (D = 16 NV): the first least sum by an unsigned 16-bit minimum
+// (phminposuw) and a compare; the rivals' minimum with the lanes b - 1 .. b + 1 set to 0xFFFF; each
+// vector's offers reversed onto the 16 right pixels it reaches. The same integers as the scalar loop.
+template <int NV>
+__attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int x0, int w, int uniqueness, uint16_t *rsum,
+                                                  uint16_t *rd, int16_t *best) {
+    constexpr int D = 16 * NV;
+    const __m256i lane = _mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m256i down = _mm256_setr_epi16(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+    const __m256i reverse8 = _mm256_setr_epi8(14, 15, 12, 13, 10, 11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1, 14, 15, 12, 13, 10,
+                                              11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1);
+    const __m256i two = _mm256_set1_epi16(2);
+    for (int x = x0; x < w; ++x) {
+        const uint16_t *s = S + static_cast<size_t>(x) * D;
+        __m256i v[NV];
+        for (int k = 0; k < NV; ++k) v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(s + 16 * k));
+        __m256i m = v[0];
+        for (int k = 1; k < NV; ++k) m = _mm256_min_epu16(m, v[k]);
+        const uint16_t bs = least_u16(m);
+        const __m256i bsv = _mm256_set1_epi16(static_cast<short>(bs));
+        int b = 0;
+        for (int k = 0; k < NV; ++k) {
+            const unsigned mask = static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi16(v[k], bsv)));
+            if (mask) {
+                b = 16 * k + __builtin_ctz(mask) / 2;
+                break;
+            }
+        }
+        // t = d - (b - 1) modulo 2^16 is at most 2 exactly for d in b - 1 .. b + 1.
+        const __m256i from = _mm256_set1_epi16(static_cast<short>(b - 1));
+        __m256i other = _mm256_set1_epi16(-1);
+        for (int k = 0; k < NV; ++k) {
+            const __m256i t = _mm256_sub_epi16(_mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k))), from);
+            const __m256i near = _mm256_cmpeq_epi16(_mm256_min_epu16(t, two), t);
+            other = _mm256_min_epu16(other, _mm256_or_si256(v[k], near));
+        }
+        best[x] = static_cast<int16_t>(uint64_t{least_u16(other)} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
+        for (int k = 0; k < NV; ++k) {
+            // Lane j: disparity 16 k + 15 - j, right pixel x - 16 k - 15 + j.
+            const __m256i r = _mm256_shuffle_epi8(v[k], reverse8);
+            const __m256i offer = _mm256_permute2x128_si256(r, r, 0x01);
+            const int p = x - 16 * k - 15;
+            auto *rs = reinterpret_cast<__m256i *>(rsum + p);
+            auto *rdp = reinterpret_cast<__m256i *>(rd + p);
+            const __m256i held = _mm256_loadu_si256(rs);
+            const __m256i not_less = _mm256_cmpeq_epi16(_mm256_max_epu16(offer, held), offer);
+            const __m256i d = _mm256_add_epi16(down, _mm256_set1_epi16(static_cast<short>(16 * k)));
+            _mm256_storeu_si256(rs, _mm256_min_epu16(offer, held));
+            _mm256_storeu_si256(rdp, _mm256_blendv_epi8(d, _mm256_loadu_si256(rdp), not_less));
+        }
+    }
+}
+#endif
+
+}  // namespace
+
+void detail::row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_diff, bool simd,
+                         uint16_t *scratch, int16_t *best) {
+    uint16_t *rsum = scratch, *rd = scratch + w;  // the right image's pixels' least sum and its d
+    std::fill(rsum, rsum + w, UINT16_MAX);
+    std::fill(rd, rd + w, 0);  // every sum UINT16_MAX: the first offer, d = 0, keeps it
+    int scalar_end = w;
+#if defined(__x86_64__) || defined(__i386__)
+    if (simd && D <= 128 && cpu_has_avx2()) scalar_end = std::min(w, D - 1);
+#endif
+    for (int x = 0; x < scalar_end; ++x)
+        pixel_winner(S + static_cast<size_t>(x) * D, x, std::min(D, x + 1), uniqueness, rsum, rd, best);
+#if defined(__x86_64__) || defined(__i386__)
+    if (scalar_end < w) switch (D / 16) {
+        case 1: winners_avx2<1>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 2: winners_avx2<2>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 3: winners_avx2<3>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 4: winners_avx2<4>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 5: winners_avx2<5>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 6: winners_avx2<6>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        case 7: winners_avx2<7>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        default: winners_avx2<8>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+        }
+#endif
     if (lr_max_diff < 0) return;
     for (int x = 0; x < w; ++x)
-        if (best[x] >= 0 && std::abs(static_cast<int>(keys[x - best[x]] & 511u) - best[x]) > lr_max_diff) best[x] = -1;
+        if (best[x] >= 0 && std::abs(rd[x - best[x]] - best[x]) > lr_max_diff) best[x] = -1;
 }
+
+namespace {
 
 // A LiDAR point of densify_lidar: column, its pixel's intensity, disparity.
 struct SplatPoint {
@@ -545,7 +624,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     const size_t plane = static_cast<size_t>(w) * D;
     std::unique_ptr<uint8_t[]> cost(new uint8_t[plane * h]);  // every element is written
     std::unique_ptr<uint16_t[]> sum(new uint16_t[plane * h]);
-    std::vector<std::vector<uint32_t>> wta_scratch(T, std::vector<uint32_t>(w));
+    std::vector<std::vector<uint16_t>> wta_scratch(T, std::vector<uint16_t>(2 * static_cast<size_t>(w)));
     std::vector<std::vector<int16_t>> prior16(T, std::vector<int16_t>(w));  // the row's prior in 1/16 px
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
@@ -597,8 +676,8 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     for (int y = 0; y < h; ++y) {
         const uint16_t *S = sum.get() + plane * y;
         int16_t *out = disp16.ptr<int16_t>(y);
-        std::vector<uint32_t> &keys = wta_scratch[static_cast<size_t>(omp_get_thread_num())];
-        row_winners(S, w, D, opt.uniqueness_ratio, opt.lr_max_diff, keys.data(), out);
+        std::vector<uint16_t> &scratch = wta_scratch[static_cast<size_t>(omp_get_thread_num())];
+        detail::row_winners(S, w, D, opt.uniqueness_ratio, opt.lr_max_diff, true, scratch.data(), out);
         for (int x = 0; x < w; ++x) {
             const int best = out[x];
             if (best < 0) {

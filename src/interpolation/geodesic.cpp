@@ -9,6 +9,8 @@
 
 #include "core/branchless.hpp"
 #include "core/error.hpp"
+#include "core/parallel_errors.hpp"
+#include "core/threads.hpp"
 
 namespace lidarflow::interpolation {
 namespace {
@@ -16,7 +18,7 @@ namespace {
 constexpr int kGeodesicPasses = 2;
 }  // namespace
 
-SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> &seeds, float edge_gain) {
+SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> &seeds, float edge_gain, int threads) {
     require(!edges.empty(), ErrorCode::InvalidArgument, "geodesic: empty edge map");
     require(!seeds.empty(), ErrorCode::InvalidArgument, "geodesic: no seeds");
     require(std::isfinite(edge_gain) && edge_gain >= 0.0f, ErrorCode::InvalidArgument,
@@ -126,67 +128,105 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     }
 
     // Seed links across Voronoi borders: shortest seed-to-seed path through that border. Each
-    // seed's slots are sized by its border pixel pairs (an upper bound on its distinct
-    // neighbours), so the links need no allocation per seed.
-    std::vector<int> cap(static_cast<size_t>(n) + 1, 0);
-    // visit(p, q, vertical) for each 4-neighbour pixel pair across a border.
-    auto each_border = [&](auto &&visit) {
-        for (int y = 0; y < h; ++y) {
-            const int *lr = lab + static_cast<size_t>(y) * w;
-            for (int x = 0; x < w; ++x) {
-                if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1, 0);
-                if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x, 1);
-            }
-        }
+    // band of rows links the border pixel pairs that start in it (a pixel and its right or lower
+    // neighbour), into its own slots per seed, sized by those pairs (an upper bound on the seed's
+    // distinct neighbours there); a seed's lists from all bands are then merged, the least
+    // weight of a neighbour kept: the least over every border pixel pair, as one scan gives.
+    const int T = std::max(1, std::min(threads, h));
+    struct BandLinks {
+        std::vector<int> cap, used;
+        std::vector<std::pair<int, float>> slots;
     };
-    each_border([&](int p, int q, int) {
-        ++cap[lab[p] + 1];
-        ++cap[lab[q] + 1];
+    std::vector<BandLinks> bands(static_cast<size_t>(T));
+    ParallelErrors errors;  // the bands allocate
+    for_each_band(h, T, [&](int band, int y0, int y1) {
+        errors.run([&] {
+            BandLinks &L = bands[static_cast<size_t>(band)];
+            // visit(p, q, vertical) for each 4-neighbour pixel pair across a border, p in the band.
+            auto each_border = [&](auto &&visit) {
+                for (int y = y0; y < y1; ++y) {
+                    const int *lr = lab + static_cast<size_t>(y) * w;
+                    for (int x = 0; x < w; ++x) {
+                        if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1, 0);
+                        if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x, 1);
+                    }
+                }
+            };
+            L.cap.assign(static_cast<size_t>(n) + 1, 0);
+            each_border([&](int p, int q, int) {
+                ++L.cap[lab[p] + 1];
+                ++L.cap[lab[q] + 1];
+            });
+            for (int i = 0; i < n; ++i) L.cap[i + 1] += L.cap[i];
+            L.slots.resize(static_cast<size_t>(L.cap[n]));
+            L.used.assign(static_cast<size_t>(n), 0);
+            // a's link to b, with the least weight so far (slots do not move: the pointer stays valid).
+            auto link = [&](int a, int b, float wgt) {
+                std::pair<int, float> *first = L.slots.data() + L.cap[a], *last = first + L.used[a];
+                for (std::pair<int, float> *e = first; e != last; ++e)
+                    if (e->first == b) {
+                        e->second = std::min(e->second, wgt);
+                        return e;
+                    }
+                *last = {b, wgt};
+                ++L.used[a];
+                return last;
+            };
+            // A border runs on along a row or a column: the pair of the previous pixel pair of the
+            // same direction is usually this one's, and its links need no search.
+            struct Recent {
+                int a = -1, b = -1;
+                std::pair<int, float> *ab = nullptr, *ba = nullptr;
+            } recent[2];
+            each_border([&](int p, int q, int vertical) {
+                const float wgt = dist[p] + hc[p] + hc[q] + dist[q];
+                Recent &r = recent[vertical];
+                if (lab[p] == r.a && lab[q] == r.b) {
+                    r.ab->second = std::min(r.ab->second, wgt);
+                    r.ba->second = std::min(r.ba->second, wgt);
+                    return;
+                }
+                r = {lab[p], lab[q], link(lab[p], lab[q], wgt), link(lab[q], lab[p], wgt)};
+            });
+        });
     });
-    for (int i = 0; i < n; ++i) cap[i + 1] += cap[i];
-    std::vector<std::pair<int, float>> slots(static_cast<size_t>(cap[n]));
-    std::vector<int> used(n, 0);
-    // a's link to b, with the least weight so far (slots do not move: the pointer stays valid).
-    auto link = [&](int a, int b, float wgt) {
-        std::pair<int, float> *first = slots.data() + cap[a], *last = first + used[a];
-        for (std::pair<int, float> *e = first; e != last; ++e)
-            if (e->first == b) {
-                e->second = std::min(e->second, wgt);
-                return e;
-            }
-        *last = {b, wgt};
-        ++used[a];
-        return last;
-    };
-    // A border runs on along a row or a column: the pair of the previous pixel pair of the
-    // same direction is usually this one's, and its links need no search.
-    struct Recent {
-        int a = -1, b = -1;
-        std::pair<int, float> *ab = nullptr, *ba = nullptr;
-    } recent[2];
-    each_border([&](int p, int q, int vertical) {
-        const float wgt = dist[p] + hc[p] + hc[q] + dist[q];
-        Recent &r = recent[vertical];
-        if (lab[p] == r.a && lab[q] == r.b) {
-            r.ab->second = std::min(r.ab->second, wgt);
-            r.ba->second = std::min(r.ba->second, wgt);
-            return;
-        }
-        r = {lab[p], lab[q], link(lab[p], lab[q], wgt), link(lab[q], lab[p], wgt)};
-    });
-    g.start.assign(n + 1, 0);
-    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + used[i];
-    g.nbr.resize(g.start[n]);
-    g.weight.resize(g.start[n]);
+    errors.rethrow_if_any();
+    // Each seed's lists from all bands, sorted by neighbour index (so that the graph, and every
+    // query on it, is reproducible), a neighbour's least weight kept: first into slots sized by
+    // the bands' counts, then packed.
+    std::vector<int> upper(static_cast<size_t>(n) + 1, 0), count(static_cast<size_t>(n) + 1, 0);
     for (int i = 0; i < n; ++i) {
-        // Sorted by neighbour index so the graph (and every query on it) is reproducible.
-        std::pair<int, float> *first = slots.data() + cap[i];
-        std::sort(first, first + used[i]);
-        for (int j = 0; j < used[i]; ++j) {
-            g.nbr[g.start[i] + j] = first[j].first;
-            g.weight[g.start[i] + j] = first[j].second;
-        }
+        int c = 0;
+        for (const BandLinks &L : bands) c += L.used[static_cast<size_t>(i)];
+        upper[i + 1] = upper[i] + c;
     }
+    std::vector<std::pair<int, float>> merged(static_cast<size_t>(upper[n]));
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int i = 0; i < n; ++i) {
+        std::pair<int, float> *out = merged.data() + upper[i], *end = out;
+        for (const BandLinks &L : bands) {
+            const std::pair<int, float> *first = L.slots.data() + L.cap[i];
+            end = std::copy(first, first + L.used[static_cast<size_t>(i)], end);
+        }
+        std::sort(out, end);
+        int k = 0;
+        for (const std::pair<int, float> *e = out; e != end; ++e)
+            if (k > 0 && out[k - 1].first == e->first)
+                out[k - 1].second = std::min(out[k - 1].second, e->second);
+            else
+                out[k++] = *e;
+        count[i + 1] = k;
+    }
+    g.start.assign(static_cast<size_t>(n) + 1, 0);
+    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + count[i + 1];
+    g.nbr.resize(static_cast<size_t>(g.start[n]));
+    g.weight.resize(static_cast<size_t>(g.start[n]));
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < count[i + 1]; ++j) {
+            g.nbr[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].first;
+            g.weight[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].second;
+        }
     return g;
 }
 

@@ -629,14 +629,15 @@ Superpixels segment(const cv::Mat &image, const DisparityMap &geometry_hint, con
 }
 
 // Phase 2b: the edge map (res.edges; `edges` when computed ahead, else null) and the seed graph
-// over it (its time the start of res.timings.geodesic_s). Serial but for OpenCV's filters.
+// over it (its time the start of res.timings.geodesic_s), its links on `threads` threads. Serial
+// but for OpenCV's filters and those links.
 SeedGraph edges_and_graph(const cv::Mat &image, const SedModel *sed, const Seeds &seeds, const InterpolationOptions &o,
-                          const cv::Mat1f *edges, InterpolationResult &res) {
+                          const cv::Mat1f *edges, int threads, InterpolationResult &res) {
     auto t = Clock::now();
     res.edges = edges ? *edges : compute_edge_map(image, o.edges, sed);
     res.timings.edges_s = seconds_since(t);
     t = Clock::now();
-    SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain);
+    SeedGraph graph = build_seed_graph(res.edges, seeds.pos, o.edge_gain, threads);
     res.timings.geodesic_s = seconds_since(t);
     return graph;
 }
@@ -656,7 +657,7 @@ Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geome
         sp = *work->superpixels;
         res.superpixels = sp.labels;
         res.num_superpixels = sp.count;
-        graph = edges_and_graph(image, sed, set.seeds, o, &work->edges, res);
+        graph = edges_and_graph(image, sed, set.seeds, o, &work->edges, o.num_threads, res);
         return sp;
     }
     ParallelErrors errors;
@@ -666,7 +667,7 @@ Superpixels segment_beside_graph(const cv::Mat &image, const DisparityMap &geome
         // freed; the worker's heap takes the superpixels' few.
         const int id = omp_get_thread_num(), team = omp_get_num_threads();
         const cv::Mat1f *edges = work ? &work->edges : nullptr;
-        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, edges, res); });
+        if (id == 0) errors.run([&] { graph = edges_and_graph(image, sed, set.seeds, o, edges, 1, res); });
         if (id == 1 || team == 1)
             errors.run([&] { sp = segment(image, geometry_hint, set, largest, o, std::max(1, o.num_threads - 1), res); });
     }

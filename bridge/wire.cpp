@@ -364,16 +364,24 @@ bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step
     std::vector<uint8_t> *dst[4] = {&out.u, &out.v, &out.d0, &out.d1};
     for (int k = 0; k < 4; ++k) dst[k]->assign(n * value_bytes, 0);
     out.valid.assign(n, 0);
+    // A row's values gathered (views have any alignment), then converted in plain loops that
+    // vectorise: a message is on its way to the bus after every pair.
+    std::vector<float> values(w);
+    std::vector<int16_t> fixed(w);
     for (uint32_t y = 0; y < h; ++y) {
         const uint32_t sy = y * static_cast<uint32_t>(step);
         for (int k = 0; k < 4; ++k) {
             const auto *row = reinterpret_cast<const uint8_t *>(src[k]->data) + sy * src[k]->stride_bytes;
             uint8_t *o = dst[k]->data() + static_cast<size_t>(y) * w * value_bytes;
-            for (uint32_t x = 0; x < w; ++x) {
-                float f;
-                std::memcpy(&f, row + 4 * static_cast<size_t>(x) * step, 4);  // views have any alignment
-                if (encoding == FlowEncoding::Float32) put_le32f(o + 4 * x, f);
-                else put_le16(o + 2 * x, to_fixed(f));
+            if (step == 1)
+                std::memcpy(values.data(), row, 4 * static_cast<size_t>(w));
+            else
+                for (uint32_t x = 0; x < w; ++x) std::memcpy(&values[x], row + 4 * static_cast<size_t>(x) * step, 4);
+            if (encoding == FlowEncoding::Float32) {
+                for (uint32_t x = 0; x < w; ++x) put_le32f(o + 4 * x, values[x]);
+            } else {
+                for (uint32_t x = 0; x < w; ++x) fixed[x] = to_fixed(values[x]);
+                for (uint32_t x = 0; x < w; ++x) put_le16(o + 2 * x, fixed[x]);
             }
         }
         const auto *vrow = static_cast<const uint8_t *>(views.valid.data) + sy * views.valid.stride_bytes;

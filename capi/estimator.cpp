@@ -4,6 +4,7 @@
 // so a failed call leaves the handle exactly as it was; with frames in flight, a pair's own
 // failure is handed over in place of its result, and the result readers report it.
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -61,22 +62,34 @@ int64_t elapsed_us(int64_t from, int64_t to) {
 std::unique_ptr<Result> make_result(lidarflow::pipeline::EstimatorResult &&r, int64_t t0, int64_t t1) {
     auto out = std::make_unique<Result>();
     lidarflow::SceneFlowField &f = r.output();
-    const cv::Mat1b invalid = f.valid == 0;
-    auto plane = [&](cv::Mat1f &m, float hole) {
-        cv::Mat1f c;
-        if (m.empty()) c = cv::Mat1f::zeros(f.valid.size());
-        else if (m.u && m.u->refcount == 1 && m.isContinuous()) c = std::move(m);
-        else c = m.clone();
-        c.setTo(hole, invalid);
-        return c;
+    auto plane = [&](cv::Mat1f &m) {
+        if (m.empty()) return cv::Mat1f(cv::Mat1f::zeros(f.valid.size()));
+        if (m.u && m.u->refcount == 1 && m.isContinuous()) return cv::Mat1f(std::move(m));
+        return cv::Mat1f(m.clone());
     };
+    lidarflow::SceneFlowField &o = out->field;
+    o.u = plane(f.u);
+    o.v = plane(f.v);
+    o.d0 = plane(f.d0);
+    o.d1 = plane(f.d1);
+    o.confidence = plane(f.confidence);
+    o.valid.create(f.valid.size());
+    // The holes and the 0/1 mask in one pass over the rows (a result is waited for: on the
+    // estimator's threads), not one pass a plane.
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    out->field.u = plane(f.u, nan);
-    out->field.v = plane(f.v, nan);
-    out->field.d0 = plane(f.d0, nan);
-    out->field.d1 = plane(f.d1, nan);
-    out->field.confidence = plane(f.confidence, 0.0f);
-    out->field.valid = (f.valid != 0) / 255;
+#pragma omp parallel for schedule(static) num_threads(std::max(1, r.threads))
+    for (int y = 0; y < f.valid.rows; ++y) {
+        const uint8_t *in = f.valid[y];
+        uint8_t *valid = o.valid[y];
+        float *u = o.u[y], *v = o.v[y], *d0 = o.d0[y], *d1 = o.d1[y], *c = o.confidence[y];
+        for (int x = 0; x < f.valid.cols; ++x) {
+            const bool ok = in[x] != 0;
+            valid[x] = ok ? 1 : 0;
+            if (ok) continue;
+            u[x] = v[x] = d0[x] = d1[x] = nan;
+            c[x] = 0.0f;
+        }
+    }
     out->stage = r.last_stage;
     out->t0_us = t0;
     out->t1_us = t1;

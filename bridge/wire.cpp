@@ -110,6 +110,9 @@ constexpr int kFlowFixed = 72;
 constexpr int kEgoMotionFixed = 157;
 
 
+// The wire's byte order is the host's: a row of values is one copy.
+constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+
 void put_le16(uint8_t *p, int16_t v) {
     const auto u = static_cast<uint16_t>(v);
     p[0] = static_cast<uint8_t>(u);
@@ -132,22 +135,29 @@ float get_le32f(const uint8_t *p) {
 
 int16_t get_le16(const uint8_t *p) { return static_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))); }
 
-// value / kInt16Scale to the nearest integer (ties to even), within +-32767; not finite: 0.
+// Each value / kInt16Scale to the nearest integer (ties to even), within +-32767; not finite: 0.
 // The scale is a power of two, so the product is exact in float, and adding and taking away
-// 1.5 * 2^23 rounds |s| < 2^22 as nearbyint does, without a libm call per value. It needs
-// IEEE single-precision arithmetic (no -ffast-math); test_flow_int16_rule checks the rule.
-int16_t to_fixed(float value) {
+// 1.5 * 2^23 rounds |s| < 2^22 as nearbyint does, without a libm call per value. Every step
+// runs on every value and the non-finite ones' 0 is chosen at the end (a bit test), so that the
+// loop vectorises (with -fno-trapping-math, bridge/CMakeLists.txt). It needs IEEE
+// single-precision arithmetic (no -ffast-math); test_flow_int16_rule checks the rule.
+void to_fixed_row(const float *values, int16_t *out, size_t n) {
+    for (size_t i = 0; i < n; ++i) {
+        const float value = values[i];
 #if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
-    float s = value * (1.0f / kInt16Scale);
-    s = s > 32767.0f ? 32767.0f : s;
-    s = s < -32767.0f ? -32767.0f : s;
-    const float rounded = (s + 12582912.0f) - 12582912.0f;
-    return std::isfinite(value) ? static_cast<int16_t>(rounded) : int16_t{0};
+        uint32_t bits;
+        std::memcpy(&bits, &value, 4);
+        float s = value * (1.0f / kInt16Scale);
+        s = s > 32767.0f ? 32767.0f : s;
+        s = s < -32767.0f ? -32767.0f : s;
+        const float rounded = (s + 12582912.0f) - 12582912.0f;
+        const float kept = (bits & 0x7f800000u) != 0x7f800000u ? rounded : 0.0f;
+        out[i] = static_cast<int16_t>(static_cast<int32_t>(kept));
 #else  // wider intermediates (x87) would round the sum elsewhere: the library's rounding
-    if (!std::isfinite(value)) return 0;
-    const double q = std::nearbyint(static_cast<double>(value) / kInt16Scale);
-    return static_cast<int16_t>(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+        const double q = std::isfinite(value) ? std::nearbyint(static_cast<double>(value) / kInt16Scale) : 0.0;
+        out[i] = static_cast<int16_t>(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
 #endif
+    }
 }
 
 }  // namespace
@@ -378,14 +388,20 @@ bool encode_flow(const lf_result_views_t &views, FlowEncoding encoding, int step
             else
                 for (uint32_t x = 0; x < w; ++x) std::memcpy(&values[x], row + 4 * static_cast<size_t>(x) * step, 4);
             if (encoding == FlowEncoding::Float32) {
-                for (uint32_t x = 0; x < w; ++x) put_le32f(o + 4 * x, values[x]);
+                if (kLittleEndian) std::memcpy(o, values.data(), 4 * static_cast<size_t>(w));
+                else for (uint32_t x = 0; x < w; ++x) put_le32f(o + 4 * x, values[x]);
             } else {
-                for (uint32_t x = 0; x < w; ++x) fixed[x] = to_fixed(values[x]);
-                for (uint32_t x = 0; x < w; ++x) put_le16(o + 2 * x, fixed[x]);
+                to_fixed_row(values.data(), fixed.data(), w);
+                if (kLittleEndian) std::memcpy(o, fixed.data(), 2 * static_cast<size_t>(w));
+                else for (uint32_t x = 0; x < w; ++x) put_le16(o + 2 * x, fixed[x]);
             }
         }
         const auto *vrow = static_cast<const uint8_t *>(views.valid.data) + sy * views.valid.stride_bytes;
-        for (uint32_t x = 0; x < w; ++x) out.valid[static_cast<size_t>(y) * w + x] = vrow[x * step] ? 1 : 0;
+        uint8_t *valid = out.valid.data() + static_cast<size_t>(y) * w;
+        if (step == 1)
+            for (uint32_t x = 0; x < w; ++x) valid[x] = vrow[x] != 0;
+        else
+            for (uint32_t x = 0; x < w; ++x) valid[x] = vrow[x * step] != 0;
     }
     out.header.image_width = static_cast<int32_t>(views.width);
     out.header.image_height = static_cast<int32_t>(views.height);

@@ -297,7 +297,7 @@ void winners_vector_equals_scalar(void **) {
             }
             for (const int uniqueness : {0, 10, 60})
                 for (const int lr : {-1, 0, 2}) {
-                    std::vector<uint16_t> scratch(2 * static_cast<size_t>(w));
+                    std::vector<uint16_t> scratch(2 * (static_cast<size_t>(w) + D));
                     std::vector<int16_t> vec(w), sca(w);
                     stereo::detail::row_winners(S.data(), w, D, uniqueness, lr, true, scratch.data(), vec.data());
                     stereo::detail::row_winners(S.data(), w, D, uniqueness, lr, false, scratch.data(), sca.data());

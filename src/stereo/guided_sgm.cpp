@@ -394,25 +394,34 @@ void column_paths(const uint8_t *cost, const uint8_t *img, const uint8_t *img_pr
 // The pixels come in order of x, so of equal sums a right pixel keeps the smallest d.
 inline void pixel_winner(const uint16_t *s, int x, int lim, int uniqueness, uint16_t *rsum, uint16_t *rd,
                          int16_t *best) {
+    // Branch-free loops that vectorise: the least sum, its first disparity, the rivals' least.
+    uint16_t bs = UINT16_MAX;
+    for (int d = 0; d < lim; ++d) bs = std::min(bs, s[d]);
     int b = 0;
-    for (int d = 1; d < lim; ++d)
-        if (s[d] < s[b]) b = d;
+    while (s[b] != bs) ++b;
     uint32_t other = UINT32_MAX;
-    for (int d = 0; d < lim; ++d) {
-        if (d < b - 1 || d > b + 1) other = std::min<uint32_t>(other, s[d]);
-        if (s[d] < rsum[x - d]) rsum[x - d] = s[d], rd[x - d] = static_cast<uint16_t>(d);
+    for (int d = 0; d < lim; ++d) other = std::min<uint32_t>(other, d < b - 1 || d > b + 1 ? s[d] : UINT32_MAX);
+    // Offers in order of the right pixels: e = 0 is x - (lim - 1), disparity lim - 1.
+    uint16_t *rs = rsum + x - (lim - 1), *rds = rd + x - (lim - 1);
+    for (int e = 0; e < lim; ++e) {
+        const uint16_t v = s[lim - 1 - e];
+        const bool less = v < rs[e];
+        rds[e] = less ? static_cast<uint16_t>(lim - 1 - e) : rds[e];
+        rs[e] = less ? v : rs[e];
     }
     best[x] = static_cast<int16_t>(
-        other == UINT32_MAX || uint64_t{other} * (100 - uniqueness) <= uint64_t{100} * s[b] ? -1 : b);
+        other == UINT32_MAX || uint64_t{other} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
 }
 
 #if defined(__x86_64__) || defined(__i386__)
-// pixel_winner for x in [x0, w), x0 >= D - 1 (every disparity exists, so a rival always does),
-// NV vectors of 16 disparities (D = 16 NV): the first least sum by an unsigned 16-bit minimum
-// (phminposuw) and a compare; the rivals' minimum with the lanes b - 1 .. b + 1 set to 0xFFFF; each
-// vector's offers reversed onto the 16 right pixels it reaches. The same integers as the scalar loop.
+// pixel_winner for every pixel of the row, NV vectors of 16 disparities (D = 16 NV): the first
+// least sum by an unsigned 16-bit minimum (phminposuw) and a compare; the rivals' minimum with
+// the lanes b - 1 .. b + 1 set to 0xFFFF; each vector's offers reversed onto the 16 right
+// pixels it reaches. Left of pixel D - 1 the disparities from x + 1 on read as 0xFFFF (a sum of
+// 0xFFFF ties them, and d = 0 wins that tie either way) and their offers land left of the row,
+// in the D values rsum and rd have before it. The same integers as the scalar loop.
 template <int NV>
-__attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int x0, int w, int uniqueness, uint16_t *rsum,
+__attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int uniqueness, uint16_t *rsum,
                                                   uint16_t *rd, int16_t *best) {
     constexpr int D = 16 * NV;
     const __m256i lane = _mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -420,10 +429,17 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int x0, int
     const __m256i reverse8 = _mm256_setr_epi8(14, 15, 12, 13, 10, 11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1, 14, 15, 12, 13, 10,
                                               11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1);
     const __m256i two = _mm256_set1_epi16(2);
-    for (int x = x0; x < w; ++x) {
+    for (int x = 0; x < w; ++x) {
         const uint16_t *s = S + static_cast<size_t>(x) * D;
+        const int lim = std::min(D, x + 1);
         __m256i v[NV];
-        for (int k = 0; k < NV; ++k) v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(s + 16 * k));
+        for (int k = 0; k < NV; ++k) {
+            v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(s + 16 * k));
+            if (lim < D) {  // lanes at d >= lim (a signed compare: d < 128)
+                const __m256i d = _mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k)));
+                v[k] = _mm256_or_si256(v[k], _mm256_cmpgt_epi16(d, _mm256_set1_epi16(static_cast<short>(lim - 1))));
+            }
+        }
         __m256i m = v[0];
         for (int k = 1; k < NV; ++k) m = _mm256_min_epu16(m, v[k]);
         const uint16_t bs = least_u16(m);
@@ -444,7 +460,9 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int x0, int
             const __m256i near = _mm256_cmpeq_epi16(_mm256_min_epu16(t, two), t);
             other = _mm256_min_epu16(other, _mm256_or_si256(v[k], near));
         }
-        best[x] = static_cast<int16_t>(uint64_t{least_u16(other)} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
+        const bool rival = b >= 2 || lim > b + 2;
+        best[x] = static_cast<int16_t>(
+            !rival || uint64_t{least_u16(other)} * (100 - uniqueness) <= uint64_t{100} * bs ? -1 : b);
         for (int k = 0; k < NV; ++k) {
             // Lane j: disparity 16 k + 15 - j, right pixel x - 16 k - 15 + j.
             const __m256i r = _mm256_shuffle_epi8(v[k], reverse8);
@@ -466,27 +484,25 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int x0, int
 
 void detail::row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_diff, bool simd,
                          uint16_t *scratch, int16_t *best) {
-    uint16_t *rsum = scratch, *rd = scratch + w;  // the right image's pixels' least sum and its d
+    // The right image's pixels' least sum and its d, each after D values of room (left of the row).
+    uint16_t *rsum = scratch + D, *rd = scratch + w + 2 * D;
     std::fill(rsum, rsum + w, UINT16_MAX);
     std::fill(rd, rd + w, 0);  // every sum UINT16_MAX: the first offer, d = 0, keeps it
-    int scalar_end = w;
 #if defined(__x86_64__) || defined(__i386__)
-    if (simd && D <= 128 && cpu_has_avx2()) scalar_end = std::min(w, D - 1);
-#endif
-    for (int x = 0; x < scalar_end; ++x)
-        pixel_winner(S + static_cast<size_t>(x) * D, x, std::min(D, x + 1), uniqueness, rsum, rd, best);
-#if defined(__x86_64__) || defined(__i386__)
-    if (scalar_end < w) switch (D / 16) {
-        case 1: winners_avx2<1>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 2: winners_avx2<2>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 3: winners_avx2<3>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 4: winners_avx2<4>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 5: winners_avx2<5>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 6: winners_avx2<6>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        case 7: winners_avx2<7>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
-        default: winners_avx2<8>(S, scalar_end, w, uniqueness, rsum, rd, best); break;
+    if (simd && D <= 128 && cpu_has_avx2()) switch (D / 16) {
+        case 1: winners_avx2<1>(S, w, uniqueness, rsum, rd, best); break;
+        case 2: winners_avx2<2>(S, w, uniqueness, rsum, rd, best); break;
+        case 3: winners_avx2<3>(S, w, uniqueness, rsum, rd, best); break;
+        case 4: winners_avx2<4>(S, w, uniqueness, rsum, rd, best); break;
+        case 5: winners_avx2<5>(S, w, uniqueness, rsum, rd, best); break;
+        case 6: winners_avx2<6>(S, w, uniqueness, rsum, rd, best); break;
+        case 7: winners_avx2<7>(S, w, uniqueness, rsum, rd, best); break;
+        default: winners_avx2<8>(S, w, uniqueness, rsum, rd, best); break;
         }
+    else
 #endif
+        for (int x = 0; x < w; ++x)
+            pixel_winner(S + static_cast<size_t>(x) * D, x, std::min(D, x + 1), uniqueness, rsum, rd, best);
     if (lr_max_diff < 0) return;
     for (int x = 0; x < w; ++x)
         if (best[x] >= 0 && std::abs(rd[x - best[x]] - best[x]) > lr_max_diff) best[x] = -1;
@@ -624,7 +640,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     const size_t plane = static_cast<size_t>(w) * D;
     std::unique_ptr<uint8_t[]> cost(new uint8_t[plane * h]);  // every element is written
     std::unique_ptr<uint16_t[]> sum(new uint16_t[plane * h]);
-    std::vector<std::vector<uint16_t>> wta_scratch(T, std::vector<uint16_t>(2 * static_cast<size_t>(w)));
+    std::vector<std::vector<uint16_t>> wta_scratch(T, std::vector<uint16_t>(2 * (static_cast<size_t>(w) + D)));
     std::vector<std::vector<int16_t>> prior16(T, std::vector<int16_t>(w));  // the row's prior in 1/16 px
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {

@@ -90,8 +90,8 @@ void horizontal_paths(const uint8_t *cost, const uint8_t *img, int w, int D, int
 // smallest d on ties), or -1 when a sum more than 1 px away is within the uniqueness margin (0..99
 // percent), when there is no such rival, or when the right image's winner at x - d (read from the
 // same sums, of equal sums the smallest d) differs by more than lr_max_diff (< 0: no check).
-// `simd` takes the AVX2 kernel from pixel D - 1 on where the CPU has it and D <= 128, else the
-// scalar loop: the same winners. `scratch`: 2 w values.
+// `simd` takes the AVX2 kernel where the CPU has it and D <= 128, else the scalar loop: the same
+// winners. `scratch`: 2 (w + D) values.
 void row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr_max_diff, bool simd, uint16_t *scratch,
                  int16_t *best);
 }  // namespace detail

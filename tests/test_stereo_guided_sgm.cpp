@@ -271,7 +271,8 @@ void horizontal_paths_vector_equals_scalar(void **) {
     for (const int D : {16, 32, 48, 64, 80, 96, 112, 128, 144})
         for (const bool adaptive : {false, true}) {
             std::vector<uint8_t> cost(static_cast<size_t>(w) * D);
-            for (uint8_t &c : cost) c = rng() % 5 == 0 ? static_cast<uint8_t>(rng() % 256) : static_cast<uint8_t>(rng() % 40);
+            for (uint8_t &c : cost)
+                c = rng() % 5 == 0 ? static_cast<uint8_t>(rng() % 256) : static_cast<uint8_t>(rng() % 40);
             std::vector<uint16_t> vec(cost.size(), 1), sca(cost.size(), 2);
             stereo::detail::horizontal_paths(cost.data(), img.data(), w, D, 10, 120, adaptive, true, vec.data());
             stereo::detail::horizontal_paths(cost.data(), img.data(), w, D, 10, 120, adaptive, false, sca.data());
@@ -293,7 +294,9 @@ void winners_vector_equals_scalar(void **) {
             std::vector<uint16_t> S(static_cast<size_t>(w) * D);
             for (uint16_t &v : S) {
                 const uint64_t r = rng() % 16;
-                v = r == 0 ? UINT16_MAX : r < 4 ? static_cast<uint16_t>(300 + rng() % 4) : static_cast<uint16_t>(rng() % 3000);
+                v = r == 0   ? UINT16_MAX
+                    : r < 4  ? static_cast<uint16_t>(300 + rng() % 4)
+                             : static_cast<uint16_t>(rng() % 3000);
             }
             for (const int uniqueness : {0, 10, 60})
                 for (const int lr : {-1, 0, 2}) {
@@ -310,7 +313,9 @@ void winners_vector_equals_scalar(void **) {
                         int other = -1;
                         for (int d = 0; d < lim; ++d)
                             if (std::abs(d - b) > 1 && (other < 0 || sum(x, d) < other)) other = sum(x, d);
-                        int want = other < 0 || int64_t{other} * (100 - uniqueness) <= int64_t{100} * sum(x, b) ? -1 : b;
+                        const bool unique =
+                            other >= 0 && int64_t{other} * (100 - uniqueness) > int64_t{100} * sum(x, b);
+                        int want = unique ? b : -1;
                         if (want >= 0 && lr >= 0) {
                             const int p = x - want;  // the right pixel: its least (sum, d) over x' = p + d
                             int rb = 0;

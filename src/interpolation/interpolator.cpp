@@ -926,9 +926,9 @@ struct SupportPoints {
     }
 };
 
-// The pairs' index of (seed, superpixel) pairs: each in the first-seen order of `pairs`, which
-// (find) looks up and (append) extends. Each seed's pairs are a list threaded through next (no
-// allocation per seed).
+// Where each (seed, superpixel) pair sits in a list of pairs: find_or_add gives its place,
+// appending it when new. Each seed's pairs are a list threaded through next_ (no allocation per
+// seed).
 class PairIndex {
 public:
     explicit PairIndex(int seeds) : first_(static_cast<size_t>(seeds), -1) {}
@@ -1014,7 +1014,8 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     // Decisions depend only on (nearest seed, superpixel): number the pairs that occur (rows
     // are mostly long runs of one pair), decide each pair once, then fill the pixels.
     cv::Mat1i pair_of(h, w);
-    std::vector<std::pair<int, int>> pairs = number_pairs(sp.labels, graph.nearest, seeds.size(), o.num_threads, pair_of);
+    const std::vector<std::pair<int, int>> pairs =
+        number_pairs(sp.labels, graph.nearest, seeds.size(), o.num_threads, pair_of);
     // A graph neighbour's weight depends only on the edge: once per edge, not per candidate.
     std::vector<float> edge_weight(graph.weight.size());
     for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);

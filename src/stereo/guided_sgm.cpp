@@ -456,7 +456,8 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int 
         const __m256i from = _mm256_set1_epi16(static_cast<short>(b - 1));
         __m256i other = _mm256_set1_epi16(-1);
         for (int k = 0; k < NV; ++k) {
-            const __m256i t = _mm256_sub_epi16(_mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k))), from);
+            const __m256i d = _mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k)));
+            const __m256i t = _mm256_sub_epi16(d, from);
             const __m256i near = _mm256_cmpeq_epi16(_mm256_min_epu16(t, two), t);
             other = _mm256_min_epu16(other, _mm256_or_si256(v[k], near));
         }

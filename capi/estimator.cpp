@@ -3,8 +3,8 @@
 // A push builds the new frame and result aside and commits them only when everything succeeded,
 // so a failed call leaves the handle exactly as it was; with frames in flight, a pair's own
 // failure is handed over in place of its result, and the result readers report it.
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>

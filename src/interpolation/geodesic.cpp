@@ -194,7 +194,7 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     // Each seed's lists from all bands, sorted by neighbour index (so that the graph, and every
     // query on it, is reproducible), a neighbour's least weight kept: first into slots sized by
     // the bands' counts, then packed.
-    std::vector<int> upper(static_cast<size_t>(n) + 1, 0), count(static_cast<size_t>(n) + 1, 0);
+    std::vector<int> upper(static_cast<size_t>(n) + 1, 0), count(static_cast<size_t>(n), 0);
     for (int i = 0; i < n; ++i) {
         int c = 0;
         for (const BandLinks &L : bands) c += L.used[static_cast<size_t>(i)];
@@ -215,15 +215,15 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
                 out[k - 1].second = std::min(out[k - 1].second, e->second);
             else
                 out[k++] = *e;
-        count[i + 1] = k;
+        count[i] = k;
     }
     g.start.assign(static_cast<size_t>(n) + 1, 0);
-    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + count[i + 1];
+    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + count[i];
     g.nbr.resize(static_cast<size_t>(g.start[n]));
     g.weight.resize(static_cast<size_t>(g.start[n]));
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int i = 0; i < n; ++i)
-        for (int j = 0; j < count[i + 1]; ++j) {
+        for (int j = 0; j < count[i]; ++j) {
             g.nbr[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].first;
             g.weight[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].second;
         }

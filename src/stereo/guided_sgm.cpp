@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <omp.h>
@@ -292,6 +293,22 @@ __attribute__((target("avx2"))) inline uint16_t least_u16(__m256i v) {
     return static_cast<uint16_t>(_mm_cvtsi128_si32(_mm_minpos_epu16(m8)));
 }
 
+// f(std::integral_constant<int, NV>{}) for a kernel templated on its vector count NV = D / 16
+// (D a multiple of 16 in [16, 128]).
+template <class F>
+void with_vector_count(int D, F &&f) {
+    switch (D / 16) {
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 7: return f(std::integral_constant<int, 7>{});
+    default: return f(std::integral_constant<int, 8>{});
+    }
+}
+
 // horizontal_paths with the path in registers, NV vectors of 16 disparities (D = 16 NV): the
 // scalar loop reloads the path it has just stored one disparity off, a load the CPU cannot
 // forward from the store, so every step waited on memory; here d - 1 and d + 1 are shuffled out
@@ -338,16 +355,8 @@ __attribute__((target("avx2"))) void horizontal_paths_avx2(const uint8_t *cost, 
 void horizontal_paths_of(const uint8_t *cost, const uint8_t *img, int w, int D, const Penalties &pen, bool simd,
                          uint16_t *sum, uint16_t *a, uint16_t *b) {
 #if defined(__x86_64__) || defined(__i386__)
-    if (simd && D <= 128 && cpu_has_avx2()) switch (D / 16) {
-        case 1: return horizontal_paths_avx2<1>(cost, img, w, pen, sum);
-        case 2: return horizontal_paths_avx2<2>(cost, img, w, pen, sum);
-        case 3: return horizontal_paths_avx2<3>(cost, img, w, pen, sum);
-        case 4: return horizontal_paths_avx2<4>(cost, img, w, pen, sum);
-        case 5: return horizontal_paths_avx2<5>(cost, img, w, pen, sum);
-        case 6: return horizontal_paths_avx2<6>(cost, img, w, pen, sum);
-        case 7: return horizontal_paths_avx2<7>(cost, img, w, pen, sum);
-        default: return horizontal_paths_avx2<8>(cost, img, w, pen, sum);
-        }
+    if (simd && D <= 128 && cpu_has_avx2())
+        return with_vector_count(D, [&](auto nv) { horizontal_paths_avx2<nv()>(cost, img, w, pen, sum); });
 #endif
     horizontal_paths(cost, img, w, D, pen, sum, a, b);
 }
@@ -394,7 +403,7 @@ void column_paths(const uint8_t *cost, const uint8_t *img, const uint8_t *img_pr
 // The pixels come in order of x, so of equal sums a right pixel keeps the smallest d.
 inline void pixel_winner(const uint16_t *s, int x, int lim, int uniqueness, uint16_t *rsum, uint16_t *rd,
                          int16_t *best) {
-    // Branch-free loops that vectorise: the least sum, its first disparity, the rivals' least.
+    // Loops without branches on the sums, so that they vectorise.
     uint16_t bs = UINT16_MAX;
     for (int d = 0; d < lim; ++d) bs = std::min(bs, s[d]);
     int b = 0;
@@ -424,8 +433,13 @@ template <int NV>
 __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int uniqueness, uint16_t *rsum,
                                                   uint16_t *rd, int16_t *best) {
     constexpr int D = 16 * NV;
-    const __m256i lane = _mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    const __m256i down = _mm256_setr_epi16(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+    // Per vector k: its lanes' disparities, in order and reversed (the offers' order).
+    __m256i up[NV], down[NV];
+    for (int k = 0; k < NV; ++k) {
+        const __m256i first = _mm256_set1_epi16(static_cast<short>(16 * k));
+        up[k] = _mm256_add_epi16(_mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), first);
+        down[k] = _mm256_add_epi16(_mm256_setr_epi16(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0), first);
+    }
     const __m256i reverse8 = _mm256_setr_epi8(14, 15, 12, 13, 10, 11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1, 14, 15, 12, 13, 10,
                                               11, 8, 9, 6, 7, 4, 5, 2, 3, 0, 1);
     const __m256i two = _mm256_set1_epi16(2);
@@ -435,10 +449,8 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int 
         __m256i v[NV];
         for (int k = 0; k < NV; ++k) {
             v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(s + 16 * k));
-            if (lim < D) {  // lanes at d >= lim (a signed compare: d < 128)
-                const __m256i d = _mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k)));
-                v[k] = _mm256_or_si256(v[k], _mm256_cmpgt_epi16(d, _mm256_set1_epi16(static_cast<short>(lim - 1))));
-            }
+            if (lim < D)  // lanes at d >= lim (a signed compare: d < 128)
+                v[k] = _mm256_or_si256(v[k], _mm256_cmpgt_epi16(up[k], _mm256_set1_epi16(static_cast<short>(lim - 1))));
         }
         __m256i m = v[0];
         for (int k = 1; k < NV; ++k) m = _mm256_min_epu16(m, v[k]);
@@ -456,8 +468,7 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int 
         const __m256i from = _mm256_set1_epi16(static_cast<short>(b - 1));
         __m256i other = _mm256_set1_epi16(-1);
         for (int k = 0; k < NV; ++k) {
-            const __m256i d = _mm256_add_epi16(lane, _mm256_set1_epi16(static_cast<short>(16 * k)));
-            const __m256i t = _mm256_sub_epi16(d, from);
+            const __m256i t = _mm256_sub_epi16(up[k], from);
             const __m256i near = _mm256_cmpeq_epi16(_mm256_min_epu16(t, two), t);
             other = _mm256_min_epu16(other, _mm256_or_si256(v[k], near));
         }
@@ -473,9 +484,8 @@ __attribute__((target("avx2"))) void winners_avx2(const uint16_t *S, int w, int 
             auto *rdp = reinterpret_cast<__m256i *>(rd + p);
             const __m256i held = _mm256_loadu_si256(rs);
             const __m256i not_less = _mm256_cmpeq_epi16(_mm256_max_epu16(offer, held), offer);
-            const __m256i d = _mm256_add_epi16(down, _mm256_set1_epi16(static_cast<short>(16 * k)));
             _mm256_storeu_si256(rs, _mm256_min_epu16(offer, held));
-            _mm256_storeu_si256(rdp, _mm256_blendv_epi8(d, _mm256_loadu_si256(rdp), not_less));
+            _mm256_storeu_si256(rdp, _mm256_blendv_epi8(down[k], _mm256_loadu_si256(rdp), not_less));
         }
     }
 }
@@ -490,16 +500,8 @@ void detail::row_winners(const uint16_t *S, int w, int D, int uniqueness, int lr
     std::fill(rsum, rsum + w, UINT16_MAX);
     std::fill(rd, rd + w, 0);  // every sum UINT16_MAX: the first offer, d = 0, keeps it
 #if defined(__x86_64__) || defined(__i386__)
-    if (simd && D <= 128 && cpu_has_avx2()) switch (D / 16) {
-        case 1: winners_avx2<1>(S, w, uniqueness, rsum, rd, best); break;
-        case 2: winners_avx2<2>(S, w, uniqueness, rsum, rd, best); break;
-        case 3: winners_avx2<3>(S, w, uniqueness, rsum, rd, best); break;
-        case 4: winners_avx2<4>(S, w, uniqueness, rsum, rd, best); break;
-        case 5: winners_avx2<5>(S, w, uniqueness, rsum, rd, best); break;
-        case 6: winners_avx2<6>(S, w, uniqueness, rsum, rd, best); break;
-        case 7: winners_avx2<7>(S, w, uniqueness, rsum, rd, best); break;
-        default: winners_avx2<8>(S, w, uniqueness, rsum, rd, best); break;
-        }
+    if (simd && D <= 128 && cpu_has_avx2())
+        with_vector_count(D, [&](auto nv) { winners_avx2<nv()>(S, w, uniqueness, rsum, rd, best); });
     else
 #endif
         for (int x = 0; x < w; ++x)

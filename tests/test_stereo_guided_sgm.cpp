@@ -224,40 +224,47 @@ void prior_equals_its_definition(void **) {
 // LiDAR point still places the pixels its prior reaches.
 // The data costs' vector loop gives the scalar loop's bytes, and both are the definition: the
 // popcount of the signatures' XOR (ternary: both planes, halved, rounded up), the right image's
-// column 0 left of the image, plus the LiDAR penalty on weighted pixels.
+// column 0 left of the image, plus on weighted pixels the LiDAR penalty round(weight *
+// min(slope * |d - prior|, cap) / 255), saturated at 255; priors inside and beyond the range, a
+// penalty rising over few or many disparities (the vector loop's capped span and its fallback).
 void data_costs_vector_equals_scalar(void **) {
     std::mt19937_64 rng(7);
     const int w = 203;
-    for (const int D : {16, 64, 96})
-        for (const bool ternary : {false, true}) {
-            std::vector<uint64_t> dl(w), dr(w), bl(w), br(w);
-            std::vector<int16_t> prior(w);
-            std::vector<uint8_t> weight(w);
-            for (int x = 0; x < w; ++x) {
-                // 62 census bits; every fourth pixel a sparse or a dense signature.
-                const uint64_t mask = x % 4 == 1 ? 0x0101010101010101ull : (1ull << 62) - 1;
-                dl[x] = rng() & mask, dr[x] = rng() & mask;
-                bl[x] = rng() & mask & ~dl[x], br[x] = rng() & mask & ~dr[x];
-                prior[x] = static_cast<int16_t>(rng() % (16 * D));
-                weight[x] = x % 7 == 0 ? static_cast<uint8_t>(rng() % 256) : 0;
-            }
-            std::vector<uint8_t> vec(static_cast<size_t>(w) * D), sca(vec.size());
-            const uint64_t *b0 = ternary ? bl.data() : nullptr, *b1 = ternary ? br.data() : nullptr;
-            stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D, 64, 40,
-                                      true, vec.data());
-            stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D, 64, 40,
-                                      false, sca.data());
-            assert_true(vec == sca);
-            for (int x = 0; x < w; ++x) {
-                if (weight[x] != 0) continue;
-                for (int d = 0; d < D; ++d) {
-                    const int xr = std::max(0, x - d);
-                    int n = __builtin_popcountll(dl[x] ^ dr[xr]);
-                    if (ternary) n = (n + __builtin_popcountll(bl[x] ^ br[xr]) + 1) / 2;
-                    assert_int_equal(vec[static_cast<size_t>(x) * D + d], n);
+    struct Penalty {
+        int slope16, cap;
+    };
+    for (const int D : {16, 32, 64, 80, 96})
+        for (const bool ternary : {false, true})
+            for (const Penalty pen : {Penalty{64, 40}, Penalty{16, 192}, Penalty{1024, 192}, Penalty{0, 40},
+                                      Penalty{48, 0}, Penalty{20, 18}}) {
+                std::vector<uint64_t> dl(w), dr(w), bl(w), br(w);
+                std::vector<int16_t> prior(w);
+                std::vector<uint8_t> weight(w);
+                for (int x = 0; x < w; ++x) {
+                    // 62 census bits; every fourth pixel a sparse or a dense signature.
+                    const uint64_t mask = x % 4 == 1 ? 0x0101010101010101ull : (1ull << 62) - 1;
+                    dl[x] = rng() & mask, dr[x] = rng() & mask;
+                    bl[x] = rng() & mask & ~dl[x], br[x] = rng() & mask & ~dr[x];
+                    prior[x] = static_cast<int16_t>(x % 11 == 0 ? 16 * D + rng() % 4000 : rng() % (16 * D));
+                    weight[x] = x % 3 == 0 ? static_cast<uint8_t>(rng() % 256) : x % 5 == 0 ? 255 : 0;
                 }
+                std::vector<uint8_t> vec(static_cast<size_t>(w) * D), sca(vec.size());
+                const uint64_t *b0 = ternary ? bl.data() : nullptr, *b1 = ternary ? br.data() : nullptr;
+                stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D,
+                                          pen.slope16, pen.cap, true, vec.data());
+                stereo::detail::row_costs(ternary, dl.data(), dr.data(), b0, b1, prior.data(), weight.data(), w, D,
+                                          pen.slope16, pen.cap, false, sca.data());
+                assert_true(vec == sca);
+                for (int x = 0; x < w; ++x)
+                    for (int d = 0; d < D; ++d) {
+                        const int xr = std::max(0, x - d);
+                        int n = __builtin_popcountll(dl[x] ^ dr[xr]);
+                        if (ternary) n = (n + __builtin_popcountll(bl[x] ^ br[xr]) + 1) / 2;
+                        const int penalty = std::min(pen.slope16 * std::abs(16 * d - prior[x]) / 256, pen.cap);
+                        n += (weight[x] * penalty + 127) / 255;
+                        assert_int_equal(vec[static_cast<size_t>(x) * D + d], std::min(n, 255));
+                    }
             }
-        }
 }
 
 // The horizontal paths' register kernel gives the scalar loop's sums for every vector count

@@ -127,6 +127,42 @@ inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, u
     }
 }
 
+#if defined(__x86_64__) || defined(__i386__)
+// add_lidar_penalty where D >= 32 and the penalty rises over fewer than 32 disparities (top <=
+// 240): beyond that span every d takes the capped penalty, one saturated byte add per 16, and the
+// 32 around the prior take the exact one, computed from the costs before the add.
+__attribute__((target("avx2"))) inline void add_lidar_penalty_avx2(uint8_t *c, int D, int p16, int wt, int slope16,
+                                                                   uint16_t top, int cap) {
+    // The span |16 d - p16| < top lies in [(p16 - top) / 16, (p16 + top) / 16]: 32 values from
+    // `start` hold it (or the part of it inside [0, D)).
+    const int start = std::clamp((p16 - top) / 16, 0, D - 32);
+    const __m256i p = _mm256_set1_epi16(static_cast<int16_t>(p16)), s = _mm256_set1_epi16(static_cast<int16_t>(slope16));
+    const __m256i w = _mm256_set1_epi16(static_cast<int16_t>(wt)), lim = _mm256_set1_epi16(static_cast<int16_t>(top));
+    const __m256i cp = _mm256_set1_epi16(static_cast<int16_t>(cap)), half = _mm256_set1_epi16(127);
+    const __m256i one = _mm256_set1_epi16(1), step16 = _mm256_set1_epi16(16 * 16);
+    __m256i at = _mm256_add_epi16(_mm256_set1_epi16(static_cast<int16_t>(16 * start)),
+                                  _mm256_setr_epi16(0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240));
+    __m256i q[2];
+    for (__m256i &qi : q) {
+        const __m256i diff = _mm256_min_epu16(_mm256_sub_epi16(_mm256_max_epu16(at, p), _mm256_min_epu16(at, p)), lim);
+        const __m256i pen = _mm256_min_epu16(_mm256_srli_epi16(_mm256_mullo_epi16(s, diff), 8), cp);
+        const __m256i x = _mm256_add_epi16(_mm256_mullo_epi16(w, pen), half);
+        qi = _mm256_srli_epi16(_mm256_add_epi16(_mm256_add_epi16(x, one), _mm256_srli_epi16(x, 8)), 8);
+        at = _mm256_add_epi16(at, step16);
+    }
+    const __m256i exact = _mm256_adds_epu8(_mm256_loadu_si256(reinterpret_cast<const __m256i *>(c + start)),
+                                           _mm256_permute4x64_epi64(_mm256_packus_epi16(q[0], q[1]), 0xD8));
+    // The capped penalty, as the exact one computes it at |16 d - p16| >= top.
+    const auto xf = static_cast<uint16_t>(wt * std::min(slope16 * top >> 8, cap) + 127);
+    const __m128i far = _mm_set1_epi8(static_cast<char>((xf + 1 + (xf >> 8)) >> 8));
+    for (int d = 0; d < D; d += 16) {
+        __m128i *v = reinterpret_cast<__m128i *>(c + d);
+        _mm_storeu_si128(v, _mm_adds_epu8(_mm_loadu_si128(v), far));
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(c + start), exact);
+}
+#endif
+
 // The Hamming costs of pixels [x0, x1) of one row: cost[x * D + d] = Hamming(left x, right x - d),
 // the right image's column 0 standing in left of the image. bl, br: the bright planes (Ternary
 // only). Integer only.
@@ -210,6 +246,14 @@ LIDARFLOW_V3_CLONES void detail::row_costs(bool ternary, const uint64_t *dl, con
     }
 #endif
     const uint16_t top = penalty_reach(slope16, cap);
+#if defined(__x86_64__) || defined(__i386__)
+    if (simd && cpu_has_avx2() && D >= 32 && top <= 240) {
+        for (int x = 0; x < w; ++x)
+            if (weight[x] != 0)
+                add_lidar_penalty_avx2(cost + static_cast<size_t>(x) * D, D, prior16[x], weight[x], slope16, top, cap);
+        return;
+    }
+#endif
     for (int x = 0; x < w; ++x)
         if (weight[x] != 0)
             add_lidar_penalty(cost + static_cast<size_t>(x) * D, D, prior16[x], weight[x], slope16, top, cap);

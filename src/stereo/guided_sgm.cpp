@@ -136,12 +136,13 @@ __attribute__((target("avx2"))) inline void add_lidar_penalty_avx2(uint8_t *c, i
     // The span |16 d - p16| < top lies in [(p16 - top) / 16, (p16 + top) / 16]: 32 values from
     // `start` hold it (or the part of it inside [0, D)).
     const int start = std::clamp((p16 - top) / 16, 0, D - 32);
-    const __m256i p = _mm256_set1_epi16(static_cast<int16_t>(p16)), s = _mm256_set1_epi16(static_cast<int16_t>(slope16));
-    const __m256i w = _mm256_set1_epi16(static_cast<int16_t>(wt)), lim = _mm256_set1_epi16(static_cast<int16_t>(top));
-    const __m256i cp = _mm256_set1_epi16(static_cast<int16_t>(cap)), half = _mm256_set1_epi16(127);
-    const __m256i one = _mm256_set1_epi16(1), step16 = _mm256_set1_epi16(16 * 16);
+    const __m256i p = _mm256_set1_epi16(static_cast<int16_t>(p16));
+    const __m256i s = _mm256_set1_epi16(static_cast<int16_t>(slope16)), w = _mm256_set1_epi16(static_cast<int16_t>(wt));
+    const __m256i lim = _mm256_set1_epi16(static_cast<int16_t>(top)), cp = _mm256_set1_epi16(static_cast<int16_t>(cap));
+    const __m256i half = _mm256_set1_epi16(127), one = _mm256_set1_epi16(1), step16 = _mm256_set1_epi16(16 * 16);
     __m256i at = _mm256_add_epi16(_mm256_set1_epi16(static_cast<int16_t>(16 * start)),
-                                  _mm256_setr_epi16(0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240));
+                                  _mm256_setr_epi16(0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208,
+                                                    224, 240));
     __m256i q[2];
     for (__m256i &qi : q) {
         const __m256i diff = _mm256_min_epu16(_mm256_sub_epi16(_mm256_max_epu16(at, p), _mm256_min_epu16(at, p)), lim);
@@ -629,21 +630,25 @@ void GuidedSgmOptions::validate() const {
 LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
     const int h = gray.rows, w = gray.cols, r = opt.lidar_radius, T = opt.threads;
     LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
-    // The points bucketed by row (x, own intensity, disparity), so that each output row is
-    // written by one thread and reads its rows' points in order.
-    std::vector<int> first(static_cast<size_t>(h) + 1, 0);
-    std::vector<SplatPoint> by_row(lidar.points.size());
-    for (const LidarPoint &pt : lidar.points) ++first[static_cast<size_t>(pt.y) + 1];
-    for (int y = 0; y < h; ++y) first[y + 1] += first[y];
-    std::vector<int> fill(first.begin(), first.end() - 1);
-    for (const LidarPoint &pt : lidar.points) by_row[fill[pt.y]++] = {pt.x, gray(pt.y, pt.x), pt.disparity};
-    // The weight falls with the Chebyshev distance of the point that set the pixel.
-    std::vector<uint8_t> weight_at(static_cast<size_t>(r) + 1);
-    for (int dd = 0; dd <= r; ++dd) weight_at[dd] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
     // Per thread, one row padded by r on the left and by the lanes' overhang on the right, so
     // that every point's window is whole: its Chebyshev distance of the point that set each
     // pixel, the disparity, the intensity.
     const int lanes = (2 * r + 1 + 7) / 8 * 8, padded = w + r + lanes;
+    // The points bucketed by row (x, own intensity, disparity), so that each output row is
+    // written by one thread; within a row by x modulo `lanes`, so that consecutive windows do not
+    // overlap (a load overlapping the store just before it waits for that store to retire). The
+    // splat does not depend on the points' order.
+    const size_t buckets = static_cast<size_t>(h) * lanes;
+    std::vector<int> first(buckets + 1, 0);
+    std::vector<SplatPoint> by_row(lidar.points.size());
+    const auto bucket = [lanes](const LidarPoint &pt) { return static_cast<size_t>(pt.y) * lanes + pt.x % lanes; };
+    for (const LidarPoint &pt : lidar.points) ++first[bucket(pt) + 1];
+    for (size_t b = 0; b < buckets; ++b) first[b + 1] += first[b];
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (const LidarPoint &pt : lidar.points) by_row[fill[bucket(pt)]++] = {pt.x, gray(pt.y, pt.x), pt.disparity};
+    // The weight falls with the Chebyshev distance of the point that set the pixel.
+    std::vector<uint8_t> weight_at(static_cast<size_t>(r) + 1);
+    for (int dd = 0; dd <= r; ++dd) weight_at[dd] = static_cast<uint8_t>(255 * (r + 1 - dd) / (r + 1));
     std::vector<std::vector<int>> dist(T, std::vector<int>(padded));
     std::vector<std::vector<float>> disp(T, std::vector<float>(padded));
     std::vector<std::vector<int>> grey(T, std::vector<int>(padded, 0));
@@ -654,14 +659,15 @@ LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const 
         int *dr = dist[t].data(), *gr = grey[t].data();
         float *dp = disp[t].data();
         const int py0 = std::max(0, y - r), py1 = std::min(h - 1, y + r);
-        if (first[py0] == first[py1 + 1]) continue;  // no point within reach
+        const auto row_first = [&](int py) { return first[static_cast<size_t>(py) * lanes]; };
+        if (row_first(py0) == row_first(py1 + 1)) continue;  // no point within reach
         std::fill(dr, dr + padded, r + 1);
         std::fill(dp, dp + padded, kInvalidDisparity);
         const uint8_t *g = gray.ptr<uint8_t>(y);
         std::copy(g, g + w, gr + r);
         for (int py = py0; py <= py1; ++py)
-            splat_points(by_row.data() + first[py], first[py + 1] - first[py], std::abs(y - py), r, lanes,
-                         opt.lidar_intensity, gr, dr, dp);
+            splat_points(by_row.data() + row_first(py), row_first(py + 1) - row_first(py), std::abs(y - py), r,
+                         lanes, opt.lidar_intensity, gr, dr, dp);
         float *disparity = p.disparity.ptr<float>(y);
         uint8_t *weight = p.weight.ptr<uint8_t>(y);
         for (int x = 0; x < w; ++x)

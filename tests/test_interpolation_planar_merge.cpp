@@ -139,6 +139,27 @@ void merges_planes_and_the_unseen_part_only(void **) {
     assert_int_equal(cv::countNonZero(again.labels != m.labels), 0);
 }
 
+// The merged superpixels' centroids, anchors, pixel counts and adjacency are those of their label
+// map computed afresh (superpixels_from_labels), for each rule and tolerance.
+void merged_statistics_equal_a_fresh_computation(void **) {
+    for (const double noise : {0.0, 1.0}) {
+        const Scene s = make_scene(noise);
+        const Superpixels sp = segment(s.image);
+        PlanarMergeOptions planes_only = options(0.3f);
+        planes_only.unseen = false;
+        for (const PlanarMergeOptions &o : {options(0.3f), options(0.0f), planes_only, options(2.0f)}) {
+            const Superpixels m = merge_planar_superpixels(sp, s.pos, s.disparity, o);
+            const Superpixels fresh = superpixels_from_labels(m.labels.clone(), m.count, 1);
+            assert_int_equal(m.count, fresh.count);
+            assert_true(m.pixel_count == fresh.pixel_count);
+            assert_true(m.centroid == fresh.centroid);
+            assert_true(m.anchor == fresh.anchor);
+            assert_true(m.adj_start == fresh.adj_start);
+            assert_true(m.adj == fresh.adj);
+        }
+    }
+}
+
 void off_and_noisy_points_keep_the_superpixels(void **) {
     const Scene s = make_scene(0.0);
     const Superpixels sp = segment(s.image);
@@ -211,6 +232,7 @@ int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(merges_planes_and_the_unseen_part_only),
         cmocka_unit_test(off_and_noisy_points_keep_the_superpixels),
+        cmocka_unit_test(merged_statistics_equal_a_fresh_computation),
         cmocka_unit_test(refuses_bad_arguments),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

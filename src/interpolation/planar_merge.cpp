@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -27,6 +29,67 @@ bool on_one_plane(const std::vector<Point3> &pts, float tolerance) {
     for (const Point3 &p : pts)
         if (!(std::fabs(m.p[0].at(p.x, p.y) - p.d) <= tolerance)) return false;
     return true;
+}
+
+// The superpixels of `labels` (sp's relabelled: old label s is now label[s], count labels), as
+// superpixels_from_labels gives them, from sp's own: a label of one old superpixel keeps its
+// centroid and anchor, and only the merged ones' pixels are read (sums, then the first pixel
+// nearest the centroid in raster order); the adjacency is the old one's, relabelled.
+Superpixels relabelled(const Superpixels &sp, const std::vector<int> &label, int count, cv::Mat1i labels) {
+    const int n = sp.count, w = labels.cols, h = labels.rows;
+    Superpixels m;
+    m.labels = std::move(labels);
+    m.count = count;
+    m.parts.assign(count, 0);
+    m.pixel_count.assign(count, 0);
+    m.centroid.resize(count);
+    m.anchor.resize(count);
+    for (int s = 0; s < n; ++s) {
+        const int l = label[s];
+        ++m.parts[l];
+        m.pixel_count[l] += sp.pixel_count[s];
+        m.centroid[l] = sp.centroid[s];
+        m.anchor[l] = sp.anchor[s];
+    }
+    std::vector<int64_t> sx(count, 0), sy(count, 0);
+    for (int y = 0; y < h; ++y) {
+        const int *row = m.labels.ptr<int>(y);
+        for (int x = 0; x < w; ++x)
+            if (m.parts[row[x]] > 1) {
+                sx[row[x]] += x;
+                sy[row[x]] += y;
+            }
+    }
+    std::vector<float> best(count, std::numeric_limits<float>::max());
+    for (int l = 0; l < count; ++l)
+        if (m.parts[l] > 1)
+            m.centroid[l] = cv::Point2f(static_cast<float>(static_cast<double>(sx[l]) / m.pixel_count[l]),
+                                        static_cast<float>(static_cast<double>(sy[l]) / m.pixel_count[l]));
+    for (int y = 0; y < h; ++y) {
+        const int *row = m.labels.ptr<int>(y);
+        for (int x = 0; x < w; ++x) {
+            const int l = row[x];
+            if (m.parts[l] < 2) continue;
+            const float dx = x - m.centroid[l].x, dy = y - m.centroid[l].y, d = dx * dx + dy * dy;
+            if (d < best[l]) {
+                best[l] = d;
+                m.anchor[l] = cv::Point(x, y);
+            }
+        }
+    }
+    std::vector<std::vector<int>> nb(count);
+    for (int s = 0; s < n; ++s)
+        for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1]; ++k)
+            if (label[sp.adj[k]] != label[s]) nb[label[s]].push_back(label[sp.adj[k]]);
+    m.adj_start.assign(count + 1, 0);
+    for (int l = 0; l < count; ++l) {
+        std::sort(nb[l].begin(), nb[l].end());
+        nb[l].erase(std::unique(nb[l].begin(), nb[l].end()), nb[l].end());
+        m.adj_start[l + 1] = m.adj_start[l] + static_cast<int>(nb[l].size());
+    }
+    m.adj.reserve(m.adj_start[count]);
+    for (int l = 0; l < count; ++l) m.adj.insert(m.adj.end(), nb[l].begin(), nb[l].end());
+    return m;
 }
 
 int root_of(std::vector<int> &parent, int i) {
@@ -103,10 +166,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
         int *out = labels.ptr<int>(y);
         for (int x = 0; x < w; ++x) out[x] = label[in[x]];
     }
-    Superpixels merged = superpixels_from_labels(std::move(labels), count, o.threads);
-    merged.parts.assign(count, 0);
-    for (int s = 0; s < n; ++s) ++merged.parts[label[s]];
-    return merged;
+    return relabelled(sp, label, count, std::move(labels));
 }
 
 }  // namespace lidarflow::interpolation

@@ -7,6 +7,7 @@
 #include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
+#include "core/rounding.hpp"
 
 namespace lidarflow::consistency {
 
@@ -23,7 +24,7 @@ bool inside(const SceneFlowField &b, float qx, float qy) {
 
 bool sample_nearest(const SceneFlowField &b, float qx, float qy, BackwardSample &s) {
     if (!inside(b, qx, qy)) return false;
-    const int x = static_cast<int>(std::lround(qx)), y = static_cast<int>(std::lround(qy));
+    const int x = round_to_int(qx), y = round_to_int(qy);
     if (x < 0 || y < 0 || x >= b.width() || y >= b.height() || !b.valid(y, x)) return false;
     s = {b.u(y, x), b.v(y, x), b.d0(y, x), b.d1(y, x)};
     return true;

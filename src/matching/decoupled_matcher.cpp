@@ -20,6 +20,7 @@
 #include "core/log.hpp"
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
+#include "core/rounding.hpp"
 #include "core/threads.hpp"
 #include "flow/dis.hpp"
 #include "lidar/projection.hpp"
@@ -292,7 +293,7 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
         for (int x = 0; x < w; ++x) {
             const cv::Vec2f m = flow(y, x);
             if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !disparity_valid(d0(y, x))) continue;
-            const int tx = static_cast<int>(std::lround(x + m[0])), ty = static_cast<int>(std::lround(y + m[1]));
+            const int tx = round_to_int(x + m[0]), ty = round_to_int(y + m[1]);
             if (tx < 0 || ty < 0 || tx >= w || ty >= h || !disparity_valid(target(ty, tx))) continue;
             f.u(y, x) = m[0];
             f.v(y, x) = m[1];

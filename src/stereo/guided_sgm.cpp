@@ -23,6 +23,7 @@
 #include "core/error.hpp"
 #include "core/gray.hpp"
 #include "core/limits.hpp"
+#include "core/rounding.hpp"
 
 namespace lidarflow::stereo {
 namespace {
@@ -699,8 +700,9 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     for (int y = 0; y < h; ++y) {
         int16_t *p16 = prior16[static_cast<size_t>(omp_get_thread_num())].data();
         const float *pd = prior.disparity.ptr<float>(y);
-        for (int x = 0; x < w; ++x)
-            p16[x] = static_cast<int16_t>(std::lround(std::clamp(pd[x], 0.0f, 2047.0f) * 16));
+        const uint8_t *pw = prior.weight.ptr<uint8_t>(y);
+        for (int x = 0; x < w; ++x)  // read only where the pixel has a weight
+            p16[x] = pw[x] ? static_cast<int16_t>(round_to_int(std::clamp(pd[x], 0.0f, 2047.0f) * 16)) : 0;
         const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
         uint8_t *out = cost.get() + plane * y;
         detail::row_costs(ternary, dl, dr, ternary ? cl.bright.ptr<uint64_t>(y) : nullptr,

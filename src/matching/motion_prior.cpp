@@ -109,7 +109,11 @@ cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &
             double obj[3], p0[3] = {q.x, q.y, q.z}, bg[3], xb, yb;
             object_motion(q, ego.R, ego.t, obj);
             rigid(ego.R, ego.t, p0, bg);
-            const bool moved = !project(camera, bg, xb, yb) || std::hypot(x + u - xb, y + v - yb) > kMinImageMotion;
+            bool moved = !project(camera, bg, xb, yb);
+            if (!moved) {  // sqrt, not hypot (a libm call per pixel): bounded offsets, no overflow
+                const double ex = x + u - xb, ey = y + v - yb;
+                moved = std::sqrt(ex * ex + ey * ey) > kMinImageMotion;
+            }
             motions(y, x) = moved ? cv::Vec3f(static_cast<float>(obj[0]), static_cast<float>(obj[1]),
                                               static_cast<float>(obj[2]))
                                   : cv::Vec3f(kNaN, kNaN, kNaN);
@@ -183,7 +187,8 @@ CarriedLidar carry_static_points(const SparseLidar &points, const std::vector<ui
         if (!ego.predict(static_cast<float>(p.x), static_cast<float>(p.y), p.disparity, d1, u, v) || !(d1 > 0.0f) ||
             d1 > kMaxLidarDisparity)
             continue;
-        if (std::hypot(field.u(p.y, p.x) - u, field.v(p.y, p.x) - v) > kMinImageMotion ||
+        const float eu = field.u(p.y, p.x) - u, ev = field.v(p.y, p.x) - v;
+        if (std::sqrt(eu * eu + ev * ev) > kMinImageMotion ||
             std::fabs(field.d1(p.y, p.x) - d1) > kMinImageMotion)
             continue;
         int tx = 0, ty = 0;

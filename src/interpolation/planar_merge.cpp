@@ -81,14 +81,7 @@ Superpixels relabelled(const Superpixels &sp, const std::vector<int> &label, int
     for (int s = 0; s < n; ++s)
         for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1]; ++k)
             if (label[sp.adj[k]] != label[s]) nb[label[s]].push_back(label[sp.adj[k]]);
-    m.adj_start.assign(count + 1, 0);
-    for (int l = 0; l < count; ++l) {
-        std::sort(nb[l].begin(), nb[l].end());
-        nb[l].erase(std::unique(nb[l].begin(), nb[l].end()), nb[l].end());
-        m.adj_start[l + 1] = m.adj_start[l] + static_cast<int>(nb[l].size());
-    }
-    m.adj.reserve(m.adj_start[count]);
-    for (int l = 0; l < count; ++l) m.adj.insert(m.adj.end(), nb[l].begin(), nb[l].end());
+    set_adjacency(m, nb);
     return m;
 }
 

@@ -343,15 +343,22 @@ Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads) {
             nb[l].push_back(m);
             nb[m].push_back(l);
         }
-    sp.adj_start.assign(n + 1, 0);
-    for (int l = 0; l < n; ++l) {
-        std::sort(nb[l].begin(), nb[l].end());
-        nb[l].erase(std::unique(nb[l].begin(), nb[l].end()), nb[l].end());
-        sp.adj_start[l + 1] = sp.adj_start[l] + static_cast<int>(nb[l].size());
-    }
-    sp.adj.reserve(sp.adj_start[n]);
-    for (int l = 0; l < n; ++l) sp.adj.insert(sp.adj.end(), nb[l].begin(), nb[l].end());
+    set_adjacency(sp, nb);
     return sp;
+}
+
+void set_adjacency(Superpixels &sp, std::vector<std::vector<int>> &neighbours) {
+    const int n = static_cast<int>(neighbours.size());
+    sp.adj_start.assign(static_cast<size_t>(n) + 1, 0);
+    for (int l = 0; l < n; ++l) {
+        std::vector<int> &nb = neighbours[static_cast<size_t>(l)];
+        std::sort(nb.begin(), nb.end());
+        nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+        sp.adj_start[l + 1] = sp.adj_start[l] + static_cast<int>(nb.size());
+    }
+    sp.adj.clear();
+    sp.adj.reserve(static_cast<size_t>(sp.adj_start[n]));
+    for (const std::vector<int> &nb : neighbours) sp.adj.insert(sp.adj.end(), nb.begin(), nb.end());
 }
 
 }  // namespace lidarflow::interpolation

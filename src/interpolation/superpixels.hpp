@@ -44,6 +44,10 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
 // for any `threads` in [1, 1024]. Pure and thread-safe.
 Superpixels superpixels_from_labels(cv::Mat1i labels, int count, int threads = 1);
 
+// sp.adj_start / sp.adj (CSR) from each label's neighbour list, which it sorts and dedupes in
+// place. Pure but for its arguments.
+void set_adjacency(Superpixels &sp, std::vector<std::vector<int>> &neighbours);
+
 // SLIC's connectivity pass: `out` (reallocated) numbers the 4-connected components of `in` in the
 // raster order of their first pixels; a component of fewer than min_size pixels instead takes
 // the label of the last of its first pixel's left, right, upper and lower neighbours (in that

@@ -278,9 +278,8 @@ EgoMotion fit_rigid_ego_motion(const std::vector<float> &x, const std::vector<fl
     const int n = static_cast<int>(ids.size());
     em.candidates = n;
     if (n < std::max(o.min_inliers, 8)) return em;
-    // The hypotheses are scored on every k-th match, ~1500 (the refit below reads them all).
     std::vector<int> probe;
-    const int stride = std::max(1, n / 1500);
+    const int stride = std::max(1, n / 3000);
     for (int k = 0; k < n; k += stride) probe.push_back(ids[k]);
     Rng rng(0x516ull ^ (static_cast<uint64_t>(o.seed) << 17));
 

@@ -25,6 +25,11 @@
 #                            drive, and print `lidarflow sequence`'s pairs/s at each thread count
 #                            (default: 1 2 and every power of two up to the CPUs) as one stream
 #                            and with frames in flight (2, 4, ... up to the thread count)
+#   tools/dev.sh lidar-cost [PRESET] [ROUNDS]  build, then time the KITTI pairs of
+#                            $LIDARFLOW_KITTI_DIR with the 88-point and the full-scan LiDAR, the two
+#                            bench_pipeline runs alternated ROUNDS times (default 4) at PRESET
+#                            (default realtime); prints each round's pair times, their ratio and
+#                            the ratio of their means (what the scan costs over 88 points)
 #   tools/dev.sh bridge-rate [PRESET] [HZ] [LOOPS]  build, then play the KITTI frames of
 #                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
 #                            2), LOOPS times (default 10), through the bridge at PRESET (default
@@ -178,6 +183,25 @@ pairs_rate() {
     rm -rf "$dir"
 }
 
+lidar_cost() {
+    local preset="$1" rounds="$2" bench="$root/build/bench/bench_pipeline"
+    : "${LIDARFLOW_KITTI_DIR:?set LIDARFLOW_KITTI_DIR to the KITTI training folder}"
+    # The mean over both frames of bench_pipeline's pair time (median of its 3 runs).
+    pair() {
+        "$bench" --root "$LIDARFLOW_KITTI_DIR" --runs 3 --no-synth --threads 2 --preset "$preset" --lidar "$1" |
+            awk '/^  total/ { s += $2; n++ } END { if (n) printf "%.4f", s / n; else exit 1 }'
+    }
+    printf '%-6s %-14s %-14s %s\n' round "88 points [s]" "scan [s]" "scan / 88"
+    local r sparse dense all=""
+    for ((r = 1; r <= rounds; r++)); do
+        sparse="$(pair paper)"
+        dense="$(pair velodyne)"
+        all+="$sparse $dense"$'\n'
+        printf '%-6s %-14s %-14s %s\n' "$r" "$sparse" "$dense" "$(awk -v a="$sparse" -v b="$dense" 'BEGIN { printf "%.3f", b / a }')"
+    done
+    printf '%s' "$all" | awk '{ a += $1; b += $2 } END { printf "means  %-14.4f %-14.4f %.3f\n", a / NR, b / NR, b / a }'
+}
+
 case "${1:-}" in
     deps) deps ;;
     build) deps; build build ;;
@@ -246,6 +270,7 @@ case "${1:-}" in
         # lintian's errors fail the verb; its warnings are printed (docs/ARCHITECTURE.md lists them).
         lintian --fail-on error "$root"/build/packages/*.deb
         ls -1 "$root"/build/packages/*.deb ;;
+    lidar-cost) deps; build build; shift; lidar_cost "${1:-realtime}" "${2:-4}" ;;
     bridge-rate) deps; build build; shift; bridge_rate "${1:-default}" "${2:-2}" "${3:-10}" ;;
     pairs-rate) deps; build build; shift; pairs_rate "${1:-realtime}" "${@:2}" ;;
     *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;

@@ -51,12 +51,25 @@ void saturates_and_maps_nan_to_zero(void **) {
     assert_int_equal(round_to_int(std::numeric_limits<float>::quiet_NaN()), 0);
 }
 
+// nearest_inside: the rounded pixel, and whether it lies on a 4 x 3 image (-0.5 rounds off it).
+void nearest_inside_rounds_and_bounds(void **) {
+    int x = -9, y = -9;
+    assert_true(lidarflow::nearest_inside(2.5f, -0.49f, 4, 3, x, y));
+    assert_int_equal(x, 3);
+    assert_int_equal(y, 0);
+    assert_false(lidarflow::nearest_inside(-0.5f, 1.0f, 4, 3, x, y));
+    assert_false(lidarflow::nearest_inside(3.5f, 1.0f, 4, 3, x, y));
+    assert_false(lidarflow::nearest_inside(1.0f, 2.5f, 4, 3, x, y));
+    assert_false(lidarflow::nearest_inside(std::numeric_limits<float>::quiet_NaN(), 1e30f, 4, 3, x, y));
+}
+
 }  // namespace
 
 int main() {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(equals_lround),
         cmocka_unit_test(saturates_and_maps_nan_to_zero),
+        cmocka_unit_test(nearest_inside_rounds_and_bounds),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

@@ -24,8 +24,8 @@ bool inside(const SceneFlowField &b, float qx, float qy) {
 
 bool sample_nearest(const SceneFlowField &b, float qx, float qy, BackwardSample &s) {
     if (!inside(b, qx, qy)) return false;
-    const int x = round_to_int(qx), y = round_to_int(qy);
-    if (x < 0 || y < 0 || x >= b.width() || y >= b.height() || !b.valid(y, x)) return false;
+    int x, y;
+    if (!nearest_inside(qx, qy, b.width(), b.height(), x, y) || !b.valid(y, x)) return false;
     s = {b.u(y, x), b.v(y, x), b.d0(y, x), b.d1(y, x)};
     return true;
 }

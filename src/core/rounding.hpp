@@ -16,4 +16,11 @@ inline int round_to_int(float v) {
     return x == x ? static_cast<int>(x) : 0;
 }
 
+// (round_to_int(x), round_to_int(y)) into (tx, ty) when that pixel lies inside a w x h image.
+inline bool nearest_inside(float x, float y, int w, int h, int &tx, int &ty) {
+    tx = round_to_int(x);
+    ty = round_to_int(y);
+    return tx >= 0 && ty >= 0 && tx < w && ty < h;
+}
+
 }  // namespace lidarflow

@@ -293,8 +293,8 @@ SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const Di
         for (int x = 0; x < w; ++x) {
             const cv::Vec2f m = flow(y, x);
             if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !disparity_valid(d0(y, x))) continue;
-            const int tx = round_to_int(x + m[0]), ty = round_to_int(y + m[1]);
-            if (tx < 0 || ty < 0 || tx >= w || ty >= h || !disparity_valid(target(ty, tx))) continue;
+            int tx, ty;
+            if (!nearest_inside(x + m[0], y + m[1], w, h, tx, ty) || !disparity_valid(target(ty, tx))) continue;
             f.u(y, x) = m[0];
             f.v(y, x) = m[1];
             f.d0(y, x) = d0(y, x);

@@ -104,8 +104,8 @@ cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &
             const float u = f.u(y, x), v = f.v(y, x), d1 = f.d1(y, x);
             ScenePoint3 q;
             if (!triangulate_scene_flow(camera, x, y, u, v, f.d0(y, x), d1, &q)) continue;
-            const int tx = round_to_int(x + u), ty = round_to_int(y + v);
-            if (tx < 0 || ty < 0 || tx >= w || ty >= h) continue;
+            int tx, ty;
+            if (!nearest_inside(x + u, y + v, w, h, tx, ty)) continue;
             double obj[3], p0[3] = {q.x, q.y, q.z}, bg[3], xb, yb;
             object_motion(q, ego.R, ego.t, obj);
             rigid(ego.R, ego.t, p0, bg);
@@ -160,8 +160,8 @@ cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow,
             const cv::Vec3f o = objects(y, x);
             const cv::Vec2f f = flow(y, x);
             if (!finite3(o) || !std::isfinite(f[0]) || !std::isfinite(f[1])) continue;
-            const int tx = round_to_int(x + f[0]), ty = round_to_int(y + f[1]);
-            if (tx < 0 || ty < 0 || tx >= back.cols || ty >= back.rows) continue;
+            int tx, ty;
+            if (!nearest_inside(x + f[0], y + f[1], back.cols, back.rows, tx, ty)) continue;
             // This step's object motion is R o (next_step); X0 = R^T (X1 - t - R o), so the way
             // back's is -o.
             back(ty, tx) = -o;

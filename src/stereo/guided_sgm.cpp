@@ -115,15 +115,19 @@ inline uint16_t penalty_reach(int slope16, int cap) {
 // c[d] += round(wt * min(slope16 * |16 d - p16| / 256, cap) / 255), saturated at 255, in 16-bit
 // lanes: |16 d - p16| is clamped at `top` (penalty_reach: where the penalty reaches the cap), so
 // the products fit 16 bits, and x / 255 is (x + 1 + (x >> 8)) >> 8, exact for x < 65535.
+// The penalty's byte at a clamped distance diff <= top (w: weight, s: slope16, cp: cap).
+inline uint16_t penalty_at(uint16_t diff, uint16_t w, uint16_t s, uint16_t cp) {
+    const uint16_t pen = std::min(static_cast<uint16_t>(static_cast<uint16_t>(s * diff) >> 8), cp);
+    const auto x = static_cast<uint16_t>(w * pen + 127);
+    return static_cast<uint16_t>((x + 1 + (x >> 8)) >> 8);
+}
+
 inline void add_lidar_penalty(uint8_t *c, int D, int p16, int wt, int slope16, uint16_t top, int cap) {
     const auto p = static_cast<uint16_t>(p16), w = static_cast<uint16_t>(wt), s = static_cast<uint16_t>(slope16),
                cp = static_cast<uint16_t>(cap);
     for (int d = 0; d < D; ++d) {
         const auto at = static_cast<uint16_t>(16 * d);
-        const uint16_t diff = std::min(static_cast<uint16_t>(at > p ? at - p : p - at), top);
-        const uint16_t pen = std::min(static_cast<uint16_t>(static_cast<uint16_t>(s * diff) >> 8), cp);
-        const auto x = static_cast<uint16_t>(w * pen + 127);
-        const auto q = static_cast<uint16_t>((x + 1 + (x >> 8)) >> 8);
+        const uint16_t q = penalty_at(std::min(static_cast<uint16_t>(at > p ? at - p : p - at), top), w, s, cp);
         c[d] = static_cast<uint8_t>(std::min(255, c[d] + q));
     }
 }
@@ -154,9 +158,10 @@ __attribute__((target("avx2"))) inline void add_lidar_penalty_avx2(uint8_t *c, i
     }
     const __m256i exact = _mm256_adds_epu8(_mm256_loadu_si256(reinterpret_cast<const __m256i *>(c + start)),
                                            _mm256_permute4x64_epi64(_mm256_packus_epi16(q[0], q[1]), 0xD8));
-    // The capped penalty, as the exact one computes it at |16 d - p16| >= top.
-    const auto xf = static_cast<uint16_t>(wt * std::min(slope16 * top >> 8, cap) + 127);
-    const __m128i far = _mm_set1_epi8(static_cast<char>((xf + 1 + (xf >> 8)) >> 8));
+    // The capped penalty: the exact one at |16 d - p16| >= top.
+    const uint16_t capped = penalty_at(top, static_cast<uint16_t>(wt), static_cast<uint16_t>(slope16),
+                                       static_cast<uint16_t>(cap));
+    const __m128i far = _mm_set1_epi8(static_cast<char>(capped));
     for (int d = 0; d < D; d += 16) {
         __m128i *v = reinterpret_cast<__m128i *>(c + d);
         _mm_storeu_si128(v, _mm_adds_epu8(_mm_loadu_si128(v), far));

@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/maps.hpp"
 #include "guard.hpp"
 #include "lidar/projection.hpp"
 
@@ -48,7 +49,7 @@ SparseLidar from_disparities(const lf_lidar_t &l, size_t stride, cv::Size size) 
     // Larger disparity wins on a shared pixel (nearer surface), as in the projection.
     // An entry off the image is dropped and counted, as a projected 3-D point is: one point
     // must not cost the frame.
-    DisparityMap map(size, kInvalidDisparity);
+    DisparityMap map = filled(size, kInvalidDisparity);
     lidar::DroppedPoints dropped;
     dropped.seen = l.count;
     for (uint32_t i = 0; i < l.count; ++i) {

@@ -7,6 +7,7 @@
 #include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "core/rounding.hpp"
 
 namespace lidarflow::consistency {
@@ -61,7 +62,7 @@ ForwardBackwardResult detail::forward_backward_check(const SceneFlowField &forwa
 
     ForwardBackwardResult r;
     r.field = detail::empty_like(forward);
-    r.error = cv::Mat1f(h, w, std::numeric_limits<float>::infinity());
+    r.error = filled(h, w, std::numeric_limits<float>::infinity());
     r.lidar_motion_unreliable = cv::Mat1b::zeros(h, w);
     const bool bilinear = opt.fb_lookup == BackwardLookup::Bilinear;
     const int radius = opt.fb_search_radius;

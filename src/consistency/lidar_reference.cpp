@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 
 namespace lidarflow::consistency {
 
@@ -16,7 +17,7 @@ LidarReference LidarReference::build(const SparseLidar &lidar, int width, int he
             "consistency: support window must be odd and >= 1, got " + std::to_string(window));
     LidarReference ref;
     ref.is_lidar = cv::Mat1b::zeros(height, width);
-    ref.disparity = DisparityMap(height, width, kInvalidDisparity);
+    ref.disparity = filled(height, width, kInvalidDisparity);
     if (lidar.points.empty()) {
         ref.in_window = cv::Mat1b::zeros(height, width);
         return ref;

@@ -16,6 +16,7 @@
 #include "consistency/steps.hpp"
 #include "consistency/validate.hpp"
 #include "core/error.hpp"
+#include "core/maps.hpp"
 
 namespace lidarflow::consistency {
 namespace {
@@ -87,7 +88,7 @@ DisparityMap sgm_disparity(const cv::Mat &left, const cv::Mat &right, const SgmO
     require_sgm_headroom(l.cols, opt.num_disparities, b);
     sgbm->compute(l, r, disp16);
     CV_Assert(disp16.type() == CV_16S);
-    DisparityMap out(left.rows, left.cols, kInvalidDisparity);
+    DisparityMap out = filled(left.rows, left.cols, kInvalidDisparity);
     for (int y = 0; y < left.rows; ++y) {
         const short *row = disp16.ptr<short>(y) + pad;
         for (int x = 0; x < left.cols; ++x)

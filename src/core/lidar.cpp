@@ -6,12 +6,13 @@
 
 #include "core/error.hpp"
 #include "core/limits.hpp"
+#include "core/maps.hpp"
 
 namespace lidarflow {
 
 DisparityMap SparseLidar::to_map() const {
     require(width > 0 && height > 0, ErrorCode::InvalidArgument, "SparseLidar has no image size");
-    DisparityMap map(height, width, kInvalidDisparity);
+    DisparityMap map = filled(height, width, kInvalidDisparity);
     for (const LidarPoint &p : points) {
         require(p.x >= 0 && p.y >= 0 && p.x < width && p.y < height, ErrorCode::InvalidArgument,
                 "LiDAR point outside the image");

@@ -14,6 +14,20 @@ inline bool disparity_valid(float d) { return d >= 0.0f; }
 // CV_32F disparity map, invalid pixels < 0.
 using DisparityMap = cv::Mat1f;
 
+// A rows x cols matrix with every element `value`, filled by setTo: OpenCV's fill constructors
+// and operator=(Scalar) copy a non-zero value through a generic loop about ten times slower.
+template <class T>
+cv::Mat_<T> filled(int rows, int cols, const T &value) {
+    cv::Mat_<T> m(rows, cols);
+    m.setTo(cv::Scalar(value));
+    return m;
+}
+
+template <class T>
+cv::Mat_<T> filled(cv::Size size, const T &value) {
+    return filled(size.height, size.width, value);
+}
+
 struct FlowField {
     cv::Mat1f u, v;   // displacement [px] from I_l^0 to I_l^1
     cv::Mat1b valid;  // 1 where (u, v) is defined, else 0

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "eval/json_report.hpp"
 #include "io/calib.hpp"
 #include "io/kitti_layout.hpp"
@@ -244,7 +245,7 @@ KittiRunReport run_kitti(const KittiRunOptions &o, const Progress &progress) {
             if (progress) progress(i, ids.size(), id + ": image-only");
             img = Estimator(image_opt).run(frame.input);
         }
-        const DisparityMap no_seeds(seeds.size(), kInvalidDisparity);
+        const DisparityMap no_seeds = filled(seeds.size(), kInvalidDisparity);
         if (main_opt.use_lidar) {
             using matching::MatchVariant;
             table.add("Matching", "im-only", FillMode::Filled, gt, img.forward, seeds, id);

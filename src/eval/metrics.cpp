@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "eval/background_fill.hpp"
 
 namespace lidarflow::eval {
@@ -235,7 +236,7 @@ Estimate estimate_from_scene_flow(const SceneFlowField &sf) {
     const cv::Size size = sf.u.size();
     require(sf.v.size() == size && sf.d0.size() == size && sf.d1.size() == size && sf.valid.size() == size,
             ErrorCode::SizeMismatch, "scene flow estimate: u, v, d0, d1, valid differ in size");
-    Estimate e{DisparityMap(size, kInvalidDisparity), DisparityMap(size, kInvalidDisparity),
+    Estimate e{filled(size, kInvalidDisparity), filled(size, kInvalidDisparity),
                FlowField::zeros(size.width, size.height)};
     for (int y = 0; y < size.height; ++y) {
         for (int x = 0; x < size.width; ++x) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "interpolation/interpolator.hpp"
 
+#include "core/maps.hpp"
 #include "core/random.hpp"
 
 #include <algorithm>
@@ -250,7 +251,7 @@ Background predict_background(const Seeds &s, const std::vector<float> &d0, cons
 // the right view (d1 matched on the occluder, e.g. beside a near object): d1 follows the
 // background model if the measured flow says the point is static.
 int release_occluded(Seeds &s, const EgoMotion &ego, int w, int h, const InterpolationOptions &o) {
-    cv::Mat1f zl(h, w, -1.0f), zr(h, w, -1.0f);
+    cv::Mat1f zl = filled(h, w, -1.0f), zr = filled(h, w, -1.0f);
     constexpr int r = 2;  // matches are ~3 px apart after sparsification; cover the gaps
     const int n = s.size(), T = std::max(1, std::min(o.num_threads, h));
     // Each thread splats into its own band of rows (a maximum: the order does not matter).

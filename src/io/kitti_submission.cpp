@@ -2,6 +2,7 @@
 #include "io/kitti_submission.hpp"
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "io/kitti_layout.hpp"
 #include "io/kitti_png.hpp"
 
@@ -9,7 +10,7 @@ namespace lidarflow::io {
 namespace {
 
 DisparityMap masked(const cv::Mat1f &d, const cv::Mat1b &valid) {
-    DisparityMap out(d.size(), kInvalidDisparity);
+    DisparityMap out = filled(d.size(), kInvalidDisparity);
     d.copyTo(out, valid);
     return out;
 }

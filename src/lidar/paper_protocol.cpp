@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "lidar/grid_sampling.hpp"
 
 namespace lidarflow::lidar {
@@ -37,8 +38,8 @@ DewarpResult dewarp_to_t1(const DisparityMap &disp1, const FlowField &flow, cons
             "dewarp: gap_min_nearer must be in 1..9");
     const int W = disp1.cols, H = disp1.rows;
     DewarpResult r;
-    r.disp = DisparityMap(H, W, kInvalidDisparity);
-    r.source = cv::Mat2i(H, W, cv::Vec2i(-1, -1));
+    r.disp = filled(H, W, kInvalidDisparity);
+    r.source = filled(H, W, cv::Vec2i(-1, -1));
     for (int y = 0; y < H; ++y) {
         for (int x = 0; x < W; ++x) {
             const float d = disp1(y, x);

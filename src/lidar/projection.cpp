@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/limits.hpp"
+#include "core/maps.hpp"
 
 namespace lidarflow::lidar {
 namespace {
@@ -29,7 +30,7 @@ class DepthBuffer {
 public:
     DepthBuffer(const io::CamToCamCalib &calib, cv::Size image, const ProjectionOptions &opt)
         : P_(calib.P_rect_02), fb_(calib.camera.fx * calib.camera.baseline), min_depth_(opt.min_depth),
-          map_(image.height, image.width, kInvalidDisparity) {}
+          map_(filled(image.height, image.width, kInvalidDisparity)) {}
 
     void add(const cv::Vec3d &x_rect) {
         const cv::Vec3d p = P_ * cv::Vec4d(x_rect[0], x_rect[1], x_rect[2], 1.0);

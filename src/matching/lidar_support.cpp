@@ -5,12 +5,14 @@
 #include <cmath>
 #include <limits>
 
+#include "core/maps.hpp"
+
 namespace lidarflow::matching {
 
 cv::Mat1i nearest_point_labels(const std::vector<cv::Point2f> &points, int width, int height,
                                int radius) {
-    cv::Mat1i labels(height, width, -1);
-    cv::Mat1f best(height, width, std::numeric_limits<float>::infinity());
+    cv::Mat1i labels = filled(height, width, -1);
+    cv::Mat1f best = filled(height, width, std::numeric_limits<float>::infinity());
     for (int k = 0; k < static_cast<int>(points.size()); ++k) {
         const cv::Point2f p = points[k];
         const int cx = static_cast<int>(std::lround(p.x)), cy = static_cast<int>(std::lround(p.y));

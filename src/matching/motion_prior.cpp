@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/limits.hpp"
+#include "core/maps.hpp"
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
 #include "core/rounding.hpp"
@@ -63,7 +64,7 @@ cv::Mat3f close_gaps(const cv::Mat3f &m, int threads) {
 // background motion `ego` plus its object motion (none for the static ones, NaN in `objects`),
 // and lands on its new pixel, the nearest point winning.
 void advance_one_step(cv::Mat3f &objects, cv::Mat1f &d, const motion::EgoMotion &ego, const StereoCamera &c) {
-    cv::Mat3f moved(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat3f moved = filled(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
     cv::Mat1f nearest(objects.size(), 0.0f);
     for (int y = 0; y < d.rows; ++y)
         for (int x = 0; x < d.cols; ++x) {
@@ -119,7 +120,7 @@ cv::Mat3f carry_object_motion(const SceneFlowField &f, const motion::EgoMotion &
                                   : cv::Vec3f(kNaN, kNaN, kNaN);
             lands(y, x) = ty * w + tx;
         }
-    cv::Mat3f objects(h, w, cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat3f objects = filled(h, w, cv::Vec3f(kNaN, kNaN, kNaN));
     cv::Mat1f nearest(h, w, 0.0f);  // d1 of the point written at each t1 pixel
     float *near = nearest.ptr<float>();
     cv::Vec3f *obj = objects.ptr<cv::Vec3f>();
@@ -154,7 +155,7 @@ void add_object_motion(const motion::EgoMotion &m, const DisparityMap &d, const 
 cv::Mat3f reverse_object_motion(const cv::Mat3f &objects, const cv::Mat2f &flow, const motion::EgoMotion &m,
                                 int threads) {
     if (objects.empty() || objects.size() != flow.size() || !m.valid || !m.calibrated) return {};
-    cv::Mat3f back(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
+    cv::Mat3f back = filled(objects.size(), cv::Vec3f(kNaN, kNaN, kNaN));
     for (int y = 0; y < objects.rows; ++y)
         for (int x = 0; x < objects.cols; ++x) {
             const cv::Vec3f o = objects(y, x);

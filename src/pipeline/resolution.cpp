@@ -10,6 +10,7 @@
 #include "core/area_downscale.hpp"
 #include "core/error.hpp"
 #include "core/gray.hpp"
+#include "core/maps.hpp"
 
 namespace lidarflow::pipeline {
 namespace {
@@ -19,7 +20,7 @@ SparseLidar downscale_lidar(const SparseLidar &l, cv::Size size, double sx, doub
     if (l.points.empty()) return out;
     // The nearest (largest) disparity per reduced pixel, read back in row-major order: a
     // buffer of the reduced frame (a scan's ~20k points in a tree cost ~2 ms).
-    DisparityMap nearest(size, kInvalidDisparity);
+    DisparityMap nearest = filled(size, kInvalidDisparity);
     for (const LidarPoint &p : l.points) {
         const int x = std::min(size.width - 1, static_cast<int>(std::floor((p.x + 0.5) * sx)));
         const int y = std::min(size.height - 1, static_cast<int>(std::floor((p.y + 0.5) * sy)));

@@ -23,6 +23,7 @@
 #include "core/error.hpp"
 #include "core/gray.hpp"
 #include "core/limits.hpp"
+#include "core/maps.hpp"
 #include "core/rounding.hpp"
 
 namespace lidarflow::stereo {
@@ -635,7 +636,7 @@ void GuidedSgmOptions::validate() const {
 
 LidarPrior densify_lidar(const cv::Mat1b &gray, const SparseLidar &lidar, const GuidedSgmOptions &opt) {
     const int h = gray.rows, w = gray.cols, r = opt.lidar_radius, T = opt.threads;
-    LidarPrior p{cv::Mat1f(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
+    LidarPrior p{filled(h, w, kInvalidDisparity), cv::Mat1b::zeros(h, w)};
     // Per thread, one row padded by r on the left and by the lanes' overhang on the right, so
     // that every point's window is whole: its Chebyshev distance of the point that set each
     // pixel, the disparity, the intensity.
@@ -747,7 +748,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     cost.reset();
 
     // Winner takes all, uniqueness, left-right check, then the sub-pixel vertex.
-    cv::Mat1s disp16(h, w, static_cast<int16_t>(-16));
+    cv::Mat1s disp16 = filled(h, w, static_cast<int16_t>(-16));
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
         const uint16_t *S = sum.get() + plane * y;
@@ -770,7 +771,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         }
     }
     if (opt.speckle_window > 0) cv::filterSpeckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range);
-    DisparityMap d(h, w, kInvalidDisparity);
+    DisparityMap d = filled(h, w, kInvalidDisparity);
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "core/error.hpp"
+#include "core/maps.hpp"
 #include "synth/model.hpp"
 #include "synth/noise.hpp"
 #include "synth/scene.hpp"
@@ -151,10 +152,10 @@ void ground_truth(const Rig &rig, const SynthConfig &cfg, SynthScene &s) {
     const int w = rig.width, h = rig.height;
     const SceneModel &m = rig.model;
     const StereoCamera &cam = rig.cam;
-    s.disp0_occ = DisparityMap(h, w, kInvalidDisparity);
-    s.disp0_noc = DisparityMap(h, w, kInvalidDisparity);
-    s.disp1_occ = DisparityMap(h, w, kInvalidDisparity);
-    s.disp1_noc = DisparityMap(h, w, kInvalidDisparity);
+    s.disp0_occ = filled(h, w, kInvalidDisparity);
+    s.disp0_noc = filled(h, w, kInvalidDisparity);
+    s.disp1_occ = filled(h, w, kInvalidDisparity);
+    s.disp1_noc = filled(h, w, kInvalidDisparity);
     s.flow_occ = FlowField::zeros(w, h);
     s.flow_noc = FlowField::zeros(w, h);
     s.textureless_mask = cv::Mat1b::zeros(h, w);

@@ -151,10 +151,11 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
         }
 
     ClusterResult r;
-    r.field = detail::empty_like(field);
+    r.field = SceneFlowField::uninitialized(w, h);  // each row cleared where it is filled
     long long clusters = 0, removed_clusters = 0, removed_matches = 0;
 #pragma omp parallel for schedule(static) num_threads(T) reduction(+ : clusters, removed_clusters, removed_matches)
-    for (int y = 0; y < h; ++y)
+    for (int y = 0; y < h; ++y) {
+        r.field.clear_row(y);
         for (int x = 0; x < w; ++x) {
             if (!field.valid(y, x)) continue;
             const int i = y * w + x, ri = root[static_cast<size_t>(i)];
@@ -169,6 +170,7 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
             else
                 ++removed_matches;
         }
+    }
     r.clusters = static_cast<int>(clusters);
     r.removed_clusters = static_cast<int>(removed_clusters);
     r.removed_matches = removed_matches;

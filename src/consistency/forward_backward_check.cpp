@@ -61,15 +61,19 @@ ForwardBackwardResult detail::forward_backward_check(const SceneFlowField &forwa
     detail::check_size(lidar.is_lidar, h, w, "LiDAR mask");
 
     ForwardBackwardResult r;
-    r.field = detail::empty_like(forward);
-    r.error = filled(h, w, std::numeric_limits<float>::infinity());
-    r.lidar_motion_unreliable = cv::Mat1b::zeros(h, w);
+    // Each row cleared where it is filled, below.
+    r.field = SceneFlowField::uninitialized(w, h);
+    r.error.create(h, w);
+    r.lidar_motion_unreliable.create(h, w);
     const bool bilinear = opt.fb_lookup == BackwardLookup::Bilinear;
     const int radius = opt.fb_search_radius;
 
     // Rows are independent: each pixel writes only its own outputs.
 #pragma omp parallel for schedule(static) num_threads(opt.threads)
-    for (int y = 0; y < h; ++y)
+    for (int y = 0; y < h; ++y) {
+        r.field.clear_row(y);
+        std::fill(r.error[y], r.error[y] + w, std::numeric_limits<float>::infinity());
+        std::fill(r.lidar_motion_unreliable[y], r.lidar_motion_unreliable[y] + w, uchar{0});
         for (int x = 0; x < w; ++x) {
             if (!forward.valid(y, x)) continue;
             const bool is_lidar = lidar.is_lidar(y, x) != 0;
@@ -100,6 +104,7 @@ ForwardBackwardResult detail::forward_backward_check(const SceneFlowField &forwa
             if (ok || (is_lidar && opt.keep_unreliable_lidar)) detail::keep_match(r.field, forward, y, x);
             if (is_lidar && !ok) r.lidar_motion_unreliable(y, x) = 1;
         }
+    }
     return r;
 }
 

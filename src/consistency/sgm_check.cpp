@@ -126,9 +126,10 @@ SceneFlowField detail::sgm_check(const SceneFlowField &forward, const DisparityM
     for (int y = 0; y < h; ++y)
         require(std::all_of(sgm[y], sgm[y] + w, [](float s) { return std::isfinite(s); }), ErrorCode::InvalidArgument,
                 "consistency: non-finite SGM disparity");
-    SceneFlowField out = detail::empty_like(forward);
+    SceneFlowField out = SceneFlowField::uninitialized(w, h);  // each row cleared where it is filled
 #pragma omp parallel for schedule(static) num_threads(std::max(1, opt.threads))
-    for (int y = 0; y < h; ++y)
+    for (int y = 0; y < h; ++y) {
+        out.clear_row(y);
         for (int x = 0; x < w; ++x) {
             const float s = sgm(y, x);
             if (!forward.valid(y, x)) continue;
@@ -141,6 +142,7 @@ SceneFlowField detail::sgm_check(const SceneFlowField &forward, const DisparityM
                 keep = std::fabs(forward.d0(y, x) - s) <= opt.sgm_max_diff;
             if (keep) detail::keep_match(out, forward, y, x);
         }
+    }
     return out;
 }
 

@@ -43,10 +43,11 @@ SceneFlowField detail::sparsify(const SceneFlowField &field, const cv::Mat1f &er
     require(nan_rows == 0, ErrorCode::InvalidArgument, "sparsify: NaN in the consistency error");
     if (opt.sparsify_support > 1)
         cv::blur(score, score, {opt.sparsify_support, opt.sparsify_support}, {-1, -1}, cv::BORDER_REPLICATE);
-    SceneFlowField out = detail::empty_like(field);
+    SceneFlowField out = SceneFlowField::uninitialized(w, h);  // each row cleared where it is filled
     // Blocks write only their own pixels: a row of blocks per iteration.
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (int by = 0; by < h; by += b)
+    for (int by = 0; by < h; by += b) {
+        for (int y = by; y < std::min(by + b, h); ++y) out.clear_row(y);
         for (int bx = 0; bx < w; bx += b) {
             int best_x = -1, best_y = -1;
             float best_err = 0, best_conf = 0;
@@ -68,6 +69,7 @@ SceneFlowField detail::sparsify(const SceneFlowField &field, const cv::Mat1f &er
                 }
             if (best_x >= 0) detail::keep_match(out, field, best_y, best_x);
         }
+    }
     return out;
 }
 

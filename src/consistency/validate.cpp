@@ -90,6 +90,4 @@ void check_options(const ConsistencyOptions &opt) {
             "consistency: sgm uniqueness_ratio, speckle_window and speckle_range must be >= 0");
 }
 
-SceneFlowField empty_like(const SceneFlowField &f) { return SceneFlowField::zeros(f.u.cols, f.u.rows); }
-
 }  // namespace lidarflow::consistency::detail

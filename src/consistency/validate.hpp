@@ -36,8 +36,6 @@ inline float confidence_at(const SceneFlowField &f, int y, int x) {
     return f.confidence.empty() ? 0.0f : f.confidence(y, x);
 }
 
-// An all-invalid, all-zero field of f's size (with a confidence plane).
-SceneFlowField empty_like(const SceneFlowField &f);
 
 // Copies the match at (y, x) of src into dst and marks it valid.
 inline void keep_match(SceneFlowField &dst, const SceneFlowField &src, int y, int x) {

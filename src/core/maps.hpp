@@ -3,6 +3,8 @@
 // Dense per-pixel maps in the left image at t0 (the reference frame), as the stages exchange
 // them. Invalid disparities are negative (kInvalidDisparity), as in the KITTI devkit; a valid
 // disparity is >= 0. Flow carries an explicit validity mask.
+#include <algorithm>
+
 #include <opencv2/core.hpp>
 
 namespace lidarflow {
@@ -58,6 +60,13 @@ struct SceneFlowField {
     static SceneFlowField uninitialized(int width, int height) {
         return {cv::Mat1f(height, width), cv::Mat1f(height, width), cv::Mat1f(height, width),
                 cv::Mat1f(height, width), cv::Mat1b(height, width), cv::Mat1f(height, width)};
+    }
+    // Row y of every plane set to 0 (no match). With uninitialized(), a stage that visits every
+    // row clears and fills it in one parallel pass instead of zeroing each plane on one thread.
+    void clear_row(int y) {
+        for (cv::Mat1f *m : {&u, &v, &d0, &d1, &confidence})
+            std::fill(m->ptr<float>(y), m->ptr<float>(y) + m->cols, 0.0f);
+        std::fill(valid.ptr<uchar>(y), valid.ptr<uchar>(y) + valid.cols, uchar{0});
     }
     int width() const { return u.cols; }
     int height() const { return u.rows; }

@@ -282,26 +282,26 @@ SparseLidar stereo_guide(const SparseLidar &lidar, const MatchingOptions &opt) {
 SceneFlowField assemble(const cv::Mat2f &flow, const DisparityMap &ref, const DisparityMap &target,
                         const SparseLidar &lidar, int threads) {
     const int h = flow.rows, w = flow.cols;
-    SceneFlowField f = SceneFlowField::zeros(w, h);
-    DisparityMap d0 = ref.clone();
-    if (!lidar.points.empty()) {
-        const DisparityMap measured = lidar.to_map();
-        measured.copyTo(d0, measured >= 0.0f);
-    }
+    SceneFlowField f = SceneFlowField::uninitialized(w, h);  // each row cleared where it is filled
+    const DisparityMap measured = lidar.points.empty() ? DisparityMap() : lidar.to_map();
 #pragma omp parallel for schedule(static) num_threads(std::max(1, threads))
-    for (int y = 0; y < h; ++y)
+    for (int y = 0; y < h; ++y) {
+        f.clear_row(y);
+        const float *mr = measured.empty() ? nullptr : measured[y];
         for (int x = 0; x < w; ++x) {
             const cv::Vec2f m = flow(y, x);
-            if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !disparity_valid(d0(y, x))) continue;
+            const float d = mr && mr[x] >= 0.0f ? mr[x] : ref(y, x);  // the LiDAR's measurement where there is one
+            if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !disparity_valid(d)) continue;
             int tx, ty;
             if (!nearest_inside(x + m[0], y + m[1], w, h, tx, ty) || !disparity_valid(target(ty, tx))) continue;
             f.u(y, x) = m[0];
             f.v(y, x) = m[1];
-            f.d0(y, x) = d0(y, x);
+            f.d0(y, x) = d;
             f.d1(y, x) = target(ty, tx);
             f.valid(y, x) = 1;
             f.confidence(y, x) = 1.0f;
         }
+    }
     return f;
 }
 

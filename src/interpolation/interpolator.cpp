@@ -1,9 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "interpolation/interpolator.hpp"
 
-#include "core/maps.hpp"
-#include "core/random.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,9 +15,12 @@
 
 #include "core/error.hpp"
 #include "core/log.hpp"
+#include "core/maps.hpp"
 #include "core/parallel_errors.hpp"
 #include "core/pixels.hpp"
+#include "core/random.hpp"
 #include "core/threads.hpp"
+#include "interpolation/chamfer_distance.hpp"
 #include "interpolation/geodesic.hpp"
 #include "interpolation/lidar_anchors.hpp"
 #include "interpolation/lidar_residuals.hpp"
@@ -356,8 +356,15 @@ int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const
     cv::Mat1b not_match(h, w, uint8_t{255});
     for (int i = 0; i < s.size(); ++i)
         if (s.has_motion[i]) not_match(s.pos[i]) = 0;
+    // The distance to the nearest match only at the grid's pixels, from the window that can hold
+    // one closer than the bound; a bound beyond the image takes the whole map's transform (which
+    // also gives its own large value where no match exists).
+    const int reach = ChamferMask3::reach_below(o.hint_min_distance);
     cv::Mat1f dist;
-    cv::distanceTransform(not_match, dist, cv::DIST_L2, 3);
+    if (reach >= std::max(w, h)) cv::distanceTransform(not_match, dist, cv::DIST_L2, 3);
+    const auto near_match = [&](int x, int y) {
+        return (dist.empty() ? ChamferMask3::near(not_match, x, y, reach) : dist(y, x)) < o.hint_min_distance;
+    };
     cv::Mat1b agree(h, w, uint8_t{0}), disagree(h, w, uint8_t{0});
     for (const LidarPoint &p : lidar.points) {
         const float d = hint(p.y, p.x);
@@ -378,7 +385,7 @@ int add_hint_seeds(Seeds &s, cv::Mat1i &seed_at, const DisparityMap &hint, const
     for (int y = g / 2; y < h; y += g)
         for (int x = g / 2; x < w; x += g) {
             const float d = hint(y, x);
-            if (d < 0.0f || seed_at(y, x) >= 0 || dist(y, x) < o.hint_min_distance) continue;
+            if (d < 0.0f || seed_at(y, x) >= 0 || near_match(x, y)) continue;
             const int na = box(ia, x, y), nd = box(id, x, y);
             if (na == 0 || 5 * nd > na + nd) continue;
             seed_at(y, x) = s.size();

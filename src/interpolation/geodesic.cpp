@@ -85,21 +85,24 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
         if (w > 1) border(w - 1);
         for (int x = 1; x + 1 < w; ++x) cell(x, true, true);  // both diagonals exist: no branch
     };
-    // The serial step along row y from x - s, then the row before's best.
+    // The serial step along row y from x - s, then the row before's best. The previous pixel's
+    // result stays in registers: reloading what was just stored made each step wait on the store.
     auto along = [&](int y, int s) {
         const size_t row = static_cast<size_t>(y) * w;
         const bool vertical = s > 0 ? y > 0 : y + 1 < h;
+        float prev_d = 0.0f, prev_h = 0.0f;
+        int prev_l = 0;
         for (int k = 0; k < w; ++k) {
             const int x = s > 0 ? k : w - 1 - k;
             const size_t idx = row + x;
             float best = dist[idx];
             int bl = lab[idx];
+            const float hx = hc[idx];
             if (k > 0) {
-                const size_t q = s > 0 ? idx - 1 : idx + 1;
-                const float c = dist[q] + 1.0f * (hc[idx] + hc[q]);
+                const float c = prev_d + 1.0f * (hx + prev_h);
                 if (c < best) {
                     best = c;
-                    bl = lab[q];
+                    bl = prev_l;
                 }
             }
             if (vertical && vdist[x] < best) {
@@ -108,6 +111,9 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
             }
             dist[idx] = best;
             lab[idx] = bl;
+            prev_d = best;
+            prev_l = bl;
+            prev_h = hx;
         }
     };
     auto unreached = [&] {

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -571,6 +572,42 @@ void test_visibility_filter_automatic_height(void **) {
     assert_non_null(find_point(lidar::remove_hidden_points(s, o), 101, 2 + 19 * 5 + 12));
 }
 
+// Few points read their windows' rows, many dilate the map: both keep exactly the points that no
+// point of their window (several on one pixel included) hides, as a plain scan of all pairs says.
+void test_visibility_filter_sparse_and_dense_agree(void **) {
+    std::mt19937 gen(31);
+    int sparse_runs = 0, dense_runs = 0;
+    for (const int n : {1, 5, 20, 60, 200, 800})
+        for (const int hw : {0, 2, 6})
+            for (const int hh : {1, 4, 9}) {  // 0 would be the automatic height
+                SparseLidar in{120, 60, {}};
+                for (int i = 0; i < n; ++i) {
+                    LidarPoint p;
+                    p.x = static_cast<int>(gen() % 120);
+                    p.y = static_cast<int>(gen() % 60);
+                    p.disparity = static_cast<float>(gen() % 4000) / 50.0f;  // ties and equal pixels occur
+                    in.points.push_back(p);
+                    if (gen() % 7 == 0) in.points.push_back({p.x, p.y, p.disparity * 0.5f});
+                }
+                lidar::VisibilityFilterOptions o;
+                o.half_width = hw;
+                o.half_height = hh;
+                const SparseLidar out = lidar::remove_hidden_points(in, o);
+                std::vector<LidarPoint> want;
+                for (const LidarPoint &p : in.points) {
+                    float m = -1.0f;
+                    for (const LidarPoint &q : in.points)
+                        if (std::abs(q.x - p.x) <= hw && std::abs(q.y - p.y) <= hh) m = std::max(m, q.disparity);
+                    if (!(m > p.disparity * (1.0f + o.ratio) + o.margin)) want.push_back(p);
+                }
+                assert_true(out.points == want);
+                const double visits = static_cast<double>(in.points.size()) * (2 * hh + 1);
+                ++(visits * 16 < 120.0 * 60 ? sparse_runs : dense_runs);
+            }
+    assert_true(sparse_runs > 10);
+    assert_true(dense_runs > 10);
+}
+
 void test_visibility_filter_rejects_bad_input(void **) {
     const SparseLidar in{20, 10, {{3, 3, 5.0f}}};
     for (const auto &set : std::vector<std::function<void(lidar::VisibilityFilterOptions &)>>{
@@ -648,6 +685,7 @@ int main() {
         cmocka_unit_test(test_velodyne_protocol_real),
         cmocka_unit_test(test_visibility_filter_synthetic),
         cmocka_unit_test(test_visibility_filter_automatic_height),
+        cmocka_unit_test(test_visibility_filter_sparse_and_dense_agree),
         cmocka_unit_test(test_visibility_filter_rejects_bad_input),
         cmocka_unit_test(test_visibility_filter_real),
     };

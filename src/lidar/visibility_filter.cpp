@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -56,6 +57,48 @@ int auto_half_height(const SparseLidar &points) {
     return std::clamp(static_cast<int>(std::lround(0.7 * *q)), 1, kMaxAutoHalfHeight);
 }
 
+namespace {
+
+// The largest disparity in each point's window (itself included), as both functions below give
+// it: the dilation of the points' map (of several points on one pixel, the nearest) read at the
+// points, or the same maximum over the points of the window's rows, sorted by x.
+std::vector<float> window_max_by_dilation(const SparseLidar &in, int half_width, int half_height) {
+    const DisparityMap map = in.to_map();
+    DisparityMap nearest;
+    cv::dilate(map, nearest,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * half_width + 1, 2 * half_height + 1)),
+               cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kInvalidDisparity));
+    std::vector<float> out(in.points.size());
+    for (size_t i = 0; i < in.points.size(); ++i) out[i] = nearest(in.points[i].y, in.points[i].x);
+    return out;
+}
+
+std::vector<float> window_max_by_rows(const SparseLidar &in, int half_width, int half_height) {
+    const int h = in.height;
+    const size_t n = in.points.size();
+    std::vector<int> first(static_cast<size_t>(h) + 1, 0);
+    for (const LidarPoint &p : in.points) ++first[static_cast<size_t>(p.y) + 1];
+    for (int y = 0; y < h; ++y) first[y + 1] += first[y];
+    std::vector<std::pair<int, float>> row(n);  // (x, disparity) by row, then by x
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (const LidarPoint &p : in.points) row[static_cast<size_t>(fill[p.y]++)] = {p.x, p.disparity};
+    for (int y = 0; y < h; ++y) std::sort(row.begin() + first[y], row.begin() + first[y + 1]);
+    std::vector<float> out(n);
+    for (size_t i = 0; i < n; ++i) {
+        const LidarPoint &p = in.points[i];
+        float m = kInvalidDisparity;  // what the dilation's border and empty pixels give
+        for (int y = std::max(0, p.y - half_height); y <= std::min(h - 1, p.y + half_height); ++y) {
+            const auto end = row.begin() + first[y + 1];
+            auto q = std::lower_bound(row.begin() + first[y], end, std::pair<int, float>(p.x - half_width, -1e30f));
+            for (; q != end && q->first <= p.x + half_width; ++q) m = std::max(m, q->second);
+        }
+        out[i] = m;
+    }
+    return out;
+}
+
+}  // namespace
+
 SparseLidar remove_hidden_points(const SparseLidar &in, const VisibilityFilterOptions &o) {
     o.validate();
     if (!o.enabled || in.points.empty()) return in;
@@ -63,15 +106,18 @@ SparseLidar remove_hidden_points(const SparseLidar &in, const VisibilityFilterOp
     // The nearest point of every window at once: a max filter (dilation) of the sparse
     // disparity map, whose empty pixels (kInvalidDisparity < 0) never win.
     const int half_height = o.half_height > 0 ? o.half_height : auto_half_height(in);
-    const DisparityMap map = in.to_map();  // of several points on one pixel, the nearest
-    DisparityMap nearest;
-    cv::dilate(map, nearest,
-               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * o.half_width + 1, 2 * half_height + 1)),
-               cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kInvalidDisparity));
+    // Rows of the window visited per point against the map's pixels: a few points read only
+    // their windows' rows, a scan dilates the map.
+    const double visits = static_cast<double>(in.points.size()) * (2 * half_height + 1);
+    const std::vector<float> nearest = visits * 16 < static_cast<double>(in.width) * in.height
+                                           ? window_max_by_rows(in, o.half_width, half_height)
+                                           : window_max_by_dilation(in, o.half_width, half_height);
     SparseLidar out{in.width, in.height, {}};
     out.points.reserve(in.points.size());
-    for (const LidarPoint &p : in.points)
-        if (!(nearest(p.y, p.x) > p.disparity * (1.0f + o.ratio) + o.margin)) out.points.push_back(p);
+    for (size_t i = 0; i < in.points.size(); ++i) {
+        const LidarPoint &p = in.points[i];
+        if (!(nearest[i] > p.disparity * (1.0f + o.ratio) + o.margin)) out.points.push_back(p);
+    }
     return out;
 }
 

@@ -16,6 +16,7 @@
 #include <immintrin.h>
 #endif
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/cpu_dispatch.hpp"
@@ -24,7 +25,6 @@
 #include "core/limits.hpp"
 #include "core/maps.hpp"
 #include "core/rounding.hpp"
-#include "stereo/speckles.hpp"
 
 namespace lidarflow::stereo {
 namespace {
@@ -770,7 +770,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
             out[x] = static_cast<int16_t>(std::clamp(v16, 0, 16 * x));
         }
     }
-    if (opt.speckle_window > 0) filter_speckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range, T);
+    if (opt.speckle_window > 0) cv::filterSpeckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range);
     DisparityMap d = filled(h, w, kInvalidDisparity);
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y)

@@ -540,7 +540,10 @@ cv::Mat2f dis_flow(const DisPyramid &from, const DisPyramid &to, const DisOption
         l.gx = a.interior(a.gx);
         l.gy = a.interior(a.gy);
         l.f1 = b.padded;
-        if (!initial.empty()) {
+        if (fraction == 1 && !initial.empty()) {  // full size: a resize would copy, x / 1 is x
+            l.init_u = flow_uv[0];
+            l.init_v = flow_uv[1];
+        } else if (!initial.empty()) {
             cv::resize(flow_uv[0], l.init_u, a.image.size());
             l.init_u /= fraction;
             cv::resize(flow_uv[1], l.init_v, a.image.size());
@@ -573,6 +576,7 @@ cv::Mat2f dis_flow(const DisPyramid &from, const DisPyramid &to, const DisOption
     cv::Mat uv[] = {U[static_cast<size_t>(finest)], V[static_cast<size_t>(finest)]};
     cv::Mat merged, out;
     cv::merge(uv, 2, merged);
+    if (finest == 0) return merged;  // already the images' size and scale
     cv::resize(merged, out, from.size());
     out *= 1 << finest;
     return out;

@@ -103,8 +103,8 @@ SparseLidar remove_hidden_points(const SparseLidar &in, const VisibilityFilterOp
     o.validate();
     if (!o.enabled || in.points.empty()) return in;
     in.validate(in.width, in.height, "LiDAR visibility filter: points");
-    // The nearest point of every window at once: a max filter (dilation) of the sparse
-    // disparity map, whose empty pixels (kInvalidDisparity < 0) never win.
+    // The nearest point of every window: a max filter (dilation) of the sparse disparity map,
+    // whose empty pixels (kInvalidDisparity < 0) never win, or the same maxima from the points.
     const int half_height = o.half_height > 0 ? o.half_height : auto_half_height(in);
     // Rows of the window visited per point against the map's pixels: a few points read only
     // their windows' rows, a scan dilates the map.

@@ -748,7 +748,7 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
     cost.reset();
 
     // Winner takes all, uniqueness, left-right check, then the sub-pixel vertex.
-    cv::Mat1s disp16 = filled(h, w, static_cast<int16_t>(-16));
+    cv::Mat1s disp16(h, w);  // row_winners writes every pixel, the loop below every one again
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y) {
         const uint16_t *S = sum.get() + plane * y;
@@ -771,11 +771,10 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
         }
     }
     if (opt.speckle_window > 0) cv::filterSpeckles(disp16, -16, opt.speckle_window, 16 * opt.speckle_range);
-    DisparityMap d = filled(h, w, kInvalidDisparity);
+    DisparityMap d(h, w);
 #pragma omp parallel for num_threads(T) schedule(static)
     for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            if (disp16(y, x) >= 0) d(y, x) = disp16(y, x) / 16.0f;
+        for (int x = 0; x < w; ++x) d(y, x) = disp16(y, x) >= 0 ? disp16(y, x) / 16.0f : kInvalidDisparity;
     return d;
 }
 

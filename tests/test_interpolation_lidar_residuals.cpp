@@ -60,7 +60,7 @@ void equals_its_definition(void **) {
             const cv::Mat1f c = lidar_residual_correction(model_of, pts, res, radius, 0.05f);
             assert_int_equal(c.rows, size.height);
             assert_int_equal(c.cols, size.width);
-            // Row bands per thread: every pixel still adds its terms in point order.
+            // Bands of rows on any thread count: every pixel still adds its terms in point order.
             for (int threads : {2, 3, 7, 64}) {
                 const cv::Mat1f ct = lidar_residual_correction(model_of, pts, res, radius, 0.05f, threads);
                 assert_int_equal(std::memcmp(c.data, ct.data, c.total() * sizeof(float)), 0);

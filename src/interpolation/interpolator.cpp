@@ -1026,7 +1026,9 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
         number_pairs(sp.labels, graph.nearest, seeds.size(), o.num_threads, pair_of);
     // A graph neighbour's weight depends only on the edge: once per edge, not per candidate.
     std::vector<float> edge_weight(graph.weight.size());
-    for (size_t e = 0; e < edge_weight.size(); ++e) edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
+#pragma omp parallel for num_threads(o.num_threads) schedule(static)
+    for (int e = 0; e < static_cast<int>(edge_weight.size()); ++e)
+        edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
     std::vector<int> chosen(pairs.size() * kNumChannels);
     ParallelErrors choice_errors;  // the gathers allocate
 #pragma omp parallel num_threads(o.num_threads)

@@ -3,9 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/error.hpp"
-#include "core/threads.hpp"
 
 namespace lidarflow::interpolation {
 
@@ -27,14 +27,38 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
                 "lidar residuals: point outside the model map");
     const float r2 = radius * radius;
     const int reach = static_cast<int>(std::ceil(radius));
-    // Each point spreads over its window: ~(2 * reach + 1)^2 pixels a point. Each thread owns a
-    // band of rows and walks all points in order, so every pixel adds its terms in point order
-    // whatever the thread count.
-    for_each_band(h, std::max(1, std::min(threads, h)), [&](int, int y0, int y1) {
-        for (size_t i = 0; i < points.size(); ++i) {
+    // Each point spreads over its window: ~(2 * reach + 1)^2 pixels a point. Bands of rows, each
+    // with the list of the points that reach it in their order, go to the threads as they free
+    // up (a scan fills the lower rows only): every pixel adds its terms in point order whatever
+    // the thread count.
+    constexpr int kBandRows = 8;
+    const int bands = (h + kBandRows - 1) / kBandRows;
+    std::vector<int> start(static_cast<size_t>(bands) + 1, 0), members;
+    auto band_range = [&](const cv::Point &p, int &b0, int &b1) {
+        b0 = std::max(0, p.y - reach) / kBandRows;
+        b1 = std::min(h - 1, p.y + reach) / kBandRows;
+    };
+    for (const cv::Point &p : points) {
+        int b0, b1;
+        band_range(p, b0, b1);
+        for (int b = b0; b <= b1; ++b) ++start[static_cast<size_t>(b) + 1];
+    }
+    for (int b = 0; b < bands; ++b) start[static_cast<size_t>(b) + 1] += start[static_cast<size_t>(b)];
+    members.resize(static_cast<size_t>(start[static_cast<size_t>(bands)]));
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < points.size(); ++i) {
+        int b0, b1;
+        band_range(points[i], b0, b1);
+        for (int b = b0; b <= b1; ++b)
+            members[static_cast<size_t>(fill[static_cast<size_t>(b)]++)] = static_cast<int>(i);
+    }
+#pragma omp parallel for num_threads(std::max(1, std::min(threads, bands))) schedule(dynamic, 1)
+    for (int b = 0; b < bands; ++b) {
+        const int y0 = b * kBandRows, y1 = std::min(h, y0 + kBandRows);
+        for (int k = start[static_cast<size_t>(b)]; k < start[static_cast<size_t>(b) + 1]; ++k) {
+            const size_t i = static_cast<size_t>(members[static_cast<size_t>(k)]);
             const cv::Point p = points[i];
             const int ya = std::max(y0, p.y - reach), yb = std::min(y1 - 1, p.y + reach);
-            if (ya > yb) continue;
             const int model = model_of(p);
             const float r = residuals[i];
             for (int y = ya; y <= yb; ++y) {
@@ -55,7 +79,7 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
             const float *wr = weight[y];
             for (int x = 0; x < w; ++x) sr[x] = wr[x] > 0.0f ? sr[x] / (wr[x] + prior_weight) : 0.0f;
         }
-    });
+    }
     return sum;
 }
 

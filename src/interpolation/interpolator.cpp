@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -1027,8 +1028,8 @@ void write_output(const SeedSet &set, const Superpixels &sp, const Neighbourhood
     // A graph neighbour's weight depends only on the edge: once per edge, not per candidate.
     std::vector<float> edge_weight(graph.weight.size());
 #pragma omp parallel for num_threads(o.num_threads) schedule(static)
-    for (int e = 0; e < static_cast<int>(edge_weight.size()); ++e)
-        edge_weight[e] = std::exp(-graph.weight[e] / o.distance_sigma);
+    for (std::ptrdiff_t e = 0; e < static_cast<std::ptrdiff_t>(edge_weight.size()); ++e)
+        edge_weight[static_cast<size_t>(e)] = std::exp(-graph.weight[static_cast<size_t>(e)] / o.distance_sigma);
     std::vector<int> chosen(pairs.size() * kNumChannels);
     ParallelErrors choice_errors;  // the gathers allocate
 #pragma omp parallel num_threads(o.num_threads)

@@ -36,7 +36,6 @@ inline float confidence_at(const SceneFlowField &f, int y, int x) {
     return f.confidence.empty() ? 0.0f : f.confidence(y, x);
 }
 
-
 // Copies the match at (y, x) of src into dst and marks it valid.
 inline void keep_match(SceneFlowField &dst, const SceneFlowField &src, int y, int x) {
     dst.u(y, x) = src.u(y, x);

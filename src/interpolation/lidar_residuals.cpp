@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/bucket_lists.hpp"
 #include "core/error.hpp"
 
 namespace lidarflow::interpolation {
@@ -33,30 +34,15 @@ cv::Mat1f lidar_residual_correction(const cv::Mat1i &model_of, const std::vector
     // the thread count.
     constexpr int kBandRows = 8;
     const int bands = (h + kBandRows - 1) / kBandRows;
-    std::vector<size_t> start(static_cast<size_t>(bands) + 1, 0);
-    std::vector<size_t> members;
-    auto band_range = [&](const cv::Point &p, int &b0, int &b1) {
-        b0 = std::max(0, p.y - reach) / kBandRows;
-        b1 = std::min(h - 1, p.y + reach) / kBandRows;
-    };
-    for (const cv::Point &p : points) {
-        int b0, b1;
-        band_range(p, b0, b1);
-        for (int b = b0; b <= b1; ++b) ++start[static_cast<size_t>(b) + 1];
-    }
-    for (int b = 0; b < bands; ++b) start[static_cast<size_t>(b) + 1] += start[static_cast<size_t>(b)];
-    members.resize(start[static_cast<size_t>(bands)]);
-    std::vector<size_t> fill(start.begin(), start.end() - 1);
-    for (size_t i = 0; i < points.size(); ++i) {
-        int b0, b1;
-        band_range(points[i], b0, b1);
-        for (int b = b0; b <= b1; ++b) members[fill[static_cast<size_t>(b)]++] = i;
-    }
+    const BucketLists reaching = bucket_lists(points.size(), bands, [&](size_t i, int &b0, int &b1) {
+        b0 = std::max(0, points[i].y - reach) / kBandRows;
+        b1 = std::min(h - 1, points[i].y + reach) / kBandRows;
+    });
 #pragma omp parallel for num_threads(std::max(1, std::min(threads, bands))) schedule(dynamic, 1)
     for (int b = 0; b < bands; ++b) {
         const int y0 = b * kBandRows, y1 = std::min(h, y0 + kBandRows);
-        for (size_t k = start[static_cast<size_t>(b)]; k < start[static_cast<size_t>(b) + 1]; ++k) {
-            const size_t i = members[k];
+        for (size_t k = reaching.begin(b); k < reaching.end(b); ++k) {
+            const size_t i = reaching.items[k];
             const cv::Point p = points[i];
             const int ya = std::max(y0, p.y - reach), yb = std::min(y1 - 1, p.y + reach);
             const int model = model_of(p);

@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/bucket_lists.hpp"
 #include "core/error.hpp"
 #include "core/limits.hpp"
 
@@ -76,20 +78,19 @@ std::vector<float> window_max_by_dilation(const SparseLidar &in, int half_width,
 std::vector<float> window_max_by_rows(const SparseLidar &in, int half_width, int half_height) {
     const int h = in.height;
     const size_t n = in.points.size();
-    std::vector<int> first(static_cast<size_t>(h) + 1, 0);
-    for (const LidarPoint &p : in.points) ++first[static_cast<size_t>(p.y) + 1];
-    for (int y = 0; y < h; ++y) first[y + 1] += first[y];
+    const BucketLists by_row = bucket_lists(n, h, [&](size_t i, int &y0, int &y1) { y0 = y1 = in.points[i].y; });
     std::vector<std::pair<int, float>> row(n);  // (x, disparity) by row, then by x
-    std::vector<int> fill(first.begin(), first.end() - 1);
-    for (const LidarPoint &p : in.points) row[static_cast<size_t>(fill[p.y]++)] = {p.x, p.disparity};
-    for (int y = 0; y < h; ++y) std::sort(row.begin() + first[y], row.begin() + first[y + 1]);
+    for (size_t k = 0; k < n; ++k) row[k] = {in.points[by_row.items[k]].x, in.points[by_row.items[k]].disparity};
+    const auto first = [&](int y) { return row.begin() + static_cast<std::ptrdiff_t>(by_row.begin(y)); };
+    const auto last = [&](int y) { return row.begin() + static_cast<std::ptrdiff_t>(by_row.end(y)); };
+    for (int y = 0; y < h; ++y) std::sort(first(y), last(y));
     std::vector<float> out(n);
     for (size_t i = 0; i < n; ++i) {
         const LidarPoint &p = in.points[i];
         float m = kInvalidDisparity;  // what the dilation's border and empty pixels give
         for (int y = std::max(0, p.y - half_height); y <= std::min(h - 1, p.y + half_height); ++y) {
-            const auto end = row.begin() + first[y + 1];
-            auto q = std::lower_bound(row.begin() + first[y], end, std::pair<int, float>(p.x - half_width, -1e30f));
+            const auto end = last(y);
+            auto q = std::lower_bound(first(y), end, std::pair<int, float>(p.x - half_width, -1e30f));
             for (; q != end && q->first <= p.x + half_width; ++q) m = std::max(m, q->second);
         }
         out[i] = m;

@@ -3,7 +3,8 @@
 // sweeps (each pixel tries W, N, NW, NE forward and E, S, SE, SW backward, keeping the first
 // least candidate): the same distances and nearest seeds, bit for bit, ties included. And the
 // seed search's one-traversal pair of neighbour lists against two separate searches; the seed
-// links against every border pixel pair; the search order against a plain Dijkstra.
+// links against every border pixel pair; the search order against a plain Dijkstra; edge values
+// out of range refused.
 #include "test_support.hpp"
 
 #include <cstring>
@@ -194,6 +195,19 @@ void seed_links_are_the_least_border_paths(void **) {
         }
 }
 
+// A negative or non-finite edge value would make a step cost less than nothing: refused.
+void edge_values_out_of_range_are_refused(void **) {
+    const std::vector<cv::Point> seeds = {{1, 1}, {5, 3}};
+    for (const float bad : {-0.25f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        cv::Mat1f edges(6, 9, 0.5f);
+        edges(4, 7) = bad;
+        lidarflow::test::expect_error([&] { build_seed_graph(edges, seeds, 1.0f); },
+                                      lidarflow::ErrorCode::InvalidArgument);
+    }
+    const cv::Mat1f fine(6, 9, 0.5f);
+    assert_int_equal(build_seed_graph(fine, seeds, 1.0f).num_seeds(), 2);
+}
+
 // The search settles seeds by (distance, seed index), as a plain Dijkstra over (distance,
 // seed) pairs does; on a flat map many distances tie.
 void search_settles_in_dijkstra_order(void **) {
@@ -254,6 +268,7 @@ int main() {
         cmocka_unit_test(one_traversal_gives_both_neighbour_lists),
         cmocka_unit_test(seed_links_are_the_least_border_paths),
         cmocka_unit_test(search_settles_in_dijkstra_order),
+        cmocka_unit_test(edge_values_out_of_range_are_refused),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

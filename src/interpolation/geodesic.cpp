@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <vector>
@@ -32,9 +34,18 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     g.distance.setTo(std::numeric_limits<float>::infinity());
 
     // Half-costs per pixel so that a step p->q costs half(p) + half(q) (symmetric).
+    // Every step costs at least 1 (the links' keys below order the weights by their bits).
     cv::Mat1f half(h, w);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) half(y, x) = 0.5f * (1.0f + edge_gain * edges(y, x));
+    int in_range = 1;
+    for (int y = 0; y < h; ++y) {
+        const float *er = edges[y];
+        float *hr = half[y];
+        for (int x = 0; x < w; ++x) {
+            in_range &= er[x] >= 0.0f && er[x] <= std::numeric_limits<float>::max();
+            hr[x] = 0.5f * (1.0f + edge_gain * er[x]);
+        }
+    }
+    require(in_range, ErrorCode::InvalidArgument, "geodesic: edge map values must be finite and >= 0");
 
     for (int i = 0; i < n; ++i) {
         const cv::Point p = seeds[i];
@@ -133,105 +144,98 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
         }
     }
 
-    // Seed links across Voronoi borders: shortest seed-to-seed path through that border. Each
-    // band of rows links the border pixel pairs that start in it (a pixel and its right or lower
-    // neighbour), into its own slots per seed, sized by those pairs (an upper bound on the seed's
-    // distinct neighbours there); a seed's lists from all bands are then merged, the least
-    // weight of a neighbour kept: the least over every border pixel pair, as one scan gives.
-    const int T = std::max(1, std::min(threads, h));
-    struct BandLinks {
-        std::vector<int> cap, used;
-        std::vector<std::pair<int, float>> slots;
+    // Seed links across Voronoi borders: for each two touching cells, the shortest seed-to-seed
+    // path through a border pixel pair (a pixel and its right or lower neighbour). Each band of
+    // rows lists its pairs as (lower seed, higher seed, weight), a run of one pair along the scan
+    // as one entry with the least weight; the lists are bucketed by lower seed, each bucket
+    // sorted by higher seed keeping the least weight, and the adjacency is filled bucket by
+    // bucket in seed order, which leaves every seed's neighbours sorted by index. No step depends
+    // on the order of visits: the same graph on any thread count.
+    struct Link {
+        int a, b;  // a < b
+        float w;
     };
-    std::vector<BandLinks> bands(static_cast<size_t>(T));
-    ParallelErrors errors;  // the bands allocate
+    const int T = std::max(1, std::min(threads, h));
+    std::vector<std::vector<Link>> found(static_cast<size_t>(T));
+    ParallelErrors errors;  // the bands' lists grow
     for_each_band(h, T, [&](int band, int y0, int y1) {
         errors.run([&] {
-            BandLinks &L = bands[static_cast<size_t>(band)];
-            // visit(p, q, vertical) for each 4-neighbour pixel pair across a border, p in the band.
-            auto each_border = [&](auto &&visit) {
-                for (int y = y0; y < y1; ++y) {
-                    const int *lr = lab + static_cast<size_t>(y) * w;
-                    for (int x = 0; x < w; ++x) {
-                        if (x + 1 < w && lr[x + 1] != lr[x]) visit(y * w + x, y * w + x + 1, 0);
-                        if (y + 1 < h && lr[x + w] != lr[x]) visit(y * w + x, (y + 1) * w + x, 1);
-                    }
-                }
-            };
-            L.cap.assign(static_cast<size_t>(n) + 1, 0);
-            each_border([&](int p, int q, int) {
-                ++L.cap[lab[p] + 1];
-                ++L.cap[lab[q] + 1];
-            });
-            for (int i = 0; i < n; ++i) L.cap[i + 1] += L.cap[i];
-            L.slots.resize(static_cast<size_t>(L.cap[n]));
-            L.used.assign(static_cast<size_t>(n), 0);
-            // a's link to b, with the least weight so far (slots do not move: the pointer stays valid).
-            auto link = [&](int a, int b, float wgt) {
-                std::pair<int, float> *first = L.slots.data() + L.cap[a], *last = first + L.used[a];
-                for (std::pair<int, float> *e = first; e != last; ++e)
-                    if (e->first == b) {
-                        e->second = std::min(e->second, wgt);
-                        return e;
-                    }
-                *last = {b, wgt};
-                ++L.used[a];
-                return last;
-            };
-            // A border runs on along a row or a column: the pair of the previous pixel pair of the
-            // same direction is usually this one's, and its links need no search.
-            struct Recent {
-                int a = -1, b = -1;
-                std::pair<int, float> *ab = nullptr, *ba = nullptr;
-            } recent[2];
-            each_border([&](int p, int q, int vertical) {
+            std::vector<Link> &out = found[static_cast<size_t>(band)];
+            size_t recent[2] = {SIZE_MAX, SIZE_MAX};  // the last entry of each direction
+            const auto add = [&](int dir, int p, int q) {
+                const int a = std::min(lab[p], lab[q]), b = std::max(lab[p], lab[q]);
                 const float wgt = dist[p] + hc[p] + hc[q] + dist[q];
-                Recent &r = recent[vertical];
-                if (lab[p] == r.a && lab[q] == r.b) {
-                    r.ab->second = std::min(r.ab->second, wgt);
-                    r.ba->second = std::min(r.ba->second, wgt);
+                const size_t r = recent[dir];
+                if (r != SIZE_MAX && out[r].a == a && out[r].b == b) {
+                    out[r].w = std::min(out[r].w, wgt);
                     return;
                 }
-                r = {lab[p], lab[q], link(lab[p], lab[q], wgt), link(lab[q], lab[p], wgt)};
-            });
+                recent[dir] = out.size();
+                out.push_back({a, b, wgt});
+            };
+            for (int y = y0; y < y1; ++y) {
+                const int *lr = lab + static_cast<size_t>(y) * w;
+                const int row = y * w;
+                for (int x = 0; x + 1 < w; ++x)
+                    if (lr[x + 1] != lr[x]) add(0, row + x, row + x + 1);
+                if (y + 1 < h)
+                    for (int x = 0; x < w; ++x)
+                        if (lr[x + w] != lr[x]) add(1, row + x, row + x + w);
+            }
         });
     });
     errors.rethrow_if_any();
-    // Each seed's lists from all bands, sorted by neighbour index (so that the graph, and every
-    // query on it, is reproducible), a neighbour's least weight kept: first into slots sized by
-    // the bands' counts, then packed.
-    std::vector<int> upper(static_cast<size_t>(n) + 1, 0), count(static_cast<size_t>(n), 0);
-    for (int i = 0; i < n; ++i) {
-        int c = 0;
-        for (const BandLinks &L : bands) c += L.used[static_cast<size_t>(i)];
-        upper[i + 1] = upper[i] + c;
+    // Bucketed by lower seed (a counting sort, bands in order), each entry one key: the higher
+    // seed above the weight's bits, which order as the weights do (non-negative floats).
+    std::vector<int> first(static_cast<size_t>(n) + 1, 0);
+    for (const std::vector<Link> &band : found)
+        for (const Link &l : band) ++first[static_cast<size_t>(l.a) + 1];
+    for (int i = 0; i < n; ++i) first[i + 1] += first[i];
+    std::vector<uint64_t> bucket(static_cast<size_t>(first[n]));
+    {
+        std::vector<int> next(first.begin(), first.end() - 1);
+        for (const std::vector<Link> &band : found)
+            for (const Link &l : band) {
+                uint32_t bits;
+                std::memcpy(&bits, &l.w, sizeof bits);
+                bucket[static_cast<size_t>(next[l.a]++)] = static_cast<uint64_t>(l.b) << 32 | bits;
+            }
     }
-    std::vector<std::pair<int, float>> merged(static_cast<size_t>(upper[n]));
-#pragma omp parallel for num_threads(T) schedule(static)
+    std::vector<std::vector<Link>>().swap(found);
+    // Each bucket sorted, a neighbour's least weight (its first key) kept.
+    std::vector<int> kept(static_cast<size_t>(n), 0);
+#pragma omp parallel for num_threads(T) schedule(dynamic, 512)
     for (int i = 0; i < n; ++i) {
-        std::pair<int, float> *out = merged.data() + upper[i], *end = out;
-        for (const BandLinks &L : bands) {
-            const std::pair<int, float> *first = L.slots.data() + L.cap[i];
-            end = std::copy(first, first + L.used[static_cast<size_t>(i)], end);
-        }
+        uint64_t *out = bucket.data() + first[i], *end = bucket.data() + first[i + 1];
         std::sort(out, end);
         int k = 0;
-        for (const std::pair<int, float> *e = out; e != end; ++e)
-            if (k > 0 && out[k - 1].first == e->first)
-                out[k - 1].second = std::min(out[k - 1].second, e->second);
-            else
-                out[k++] = *e;
-        count[i] = k;
+        for (const uint64_t *e = out; e != end; ++e)
+            if (k == 0 || out[k - 1] >> 32 != *e >> 32) out[k++] = *e;
+        kept[i] = k;
+    }
+    // The adjacency: seed i's links to lower seeds come from the buckets before its own, in the
+    // order of those seeds, then its own bucket's to higher seeds: sorted without a sort.
+    std::vector<int> degree(static_cast<size_t>(n), 0);
+    for (int i = 0; i < n; ++i) {
+        degree[i] += kept[i];
+        for (int j = 0; j < kept[i]; ++j) ++degree[bucket[static_cast<size_t>(first[i] + j)] >> 32];
     }
     g.start.assign(static_cast<size_t>(n) + 1, 0);
-    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + count[i];
+    for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + degree[i];
     g.nbr.resize(static_cast<size_t>(g.start[n]));
     g.weight.resize(static_cast<size_t>(g.start[n]));
-#pragma omp parallel for num_threads(T) schedule(static)
+    std::vector<int> next(g.start.begin(), g.start.end() - 1);
     for (int i = 0; i < n; ++i)
-        for (int j = 0; j < count[i]; ++j) {
-            g.nbr[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].first;
-            g.weight[g.start[i] + j] = merged[static_cast<size_t>(upper[i] + j)].second;
+        for (int j = 0; j < kept[i]; ++j) {
+            const uint64_t key = bucket[static_cast<size_t>(first[i] + j)];
+            const int b = static_cast<int>(key >> 32);
+            const uint32_t bits = static_cast<uint32_t>(key);
+            float wgt;
+            std::memcpy(&wgt, &bits, sizeof wgt);
+            g.nbr[next[i]] = b;
+            g.weight[next[i]++] = wgt;
+            g.nbr[next[b]] = i;
+            g.weight[next[b]++] = wgt;
         }
     return g;
 }

@@ -25,8 +25,8 @@ struct SeedGraph {
 // Step cost between 4-neighbouring pixels p, q is 1 + edge_gain * (E(p) + E(q)) / 2, so a
 // path through flat image regions costs its length in pixels and crossing an edge costs more.
 // `seeds` are distinct pixels inside the map (at least one). The seed links on `threads` threads
-// (the same graph on any count). Throws Error(InvalidArgument) on an empty map, no seeds, a seed
-// outside the map, or edge_gain < 0 / non-finite.
+// (the same graph on any count). Throws Error(InvalidArgument) on an empty map, an edge value
+// below 0 or not finite, no seeds, a seed outside the map, or edge_gain < 0 / non-finite.
 SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> &seeds, float edge_gain,
                            int threads = 1);
 

@@ -220,22 +220,37 @@ Superpixels compute_superpixels(const cv::Mat &image, const SuperpixelOptions &o
             const int k0 = j0 * gx, k1 = j1 * gx;
             const int y0 = j0 == 0 ? 0 : row_start[static_cast<size_t>(j0 - 1)];
             const int y1 = row_start[static_cast<size_t>(std::min(gy, j1 + 1))];
+            // A run of one centre along the row adds in registers: the same additions in the
+            // same order as one pixel at a time, without each waiting on the last one's store.
+            // Adding +0 where a pixel has no disparity changes no sum (all start at +0).
             for (int y = y0; y < y1; ++y) {
                 const int *arow = assign[y];
-                for (int x = 0; x < w; ++x) {
+                const float *L = lab[0][y], *A = lab[1][y], *B = lab[2][y];
+                const float *D = depth ? dplane[y] : nullptr, *V = depth ? vplane[y] : nullptr;
+                for (int x = 0; x < w;) {
                     const int k = arow[x];
-                    if (k < k0 || k >= k1) continue;
-                    double *a = &acc[static_cast<size_t>(k) * kAcc];
-                    a[0] += lab[0](y, x);
-                    a[1] += lab[1](y, x);
-                    a[2] += lab[2](y, x);
-                    a[3] += x;
-                    a[4] += y;
-                    a[5] += 1.0;
-                    if (depth && vplane(y, x) > 0.0f) {
-                        a[6] += dplane(y, x);
-                        a[7] += 1.0;
+                    int end = x + 1;
+                    while (end < w && arow[end] == k) ++end;
+                    if (k >= k0 && k < k1) {
+                        double *a = &acc[static_cast<size_t>(k) * kAcc];
+                        double s[kAcc];
+                        std::copy(a, a + kAcc, s);
+                        for (int i = x; i < end; ++i) {
+                            s[0] += L[i];
+                            s[1] += A[i];
+                            s[2] += B[i];
+                            s[3] += i;
+                            s[4] += y;
+                            s[5] += 1.0;
+                            if (depth) {
+                                const bool valid = V[i] > 0.0f;
+                                s[6] += valid ? D[i] : 0.0f;
+                                s[7] += valid ? 1.0 : 0.0;
+                            }
+                        }
+                        std::copy(s, s + kAcc, a);
                     }
+                    x = end;
                 }
             }
         });

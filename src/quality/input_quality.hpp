@@ -62,8 +62,8 @@ std::string calibration_size_mismatch(cv::Size calibration, cv::Size image);
 // An image without content (black, saturated, uniform), or t1 bit-identical to t0 (frozen).
 std::string blank_frame(const Input &in);
 
-// Sparse left -> right matches (corners tracked with pyramidal Lucas-Kanade, kept where the
-// track back lands where it started), in full-resolution pixels.
+// Sparse left -> right matches (corners found on a half-size copy and tracked with pyramidal
+// Lucas-Kanade, kept where the track back lands where it started), in full-resolution pixels.
 struct StereoMatches {
     int count = 0;          // round-trip consistent matches
     int positive = 0;       // of them with disparity x_left - x_right >= 1 px

@@ -90,34 +90,8 @@ struct Data {
     double d_scale;  // flow_inlier / disparity_inlier: both residuals in "flow pixels"
 
     // The normal equations' upper triangle (21 entries of J^T J, row-major) and J^T r of the
-    // points ids[0 .. n), added into A and b.
-    void accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const {
-        for (size_t k = 0; k < n; ++k) {
-            const int i = ids[k];
-            const Prediction p = project(m, cam, x[i], y[i], d0[i]);
-            if (p.n[2] < kMinDepthRatio) continue;
-            const double iz = 1.0 / p.n[2];
-            // d(x', y', d1) / dn
-            const double gx[3] = {cam.fx * iz, 0, -cam.fx * p.n[0] * iz * iz};
-            const double gy[3] = {0, cam.fy * iz, -cam.fy * p.n[1] * iz * iz};
-            const double gd[3] = {0, 0, -d_scale * d0[i] * iz * iz};
-            const double r[3] = {p.xp - x[i] - u[i], p.yp - y[i] - v[i], d_scale * (p.d1 - d1[i])};
-            const double *g[3] = {gx, gy, gd};
-            for (int j = 0; j < 3; ++j) {
-                // dn / d(dw) = -[m]x, dn / d(dt) = w I
-                const double *q = g[j];
-                double J[6];
-                J[0] = q[2] * p.m[1] - q[1] * p.m[2];
-                J[1] = q[0] * p.m[2] - q[2] * p.m[0];
-                J[2] = q[1] * p.m[0] - q[0] * p.m[1];
-                J[3] = q[0] * p.w, J[4] = q[1] * p.w, J[5] = q[2] * p.w;
-                for (int a = 0, e = 0; a < 6; ++a) {
-                    b[a] -= J[a] * r[j];
-                    for (int c = a; c < 6; ++c, ++e) A[e] += J[a] * J[c];
-                }
-            }
-        }
-    }
+    // points ids[0 .. n), added into A and b (accumulate_normal).
+    void accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const;
 
     // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
     // The sums go by blocks of a fixed size, added in block order: the same on any thread count.
@@ -174,6 +148,54 @@ struct Data {
         return true;
     }
 };
+
+// Data::accumulate's sums. Every entry of A and b gets the same products added in the same order
+// as a loop over the upper triangle would add them, two entries per SSE2 operation (GCC's vector
+// extension: the same IEEE operations per element). Row a of the triangle is held as the column
+// pairs from the one holding column a on.
+using V2 = double __attribute__((vector_size(16)));
+// Index of entry (a, c), c >= a, in the row-major upper triangle.
+constexpr int triangle_index(int a, int c) { return a * 6 - a * (a - 1) / 2 + (c - a); }
+void accumulate_normal(const Data &data, const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) {
+    const StereoCamera &cam = data.cam;
+    V2 acc[6][3] = {};  // [row][column pair]; pairs left of the row's first stay unused
+    for (int a = 0; a < 6; ++a)
+        for (int c = a; c < 6; ++c) acc[a][c / 2][c % 2] = A[triangle_index(a, c)];
+    V2 rhs[3] = {{b[0], b[1]}, {b[2], b[3]}, {b[4], b[5]}};
+    for (size_t k = 0; k < n; ++k) {
+        const int i = ids[k];
+        const float x = data.x[i], y = data.y[i], d0 = data.d0[i];
+        const Prediction p = project(m, cam, x, y, d0);
+        if (p.n[2] < kMinDepthRatio) continue;
+        const double iz = 1.0 / p.n[2];
+        // d(x', y', d1) / dn
+        const double gx[3] = {cam.fx * iz, 0, -cam.fx * p.n[0] * iz * iz};
+        const double gy[3] = {0, cam.fy * iz, -cam.fy * p.n[1] * iz * iz};
+        const double gd[3] = {0, 0, -data.d_scale * d0 * iz * iz};
+        const double r[3] = {p.xp - x - data.u[i], p.yp - y - data.v[i], data.d_scale * (p.d1 - data.d1[i])};
+        const double *g[3] = {gx, gy, gd};
+        for (int j = 0; j < 3; ++j) {
+            // dn / d(dw) = -[m]x, dn / d(dt) = w I
+            const double *q = g[j];
+            double J[6];
+            J[0] = q[2] * p.m[1] - q[1] * p.m[2];
+            J[1] = q[0] * p.m[2] - q[2] * p.m[0];
+            J[2] = q[1] * p.m[0] - q[0] * p.m[1];
+            J[3] = q[0] * p.w, J[4] = q[1] * p.w, J[5] = q[2] * p.w;
+            const V2 jp[3] = {{J[0], J[1]}, {J[2], J[3]}, {J[4], J[5]}};
+            for (int h = 0; h < 3; ++h) rhs[h] -= jp[h] * r[j];
+            for (int a = 0; a < 6; ++a)
+                for (int h = a / 2; h < 3; ++h) acc[a][h] += J[a] * jp[h];
+        }
+    }
+    for (int a = 0; a < 6; ++a)
+        for (int c = a; c < 6; ++c) A[triangle_index(a, c)] = acc[a][c / 2][c % 2];
+    for (int a = 0; a < 6; ++a) b[a] = rhs[a / 2][a % 2];
+}
+
+void Data::accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const {
+    accumulate_normal(*this, m, ids, n, A, b);
+}
 
 // A fixed set of matches as arrays, so that a model's inliers are counted in a loop the
 // compiler vectorises.

@@ -18,7 +18,6 @@
 #include "core/gray.hpp"
 #include "core/limits.hpp"
 #include "core/log.hpp"
-#include "core/parallel_errors.hpp"
 #include "core/pixels.hpp"
 #include "core/points3d.hpp"
 #include "core/rounding.hpp"
@@ -370,32 +369,9 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
 
     t = Clock::now();
     r.guide1 = guide1;
-    // Each image is prepared for the flow search once: both directions read it, and a stream's
-    // t0 image is the previous pair's t1.
-    const bool same_settings = r.reused_t0 && t0_reuse->pyramid && t0_reuse->pyramid->size() == g0.size() &&
-                               t0_reuse->pyramid->finest_scale() == opt.flow.finest_scale &&
-                               t0_reuse->pyramid->patch_size() == opt.flow.patch_size;
-    std::shared_ptr<const flow::DisPyramid> pyr0;
-    bool prepared = false;
-    const auto prepare_images = [&] {
-        pyr0 = same_settings ? t0_reuse->pyramid : prepared_for_search(g0, opt.flow);
-        r.pyramid1 = prepared_for_search(g1, opt.flow);
-        prepared = true;
-    };
     if (opt.carry_lidar && guide1.points.empty() && !guide0.points.empty()) {
-        // The carried points' pose and the flow search's image pyramids, both serial and
-        // independent, side by side.
-        ParallelErrors errors;
-#pragma omp parallel num_threads(2) if (opt.threads > 1)
-        {
-            const int id = omp_get_thread_num(), team = omp_get_num_threads();
-            if (id == 0) errors.run([&] {
-                const motion::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
-                if (pose.valid) r.guide1 = carry_points(guide0, pose, 1);
-            });
-            if (id == 1 || team == 1) errors.run(prepare_images);
-        }
-        errors.rethrow_if_any();
+        const motion::EgoMotion pose = pose_from_t0(tracks, r.sgm0, camera);
+        if (pose.valid) r.guide1 = carry_points(guide0, pose, opt.threads);
     }
     r.sgm1 = disparity(in.left1, in.right1, r.guide1);
     r.seconds_stereo += seconds_since(t);
@@ -422,7 +398,14 @@ DecoupledResult match_decoupled(const MatchInput &in, const MatchingOptions &opt
     const cv::Mat3f objects = prior && same_step ? source->object_motion : cv::Mat3f();
     cv::Mat2f prior0 = rigid_flow(motion, r.sgm0, opt.threads);
     add_object_motion(motion, r.sgm0, objects, prior0, opt.threads);
-    if (!prepared) prepare_images();
+    // Each image is prepared for the flow search once: both directions read it, and a stream's
+    // t0 image is the previous pair's t1.
+    const bool same_settings = r.reused_t0 && t0_reuse->pyramid && t0_reuse->pyramid->size() == g0.size() &&
+                               t0_reuse->pyramid->finest_scale() == opt.flow.finest_scale &&
+                               t0_reuse->pyramid->patch_size() == opt.flow.patch_size;
+    const std::shared_ptr<const flow::DisPyramid> pyr0 =
+        same_settings ? t0_reuse->pyramid : prepared_for_search(g0, opt.flow);
+    r.pyramid1 = prepared_for_search(g1, opt.flow);
     const cv::Mat2f flow0 = choose_rigid(
         g0, g1, dense_inverse_search(g0, g1, opt.flow, opt.threads, prior0.clone(), {pyr0.get(), r.pyramid1.get()}),
         prior0, r.sgm0, rc, opt.threads);

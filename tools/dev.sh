@@ -28,8 +28,9 @@
 #   tools/dev.sh lidar-cost [PRESET] [ROUNDS]  build, then time the KITTI pairs of
 #                            $LIDARFLOW_KITTI_DIR with the 88-point and the full-scan LiDAR, the two
 #                            bench_pipeline runs alternated ROUNDS times (default 4) at PRESET
-#                            (default realtime); prints each round's pair times, their ratio and
-#                            the ratio of their means (what the scan costs over 88 points)
+#                            (default realtime); prints each round's pair times, their ratio, the
+#                            ratio of their means (what the scan costs over 88 points) and of
+#                            their medians (less moved by a round another process slowed)
 #   tools/dev.sh bridge-rate [PRESET] [HZ] [LOOPS]  build, then play the KITTI frames of
 #                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
 #                            2), LOOPS times (default 10), through the bridge at PRESET (default
@@ -200,6 +201,10 @@ lidar_cost() {
         printf '%-6s %-14s %-14s %s\n' "$r" "$sparse" "$dense" "$(awk -v a="$sparse" -v b="$dense" 'BEGIN { printf "%.3f", b / a }')"
     done
     printf '%s' "$all" | awk '{ a += $1; b += $2 } END { printf "means  %-14.4f %-14.4f %.3f\n", a / NR, b / NR, b / a }'
+    median() { sort -n | awk '{ v[NR] = $1 } END { printf "%.4f", NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+    sparse="$(printf '%s' "$all" | awk '{ print $1 }' | median)"
+    dense="$(printf '%s' "$all" | awk '{ print $2 }' | median)"
+    printf '%-6s %-14s %-14s %s\n' median "$sparse" "$dense" "$(awk -v a="$sparse" -v b="$dense" 'BEGIN { printf "%.3f", b / a }')"
 }
 
 case "${1:-}" in

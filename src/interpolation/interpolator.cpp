@@ -54,6 +54,11 @@ struct Seeds {
     std::vector<float> z1, zu, zv, d0_match;
     std::vector<uint8_t> has_motion, is_lidar, is_hint;
     int size() const { return static_cast<int>(pos.size()); }
+    void reserve(size_t n) {
+        pos.reserve(n);
+        for (auto *a : {&x, &y, &u, &v, &d0, &d1, &z1, &zu, &zv, &d0_match}) a->reserve(n);
+        for (auto *a : {&has_motion, &is_lidar, &is_hint}) a->reserve(n);
+    }
     void push(int px, int py, float uu, float vv, float dd0, float dd1, bool motion, bool lidar,
               bool hint = false) {
         pos.emplace_back(px, py);
@@ -172,6 +177,8 @@ Seeds collect_seeds(const SceneFlowField &m, const SparseLidar &lidar, bool use_
     seed_at.create(h, w);
     seed_at.setTo(-1);
     Seeds s;
+    // Room for every match and point up front: a scan's ~30k seeds grew fourteen arrays by doubling.
+    s.reserve(static_cast<size_t>(cv::countNonZero(m.valid)) + (use_lidar ? lidar.points.size() : 0));
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             if (!m.valid(y, x)) continue;

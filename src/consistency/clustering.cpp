@@ -54,9 +54,10 @@ LIDARFLOW_AVX2_CLONES void add_links(const Planes &a, const Planes &b, int db, i
                             *__restrict bd1 = b.d1 + db;
     const uint8_t *__restrict avalid = a.valid, *__restrict bvalid = b.valid + db;
     for (int x = x0; x < x1; ++x) {
-        const bool j = (avalid[x] != 0) & (bvalid[x] != 0) & (std::fabs(au[x] - bu[x]) <= flow_step) &
-                       (std::fabs(av[x] - bv[x]) <= flow_step) & (std::fabs(ad0[x] - bd0[x]) <= disp_step) &
-                       (std::fabs(ad1[x] - bd1[x]) <= disp_step);
+        // Bitwise on ints, not short-circuit: no branch in the loop.
+        const int j = int{avalid[x] != 0} & int{bvalid[x] != 0} & int{std::fabs(au[x] - bu[x]) <= flow_step} &
+                      int{std::fabs(av[x] - bv[x]) <= flow_step} & int{std::fabs(ad0[x] - bd0[x]) <= disp_step} &
+                      int{std::fabs(ad1[x] - bd1[x]) <= disp_step};
         links[x] = static_cast<uint8_t>(links[x] | (j ? bit : 0));
     }
 }

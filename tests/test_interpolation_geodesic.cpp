@@ -195,7 +195,7 @@ void seed_links_are_the_least_border_paths(void **) {
         }
 }
 
-// A negative or non-finite edge value would make a step cost less than nothing: refused.
+// An edge value below 0 or not finite gives a step a cost below 1, infinite or not a number: refused.
 void edge_values_out_of_range_are_refused(void **) {
     const std::vector<cv::Point> seeds = {{1, 1}, {5, 3}};
     for (const float bad : {-0.25f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/branchless.hpp"
+#include "core/bucket_lists.hpp"
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
 #include "core/threads.hpp"
@@ -185,28 +186,28 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
         });
     });
     errors.rethrow_if_any();
-    // Bucketed by lower seed (a counting sort, bands in order), each entry one key: the higher
-    // seed above the weight's bits, which order as the weights do (non-negative floats).
-    std::vector<int> first(static_cast<size_t>(n) + 1, 0);
-    for (const std::vector<Link> &band : found)
-        for (const Link &l : band) ++first[static_cast<size_t>(l.a) + 1];
-    for (int i = 0; i < n; ++i) first[i + 1] += first[i];
-    std::vector<uint64_t> bucket(static_cast<size_t>(first[n]));
-    {
-        std::vector<int> next(first.begin(), first.end() - 1);
-        for (const std::vector<Link> &band : found)
-            for (const Link &l : band) {
-                uint32_t bits;
-                std::memcpy(&bits, &l.w, sizeof bits);
-                bucket[static_cast<size_t>(next[l.a]++)] = static_cast<uint64_t>(l.b) << 32 | bits;
-            }
+    // Bucketed by lower seed (bands in order), each entry one key: the higher seed above the
+    // weight's bits, which order as the weights do (non-negative floats).
+    std::vector<Link> links;
+    for (std::vector<Link> &band : found) {
+        links.insert(links.end(), band.begin(), band.end());
+        std::vector<Link>().swap(band);
     }
-    std::vector<std::vector<Link>>().swap(found);
+    const BucketLists by_lower =
+        bucket_lists(links.size(), n, [&](size_t i, int &lo, int &hi) { lo = hi = links[i].a; });
+    std::vector<uint64_t> bucket(links.size());
+    for (size_t k = 0; k < links.size(); ++k) {
+        const Link &l = links[by_lower.items[k]];
+        uint32_t bits;
+        std::memcpy(&bits, &l.w, sizeof bits);
+        bucket[k] = static_cast<uint64_t>(l.b) << 32 | bits;
+    }
+    std::vector<Link>().swap(links);
     // Each bucket sorted, a neighbour's least weight (its first key) kept.
     std::vector<int> kept(static_cast<size_t>(n), 0);
 #pragma omp parallel for num_threads(T) schedule(dynamic, 512)
     for (int i = 0; i < n; ++i) {
-        uint64_t *out = bucket.data() + first[i], *end = bucket.data() + first[i + 1];
+        uint64_t *out = bucket.data() + by_lower.begin(i), *end = bucket.data() + by_lower.end(i);
         std::sort(out, end);
         int k = 0;
         for (const uint64_t *e = out; e != end; ++e)
@@ -218,7 +219,7 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     std::vector<int> degree(static_cast<size_t>(n), 0);
     for (int i = 0; i < n; ++i) {
         degree[i] += kept[i];
-        for (int j = 0; j < kept[i]; ++j) ++degree[bucket[static_cast<size_t>(first[i] + j)] >> 32];
+        for (int j = 0; j < kept[i]; ++j) ++degree[bucket[by_lower.begin(i) + static_cast<size_t>(j)] >> 32];
     }
     g.start.assign(static_cast<size_t>(n) + 1, 0);
     for (int i = 0; i < n; ++i) g.start[i + 1] = g.start[i] + degree[i];
@@ -227,7 +228,7 @@ SeedGraph build_seed_graph(const cv::Mat1f &edges, const std::vector<cv::Point> 
     std::vector<int> next(g.start.begin(), g.start.end() - 1);
     for (int i = 0; i < n; ++i)
         for (int j = 0; j < kept[i]; ++j) {
-            const uint64_t key = bucket[static_cast<size_t>(first[i] + j)];
+            const uint64_t key = bucket[by_lower.begin(i) + static_cast<size_t>(j)];
             const int b = static_cast<int>(key >> 32);
             const uint32_t bits = static_cast<uint32_t>(key);
             float wgt;

@@ -90,7 +90,7 @@ struct Data {
     double d_scale;  // flow_inlier / disparity_inlier: both residuals in "flow pixels"
 
     // The normal equations' upper triangle (21 entries of J^T J, row-major) and J^T r of the
-    // points ids[0 .. n), added into A and b (accumulate_normal).
+    // points ids[0 .. n), added into A and b (defined below the struct).
     void accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const;
 
     // One damped Gauss-Newton step on the points ids[0 .. n); false when the system is singular.
@@ -149,30 +149,29 @@ struct Data {
     }
 };
 
-// Data::accumulate's sums. Every entry of A and b gets the same products added in the same order
-// as a loop over the upper triangle would add them, two entries per SSE2 operation (GCC's vector
+// Data::accumulate: every entry of A and b gets the same products added in the same order as a
+// loop over the upper triangle would add them, two entries per SSE2 operation (GCC's vector
 // extension: the same IEEE operations per element). Row a of the triangle is held as the column
 // pairs from the one holding column a on.
 using V2 = double __attribute__((vector_size(16)));
 // Index of entry (a, c), c >= a, in the row-major upper triangle.
 constexpr int triangle_index(int a, int c) { return a * 6 - a * (a - 1) / 2 + (c - a); }
-void accumulate_normal(const Data &data, const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) {
-    const StereoCamera &cam = data.cam;
+void Data::accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const {
     V2 acc[6][3] = {};  // [row][column pair]; pairs left of the row's first stay unused
     for (int a = 0; a < 6; ++a)
         for (int c = a; c < 6; ++c) acc[a][c / 2][c % 2] = A[triangle_index(a, c)];
     V2 rhs[3] = {{b[0], b[1]}, {b[2], b[3]}, {b[4], b[5]}};
     for (size_t k = 0; k < n; ++k) {
         const int i = ids[k];
-        const float x = data.x[i], y = data.y[i], d0 = data.d0[i];
-        const Prediction p = project(m, cam, x, y, d0);
+        const float xi = x[i], yi = y[i], d0i = d0[i];
+        const Prediction p = project(m, cam, xi, yi, d0i);
         if (p.n[2] < kMinDepthRatio) continue;
         const double iz = 1.0 / p.n[2];
         // d(x', y', d1) / dn
         const double gx[3] = {cam.fx * iz, 0, -cam.fx * p.n[0] * iz * iz};
         const double gy[3] = {0, cam.fy * iz, -cam.fy * p.n[1] * iz * iz};
-        const double gd[3] = {0, 0, -data.d_scale * d0 * iz * iz};
-        const double r[3] = {p.xp - x - data.u[i], p.yp - y - data.v[i], data.d_scale * (p.d1 - data.d1[i])};
+        const double gd[3] = {0, 0, -d_scale * d0i * iz * iz};
+        const double r[3] = {p.xp - xi - u[i], p.yp - yi - v[i], d_scale * (p.d1 - d1[i])};
         const double *g[3] = {gx, gy, gd};
         for (int j = 0; j < 3; ++j) {
             // dn / d(dw) = -[m]x, dn / d(dt) = w I
@@ -191,10 +190,6 @@ void accumulate_normal(const Data &data, const Rigid &m, const int *ids, size_t 
     for (int a = 0; a < 6; ++a)
         for (int c = a; c < 6; ++c) A[triangle_index(a, c)] = acc[a][c / 2][c % 2];
     for (int a = 0; a < 6; ++a) b[a] = rhs[a / 2][a % 2];
-}
-
-void Data::accumulate(const Rigid &m, const int *ids, size_t n, double A[21], double b[6]) const {
-    accumulate_normal(*this, m, ids, n, A, b);
 }
 
 // A fixed set of matches as arrays, so that a model's inliers are counted in a loop the

@@ -269,6 +269,7 @@ SparseLidar lidar_in_use(const EstimatorOptions &o, const SparseLidar &lidar) {
 }
 
 EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) const {
+    const auto t_quality = Clock::now();  // the checks, the points in use and the reuse test included
     check_frame(input);
     ReleaseWorkersAtEnd release_at_end;
     const int threads = frame_threads(options_);
@@ -295,7 +296,6 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
         cache->first_.reset();
         cache->last_prepared_ = first != nullptr;
     }
-    const auto t_quality = Clock::now();
     quality::Report verdict = assess_inputs(frame, first ? &first->check : nullptr, threads);
     const double quality_seconds = seconds_since(t_quality);
     EstimatorResult r;

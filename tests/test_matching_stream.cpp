@@ -235,6 +235,41 @@ void estimator_first_frame_prepared(void **) {
     }
 }
 
+// A stream's pair takes the previous pair's t1 frame, at the processing size, as its t0 only
+// when the full-size images and points are the same, and its result is the lone pair's.
+void estimator_stream_reuses_previous_frame(void **) {
+    const auto &s = scene();
+    pipeline::EstimatorOptions o = pipeline::EstimatorOptions::preset("realtime");
+    o.threads = 2;
+    o.keep_stage_fields = true;
+    const pipeline::Estimator est(o);
+    assert_true(o.processing_scale < 1.0);
+    const pipeline::FrameInput fwd{s.left0, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}, 100000};
+    pipeline::FrameInput rev{s.left1, s.right1, s.left0, s.right0, s.lidar1, s.lidar0, s.camera, {}, 100000};
+    const auto same_result = [](const pipeline::EstimatorResult &a, const pipeline::EstimatorResult &b) {
+        for (auto f : {&pipeline::EstimatorResult::forward, &pipeline::EstimatorResult::backward,
+                       &pipeline::EstimatorResult::after_fb, &pipeline::EstimatorResult::dense})
+            if (!same_field(a.*f, b.*f)) return false;
+        return true;
+    };
+    pipeline::StreamCache cache;
+    est.run(fwd, &cache);
+    assert_false(cache.last_reused_frame());
+    assert_true(same_result(est.run(rev, &cache), est.run(rev)));
+    assert_true(cache.last_reused_frame());
+    // One pixel of the next t0 differs from the t1 kept: the frame is reduced again.
+    cv::Mat changed = s.left0.clone();
+    changed.at<cv::Vec3b>(changed.rows / 2, changed.cols / 2)[1] ^= 0x40;
+    const pipeline::FrameInput next{changed, s.right0, s.left1, s.right1, s.lidar0, s.lidar1, s.camera, {}, 100000};
+    assert_true(same_result(est.run(next, &cache), est.run(next)));
+    assert_false(cache.last_reused_frame());
+    // So is one point more or less.
+    rev.lidar0.points.pop_back();
+    est.run(next, &cache);
+    assert_true(same_result(est.run(rev, &cache), est.run(rev)));
+    assert_false(cache.last_reused_frame());
+}
+
 void presets(void **) {
     // "paper" is the field defaults (the paper's design); the others are measured from it.
     const pipeline::EstimatorOptions d = pipeline::EstimatorOptions::preset("paper");
@@ -269,6 +304,7 @@ int main() {
         cmocka_unit_test(run_both_equals_single_runs),
         cmocka_unit_test(estimator_stream_cache_keeps_results),
         cmocka_unit_test(estimator_first_frame_prepared),
+        cmocka_unit_test(estimator_stream_reuses_previous_frame),
         cmocka_unit_test(presets),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);

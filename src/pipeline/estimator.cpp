@@ -289,14 +289,18 @@ EstimatorResult Estimator::run(const FrameInput &input, StreamCache *cache) cons
                            input.step_us};
     report_hidden(input.lidar0, frame.lidar0, "t0");
     report_hidden(input.lidar1, frame.lidar1, "t1");
-    // The prepared first frame serves only the pair whose t0 it is (and is spent either way).
+    // The prepared first frame, or the previous pair's t1, serves only the pair whose t0 it is
+    // (and is spent either way).
     std::shared_ptr<const PreparedFrame> first;
     if (cache) {
         if (cache->first_ && cache->first_->is_t0_of(frame)) first = cache->first_;
-        cache->first_.reset();
         cache->last_prepared_ = first != nullptr;
+        cache->last_reused_frame_ = !first && cache->previous_t1_ && cache->previous_t1_->is_t0_of(frame);
+        if (cache->last_reused_frame_) first = cache->previous_t1_;
+        cache->first_.reset();
+        cache->previous_t1_.reset();
     }
-    quality::Report verdict = assess_inputs(frame, first ? &first->check : nullptr, threads);
+    quality::Report verdict = assess_inputs(frame, first && first->check ? &*first->check : nullptr, threads);
     const double quality_seconds = seconds_since(t_quality);
     EstimatorResult r;
     try {
@@ -383,8 +387,18 @@ EstimatorResult Estimator::run_scaled(const FrameInput &frame, StreamCache *cach
     auto t = Clock::now();
     const StereoFrame *t0 = first && first->small.left.size() == size ? &first->small : nullptr;
     const FrameInput small = downscale_frame(frame, size, t0, threads);
+    // A stream's next pair starts from this t1 frame: it keeps the frame at the processing size.
+    std::shared_ptr<PreparedFrame> t1;
+    if (cache && cache->lag_ == 0) {
+        t1 = std::make_shared<PreparedFrame>();
+        t1->left = frame.left1.clone();
+        t1->right = frame.right1.clone();
+        t1->lidar = frame.lidar1;
+        t1->small = {small.left1, small.right1, small.lidar1};
+    }
     const double t_down = seconds_since(t);
     EstimatorResult r = drop_stage_fields(run_native(small, cache, threads, work));
+    if (t1) cache->previous_t1_ = std::move(t1);
     r.timings.insert(r.timings.begin(), {"downscale", t_down});
     t = Clock::now();
     const EdgeGuide edges0(small.left0, frame.left0, options_.upscale_edge_step);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -180,11 +181,13 @@ bool lagged_prior_in_pace(double t0, double t1, double later_t0, int lag);
 
 // What Estimator::prepare_first keeps of a stream's first frame for its pair besides stage 1's
 // part: the frame itself (copies, to know it again as the pair's t0), its stereo checks, its
-// images and points at the processing size, and stage 4's work on its left image.
+// images and points at the processing size, and stage 4's work on its left image. A stream's
+// run keeps the same of its t1 frame for the next pair, without the checks and stage 4's work
+// (computed for a frame only as a t0).
 struct PreparedFrame {
     cv::Mat left, right;
     SparseLidar lidar;  // the points in use (lidar_in_use)
-    quality::StereoCheck check;
+    std::optional<quality::StereoCheck> check;
     StereoFrame small;  // at the processing size; empty images when the frame runs at its own
     std::shared_ptr<const interpolation::ImageWork> stage4;  // null when the run stops before stage 4
     // Whether `frame`'s t0 images and points (those in use) are this frame's.
@@ -195,6 +198,7 @@ class StreamCache {
 public:
     void clear() {
         first_.reset();
+        previous_t1_.reset();
         t1_.reset();
         spare_.reset();
         stereo_t1_.reset();
@@ -206,6 +210,8 @@ public:
     bool last_reused() const { return last_reused_; }
     // Whether the last run through this cache took prepare_first's frame as its t0.
     bool last_prepared() const { return last_prepared_; }
+    // Whether the last run took the previous run's t1 frame at the processing size as its t0's.
+    bool last_reused_frame() const { return last_reused_frame_; }
 
     // Frames in flight (docs/ARCHITECTURE.md): a pool computes pair k while pairs k-lag+1 ..
     // k-1 are still running, so pair k's motion prior comes from pair k-lag, carried lag steps.
@@ -227,8 +233,10 @@ private:
     std::shared_ptr<matching::StereoFeatures> spare_;  // storage for the next t1 pair
     std::shared_ptr<const matching::DecoupledStereo> stereo_t1_;  // decoupled design: t1 disparity
     std::shared_ptr<const PreparedFrame> first_;  // prepare_first's, until the next run
+    std::shared_ptr<const PreparedFrame> previous_t1_;  // the last run's t1 frame, until the next run
     bool last_reused_ = false;
     bool last_prepared_ = false;
+    bool last_reused_frame_ = false;
 };
 
 class Estimator {

@@ -375,6 +375,74 @@ void chain_on_consistent_field(void **) {
     assert_true(r.seconds.total >= 0.0 && r.seconds.sgm == 0.0);
 }
 
+bool identical(const SceneFlowField &a, const SceneFlowField &b) {
+    for (const auto plane : {&SceneFlowField::u, &SceneFlowField::v, &SceneFlowField::d0, &SceneFlowField::d1,
+                             &SceneFlowField::confidence})
+        if (cv::norm(a.*plane, b.*plane, cv::NORM_INF) != 0) return false;
+    return cv::norm(a.valid, b.valid, cv::NORM_INF) == 0;
+}
+
+// Without the clustering after 2a (after_sgm_field false) stage 2b, its clustering and stage 3
+// give the same fields bit for bit, on random patchworks of small and large regions whose
+// round trips fail at random, with LiDAR pixels inside them, for every LiDAR rule and grid.
+void clustering_after_2a_changes_nothing_later(void **) {
+    const int w = 48, h = 36;
+    int removed_by_2a = 0, removed_by_2b = 0;
+    for (int seed = 1; seed <= 12; ++seed) {
+        cv::RNG rng(static_cast<uint64_t>(seed));
+        SceneFlowField f = SceneFlowField::zeros(w, h), b = SceneFlowField::zeros(w, h);
+        for (int k = 0; k < 60; ++k) {
+            const int bw = rng.uniform(1, 12), bh = rng.uniform(1, 10);
+            const int x0 = rng.uniform(0, w - bw + 1), y0 = rng.uniform(0, h - bh + 1);
+            // Values on a coarse lattice: touching regions join or stay apart at random.
+            const float u = static_cast<float>(rng.uniform(-3, 4)), v = static_cast<float>(rng.uniform(-2, 3));
+            const float d0 = static_cast<float>(rng.uniform(10, 14)), d1 = d0 - static_cast<float>(rng.uniform(0, 2));
+            fill_block(f, x0, y0, bw, bh, u, v, d0, d1);
+        }
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!f.valid(y, x)) continue;
+                f.confidence(y, x) = rng.uniform(0.f, 1.f);
+                const int qx = x + static_cast<int>(f.u(y, x)), qy = y + static_cast<int>(f.v(y, x));
+                if (qx < 0 || qy < 0 || qx >= w || qy >= h || rng.uniform(0.f, 1.f) < 0.3f) continue;
+                set_match(b, qx, qy, -f.u(y, x), -f.v(y, x), f.d1(y, x), f.d0(y, x));
+            }
+        std::vector<LidarPoint> points;
+        for (int k = 0; k < 10; ++k) {
+            const int x = rng.uniform(0, w), y = rng.uniform(0, h);
+            if (f.valid(y, x)) points.push_back({x, y, f.d0(y, x)});
+        }
+        const SparseLidar lidar = lidar_at(w, h, {});  // image-only
+        SparseLidar with_points = lidar;
+        with_points.points = points;
+        const DisparityMap sgm = f.d0.clone();
+        for (const SparseLidar *l : {&lidar, static_cast<const SparseLidar *>(&with_points)})
+            for (const bool keep_clusters : {true, false})
+                for (const bool keep_unreliable : {true, false})
+                    for (const int radius : {0, 1}) {
+                        ConsistencyOptions opt;
+                        opt.support_window = 1;
+                        opt.cluster_min_size = 12;
+                        opt.keep_lidar_clusters = keep_clusters;
+                        opt.keep_unreliable_lidar = keep_unreliable;
+                        opt.fb_search_radius = radius;
+                        opt.grid_step = 1 + seed % 2;
+                        const ConsistencyResult with = run_consistency(f, b, sgm, *l, opt);
+                        opt.after_sgm_field = false;
+                        const ConsistencyResult without = run_consistency(f, b, sgm, *l, opt);
+                        assert_true(without.after_sgm.u.empty());
+                        assert_true(identical(with.after_fb, without.after_fb));
+                        assert_true(identical(with.sparse, without.sparse));
+                        assert_true(cv::norm(with.lidar_motion_unreliable, without.lidar_motion_unreliable,
+                                             cv::NORM_INF) == 0);
+                        removed_by_2a += with.counts.after_sgm_clusters < with.counts.after_sgm_check;
+                        removed_by_2b += with.counts.after_fb_check < with.counts.after_sgm_clusters;
+                    }
+    }
+    // The fields had small regions for the first clustering and round trips for 2b to fail.
+    assert_true(removed_by_2a > 100 && removed_by_2b > 100);
+}
+
 }  // namespace
 
 int main() {
@@ -389,6 +457,7 @@ int main() {
         cmocka_unit_test(sparsify_prefers_matches_inside_consistent_regions),
         cmocka_unit_test(lidar_pixels_survive_every_filter),
         cmocka_unit_test(chain_on_consistent_field),
+        cmocka_unit_test(clustering_after_2a_changes_nothing_later),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
 }

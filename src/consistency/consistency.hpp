@@ -26,7 +26,8 @@
 
 namespace lidarflow::consistency {
 
-// Valid matches after each step (the input count is after the LiDAR d0 is put in).
+// Valid matches after each step (the input count is after the LiDAR d0 is put in);
+// after_sgm_clusters 0 and after_fb_check counted on 2a's output without after_sgm_field.
 struct ConsistencyCounts {
     long long input = 0, after_sgm_check = 0, after_sgm_clusters = 0, after_fb_check = 0,
               after_fb_clusters = 0, sparse = 0;
@@ -41,7 +42,7 @@ struct ConsistencyTimings {
 
 struct ConsistencyResult {
     DisparityMap sgm;          // reference disparity of stage 2a
-    SceneFlowField after_sgm;  // 2a + clustering   (Table I "Disp+LiDAR")
+    SceneFlowField after_sgm;  // 2a + clustering   (Table I "Disp+LiDAR"; empty without after_sgm_field)
     SceneFlowField after_fb;   // 2b + clustering   (Table I "disp+LiDAR & backward+LiDAR")
     SceneFlowField sparse;     // stage 3           (Table I "Spars+LiDAR")
     cv::Mat1f fb_error;        // ForwardBackwardResult::error

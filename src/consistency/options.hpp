@@ -64,6 +64,11 @@ struct ConsistencyOptions {
     bool keep_lidar_clusters = true;   // ... unless they hold a trusted LiDAR pixel
     bool cluster_8_neighbours = true;  // false: 4-neighbourhood
     int grid_step = 1;                 // matches sit on a grid of this step (neighbours are step px apart)
+    // Whether to compute ConsistencyResult::after_sgm, the clustering after 2a (Table I's
+    // "Disp+LiDAR"). 2b, its clustering and stage 3 are the same bit for bit without it: 2b only
+    // removes matches, each by its own round trip, so the clustering after 2b removes every
+    // region the first one would have (a region joins no neighbour it did not join before).
+    bool after_sgm_field = true;
 
     // --- stage 3 ---
     int sparsify_block = 3;  // side of the non-overlapping blocks; 1 disables sparsification

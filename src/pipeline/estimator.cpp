@@ -57,6 +57,7 @@ interpolation::InterpolationOptions interpolation_options(const EstimatorOptions
 consistency::ConsistencyOptions consistency_options(const EstimatorOptions &o, int threads) {
     consistency::ConsistencyOptions co = o.consistency;
     co.threads = threads;
+    co.after_sgm_field = o.keep_stage_fields;  // nobody else reads it
     return co;
 }
 

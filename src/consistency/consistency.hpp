@@ -9,10 +9,10 @@
 //
 // Image-only mode (the SFF++ comparison rows): pass a SparseLidar without points.
 // The steps are 2a sgm_check -> remove_small_clusters (with opt.after_sgm_field) -> 2b
-// forward_backward_check -> remove_small_clusters -> 3 sparsify. Every valid LiDAR pixel of the forward field survives
-// all of them, carrying the LiDAR disparity as its d0, unless its (u, v, d1) fail stage 2b
-// (see ConsistencyOptions::keep_unreliable_lidar; such pixels are listed in
-// lidar_motion_unreliable either way).
+// forward_backward_check -> remove_small_clusters -> 3 sparsify. Every valid LiDAR pixel of
+// the forward field survives all of them, carrying the LiDAR disparity as its d0, unless its
+// (u, v, d1) fail stage 2b (see ConsistencyOptions::keep_unreliable_lidar; such pixels are
+// listed in lidar_motion_unreliable either way).
 #include <opencv2/core.hpp>
 
 #include "consistency/clustering.hpp"

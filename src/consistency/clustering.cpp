@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
 #include "core/threads.hpp"
+#include "core/union_find.hpp"
 
 namespace lidarflow::consistency {
 
@@ -22,15 +23,6 @@ namespace {
 // Union-find over pixel indices whose root is the smallest index of its set, with path halving.
 // A pixel is linked only to earlier ones, so a set made inside one band of rows keeps every
 // parent inside that band: bands may link at the same time.
-int find(std::vector<int> &parent, int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-}
-void unite(std::vector<int> &parent, int a, int b) {
-    a = find(parent, a);
-    b = find(parent, b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-}
 
 // The links of row y to its earlier neighbours (left, and up-left, up, up-right with 8
 // neighbours; left and up with 4), one bit each per pixel, computed for a whole row at a time
@@ -101,9 +93,9 @@ ClusterResult detail::remove_small_clusters(const SceneFlowField &field, const L
             for (int k = 0; k < 4; ++k) {
                 if (!(l & (1 << k))) continue;
                 if (parent[static_cast<size_t>(i)] == i)
-                    parent[static_cast<size_t>(i)] = find(parent, nb[k]);
+                    parent[static_cast<size_t>(i)] = find_root(parent, nb[k]);
                 else
-                    unite(parent, i, nb[k]);
+                    unite_roots(parent, i, nb[k]);
             }
         }
     };

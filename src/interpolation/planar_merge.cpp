@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/union_find.hpp"
 #include "interpolation/piecewise_model.hpp"
 
 namespace lidarflow::interpolation {
@@ -85,11 +86,6 @@ Superpixels relabelled(const Superpixels &sp, const std::vector<int> &label, int
     return m;
 }
 
-int root_of(std::vector<int> &parent, int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-}
-
 }  // namespace
 
 Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv::Point> &pos,
@@ -128,7 +124,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
         for (int k = sp.adj_start[s]; k < sp.adj_start[s + 1]; ++k) {
             const int t = sp.adj[k];
             if (t < s) continue;  // each pair once, in label order
-            const int rs = root_of(parent, s), rt = root_of(parent, t);
+            const int rs = find_root(parent, s), rt = find_root(parent, t);
             if (rs == rt || area[rs] + area[rt] > o.max_area) continue;
             // A region is all unseen or all planar (unseen superpixels hold no points).
             if (!(unseen[s] && unseen[t])) {
@@ -147,7 +143,7 @@ Superpixels merge_planar_superpixels(const Superpixels &sp, const std::vector<cv
     std::vector<int> label(n, -1);
     int count = 0;
     for (int s = 0; s < n; ++s) {
-        const int r = root_of(parent, s);
+        const int r = find_root(parent, s);
         if (label[r] < 0) label[r] = count++;
         label[s] = label[r];
     }

@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/parallel_errors.hpp"
 #include "core/threads.hpp"
+#include "core/union_find.hpp"
 
 namespace lidarflow::interpolation {
 namespace {
@@ -97,17 +98,10 @@ int connected_labels(const cv::Mat1i &in, int min_size, cv::Mat1i &out) {
     const int *lab = src.ptr<int>();
     // parent[i] <= i; a root is its component's first pixel.
     std::vector<int> parent(n);
-    auto find = [&parent](int i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];  // path halving
-        return i;
-    };
     for (int y = 0; y < h; ++y)
         for (int x = 0, i = y * w; x < w; ++x, ++i) {
-            parent[i] = x > 0 && lab[i] == lab[i - 1] ? find(i - 1) : i;
-            if (y > 0 && lab[i] == lab[i - w]) {
-                const int a = find(i), b = find(i - w);
-                parent[std::max(a, b)] = std::min(a, b);
-            }
+            parent[i] = x > 0 && lab[i] == lab[i - 1] ? find_root(parent, i - 1) : i;
+            if (y > 0 && lab[i] == lab[i - w]) unite_roots(parent, i, i - w);
         }
     // In raster order a pixel's parent, an earlier pixel, already points at its root.
     std::vector<int> size(n, 0);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "consistency/consistency.hpp"
+#include "synth_fields.hpp"
 #include "consistency_fixtures.hpp"  // last: brings cmocka
 
 using namespace lidarflow;
@@ -375,13 +376,6 @@ void chain_on_consistent_field(void **) {
     assert_true(r.seconds.total >= 0.0 && r.seconds.sgm == 0.0);
 }
 
-bool identical(const SceneFlowField &a, const SceneFlowField &b) {
-    for (const auto plane : {&SceneFlowField::u, &SceneFlowField::v, &SceneFlowField::d0, &SceneFlowField::d1,
-                             &SceneFlowField::confidence})
-        if (cv::norm(a.*plane, b.*plane, cv::NORM_INF) != 0) return false;
-    return cv::norm(a.valid, b.valid, cv::NORM_INF) == 0;
-}
-
 // Without the clustering after 2a (after_sgm_field false) stage 2b, its clustering and stage 3
 // give the same fields bit for bit, on random patchworks of small and large regions whose
 // round trips fail at random, with LiDAR pixels inside them, for every LiDAR rule and grid.
@@ -431,8 +425,8 @@ void clustering_after_2a_changes_nothing_later(void **) {
                         opt.after_sgm_field = false;
                         const ConsistencyResult without = run_consistency(f, b, sgm, *l, opt);
                         assert_true(without.after_sgm.u.empty());
-                        assert_true(identical(with.after_fb, without.after_fb));
-                        assert_true(identical(with.sparse, without.sparse));
+                        assert_true(test::same_field(with.after_fb, without.after_fb));
+                        assert_true(test::same_field(with.sparse, without.sparse));
                         assert_true(cv::norm(with.lidar_motion_unreliable, without.lidar_motion_unreliable,
                                              cv::NORM_INF) == 0);
                         removed_by_2a += with.counts.after_sgm_clusters < with.counts.after_sgm_check;

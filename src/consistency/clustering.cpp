@@ -20,9 +20,9 @@ namespace lidarflow::consistency {
 
 namespace {
 
-// Union-find over pixel indices whose root is the smallest index of its set, with path halving.
-// A pixel is linked only to earlier ones, so a set made inside one band of rows keeps every
-// parent inside that band: bands may link at the same time.
+// Pixels are united by core/union_find.hpp. A pixel is linked only to earlier ones, so a set
+// made inside one band of rows keeps every parent inside that band: bands may link at the same
+// time.
 
 // The links of row y to its earlier neighbours (left, and up-left, up, up-right with 8
 // neighbours; left and up with 4), one bit each per pixel, computed for a whole row at a time

@@ -37,7 +37,7 @@ ConsistencyResult run_checked(const SceneFlowField &forward, const SceneFlowFiel
     // Intermediate fields (~10 MB each on KITTI) live only as long as the next step needs them:
     // this stage's high-water mark stays resident in a process that keeps its freed heap.
     Clock::time_point t;
-    SceneFlowField checked_sgm;
+    SceneFlowField after_2a;  // what 2b reads: 2a's output, clustered where after_sgm is kept
     {
         // LiDAR d0 is exact (the matcher may not move it); put it in so that every output carries it.
         SceneFlowField input = forward;
@@ -50,24 +50,23 @@ ConsistencyResult run_checked(const SceneFlowField &forward, const SceneFlowFiel
         r.counts.input = count_valid(input);
 
         t = Clock::now();
-        checked_sgm = detail::sgm_check(input, sgm, lidar, checked);
+        after_2a = detail::sgm_check(input, sgm, lidar, checked);
         r.seconds.sgm_check = seconds_since(t);
-        r.counts.after_sgm_check = count_valid(checked_sgm);
+        r.counts.after_sgm_check = count_valid(after_2a);
         input = SceneFlowField();
 
         if (opt.after_sgm_field) {
             t = Clock::now();
-            r.after_sgm = detail::remove_small_clusters(checked_sgm, lidar, cv::Mat1b(), checked).field;
+            r.after_sgm = detail::remove_small_clusters(after_2a, lidar, cv::Mat1b(), checked).field;
             r.seconds.sgm_clusters = seconds_since(t);
             r.counts.after_sgm_clusters = count_valid(r.after_sgm);
-            checked_sgm = SceneFlowField();
+            after_2a = r.after_sgm;  // shares its planes
         }
     }
 
     t = Clock::now();
-    ForwardBackwardResult fb =
-        detail::forward_backward_check(opt.after_sgm_field ? r.after_sgm : checked_sgm, backward, lidar, checked);
-    checked_sgm = SceneFlowField();
+    ForwardBackwardResult fb = detail::forward_backward_check(after_2a, backward, lidar, checked);
+    after_2a = SceneFlowField();
     r.seconds.fb_check = seconds_since(t);
     r.counts.after_fb_check = count_valid(fb.field);
     r.counts.lidar_motion_unreliable = cv::countNonZero(fb.lidar_motion_unreliable);

@@ -55,8 +55,11 @@ int main(int argc, char **argv) try {
     std::printf("bench_downscale: %d thread(s), median of %d, one image\n", threads, runs);
     std::printf("%-7s %-10s %-9s %12s %14s %7s  %s\n", "image", "size", "to", "cv::resize", "area_downscale",
                 "ratio", "bytes");
-    for (const auto &[name, image] : images)
+    for (const auto &entry : images)
         for (double scale : {0.55, 0.65}) {
+            // Plain names, not a structured binding: the lambdas below capture them (C++17).
+            const std::string &name = entry.first;
+            const cv::Mat &image = entry.second;
             const cv::Size size = pipeline::scaled_size(image.cols, image.rows, scale);
             cv::Mat a, b;
             const double theirs = bench::median_seconds(runs, [&] { cv::resize(image, a, size, 0, 0, cv::INTER_AREA); });

@@ -240,11 +240,13 @@ bool detail::predict_rigid(const EgoMotion &em, float x, float y, float d0, floa
     return p.n[2] >= kMinDepthRatio;
 }
 
+namespace {
+
 // predict_rigid for n points: project()'s operations in its order per point (the same doubles),
 // on plain arrays so that the loop vectorises (its divisions dominate one point at a time).
 LIDARFLOW_AVX2_CLONES
-void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
-                                float *u, float *v) {
+void predict_rigid_many_cloned(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
+                               float *u, float *v) {
     const double *R = em.R, *t = em.t;
     const double r00 = R[0], r01 = R[1], r02 = R[2], r10 = R[3], r11 = R[4], r12 = R[5], r20 = R[6], r21 = R[7],
                  r22 = R[8], t0 = t[0], t1 = t[1], t2 = t[2];
@@ -262,6 +264,15 @@ void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float
         u[i] = static_cast<float>(fx * n0 / n2 + cx - px);
         v[i] = static_cast<float>(fy * n1 / n2 + cy - py);
     }
+}
+
+}  // namespace
+
+// Clang before 16 gives a cloned function's dispatcher another symbol than the one other
+// translation units call: the clones stay internal, behind a plain call.
+void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
+                                float *u, float *v) {
+    predict_rigid_many_cloned(em, x, y, d0, n, d1, u, v);
 }
 
 EgoMotion EgoMotion::inverse() const {

@@ -311,9 +311,12 @@ void threads_follow_the_idle_cpus(void **) {
     for (int i = 0; i < cpus; ++i) {
         const pid_t pid = fork();
         assert_true(pid >= 0);
-        if (pid == 0)
-            for (;;) {  // spins until killed
-            }
+        if (pid == 0) {
+            // Spins until killed. The volatile store keeps the loop: a side-effect-free infinite
+            // loop is undefined behaviour, which clang removes, and the child would run on.
+            volatile unsigned long spin = 0;
+            for (;;) spin = spin + 1;
+        }
         busy.push_back(pid);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

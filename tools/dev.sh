@@ -245,9 +245,7 @@ case "${1:-}" in
         packages=(clang-14 libclang-rt-14-dev libomp-14-dev); deps  # sanitizer runtimes, OpenMP
         CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$root/build-tsan" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
             -DLIDARFLOW_SANITIZE_THREAD=ON -DLIDARFLOW_BUILD_BENCH=OFF >/dev/null
-        # The library and the suite: CI's clang build of the core (the fuzz step compiles the
-        # bridge's decoders and the readers with clang too). Everything else gets its clang build
-        # from build-clang; in CI it is built twice by gcc already.
+        # The library and the suite only: CI builds the whole tree with clang in test-asan.
         cmake --build "$root/build-tsan" -j "$jobs" --target lidarflow test_capi_concurrent test_capi_log \
             test_capi_frames_in_flight
         # OpenMP stays at one thread per handle in the suite: libgomp is not instrumented, so its

@@ -268,7 +268,7 @@ void predict_rigid_many_cloned(const EgoMotion &em, const float *x, const float 
 
 }  // namespace
 
-// Clang before 16 gives a cloned function's dispatcher another symbol than the one other
+// Clang 14 gives a cloned function's dispatcher another symbol than the one other
 // translation units call: the clones stay internal, behind a plain call.
 void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
                                 float *u, float *v) {

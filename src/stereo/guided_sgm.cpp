@@ -267,7 +267,7 @@ LIDARFLOW_V3_CLONES void row_costs_cloned(bool ternary, const uint64_t *dl, cons
 
 }  // namespace
 
-// Clang before 16 gives a cloned function's dispatcher another symbol than the one other
+// Clang 14 gives a cloned function's dispatcher another symbol than the one other
 // translation units call (the tests call this one): the clones stay internal, behind a plain call.
 void detail::row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
                        const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap, bool simd,

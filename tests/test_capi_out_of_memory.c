@@ -19,14 +19,7 @@
 #include <unistd.h>
 
 #include "capi_scene.h"
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define LF_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
-#define LF_TEST_SANITIZED 1
-#endif
-#endif
+#include "sanitized.h"
 
 #define W 192
 #define H 128

@@ -22,6 +22,7 @@
 #include "capi_scene.h"
 #include "flow_reference.hpp"
 #include "lidarflow_status_t.h"
+#include "sanitized.h"
 
 // cmocka 1.1 has no extern "C" guard of its own; included last because of its macros.
 // Assertion failures longjmp past destructors: a failing case may leak, a passing one does not.
@@ -32,18 +33,6 @@ extern "C" {
 #include <stdint.h>
 #include <cmocka.h>
 }
-
-// Built with AddressSanitizer (gcc's macro, or clang's feature test).
-#if defined(__SANITIZE_ADDRESS__)
-#define MEMQ_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define MEMQ_ASAN 1
-#endif
-#endif
-#ifndef MEMQ_ASAN
-#define MEMQ_ASAN 0
-#endif
 
 using namespace lidarflow::bridge;
 
@@ -1530,7 +1519,7 @@ void test_soak(void **) {
     // keeps freed blocks resident (measured 409 -> 423 MiB there); LeakSanitizer checks leaks
     // in that build instead.
     assert_true(rss_warm > 0 && rss_end > 0);
-#if !MEMQ_ASAN
+#ifndef LF_TEST_SANITIZED
     assert_true(rss_end - rss_warm < 8L * 1024 * 1024);
 #endif
 }

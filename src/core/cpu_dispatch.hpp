@@ -4,6 +4,9 @@
 // one (GCC function multiversioning). For plain loops the compiler vectorises: AVX2 without FMA
 // performs the same IEEE operations per element, so both versions give the same results.
 // Not on function templates (clang 14 clones none): a cloned function inlines the template.
+// Only on functions of internal linkage: clang 14 gives a clone set's dispatcher another symbol
+// than the one other translation units call, so an entry point used elsewhere is a plain
+// function that calls the clones.
 // The pick runs in an IFUNC resolver during relocation, before a ThreadSanitizer runtime is
 // up, and crashes there: TSan builds keep only the baseline version.
 #if defined(__SANITIZE_THREAD__)

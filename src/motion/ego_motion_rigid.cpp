@@ -268,8 +268,8 @@ void predict_rigid_many_cloned(const EgoMotion &em, const float *x, const float 
 
 }  // namespace
 
-// Clang 14 gives a cloned function's dispatcher another symbol than the one other
-// translation units call: the clones stay internal, behind a plain call.
+// Other translation units' entry to the cloned kernel (core/cpu_dispatch.hpp: clones stay
+// internal).
 void detail::predict_rigid_many(const EgoMotion &em, const float *x, const float *y, const float *d0, int n, float *d1,
                                 float *u, float *v) {
     predict_rigid_many_cloned(em, x, y, d0, n, d1, u, v);

@@ -267,8 +267,7 @@ LIDARFLOW_V3_CLONES void row_costs_cloned(bool ternary, const uint64_t *dl, cons
 
 }  // namespace
 
-// Clang 14 gives a cloned function's dispatcher another symbol than the one other
-// translation units call (the tests call this one): the clones stay internal, behind a plain call.
+// The tests' entry to the cloned kernel (core/cpu_dispatch.hpp: clones stay internal).
 void detail::row_costs(bool ternary, const uint64_t *dl, const uint64_t *dr, const uint64_t *bl, const uint64_t *br,
                        const int16_t *prior16, const uint8_t *weight, int w, int D, int slope16, int cap, bool simd,
                        uint8_t *cost) {
@@ -719,9 +718,9 @@ DisparityMap guided_sgm(const cv::Mat &left, const cv::Mat &right, const SparseL
             p16[x] = pw[x] ? static_cast<int16_t>(round_to_int(std::clamp(pd[x], 0.0f, 2047.0f) * 16)) : 0;
         const uint64_t *dl = cl.dark.ptr<uint64_t>(y), *dr = cr.dark.ptr<uint64_t>(y);
         uint8_t *out = cost.get() + plane * y;
-        detail::row_costs(ternary, dl, dr, ternary ? cl.bright.ptr<uint64_t>(y) : nullptr,
-                          ternary ? cr.bright.ptr<uint64_t>(y) : nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D,
-                          slope16, opt.lidar_cap, true, out);
+        row_costs_cloned(ternary, dl, dr, ternary ? cl.bright.ptr<uint64_t>(y) : nullptr,
+                         ternary ? cr.bright.ptr<uint64_t>(y) : nullptr, p16, prior.weight.ptr<uint8_t>(y), w, D,
+                         slope16, opt.lidar_cap, true, out);
     }
 
     const Penalties pen{static_cast<uint16_t>(opt.p1), static_cast<uint16_t>(opt.p2), opt.adaptive_p2};

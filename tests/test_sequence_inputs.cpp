@@ -64,9 +64,10 @@ const fs::path &drive() {
 }
 
 fs::path copy_of_drive(const std::string &label) {
+    const fs::path &from = drive();  // first: it sets base_dir(), whose empty path was the working folder
     const fs::path to = base_dir() / label;
     fs::remove_all(to);
-    fs::copy(drive(), to, fs::copy_options::recursive);
+    fs::copy(from, to, fs::copy_options::recursive);
     return to;
 }
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
-// The CLI's input boundary (issue 13 items 1, 4, 7, 8), end to end: oversized images (65535x2
-// PNGs crashed `lidarflow run` inside SGM), files in no image format it reads, calibrations whose derived
-// baseline overflows (exit 0 before), frame ids that would leave the layout, and output folders
-// that cannot be written: each a clear message and a non-zero exit, found before any estimation.
+// The CLI's input boundary, end to end: oversized images (65535x2 PNGs crashed `lidarflow run`
+// inside SGM), files in no image format it reads, calibrations whose derived baseline overflows
+// (exit 0 before), frame ids that would leave the layout, and output folders that cannot be
+// written: each a clear message and a non-zero exit, found before any estimation.
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -54,7 +54,8 @@ void run_refuses_oversized_and_unknown_images(void **) {
     const fs::path wide = dir / "wide.png";
     assert_true(cv::imwrite(wide.string(), cv::Mat(2, 65535, CV_8UC1, cv::Scalar(9))));
     const std::string four = " --left0 " + q(wide) + " --right0 " + q(wide) + " --left1 " + q(wide) + " --right1 " + q(wide);
-    expect_failure(run("run" + four + " --out " + q(dir / "out"), dir), 2, "is 65535x2, larger than 16384 px per side");
+    // An input, not the command line: exit 1 (2 is for a bad command line).
+    expect_failure(run("run" + four + " --out " + q(dir / "out"), dir), 1, "is 65535x2, larger than 16384 px per side");
 
     // A format outside PNG, JPEG, BMP and PNM (here a GIF's signature) never reaches a decoder,
     // whatever its name.
@@ -104,6 +105,23 @@ void kitti_commands_check_ids_and_output_folder_first(void **) {
                    1, "cannot create output folder");
 }
 
+// A library error of the same code (InvalidArgument) is the command line's before the command
+// reads its inputs (exit 2) and the inputs' after (exit 1), as --help's exit statuses say.
+void library_errors_exit_by_phase(void **) {
+    const fs::path dir = test::scratch_dir("cli_limits_phase");
+    const fs::path root = synth_frame(dir);
+    expect_failure(run("kitti --root " + q(root) + " --ids 000000 --set interpolation.num_neighbors=0", dir), 2,
+                   "interpolation.num_neighbors");
+    expect_failure(run(run_args(root) + " --set interpolation.num_neighbors=0 --out " + q(dir / "out"), dir), 2,
+                   "interpolation.num_neighbors");
+    // Four black images: nothing to match, which the estimator finds once it runs.
+    const fs::path black = dir / "black.png";
+    assert_true(cv::imwrite(black.string(), cv::Mat(64, 160, CV_8UC3, cv::Scalar::all(0))));
+    const std::string four = " --left0 " + q(black) + " --right0 " + q(black) + " --left1 " + q(black) +
+                             " --right1 " + q(black);
+    expect_failure(run("run" + four + " --no-lidar --out " + q(dir / "out"), dir), 1, "no valid match");
+}
+
 }  // namespace
 
 int main() {
@@ -112,6 +130,7 @@ int main() {
         cmocka_unit_test(run_refuses_a_calibration_whose_baseline_overflows),
         cmocka_unit_test(run_checks_its_id_and_output_folder_first),
         cmocka_unit_test(kitti_commands_check_ids_and_output_folder_first),
+        cmocka_unit_test(library_errors_exit_by_phase),
     };
     return cmocka_run_group_tests_name("cli_limits", tests, nullptr, nullptr);
 }

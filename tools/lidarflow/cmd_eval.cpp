@@ -46,6 +46,7 @@ int run_eval(int argc, char **argv) {
     require(!ids.empty(), ErrorCode::InvalidArgument, "eval: no disp_0/*_10.png frames in " + est);
     for (const std::string &id : ids) io::KittiLayout::check_id(id);
 
+    lidarflow::cli::inputs_begin();
     const eval::KittiEvaluation ev = eval::evaluate_kitti(root, est, ids, opt, args.str("lidar", ""));
     std::printf("%s", eval::format_tables(ev).c_str());
     if (args.has("confidence")) {

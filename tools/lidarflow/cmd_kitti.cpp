@@ -14,6 +14,8 @@
 #include "core/error.hpp"
 #include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
+#include "io/kitti_layout.hpp"
+#include "pipeline/estimator.hpp"
 #include "pipeline/option_assignments.hpp"
 
 namespace lidarflow::cli {
@@ -125,6 +127,9 @@ int run_kitti_command(int argc, char **argv) {
             "kitti: --placements must be in [1, 1000]");
     require(placements == 1 || o.lidar.protocol == eval::LidarProtocol::Paper, ErrorCode::InvalidArgument,
             "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
+    (void)pipeline::Estimator(o.estimator);  // checks the options before any frame is read
+    for (const std::string &id : o.ids) io::KittiLayout::check_id(id);
+    inputs_begin();
 
     // Each line has the time elapsed and, once a frame is done, the time left (frames of every
     // seed and placement together); piped, one line per step.

@@ -141,6 +141,7 @@ int run(int argc, char **argv) {
     opt.last_stage = pipeline::parse_stage(args.str("stage", "interpolation"));
     pipeline::apply_option_assignments(opt, args.list("set"));
     const pipeline::Estimator estimator(opt);  // checks the options before any file is read
+    inputs_begin();
 
     detail("run: preset %s, %d thread(s), up to stage %s, LiDAR %s, output name %s\n",
            args.str("preset", "default").c_str(), opt.threads, pipeline::stage_name(opt.last_stage),

@@ -59,6 +59,7 @@ int run_sample_lidar(int argc, char **argv) {
     require(!ids.empty(), ErrorCode::InvalidArgument, "sample-lidar: no frames in " + in.root);
     for (const std::string &id : ids) io::KittiLayout::check_id(id);
     io::prepare_output_folder(out.root);
+    inputs_begin();
 
     std::vector<FrameRow> rows;
     for (const std::string &id : ids) {

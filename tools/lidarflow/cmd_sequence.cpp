@@ -241,6 +241,7 @@ int run_sequence(int argc, char **argv) {
     require(last - first <= kMaxPairs, ErrorCode::Io,
             "sequence: " + root.string() + " spans frames " + std::to_string(first) + ".." + std::to_string(last) +
                 ", more than " + std::to_string(kMaxPairs) + " pairs (choose a part with --frames A:B)");
+    inputs_begin();
     io::prepare_output_folder(out);
     const std::set<long> present(listing.frames.begin(), listing.frames.end());
     std::vector<long> in_range;

@@ -41,6 +41,7 @@ int birds_eye(const Args &args, const std::string &out) {
     o.max_speed = args.number("max", 0);
     require(o.max_speed >= 0, ErrorCode::InvalidArgument, "viz: --max must be >= 0 (0 = automatic)");
     const std::string path = args.str("points", "");
+    inputs_begin();
     const std::vector<io::CloudPoint> cloud = io::read_ply(path);
     require(!cloud.empty(), ErrorCode::InvalidArgument, "viz: " + path + " holds no points");
     const cv::Mat picture = viz::birds_eye_view(cloud, o);
@@ -81,6 +82,7 @@ int run_viz(int argc, char **argv) {
     const double max = args.number("max", 0);
     require(max >= 0, ErrorCode::InvalidArgument, "viz: --max must be >= 0 (0 = automatic)");
     const bool legend = !args.flag("no-legend");
+    inputs_begin();
 
     cv::Mat picture;
     cv::Mat1b valid;  // where the picture shows the result (for --image)

@@ -16,6 +16,13 @@ struct Command {
 
 std::vector<Command> &command_registry();
 
+// A command calls this once its command line is checked, before it reads its inputs. main's exit
+// status for a lidarflow::Error of code InvalidArgument depends on it: before, a value given on
+// the command line was out of range (2); after, the inputs were (an image too large, a frame with
+// nothing to match: 1), as --help's exit statuses say. Main thread only.
+void inputs_begin();
+bool reading_inputs();
+
 struct CommandRegistrar {
     explicit CommandRegistrar(const Command &c) { command_registry().push_back(c); }
 };

@@ -23,6 +23,12 @@ std::vector<Command> &command_registry() {
     static std::vector<Command> registry;
     return registry;
 }
+
+namespace {
+bool g_reading_inputs = false;  // one command per process
+}  // namespace
+void inputs_begin() { g_reading_inputs = true; }
+bool reading_inputs() { return g_reading_inputs; }
 }  // namespace lidarflow::cli
 
 namespace {
@@ -127,7 +133,7 @@ int main(int argc, char **argv) {
             return 2;
         } catch (const lidarflow::Error &e) {
             std::fprintf(stderr, "lidarflow %s: error: %s\n", c.name, e.what());
-            return e.code() == lidarflow::ErrorCode::InvalidArgument ? 2 : 1;
+            return e.code() == lidarflow::ErrorCode::InvalidArgument && !lidarflow::cli::reading_inputs() ? 2 : 1;
         } catch (const std::exception &e) {
             std::fprintf(stderr, "lidarflow %s: error: %s\n", c.name, e.what());
             return 1;

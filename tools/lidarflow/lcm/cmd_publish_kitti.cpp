@@ -254,6 +254,7 @@ int run(int argc, char **argv) {
             "publish-kitti: --start-delay must be in [0, 60]");
     const Channels ch{args.str("stereo-channel", "LIDARFLOW_STEREO"), args.str("lidar-channel", "LIDARFLOW_LIDAR"),
                       args.str("calib-channel", "LIDARFLOW_CALIB")};
+    inputs_begin();
 
     // Loading and publishing can take minutes (--rate, --loop): lines with elapsed time and ETA,
     // piped at most one every 2 s besides the first and the last.

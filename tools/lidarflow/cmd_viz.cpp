@@ -82,6 +82,9 @@ int run_viz(int argc, char **argv) {
     const double max = args.number("max", 0);
     require(max >= 0, ErrorCode::InvalidArgument, "viz: --max must be >= 0 (0 = automatic)");
     const bool legend = !args.flag("no-legend");
+    const std::string style = args.str("style", "kitti");
+    require(style == "kitti" || style == "middlebury", ErrorCode::InvalidArgument,
+            "viz: --style must be kitti or middlebury, got '" + style + "'");
     inputs_begin();
 
     cv::Mat picture;
@@ -124,9 +127,6 @@ int run_viz(int argc, char **argv) {
             picture = viz::flow_error_image(est, gt, noc);
             what = "flow error map (log colours, 1 = KITTI outlier threshold)";
         } else {
-            const std::string style = args.str("style", "kitti");
-            require(style == "kitti" || style == "middlebury", ErrorCode::InvalidArgument,
-                    "viz: --style must be kitti or middlebury, got '" + style + "'");
             o.style = style == "kitti" ? viz::FlowColorStyle::Kitti : viz::FlowColorStyle::Middlebury;
             o.max_flow = static_cast<float>(max);
             picture = viz::flow_to_color(est, o);

@@ -14,8 +14,6 @@
 #include "core/error.hpp"
 #include "eval/kitti_runner.hpp"
 #include "eval/metrics.hpp"
-#include "io/kitti_layout.hpp"
-#include "pipeline/estimator.hpp"
 #include "pipeline/option_assignments.hpp"
 
 namespace lidarflow::cli {
@@ -127,9 +125,6 @@ int run_kitti_command(int argc, char **argv) {
             "kitti: --placements must be in [1, 1000]");
     require(placements == 1 || o.lidar.protocol == eval::LidarProtocol::Paper, ErrorCode::InvalidArgument,
             "kitti: --placements needs the paper protocol (a real scan has no grid to move)");
-    (void)pipeline::Estimator(o.estimator);  // checks the options before any frame is read
-    for (const std::string &id : o.ids) io::KittiLayout::check_id(id);
-    inputs_begin();
 
     // Each line has the time elapsed and, once a frame is done, the time left (frames of every
     // seed and placement together); piped, one line per step.
@@ -140,6 +135,7 @@ int run_kitti_command(int argc, char **argv) {
     double step_start = 0;
     std::string step;
     const auto progress = [&](size_t i, size_t n, const std::string &what) {
+        inputs_begin();  // run_kitti checked the ids, the output folder and the options first
         const double now = clock.seconds();
         if (!step.empty()) detail("kitti:   %s took %s\n", step.c_str(), format_duration(now - step_start).c_str());
         step = what;

@@ -437,7 +437,7 @@ int main(int argc, char **argv) {
         std::fprintf(stderr,
                      "lidarflow-lcm-bridge: stopped. stereo received %lld, processed %lld, dropped %lld (stale %lld, "
                      "out of order %lld, no calibration %lld, calibration mismatch %lld, malformed %lld, estimator "
-                     "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms; "
+                     "%lld, shutdown %lld, unpaired %lld); skipped for other shards %lld; results %lld, latency mean %.1f ms max %.1f ms (estimator mean %.1f ms); "
                      "shards dead %d, their pairs lost %lld; pairs lost to a calibration change %lld; shard messages "
                      "refused (no valid MAC) %lld, shard index conflicts %lld, shard results ignored %lld\n",
                      (long long)c.stereo_received, (long long)c.stereo_processed, (long long)c.dropped(),
@@ -445,7 +445,8 @@ int main(int argc, char **argv) {
                      (long long)c.dropped_calibration_mismatch, (long long)c.dropped_malformed,
                      (long long)c.dropped_estimator_error, (long long)c.dropped_shutdown, (long long)c.dropped_unpaired,
                      (long long)c.skipped_other_shard, (long long)c.results_published, c.latency_mean_ms, c.latency_max_ms,
-                     c.shards_dead, (long long)c.pairs_lost_dead_shard, (long long)c.pairs_lost_calibration_change,
+                     c.compute_mean_ms, c.shards_dead, (long long)c.pairs_lost_dead_shard,
+                     (long long)c.pairs_lost_calibration_change,
                      (long long)c.shard_messages_refused, (long long)c.shard_index_conflicts,
                      (long long)c.shard_results_ignored);
         std::fprintf(stderr, "lidarflow-lcm-bridge: input quality of the results: %s\n", c.quality_text().c_str());

@@ -35,7 +35,7 @@
 #                            $LIDARFLOW_KITTI_DIR onto LCM (this host only) at HZ frames/s (default
 #                            2), LOOPS times (default 10), through the bridge at PRESET (default
 #                            default); prints the bridge's final counters (stale drops, results,
-#                            latency)
+#                            latency, the estimator's mean time)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"

@@ -25,6 +25,9 @@
 #                            drive, and print `lidarflow sequence`'s pairs/s at each thread count
 #                            (default: 1 2 and every power of two up to the CPUs) as one stream
 #                            and with frames in flight (2, 4, ... up to the thread count)
+#   tools/dev.sh device-bundle  build, then pack the CLI and the shared libraries it loads (but
+#                            glibc's) into .device/lidarflow-device.tar.xz, for tools/device_rates.sh
+#                            on a machine without the packages (docs/DEVELOPING.md)
 #   tools/dev.sh lidar-cost [PRESET] [ROUNDS]  build, then time the KITTI pairs of
 #                            $LIDARFLOW_KITTI_DIR with the 88-point and the full-scan LiDAR, the two
 #                            bench_pipeline runs alternated ROUNDS times (default 4) at PRESET
@@ -162,26 +165,22 @@ bridge_rate() {
     rm -f "$log"
 }
 
-pairs_rate() {
-    local preset="$1"; shift
-    local threads=("$@") cli="$root/build/tools/lidarflow/lidarflow" dir
-    if [ ${#threads[@]} -eq 0 ]; then
-        threads=(1 2)
-        for ((t = 4; t <= $(nproc); t *= 2)); do threads+=("$t"); done
-    fi
-    dir="$(mktemp -d)"
-    "$cli" synth --drive "$dir/drive" --frames 12 --width 1242 --height 375 --seed 1 >/dev/null
-    printf '%-8s %-7s %-17s %s\n' preset threads frames_in_flight pairs/s
-    for t in "${threads[@]}"; do
-        for ((f = 1; f <= t; f *= 2)); do
-            rm -rf "$dir/out"
-            local line
-            line="$("$cli" sequence --drive "$dir/drive" --out "$dir/out" --preset "$preset" --threads "$t" \
-                --frames-in-flight "$f" --poses none 2>/dev/null | grep -o '[0-9.]* pairs/s')"
-            printf '%-8s %-7s %-17s %s\n' "$preset" "$t" "$f" "${line% pairs/s}"
-        done
-    done
-    rm -rf "$dir"
+# The CLI and every shared library it loads but glibc's, for a machine without Debian's packages
+# or a network: tools/device_rates.sh unpacks and runs it there (docs/DEVELOPING.md).
+device_bundle() {
+    local cli="$root/build/tools/lidarflow/lidarflow" out="$root/.device/lidarflow-device.tar.xz" stage libs n
+    libs="$(ldd "$cli")"
+    if grep 'not found' <<<"$libs"; then echo "dev.sh device-bundle: libraries missing here" >&2; return 1; fi
+    stage="$(mktemp -d)"
+    mkdir -p "$stage/bin" "$stage/lib" "$root/.device"
+    cp "$cli" "$stage/bin/"
+    awk '/=> \// { print $3 }' <<<"$libs" | grep -Ev '/(libc|libm|libpthread|libdl|librt|libresolv)\.so|/ld-linux' |
+        xargs -r cp -L -t "$stage/lib"
+    n="$(find "$stage/lib" -type f | wc -l)"
+    tar -C "$stage" -cf - bin lib | xz -T0 -6 >"$out.tmp"
+    mv "$out.tmp" "$out"
+    rm -rf "$stage"
+    echo "dev.sh device-bundle: $out ($(du -h "$out" | cut -f1), the CLI and $n libraries)"
 }
 
 lidar_cost() {
@@ -279,6 +278,7 @@ case "${1:-}" in
         ls -1 "$root"/build/packages/*.deb ;;
     lidar-cost) deps; build build; shift; lidar_cost "${1:-realtime}" "${2:-4}" ;;
     bridge-rate) deps; build build; shift; bridge_rate "${1:-default}" "${2:-2}" "${3:-10}" ;;
-    pairs-rate) deps; build build; shift; pairs_rate "${1:-realtime}" "${@:2}" ;;
+    device-bundle) deps; build build; device_bundle ;;
+    pairs-rate) deps; build build; shift; "$root/tools/pairs_rate.sh" "$root/build/tools/lidarflow/lidarflow" "${1:-realtime}" "${@:2}" ;;
     *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;
 esac

@@ -279,6 +279,8 @@ case "${1:-}" in
     lidar-cost) deps; build build; shift; lidar_cost "${1:-realtime}" "${2:-4}" ;;
     bridge-rate) deps; build build; shift; bridge_rate "${1:-default}" "${2:-2}" "${3:-10}" ;;
     device-bundle) deps; packages=(xz-utils); deps; build build; device_bundle ;;
-    pairs-rate) deps; build build; shift; "$root/tools/pairs_rate.sh" "$root/build/tools/lidarflow/lidarflow" "${1:-realtime}" "${@:2}" ;;
+    pairs-rate)
+        deps; build build; shift
+        "$root/tools/pairs_rate.sh" "$root/build/tools/lidarflow/lidarflow" "${1:-realtime}" "${@:2}" ;;
     *) awk 'NR > 1 && /^#/ { if (!/SPDX-License-Identifier/) print; next } NR > 1 { exit }' "$0"; exit 2 ;;
 esac
